@@ -1,0 +1,48 @@
+//! hubtrack's recording format, in one place for the recorder, replay, latency and recovery.
+//!
+//! One MCAP file per run: chunked, indexed, lz4/zstd compressed, schemas embedded.
+//! - `/frames`: `foxglove.RawImage` (protobuf), so Foxglove and Lichtblick show the video;
+//! - `/frames/header`: the [`hubtrack_types::FrameHeader`] of each frame (stamps and truth), JSON;
+//! - `/detections`, `/track`, `/setpoints`, `/vehicle`, `/status`: the stage messages, JSON with
+//!   an embedded JSON schema generated from the Rust types;
+//! - `/recorder`: the recorder's own counters, JSON.
+//!
+//! Every message's MCAP `sequence` is the frame `seq` it belongs to (truncated to 32 bits), so a
+//! gap is visible to any MCAP tool; `log_time` is the wall-clock receive time (epoch ns) and
+//! `publish_time` the wall-clock time the publishing stage sent it.
+
+pub mod raw_image;
+pub mod reader;
+pub mod writer;
+
+pub use reader::{inspect, recover, FileInfo, RecoverReport};
+pub use writer::{ChannelKind, Recording, RecordingOptions};
+
+/// Why a recording could not be written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    /// File system error.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The MCAP library refused the data.
+    #[error("MCAP {path}: {message}")]
+    Mcap {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// A message could not be serialised.
+    #[error("cannot encode {channel}: {message}")]
+    Encode {
+        /// Channel.
+        channel: String,
+        /// Why.
+        message: String,
+    },
+}

@@ -1,0 +1,256 @@
+//! Writing a recording.
+
+use crate::raw_image::{self, ImageMeta};
+use crate::RecordError;
+use hubtrack_types::{FrameHeader, PixelFormat};
+use mcap::records::MessageHeader;
+use mcap::WriteOptions;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+/// Topic of the frames (foxglove.RawImage).
+pub const FRAMES_TOPIC: &str = "/frames";
+/// Topic of the frame headers (stamps and truth).
+pub const FRAME_HEADERS_TOPIC: &str = "/frames/header";
+/// Topic of the recorder's own counters.
+pub const RECORDER_TOPIC: &str = "/recorder";
+/// The MCAP profile (none of the registered ones fits: mixed protobuf and JSON).
+pub const PROFILE: &str = "";
+/// Frame id written into images.
+pub const CAMERA_FRAME_ID: &str = "camera";
+
+/// The JSON-encoded channels and the Rust type whose schema they carry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum ChannelKind {
+    /// `/frames/header`: [`hubtrack_types::FrameHeader`].
+    FrameHeader,
+    /// `/detections`: [`hubtrack_types::Detection`].
+    Detection,
+    /// `/track`: [`hubtrack_types::TrackState`].
+    Track,
+    /// `/setpoints`: [`hubtrack_types::Setpoint`].
+    Setpoint,
+    /// `/vehicle`: [`hubtrack_types::VehicleState`].
+    Vehicle,
+    /// `/status`: [`hubtrack_types::StageStatus`].
+    Status,
+    /// `/recorder`: [`RecorderStats`].
+    Recorder,
+}
+
+impl ChannelKind {
+    /// Every JSON channel.
+    pub const ALL: [ChannelKind; 7] = [
+        ChannelKind::FrameHeader,
+        ChannelKind::Detection,
+        ChannelKind::Track,
+        ChannelKind::Setpoint,
+        ChannelKind::Vehicle,
+        ChannelKind::Status,
+        ChannelKind::Recorder,
+    ];
+
+    /// MCAP topic.
+    pub fn topic(self) -> &'static str {
+        match self {
+            ChannelKind::FrameHeader => FRAME_HEADERS_TOPIC,
+            ChannelKind::Detection => "/detections",
+            ChannelKind::Track => "/track",
+            ChannelKind::Setpoint => "/setpoints",
+            ChannelKind::Vehicle => "/vehicle",
+            ChannelKind::Status => "/status",
+            ChannelKind::Recorder => RECORDER_TOPIC,
+        }
+    }
+
+    /// Schema name.
+    pub fn schema_name(self) -> &'static str {
+        match self {
+            ChannelKind::FrameHeader => "hubtrack.FrameHeader",
+            ChannelKind::Detection => "hubtrack.Detection",
+            ChannelKind::Track => "hubtrack.TrackState",
+            ChannelKind::Setpoint => "hubtrack.Setpoint",
+            ChannelKind::Vehicle => "hubtrack.VehicleState",
+            ChannelKind::Status => "hubtrack.StageStatus",
+            ChannelKind::Recorder => "hubtrack.RecorderStats",
+        }
+    }
+
+    /// The JSON schema, generated from the Rust type so it cannot drift.
+    pub fn json_schema(self) -> Vec<u8> {
+        use hubtrack_types as t;
+        let schema = match self {
+            ChannelKind::FrameHeader => schemars::schema_for!(t::FrameHeader),
+            ChannelKind::Detection => schemars::schema_for!(t::Detection),
+            ChannelKind::Track => schemars::schema_for!(t::TrackState),
+            ChannelKind::Setpoint => schemars::schema_for!(t::Setpoint),
+            ChannelKind::Vehicle => schemars::schema_for!(t::VehicleState),
+            ChannelKind::Status => schemars::schema_for!(t::StageStatus),
+            ChannelKind::Recorder => schemars::schema_for!(RecorderStats),
+        };
+        serde_json::to_vec(&schema).expect("schemas serialise")
+    }
+
+    /// The channel of a topic, if it is one of hubtrack's JSON channels.
+    pub fn from_topic(topic: &str) -> Option<ChannelKind> {
+        ChannelKind::ALL.into_iter().find(|k| k.topic() == topic)
+    }
+}
+
+/// The recorder's counters, written to `/recorder` periodically and at the end.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize, schemars::JsonSchema)]
+pub struct RecorderStats {
+    /// Frames received from shared memory.
+    pub frames_received: u64,
+    /// Frames written to the file.
+    pub frames_recorded: u64,
+    /// Frames dropped because the disk writer fell behind (queue full).
+    pub frames_dropped_queue: u64,
+    /// Frames never received (seq gaps: overwritten in shared memory before the recorder read them).
+    pub frames_lost: u64,
+    /// Result messages written.
+    pub messages_recorded: u64,
+    /// Bytes written so far (approximate until the file is finished).
+    pub bytes_written: u64,
+}
+
+/// Options of a new recording.
+#[derive(Debug, Clone)]
+pub struct RecordingOptions {
+    /// `None`, `Some("lz4")` or `Some("zstd")`.
+    pub compression: Option<mcap::Compression>,
+    /// Target chunk size, bytes.
+    pub chunk_size: u64,
+}
+
+impl Default for RecordingOptions {
+    fn default() -> Self {
+        RecordingOptions { compression: Some(mcap::Compression::Lz4), chunk_size: 4 << 20 }
+    }
+}
+
+/// An MCAP file being written.
+pub struct Recording {
+    path: PathBuf,
+    writer: mcap::Writer<BufWriter<File>>,
+    frames_channel: u16,
+    json_channels: BTreeMap<ChannelKind, u16>,
+    scratch: Vec<u8>,
+    /// Wall-clock minus monotonic ns, to turn monotonic stamps into MCAP publish times.
+    realtime_offset_ns: i128,
+}
+
+fn mcap_err(path: &Path, e: impl std::fmt::Display) -> RecordError {
+    RecordError::Mcap { path: path.into(), message: e.to_string() }
+}
+
+/// Foxglove's name for a pixel format.
+pub fn foxglove_encoding(f: PixelFormat) -> &'static str {
+    match f {
+        PixelFormat::Bgr8 => "bgr8",
+        PixelFormat::Gray8 => "mono8",
+    }
+}
+
+impl Recording {
+    /// Creates the file (its folder too) and registers every channel with its schema.
+    pub fn create(path: &Path, options: &RecordingOptions) -> Result<Recording, RecordError> {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|source| RecordError::Io { path: dir.into(), source })?;
+        }
+        let file = File::create(path).map_err(|source| RecordError::Io { path: path.into(), source })?;
+        let mut writer = WriteOptions::new()
+            .profile(PROFILE)
+            .library(concat!("hubtrack-record ", env!("CARGO_PKG_VERSION")))
+            .compression(options.compression)
+            .chunk_size(Some(options.chunk_size))
+            .create(BufWriter::with_capacity(1 << 20, file))
+            .map_err(|e| mcap_err(path, e))?;
+        let no_meta = BTreeMap::new();
+        let image_schema = writer
+            .add_schema(raw_image::SCHEMA_NAME, "protobuf", &raw_image::descriptor_set())
+            .map_err(|e| mcap_err(path, e))?;
+        let frames_channel =
+            writer.add_channel(image_schema, FRAMES_TOPIC, "protobuf", &no_meta).map_err(|e| mcap_err(path, e))?;
+        let mut json_channels = BTreeMap::new();
+        for kind in ChannelKind::ALL {
+            let schema = writer
+                .add_schema(kind.schema_name(), "jsonschema", &kind.json_schema())
+                .map_err(|e| mcap_err(path, e))?;
+            let id = writer.add_channel(schema, kind.topic(), "json", &no_meta).map_err(|e| mcap_err(path, e))?;
+            json_channels.insert(kind, id);
+        }
+        let realtime_offset_ns =
+            hubtrack_types::time::realtime_ns() as i128 - hubtrack_types::time::monotonic_ns() as i128;
+        Ok(Recording {
+            path: path.into(),
+            writer,
+            frames_channel,
+            json_channels,
+            scratch: Vec::new(),
+            realtime_offset_ns,
+        })
+    }
+
+    /// The file being written.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Converts a monotonic stamp to wall-clock ns (for MCAP publish times).
+    pub fn to_realtime(&self, monotonic_ns: u64) -> u64 {
+        (monotonic_ns as i128 + self.realtime_offset_ns).max(0) as u64
+    }
+
+    /// Writes one frame's pixels to `/frames` (skipped when `pixels` is `None`) and its header to
+    /// `/frames/header`. `log_time` is the wall-clock receive time.
+    pub fn write_frame(&mut self, header: &FrameHeader, pixels: Option<&[u8]>, log_time: u64) -> Result<(), RecordError> {
+        let sequence = header.seq as u32;
+        let publish_time = header.capture_realtime_ns;
+        if let Some(pixels) = pixels {
+            let meta = ImageMeta {
+                timestamp_ns: header.capture_realtime_ns,
+                frame_id: CAMERA_FRAME_ID,
+                width: header.width,
+                height: header.height,
+                encoding: foxglove_encoding(header.format),
+                step: header.stride,
+            };
+            raw_image::encode(&meta, pixels, &mut self.scratch);
+            let h = MessageHeader { channel_id: self.frames_channel, sequence, log_time, publish_time };
+            self.writer.write_to_known_channel(&h, &self.scratch).map_err(|e| mcap_err(&self.path, e))?;
+        }
+        self.write_json(ChannelKind::FrameHeader, header.seq, log_time, publish_time, header)
+    }
+
+    /// Writes a JSON message to a hubtrack channel.
+    pub fn write_json<T: Serialize>(
+        &mut self,
+        kind: ChannelKind,
+        seq: u64,
+        log_time: u64,
+        publish_time: u64,
+        value: &T,
+    ) -> Result<(), RecordError> {
+        self.scratch.clear();
+        serde_json::to_writer(&mut self.scratch, value)
+            .map_err(|e| RecordError::Encode { channel: kind.topic().into(), message: e.to_string() })?;
+        let h = MessageHeader { channel_id: self.json_channels[&kind], sequence: seq as u32, log_time, publish_time };
+        self.writer.write_to_known_channel(&h, &self.scratch).map_err(|e| mcap_err(&self.path, e))
+    }
+
+    /// Closes the current chunk and hands everything to the OS: after a crash, the file is
+    /// readable up to here.
+    pub fn flush(&mut self) -> Result<(), RecordError> {
+        self.writer.flush().map_err(|e| mcap_err(&self.path, e))
+    }
+
+    /// Writes the summary, indexes and footer, and closes the file.
+    pub fn finish(mut self) -> Result<(), RecordError> {
+        self.writer.finish().map_err(|e| mcap_err(&self.path, e))?;
+        Ok(())
+    }
+}

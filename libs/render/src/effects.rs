@@ -1,0 +1,349 @@
+//! Image-space effects: sun disc, propeller blur, 3x3 blur, sensor noise, JPEG-like artefacts.
+//!
+//! All passes work in place on the caller's BGR8 buffer and use scratch owned by [`Effects`].
+
+use crate::math::Rng;
+
+/// Length of the noise table; rows read it at random offsets.
+const NOISE_TABLE_LEN: usize = 1 << 16;
+/// Apparent sun radius (radians) including the overexposed core.
+const SUN_CORE_RAD: f64 = 0.0085;
+/// Outer radius of the sun's bloom as a multiple of the core.
+const SUN_BLOOM_FACTOR: f64 = 5.0;
+
+/// Reusable buffers for the effect passes.
+pub(crate) struct Effects {
+    w: usize,
+    h: usize,
+    noise_sigma: f32,
+    noise_pos: Vec<u8>,
+    noise_neg: Vec<u8>,
+    blur_rows: [Vec<u16>; 3],
+    y_plane: Vec<f32>,
+    cb_plane: Vec<f32>,
+    cr_plane: Vec<f32>,
+}
+
+impl Effects {
+    pub fn new(w: usize, h: usize) -> Effects {
+        Effects {
+            w,
+            h,
+            noise_sigma: -1.0,
+            noise_pos: Vec::new(),
+            noise_neg: Vec::new(),
+            blur_rows: [vec![0; w * 3], vec![0; w * 3], vec![0; w * 3]],
+            y_plane: Vec::new(),
+            cb_plane: Vec::new(),
+            cr_plane: Vec::new(),
+        }
+    }
+
+    /// Add zero-mean, approximately Gaussian noise of standard deviation `sigma` (8-bit levels)
+    /// independently to every byte. Each row reads a precomputed table at a random offset:
+    /// a saturating add/sub of two byte arrays, which the compiler vectorises.
+    pub fn noise(&mut self, out: &mut [u8], sigma: f32, seed: u64, frame: u64) {
+        if !(sigma > 0.0) {
+            return;
+        }
+        let row_len = self.w * 3;
+        if self.noise_sigma != sigma {
+            // Irwin–Hall(4) rescaled to unit variance: cheap and close to Gaussian.
+            let mut rng = Rng::new(0x0153, 0x0153);
+            let n = NOISE_TABLE_LEN + row_len;
+            self.noise_pos.clear();
+            self.noise_neg.clear();
+            for _ in 0..n {
+                let s: f64 = (0..4).map(|_| rng.uniform()).sum::<f64>() - 2.0;
+                let v = (s * 3f64.sqrt() * sigma as f64).round().clamp(-255.0, 255.0) as i32;
+                self.noise_pos.push(v.max(0) as u8);
+                self.noise_neg.push((-v).max(0) as u8);
+            }
+            self.noise_sigma = sigma;
+        }
+        let mut rng = Rng::new(seed ^ frame.wrapping_mul(0xA24B_AED4_963E_E407), 0x0153);
+        for row in out.chunks_exact_mut(row_len) {
+            let off = rng.below(NOISE_TABLE_LEN as u64) as usize;
+            let pos = &self.noise_pos[off..off + row_len];
+            let neg = &self.noise_neg[off..off + row_len];
+            for ((p, &a), &s) in row.iter_mut().zip(pos).zip(neg) {
+                *p = p.saturating_add(a).saturating_sub(s);
+            }
+        }
+    }
+
+    /// Separable [1 2 1]/4 x [1 2 1]/4 blur, in place, with replicated borders.
+    pub fn blur(&mut self, out: &mut [u8]) {
+        let (w, h) = (self.w, self.h);
+        if w < 2 || h < 2 {
+            return;
+        }
+        let rl = w * 3;
+        let hblur = |src: &[u8], dst: &mut [u16]| {
+            for c in 0..3 {
+                dst[c] = 3 * src[c] as u16 + src[3 + c] as u16;
+                dst[rl - 3 + c] = 3 * src[rl - 3 + c] as u16 + src[rl - 6 + c] as u16;
+            }
+            for i in 3..rl - 3 {
+                dst[i] = src[i - 3] as u16 + 2 * src[i] as u16 + src[i + 3] as u16;
+            }
+        };
+        let [r0, r1, r2] = &mut self.blur_rows;
+        let (mut prev, mut cur, mut next) = (r0, r1, r2);
+        hblur(&out[0..rl], cur);
+        prev.copy_from_slice(cur);
+        for y in 0..h {
+            let ny = (y + 1).min(h - 1);
+            hblur(&out[ny * rl..(ny + 1) * rl], next);
+            let dst = &mut out[y * rl..(y + 1) * rl];
+            for i in 0..rl {
+                dst[i] = ((prev[i] + 2 * cur[i] + next[i] + 8) >> 4) as u8;
+            }
+            std::mem::swap(&mut prev, &mut cur);
+            std::mem::swap(&mut cur, &mut next);
+        }
+    }
+
+    /// JPEG-like compression artefacts: YCbCr 4:2:0, 8x8 DCT, quantisation with the standard
+    /// (IJG) tables scaled for `quality`, inverse DCT. Blocking, ringing and chroma bleeding.
+    pub fn jpeg(&mut self, out: &mut [u8], quality: u8) {
+        let (w, h) = (self.w, self.h);
+        let (cw, ch) = (w.div_ceil(2), h.div_ceil(2));
+        self.y_plane.resize(w * h, 0.0);
+        self.cb_plane.resize(cw * ch, 0.0);
+        self.cr_plane.resize(cw * ch, 0.0);
+        self.cb_plane.fill(0.0);
+        self.cr_plane.fill(0.0);
+        for y in 0..h {
+            for x in 0..w {
+                let p = &out[(y * w + x) * 3..(y * w + x) * 3 + 3];
+                let (b, g, r) = (p[0] as f32, p[1] as f32, p[2] as f32);
+                self.y_plane[y * w + x] = 0.299 * r + 0.587 * g + 0.114 * b - 128.0;
+                let ci = (y / 2) * cw + x / 2;
+                self.cb_plane[ci] += -0.168_736 * r - 0.331_264 * g + 0.5 * b;
+                self.cr_plane[ci] += 0.5 * r - 0.418_688 * g - 0.081_312 * b;
+            }
+        }
+        // Average the 2x2 chroma sums (edge cells may have fewer samples).
+        for cy in 0..ch {
+            let ny = if 2 * cy + 1 < h { 2.0 } else { 1.0 };
+            for cx in 0..cw {
+                let nx = if 2 * cx + 1 < w { 2.0 } else { 1.0 };
+                self.cb_plane[cy * cw + cx] /= nx * ny;
+                self.cr_plane[cy * cw + cx] /= nx * ny;
+            }
+        }
+        let (ql, qc) = quant_tables(quality);
+        dct_plane(&mut self.y_plane, w, h, &ql);
+        dct_plane(&mut self.cb_plane, cw, ch, &qc);
+        dct_plane(&mut self.cr_plane, cw, ch, &qc);
+        for y in 0..h {
+            for x in 0..w {
+                let yy = self.y_plane[y * w + x] + 128.0;
+                let ci = (y / 2) * cw + x / 2;
+                let (cb, cr) = (self.cb_plane[ci], self.cr_plane[ci]);
+                let p = &mut out[(y * w + x) * 3..(y * w + x) * 3 + 3];
+                p[2] = (yy + 1.402 * cr + 0.5) as u8;
+                p[1] = (yy - 0.344_136 * cb - 0.714_136 * cr + 0.5) as u8;
+                p[0] = (yy + 1.772 * cb + 0.5) as u8;
+            }
+        }
+    }
+
+    /// The UAV's own propeller: a motion-blurred, semi-transparent dark disc entering the frame
+    /// from a top corner (left or right from the seed).
+    pub fn propeller(&mut self, out: &mut [u8], seed: u64) {
+        let (w, h) = (self.w as f64, self.h as f64);
+        let mut rng = Rng::new(seed, 0x9409);
+        let left = rng.chance(0.5);
+        // Disc seen obliquely from below: an ellipse whose centre lies just outside the corner.
+        let rx = w * rng.range(0.22, 0.30);
+        let ry = rx * rng.range(0.35, 0.5);
+        let cx = if left { w * rng.range(-0.02, 0.06) } else { w * rng.range(0.94, 1.02) };
+        let cy = -ry * rng.range(0.15, 0.45);
+        let phase = rng.range(0.0, std::f64::consts::TAU);
+        let tone = rng.range(25.0, 60.0) as f32;
+        let x0 = (cx - rx).floor().max(0.0) as usize;
+        let x1 = ((cx + rx).ceil().min(w - 1.0)).max(0.0) as usize;
+        let y1 = ((cy + ry).ceil().min(h - 1.0)).max(0.0) as usize;
+        let hub_r = 0.08;
+        for y in 0..=y1 {
+            for x in x0..=x1 {
+                let (ex, ey) = ((x as f64 - cx) / rx, (y as f64 - cy) / ry);
+                let r = (ex * ex + ey * ey).sqrt();
+                if r > 1.0 {
+                    continue;
+                }
+                let ang = ey.atan2(ex);
+                // Two-bladed prop smeared by the exposure: denser near the hub and in two lobes
+                // (rolling shutter), soft rim.
+                let lobes = 0.5 + 0.5 * (2.0 * ang + phase + 3.0 * r).cos();
+                let rim = ((1.0 - r) / 0.06).clamp(0.0, 1.0);
+                let mut a = (0.22 + 0.33 * lobes * lobes) * rim * (1.0 - 0.4 * r);
+                if r < hub_r {
+                    a = 0.95;
+                }
+                let a = a as f32;
+                let p = &mut out[(y * self.w + x) * 3..(y * self.w + x) * 3 + 3];
+                for c in p.iter_mut() {
+                    *c = (*c as f32 * (1.0 - a) + tone * a) as u8;
+                }
+            }
+        }
+    }
+
+    /// Overexposed sun disc with bloom at pixel `centre` for a camera of focal `f_px`.
+    pub fn sun_disc(&mut self, out: &mut [u8], centre: [f64; 2], f_px: f64, strength: f32) {
+        let r_core = (SUN_CORE_RAD * f_px).max(1.5);
+        let r_out = r_core * SUN_BLOOM_FACTOR;
+        let (w, h) = (self.w as f64, self.h as f64);
+        if centre[0] < -r_out || centre[1] < -r_out || centre[0] > w + r_out || centre[1] > h + r_out {
+            return;
+        }
+        let (x0, x1) = ((centre[0] - r_out).floor().max(0.0) as usize, (centre[0] + r_out).ceil().min(w - 1.0) as usize);
+        let (y0, y1) = ((centre[1] - r_out).floor().max(0.0) as usize, (centre[1] + r_out).ceil().min(h - 1.0) as usize);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let d = ((x as f64 - centre[0]).powi(2) + (y as f64 - centre[1]).powi(2)).sqrt();
+                let a = if d <= r_core {
+                    1.0
+                } else {
+                    let t = (d - r_core) / (r_out - r_core);
+                    if t >= 1.0 {
+                        continue;
+                    }
+                    0.85 * (1.0 - t).powi(3)
+                } as f32
+                    * strength;
+                let p = &mut out[(y * self.w + x) * 3..(y * self.w + x) * 3 + 3];
+                let tgt = [250.0f32, 254.0, 255.0];
+                for c in 0..3 {
+                    p[c] = (p[c] as f32 + (tgt[c] - p[c] as f32) * a) as u8;
+                }
+            }
+        }
+    }
+}
+
+/// Standard JPEG luminance / chrominance quantisation tables scaled to `quality` (IJG formula).
+fn quant_tables(quality: u8) -> ([f32; 64], [f32; 64]) {
+    const LUMA: [u16; 64] = [
+        16, 11, 10, 16, 24, 40, 51, 61, 12, 12, 14, 19, 26, 58, 60, 55, 14, 13, 16, 24, 40, 57, 69, 56, 14, 17, 22,
+        29, 51, 87, 80, 62, 18, 22, 37, 56, 68, 109, 103, 77, 24, 35, 55, 64, 81, 104, 113, 92, 49, 64, 78, 87, 103,
+        121, 120, 101, 72, 92, 95, 98, 112, 100, 103, 99,
+    ];
+    const CHROMA: [u16; 64] = [
+        17, 18, 24, 47, 99, 99, 99, 99, 18, 21, 26, 66, 99, 99, 99, 99, 24, 26, 56, 99, 99, 99, 99, 99, 47, 66, 99,
+        99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99,
+        99, 99, 99, 99, 99, 99, 99, 99, 99, 99,
+    ];
+    let q = quality.clamp(1, 100) as u32;
+    let s = if q < 50 { 5000 / q } else { 200 - 2 * q };
+    let scale = |t: &[u16; 64]| {
+        let mut o = [0f32; 64];
+        for i in 0..64 {
+            o[i] = ((t[i] as u32 * s + 50) / 100).clamp(1, 255) as f32;
+        }
+        o
+    };
+    (scale(&LUMA), scale(&CHROMA))
+}
+
+/// Orthonormal 8-point DCT-II matrix: `C[k][n]`.
+fn dct_matrix() -> [[f32; 8]; 8] {
+    let mut m = [[0f32; 8]; 8];
+    for (k, row) in m.iter_mut().enumerate() {
+        let a = if k == 0 { (1.0f64 / 8.0).sqrt() } else { (2.0f64 / 8.0).sqrt() };
+        for (n, v) in row.iter_mut().enumerate() {
+            *v = (a * (std::f64::consts::PI * (2 * n + 1) as f64 * k as f64 / 16.0).cos()) as f32;
+        }
+    }
+    m
+}
+
+/// Round to nearest (ties to even) for |x| < 2^22 without a libm call.
+#[inline(always)]
+fn round_fast(x: f32) -> f32 {
+    const MAGIC: f32 = 12_582_912.0; // 1.5 * 2^23
+    (x + MAGIC) - MAGIC
+}
+
+/// Quantise every 8x8 block of a plane in the DCT domain (edge blocks replicate the border).
+/// The loops run over contiguous rows of 8 so they vectorise.
+fn dct_plane(p: &mut [f32], w: usize, h: usize, q: &[f32; 64]) {
+    let c = dct_matrix();
+    let mut ct = [[0f32; 8]; 8];
+    for k in 0..8 {
+        for n in 0..8 {
+            ct[n][k] = c[k][n];
+        }
+    }
+    let inv_q: [f32; 64] = q.map(|v| 1.0 / v);
+    let mut blk = [[0f32; 8]; 8];
+    let mut tmp = [[0f32; 8]; 8];
+    for by in (0..h).step_by(8) {
+        for bx in (0..w).step_by(8) {
+            for (y, row) in blk.iter_mut().enumerate() {
+                let sy = (by + y).min(h - 1);
+                if bx + 8 <= w {
+                    row.copy_from_slice(&p[sy * w + bx..sy * w + bx + 8]);
+                } else {
+                    for (x, v) in row.iter_mut().enumerate() {
+                        *v = p[sy * w + (bx + x).min(w - 1)];
+                    }
+                }
+            }
+            // Forward: tmp = C · blk, then blk = tmp · Cᵀ, quantised.
+            for k in 0..8 {
+                let mut acc = [0f32; 8];
+                for n in 0..8 {
+                    let s = c[k][n];
+                    for x in 0..8 {
+                        acc[x] += s * blk[n][x];
+                    }
+                }
+                tmp[k] = acc;
+            }
+            for k in 0..8 {
+                let mut acc = [0f32; 8];
+                for n in 0..8 {
+                    let s = tmp[k][n];
+                    for l in 0..8 {
+                        acc[l] += s * ct[n][l];
+                    }
+                }
+                // The JPEG tables refer to the (1/4)-scaled 2D DCT, which equals the orthonormal
+                // transform used here, so the table values apply as they are.
+                for l in 0..8 {
+                    let qq = q[k * 8 + l];
+                    blk[k][l] = round_fast(acc[l] * inv_q[k * 8 + l]) * qq;
+                }
+            }
+            // Inverse: tmp = Cᵀ · blk, then out = tmp · C.
+            for n in 0..8 {
+                let mut acc = [0f32; 8];
+                for k in 0..8 {
+                    let s = ct[n][k];
+                    for l in 0..8 {
+                        acc[l] += s * blk[k][l];
+                    }
+                }
+                tmp[n] = acc;
+            }
+            for y in 0..8 {
+                if by + y >= h {
+                    break;
+                }
+                let mut acc = [0f32; 8];
+                for l in 0..8 {
+                    let s = tmp[y][l];
+                    for x in 0..8 {
+                        acc[x] += s * c[l][x];
+                    }
+                }
+                let n = (w - bx).min(8);
+                p[(by + y) * w + bx..(by + y) * w + bx + n].copy_from_slice(&acc[..n]);
+            }
+        }
+    }
+}

@@ -1,0 +1,321 @@
+//! iceoryx2 ports for the services in [`hubtrack_types::services`].
+//!
+//! Every publisher has a companion event notifier so subscribers sleep in the kernel until data
+//! arrives (no polling, no added latency). Services are opened with the QoS from `shared-types`,
+//! identical in every process.
+
+use hubtrack_types::services::{ServiceSpec, FRAMES};
+use hubtrack_types::FrameHeader;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use iceoryx2::sample::Sample;
+use std::fmt::Debug;
+use std::time::Duration;
+
+/// The iceoryx2 service flavour used between processes.
+pub type Ipc = ipc::Service;
+
+/// A received frame: `[u8]` pixels in shared memory with its [`FrameHeader`].
+pub type FrameSample = Sample<Ipc, [u8], FrameHeader>;
+
+/// Why an iceoryx2 port could not be opened or used.
+#[derive(Debug, thiserror::Error)]
+pub enum IpcError {
+    /// Creating the node failed.
+    #[error("cannot create iceoryx2 node `{node}`: {reason}")]
+    Node {
+        /// Node name.
+        node: String,
+        /// iceoryx2's reason.
+        reason: String,
+    },
+    /// Opening a service or creating a port failed.
+    #[error("cannot open iceoryx2 service `{service}`: {reason}")]
+    Service {
+        /// Service name.
+        service: String,
+        /// iceoryx2's reason.
+        reason: String,
+    },
+    /// Loaning, sending or receiving failed.
+    #[error("iceoryx2 {op} on `{service}` failed: {reason}")]
+    Transfer {
+        /// What was attempted.
+        op: &'static str,
+        /// Service name.
+        service: String,
+        /// iceoryx2's reason.
+        reason: String,
+    },
+}
+
+fn svc_err(spec: &ServiceSpec, e: impl Debug) -> IpcError {
+    IpcError::Service { service: spec.name.into(), reason: format!("{e:?}") }
+}
+
+fn xfer_err(op: &'static str, spec: &ServiceSpec, e: impl Debug) -> IpcError {
+    IpcError::Transfer { op, service: spec.name.into(), reason: format!("{e:?}") }
+}
+
+/// Opens this process's iceoryx2 node and removes stale resources of dead nodes (a stage that was
+/// killed leaves its ports behind; design rule 6). Signal handling stays with [`crate::shutdown`].
+pub fn open_node(stage: &str) -> Result<Node<Ipc>, IpcError> {
+    let err = |e: &dyn Debug| IpcError::Node { node: stage.into(), reason: format!("{e:?}") };
+    let name: NodeName = stage.try_into().map_err(|e| err(&e))?;
+    let node = NodeBuilder::new()
+        .name(&name)
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<Ipc>()
+        .map_err(|e| err(&e))?;
+    let cleaned = node.try_cleanup_dead_nodes();
+    if cleaned.cleanups > 0 || cleaned.failed_cleanups > 0 {
+        log::info!(
+            "removed stale iceoryx2 resources of {} dead node(s) ({} could not be cleaned)",
+            cleaned.cleanups,
+            cleaned.failed_cleanups
+        );
+    }
+    Ok(node)
+}
+
+/// Removes resources of dead nodes again (call periodically in long-running publishers so a
+/// restarted subscriber finds a free port).
+pub fn cleanup_dead_nodes(node: &Node<Ipc>) -> u64 {
+    node.try_cleanup_dead_nodes().cleanups
+}
+
+fn open_event(node: &Node<Ipc>, spec: &ServiceSpec) -> Result<PortFactoryEvent, IpcError> {
+    let name: ServiceName = spec.event_name.try_into().map_err(|e| svc_err(spec, e))?;
+    node.service_builder(&name)
+        .event()
+        .max_notifiers(spec.qos.max_publishers + 2)
+        .max_listeners(spec.qos.max_subscribers + 2)
+        .max_nodes(spec.qos.max_nodes)
+        .open_or_create()
+        .map_err(|e| svc_err(spec, e))
+}
+
+type PortFactoryEvent = iceoryx2::service::port_factory::event::PortFactory<Ipc>;
+
+macro_rules! pubsub_builder {
+    ($node:expr, $spec:expr, $payload:ty) => {{
+        let spec: &ServiceSpec = $spec;
+        let name: ServiceName = spec.name.try_into().map_err(|e| svc_err(spec, e))?;
+        $node
+            .service_builder(&name)
+            .publish_subscribe::<$payload>()
+            .enable_safe_overflow(spec.qos.safe_overflow)
+            .history_size(spec.qos.history_size)
+            .subscriber_max_buffer_size(spec.qos.subscriber_max_buffer_size)
+            .subscriber_max_borrowed_samples(spec.qos.subscriber_max_borrowed_samples)
+            .max_subscribers(spec.qos.max_subscribers)
+            .max_publishers(spec.qos.max_publishers)
+            .max_nodes(spec.qos.max_nodes)
+    }};
+}
+
+/// Publishes camera frames: pixels are written straight into the loaned shared-memory sample.
+pub struct FramePublisher {
+    publisher: Publisher<Ipc, [u8], FrameHeader>,
+    notifier: Notifier<Ipc>,
+}
+
+impl FramePublisher {
+    /// Opens the frames service; `initial_max_len` is the expected frame size in bytes (the data
+    /// segment grows in powers of two if a larger frame comes).
+    pub fn new(node: &Node<Ipc>, initial_max_len: usize) -> Result<FramePublisher, IpcError> {
+        let spec = &FRAMES;
+        let service = pubsub_builder!(node, spec, [u8])
+            .user_header::<FrameHeader>()
+            .open_or_create()
+            .map_err(|e| svc_err(spec, e))?;
+        let publisher = service
+            .publisher_builder()
+            .initial_max_slice_len(initial_max_len.max(1))
+            .allocation_strategy(AllocationStrategy::PowerOfTwo)
+            .max_loaned_samples(2)
+            .create()
+            .map_err(|e| svc_err(spec, e))?;
+        let notifier = open_event(node, spec)?.notifier_builder().create().map_err(|e| svc_err(spec, e))?;
+        Ok(FramePublisher { publisher, notifier })
+    }
+
+    /// Loans `header.payload_len()` bytes of shared memory, lets `fill` write the pixels (and
+    /// complete the header, e.g. with truth known only after rendering), stamps `publish_ns` and
+    /// sends. Never blocks on subscribers (safe overflow). If `fill` fails the loan is returned
+    /// unsent.
+    pub fn publish_with<E: From<IpcError>>(
+        &self,
+        mut header: FrameHeader,
+        fill: impl FnOnce(&mut [u8], &mut FrameHeader) -> Result<(), E>,
+    ) -> Result<FrameHeader, E> {
+        let spec = &FRAMES;
+        let len = header.payload_len();
+        let mut sample = self.publisher.loan_slice_uninit(len).map_err(|e| xfer_err("loan", spec, e))?;
+        let payload = sample.payload_mut();
+        // SAFETY: `u8` has no invalid bit patterns and the chunk lies in mapped shared memory,
+        // which the OS initialises (zero pages, or an earlier frame); `fill` only writes.
+        let bytes: &mut [u8] = unsafe { &mut *(payload as *mut [std::mem::MaybeUninit<u8>] as *mut [u8]) };
+        fill(bytes, &mut header)?;
+        // SAFETY: as above, every byte is initialised.
+        let mut sample = unsafe { sample.assume_init() };
+        header.publish_ns = hubtrack_types::time::monotonic_ns();
+        *sample.user_header_mut() = header;
+        sample.send().map_err(|e| xfer_err("send", spec, e))?;
+        // A failed notify only delays a subscriber until its wait times out.
+        let _ = self.notifier.notify();
+        Ok(header)
+    }
+}
+
+/// Result of waiting for input.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wake {
+    /// An event arrived (data may be ready).
+    Event,
+    /// The timeout passed.
+    Timeout,
+}
+
+/// Subscribes to camera frames.
+pub struct FrameSubscriber {
+    subscriber: Subscriber<Ipc, [u8], FrameHeader>,
+    listener: Listener<Ipc>,
+    last_seq: Option<u64>,
+    /// Frames that were in the buffer but skipped to take the newest one.
+    pub skipped: u64,
+    /// Frames never seen (seq gaps: overwritten in the buffer or not published to us).
+    pub lost: u64,
+}
+
+impl FrameSubscriber {
+    /// Opens the frames service with a receive buffer of `buffer` frames (1 = newest only).
+    pub fn new(node: &Node<Ipc>, buffer: usize) -> Result<FrameSubscriber, IpcError> {
+        let spec = &FRAMES;
+        let service = pubsub_builder!(node, spec, [u8])
+            .user_header::<FrameHeader>()
+            .open_or_create()
+            .map_err(|e| svc_err(spec, e))?;
+        let subscriber = service
+            .subscriber_builder()
+            .buffer_size(buffer.clamp(1, spec.qos.subscriber_max_buffer_size))
+            .create()
+            .map_err(|e| svc_err(spec, e))?;
+        let listener = open_event(node, spec)?.listener_builder().create().map_err(|e| svc_err(spec, e))?;
+        Ok(FrameSubscriber { subscriber, listener, last_seq: None, skipped: 0, lost: 0 })
+    }
+
+    /// Sleeps until a frame is announced or `timeout` passes.
+    pub fn wait(&self, timeout: Duration) -> Wake {
+        match self.listener.timed_wait(|_| {}, timeout) {
+            Ok(n) if n > 0 => Wake::Event,
+            _ => Wake::Timeout,
+        }
+    }
+
+    fn account(&mut self, seq: u64) {
+        if let Some(last) = self.last_seq {
+            if seq > last + 1 {
+                self.lost += seq - last - 1;
+            }
+        }
+        self.last_seq = Some(seq);
+    }
+
+    /// The next frame in order (for the recorder), counting seq gaps as lost.
+    pub fn receive(&mut self) -> Result<Option<FrameSample>, IpcError> {
+        let s = self.subscriber.receive().map_err(|e| xfer_err("receive", &FRAMES, e))?;
+        if let Some(s) = &s {
+            self.account(s.user_header().seq);
+        }
+        Ok(s)
+    }
+
+    /// The newest frame, releasing older ones (for the detector): those count as skipped, seq
+    /// gaps between received frames as lost.
+    pub fn receive_newest(&mut self) -> Result<Option<FrameSample>, IpcError> {
+        let mut newest: Option<FrameSample> = None;
+        while let Some(s) = self.subscriber.receive().map_err(|e| xfer_err("receive", &FRAMES, e))? {
+            self.account(s.user_header().seq);
+            if newest.is_some() {
+                self.skipped += 1;
+            }
+            newest = Some(s);
+        }
+        Ok(newest)
+    }
+}
+
+/// Publishes a fixed-size message type on one result service.
+pub struct MsgPublisher<T: Debug + ZeroCopySend + Copy + 'static> {
+    spec: ServiceSpec,
+    publisher: Publisher<Ipc, T, ()>,
+    notifier: Notifier<Ipc>,
+}
+
+impl<T: Debug + ZeroCopySend + Copy + 'static> MsgPublisher<T> {
+    /// Opens `spec` for publishing `T`.
+    pub fn new(node: &Node<Ipc>, spec: &ServiceSpec) -> Result<Self, IpcError> {
+        let service = pubsub_builder!(node, spec, T).open_or_create().map_err(|e| svc_err(spec, e))?;
+        let publisher = service.publisher_builder().create().map_err(|e| svc_err(spec, e))?;
+        let notifier = open_event(node, spec)?.notifier_builder().create().map_err(|e| svc_err(spec, e))?;
+        Ok(MsgPublisher { spec: *spec, publisher, notifier })
+    }
+
+    /// Sends a copy of `value` (these messages are small) and notifies subscribers.
+    pub fn publish(&self, value: T) -> Result<(), IpcError> {
+        self.publisher.send_copy(value).map_err(|e| xfer_err("send", &self.spec, e))?;
+        let _ = self.notifier.notify();
+        Ok(())
+    }
+}
+
+/// Subscribes to one result service.
+pub struct MsgSubscriber<T: Debug + ZeroCopySend + Copy + 'static> {
+    spec: ServiceSpec,
+    subscriber: Subscriber<Ipc, T, ()>,
+    listener: Listener<Ipc>,
+}
+
+impl<T: Debug + ZeroCopySend + Copy + 'static> MsgSubscriber<T> {
+    /// Opens `spec` for receiving `T` with a buffer of `buffer` messages.
+    pub fn new(node: &Node<Ipc>, spec: &ServiceSpec, buffer: usize) -> Result<Self, IpcError> {
+        let service = pubsub_builder!(node, spec, T).open_or_create().map_err(|e| svc_err(spec, e))?;
+        let subscriber = service
+            .subscriber_builder()
+            .buffer_size(buffer.clamp(1, spec.qos.subscriber_max_buffer_size))
+            .create()
+            .map_err(|e| svc_err(spec, e))?;
+        let listener = open_event(node, spec)?.listener_builder().create().map_err(|e| svc_err(spec, e))?;
+        Ok(MsgSubscriber { spec: *spec, subscriber, listener })
+    }
+
+    /// Sleeps until a message is announced or `timeout` passes.
+    pub fn wait(&self, timeout: Duration) -> Wake {
+        match self.listener.timed_wait(|_| {}, timeout) {
+            Ok(n) if n > 0 => Wake::Event,
+            _ => Wake::Timeout,
+        }
+    }
+
+    /// The next message, if any.
+    pub fn receive(&self) -> Result<Option<T>, IpcError> {
+        Ok(self
+            .subscriber
+            .receive()
+            .map_err(|e| xfer_err("receive", &self.spec, e))?
+            .map(|s| *s.payload()))
+    }
+
+    /// The newest message, dropping older ones.
+    pub fn receive_newest(&self) -> Result<Option<T>, IpcError> {
+        let mut newest = None;
+        while let Some(v) = self.receive()? {
+            newest = Some(v);
+        }
+        Ok(newest)
+    }
+}

@@ -1,0 +1,14 @@
+//! What every hubtrack process shares, so stage `main`s stay thin:
+//! - [`config`]: the one config file, parsed strictly and validated with errors naming the key;
+//! - [`ipc`]: iceoryx2 node, publishers and subscribers for the services in `hubtrack_types::services`;
+//! - [`logging`]: structured logs on stderr (the supervisor prefixes them with the stage name);
+//! - [`shutdown`]: SIGINT/SIGTERM as a flag the stage loop checks;
+//! - [`status`]: the periodic [`hubtrack_types::StageStatus`] heartbeat of a stage.
+
+pub mod config;
+pub mod ipc;
+pub mod logging;
+pub mod shutdown;
+pub mod status;
+
+pub use config::{Config, ConfigError};

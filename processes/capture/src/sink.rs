@@ -1,0 +1,79 @@
+//! Frame sinks: shared memory for the process, memory for tests and benchmarks.
+
+use crate::{CaptureError, Fill, FrameInfo, FrameSink};
+use hubtrack_runtime::ipc::FramePublisher;
+use hubtrack_types::time::realtime_ns;
+use hubtrack_types::{FrameHeader, FrameSourceKind};
+
+/// Publishes frames on the frames service, numbering them `seq = 0, 1, 2, ...`.
+pub struct ShmSink {
+    publisher: FramePublisher,
+    source: FrameSourceKind,
+    /// Sequence number of the next frame.
+    pub next_seq: u64,
+    /// Header of the last published frame.
+    pub last: Option<FrameHeader>,
+}
+
+impl ShmSink {
+    /// Wraps a frame publisher for frames of `source`.
+    pub fn new(publisher: FramePublisher, source: FrameSourceKind) -> ShmSink {
+        ShmSink { publisher, source, next_seq: 0, last: None }
+    }
+}
+
+/// The header of a tightly packed frame with `seq` described by `info`.
+pub fn header_for(info: &FrameInfo, seq: u64, source: FrameSourceKind) -> FrameHeader {
+    FrameHeader {
+        seq,
+        capture_ns: info.capture_ns,
+        capture_realtime_ns: realtime_ns(),
+        publish_ns: 0,
+        width: info.width,
+        height: info.height,
+        stride: info.stride() as u32,
+        format: info.format,
+        source,
+        truth: info.truth,
+    }
+}
+
+impl FrameSink for ShmSink {
+    fn publish(&mut self, info: FrameInfo, fill: &mut Fill<'_>) -> Result<(), CaptureError> {
+        let header = header_for(&info, self.next_seq, self.source);
+        let sent = self.publisher.publish_with(header, |buf, header| {
+            if let Some(truth) = fill(buf)? {
+                header.truth = truth;
+            }
+            Ok::<(), CaptureError>(())
+        })?;
+        self.next_seq += 1;
+        self.last = Some(sent);
+        Ok(())
+    }
+}
+
+/// Keeps the last frame in memory (tests, benchmarks, offline tools).
+#[derive(Default)]
+pub struct VecSink {
+    /// Source kind stamped into headers.
+    pub source: FrameSourceKind,
+    /// Pixels of the last frame.
+    pub pixels: Vec<u8>,
+    /// Header of the last frame.
+    pub header: FrameHeader,
+    /// Frames taken.
+    pub count: u64,
+}
+
+impl FrameSink for VecSink {
+    fn publish(&mut self, info: FrameInfo, fill: &mut Fill<'_>) -> Result<(), CaptureError> {
+        self.pixels.resize(info.len(), 0);
+        self.header = header_for(&info, self.count, self.source);
+        if let Some(truth) = fill(&mut self.pixels)? {
+            self.header.truth = truth;
+        }
+        self.count += 1;
+        Ok(())
+    }
+}

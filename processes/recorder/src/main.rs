@@ -1,0 +1,274 @@
+//! `hubtrack-recorder`: subscribes to every service and writes one MCAP file.
+//!
+//! Two threads: the reader takes samples from shared memory as soon as they arrive and copies
+//! frames into a fixed pool of buffers; the writer compresses and writes. When the disk falls
+//! behind and the pool is empty, frames are dropped and counted: the recorder never slows the
+//! camera (the camera never waits for anyone anyway: safe overflow). On SIGINT/SIGTERM the writer
+//! drains the queue and finishes the file; after `kill -9` the file is readable up to its last
+//! flushed chunk (see `hubtrack recover`).
+
+use anyhow::Context;
+use clap::Parser;
+use hubtrack_record::writer::{ChannelKind, RecorderStats};
+use hubtrack_record::{Recording, RecordingOptions};
+use hubtrack_runtime::config::{Compression, ConfigArgs, RecorderConfig};
+use hubtrack_runtime::ipc::{open_node, FrameSubscriber, MsgSubscriber};
+use hubtrack_runtime::shutdown::Shutdown;
+use hubtrack_runtime::status::StatusReporter;
+use hubtrack_types::services::{DETECTIONS, SETPOINTS, STATUS, TRACK, VEHICLE};
+use hubtrack_types::time::{monotonic_ns, realtime_ns};
+use hubtrack_types::{Detection, FrameHeader, Setpoint, StageStatus, TrackState, VehicleState};
+use std::path::PathBuf;
+use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
+use std::time::{Duration, Instant};
+
+/// Longest sleep of the reader between checks for shutdown and non-frame services.
+const READER_WAIT: Duration = Duration::from_millis(5);
+/// Result-service receive buffer (messages are small; a generous buffer loses none).
+const RESULT_BUFFER: usize = 64;
+/// How often the recorder writes its counters to `/recorder`.
+const STATS_INTERVAL: Duration = Duration::from_secs(1);
+
+#[derive(Parser)]
+#[command(name = "hubtrack-recorder", about = "Record every hubtrack service to an MCAP file")]
+struct Args {
+    #[command(flatten)]
+    config: ConfigArgs,
+    /// Output MCAP file.
+    #[arg(long, short = 'o', value_name = "PATH.mcap")]
+    output: PathBuf,
+}
+
+/// What the reader hands the writer.
+enum Item {
+    Frame { header: FrameHeader, pixels: Option<Vec<u8>>, log_time: u64 },
+    Json { kind: ChannelKind, seq: u64, publish_ns: u64, log_time: u64, json: JsonMsg },
+}
+
+enum JsonMsg {
+    Detection(Detection),
+    Track(TrackState),
+    Setpoint(Setpoint),
+    Vehicle(VehicleState),
+    Status(StageStatus),
+    /// The reader's counters; the writer adds its own and writes `/recorder`.
+    Recorder(RecorderStats),
+}
+
+fn main() -> anyhow::Result<()> {
+    hubtrack_runtime::logging::init("recorder");
+    let args = Args::parse();
+    let config = args.config.load()?;
+    let cfg = config.recorder.clone();
+    let shutdown = Shutdown::install()?;
+
+    let recording = Recording::create(&args.output, &options(&cfg))?;
+    log::info!("recording to {}", args.output.display());
+
+    let node = open_node("recorder")?;
+    let mut frames = FrameSubscriber::new(&node, usize::MAX)?;
+    let detections = MsgSubscriber::<Detection>::new(&node, &DETECTIONS, RESULT_BUFFER)?;
+    let track = MsgSubscriber::<TrackState>::new(&node, &TRACK, RESULT_BUFFER)?;
+    let setpoints = MsgSubscriber::<Setpoint>::new(&node, &SETPOINTS, RESULT_BUFFER)?;
+    let vehicle = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, RESULT_BUFFER)?;
+    let status_in = MsgSubscriber::<StageStatus>::new(&node, &STATUS, RESULT_BUFFER)?;
+    let mut status = StatusReporter::new(&node, "recorder", config.run.status_interval_ms)?;
+
+    // Fixed pool of frame buffers: `free` holds empty ones, `queue` carries filled ones.
+    let (free_tx, free_rx) = mpsc::sync_channel::<Vec<u8>>(cfg.queue_frames);
+    for _ in 0..cfg.queue_frames {
+        free_tx.send(Vec::new()).expect("pool fits its channel");
+    }
+    let (queue_tx, queue_rx) = mpsc::sync_channel::<Item>(cfg.queue_frames + RESULT_BUFFER * 5);
+    let (stats_tx, stats_rx) = mpsc::channel::<RecorderStats>();
+    let writer = std::thread::Builder::new()
+        .name("mcap-writer".into())
+        .spawn(move || write_loop(recording, queue_rx, free_tx, stats_tx, cfg.flush_interval_ms))?;
+
+    let mut stats = RecorderStats::default();
+    let mut stats_at = Instant::now();
+    while !shutdown.requested() {
+        frames.wait(READER_WAIT);
+        while let Some(sample) = frames.receive()? {
+            stats.frames_received += 1;
+            let header = *sample.user_header();
+            let log_time = realtime_ns();
+            let pixels = if config.recorder.record_frames {
+                match free_rx.try_recv() {
+                    Ok(mut buf) => {
+                        buf.clear();
+                        buf.extend_from_slice(sample.payload());
+                        Some(buf)
+                    }
+                    Err(_) => {
+                        stats.frames_dropped_queue += 1;
+                        status.status.dropped += 1;
+                        continue;
+                    }
+                }
+            } else {
+                None
+            };
+            drop(sample); // release shared memory before the (possibly slow) hand-off
+            enqueue(&queue_tx, Item::Frame { header, pixels, log_time }, &mut stats, &mut status);
+        }
+        stats.frames_lost = frames.lost;
+        let now = realtime_ns();
+        macro_rules! drain {
+            ($sub:expr, $kind:expr, $variant:ident, $seq:expr, $pub_ns:expr) => {
+                while let Some(m) = $sub.receive()? {
+                    let item = Item::Json { kind: $kind, seq: $seq(&m), publish_ns: $pub_ns(&m), log_time: now, json: JsonMsg::$variant(m) };
+                    enqueue(&queue_tx, item, &mut stats, &mut status);
+                }
+            };
+        }
+        drain!(detections, ChannelKind::Detection, Detection, |m: &Detection| m.stamps.seq, |m: &Detection| m.stamps.publish_ns);
+        drain!(track, ChannelKind::Track, Track, |m: &TrackState| m.stamps.seq, |m: &TrackState| m.stamps.publish_ns);
+        drain!(setpoints, ChannelKind::Setpoint, Setpoint, |m: &Setpoint| m.stamps.seq, |m: &Setpoint| m.stamps.publish_ns);
+        drain!(vehicle, ChannelKind::Vehicle, Vehicle, |_: &VehicleState| 0, |m: &VehicleState| m.publish_ns);
+        drain!(status_in, ChannelKind::Status, Status, |_: &StageStatus| 0, |m: &StageStatus| m.publish_ns);
+
+        while let Ok(s) = stats_rx.try_recv() {
+            stats.frames_recorded = s.frames_recorded;
+            stats.messages_recorded = s.messages_recorded;
+            stats.bytes_written = s.bytes_written;
+        }
+        status.status.inputs = stats.frames_received;
+        status.status.outputs = stats.frames_recorded;
+        status.status.dropped = stats.frames_dropped_queue + stats.frames_lost;
+        status.tick();
+        if stats_at.elapsed() >= STATS_INTERVAL {
+            stats_at = Instant::now();
+            let _ = queue_tx.try_send(Item::Json {
+                kind: ChannelKind::Recorder,
+                seq: 0,
+                publish_ns: monotonic_ns(),
+                log_time: realtime_ns(),
+                json: JsonMsg::Recorder(stats),
+            });
+        }
+    }
+
+    log::info!("stopping: finishing {}", args.output.display());
+    // Final reader counts go into the file's last `/recorder` message.
+    let _ = queue_tx.send(Item::Json {
+        kind: ChannelKind::Recorder,
+        seq: 0,
+        publish_ns: monotonic_ns(),
+        log_time: realtime_ns(),
+        json: JsonMsg::Recorder(stats),
+    });
+    drop(queue_tx);
+    let final_stats = writer.join().map_err(|_| anyhow::anyhow!("writer thread panicked"))??;
+    stats.frames_recorded = final_stats.frames_recorded;
+    stats.messages_recorded = final_stats.messages_recorded;
+    stats.bytes_written = final_stats.bytes_written;
+    status.status.outputs = stats.frames_recorded;
+    status.publish_now();
+    log::info!(
+        "recorded {} frames ({} received, {} dropped: disk behind, {} lost: overwritten before read), {} messages, {} bytes",
+        stats.frames_recorded,
+        stats.frames_received,
+        stats.frames_dropped_queue,
+        stats.frames_lost,
+        stats.messages_recorded,
+        stats.bytes_written
+    );
+    Ok(())
+}
+
+fn options(cfg: &RecorderConfig) -> RecordingOptions {
+    RecordingOptions {
+        compression: match cfg.compression {
+            Compression::None => None,
+            Compression::Lz4 => Some(mcap::Compression::Lz4),
+            Compression::Zstd => Some(mcap::Compression::Zstd),
+        },
+        chunk_size: cfg.chunk_size_kib * 1024,
+    }
+}
+
+/// Hands an item to the writer without ever blocking the reader; a full queue drops it.
+fn enqueue(queue: &SyncSender<Item>, item: Item, stats: &mut RecorderStats, status: &mut StatusReporter) {
+    match queue.try_send(item) {
+        Ok(()) => {}
+        Err(TrySendError::Full(Item::Frame { .. })) => {
+            stats.frames_dropped_queue += 1;
+            status.status.dropped += 1;
+        }
+        Err(TrySendError::Full(_)) => status.error("writer queue full: result message dropped"),
+        Err(TrySendError::Disconnected(_)) => status.error("writer thread gone"),
+    }
+}
+
+/// Reader-side counts (received, dropped, lost) with writer-side counts (recorded, bytes).
+fn merged(reader: &RecorderStats, writer: &RecorderStats) -> RecorderStats {
+    RecorderStats {
+        frames_recorded: writer.frames_recorded,
+        messages_recorded: writer.messages_recorded,
+        bytes_written: writer.bytes_written,
+        ..*reader
+    }
+}
+
+fn write_loop(
+    mut rec: Recording,
+    queue: Receiver<Item>,
+    free: SyncSender<Vec<u8>>,
+    stats_out: mpsc::Sender<RecorderStats>,
+    flush_interval_ms: u64,
+) -> anyhow::Result<RecorderStats> {
+    let flush_interval = Duration::from_millis(flush_interval_ms);
+    let mut stats = RecorderStats::default();
+    let mut flushed_at = Instant::now();
+    let mut reported = RecorderStats::default();
+    let mut last_frame = FrameHeader::default();
+    let mut reader_stats = RecorderStats::default();
+    loop {
+        let item = match queue.recv_timeout(flush_interval) {
+            Ok(item) => Some(item),
+            Err(mpsc::RecvTimeoutError::Timeout) => None,
+            Err(mpsc::RecvTimeoutError::Disconnected) => break,
+        };
+        match item {
+            Some(Item::Frame { header, pixels, log_time }) => {
+                rec.write_frame(&header, pixels.as_deref(), log_time).context("writing a frame")?;
+                stats.frames_recorded += 1;
+                stats.bytes_written += pixels.as_ref().map_or(0, |p| p.len() as u64);
+                last_frame = header;
+                if let Some(buf) = pixels {
+                    let _ = free.try_send(buf);
+                }
+            }
+            Some(Item::Json { kind, seq, publish_ns, log_time, json }) => {
+                let publish_time = rec.to_realtime(publish_ns);
+                let r = match &json {
+                    JsonMsg::Detection(m) => rec.write_json(kind, seq, log_time, publish_time, m),
+                    JsonMsg::Track(m) => rec.write_json(kind, seq, log_time, publish_time, m),
+                    JsonMsg::Setpoint(m) => rec.write_json(kind, seq, log_time, publish_time, m),
+                    JsonMsg::Vehicle(m) => rec.write_json(kind, seq, log_time, publish_time, m),
+                    JsonMsg::Status(m) => rec.write_json(kind, seq, log_time, publish_time, m),
+                    JsonMsg::Recorder(reader) => {
+                        reader_stats = *reader;
+                        rec.write_json(kind, last_frame.seq, log_time, publish_time, &merged(&reader_stats, &stats))
+                    }
+                };
+                r.context("writing a message")?;
+                stats.messages_recorded += 1;
+            }
+            None => {}
+        }
+        if flushed_at.elapsed() >= flush_interval {
+            rec.flush().context("flushing")?;
+            flushed_at = Instant::now();
+            if stats != reported {
+                let _ = stats_out.send(stats);
+                reported = stats;
+            }
+        }
+    }
+    let now = realtime_ns();
+    rec.write_json(ChannelKind::Recorder, last_frame.seq, now, now, &merged(&reader_stats, &stats))?;
+    rec.finish().context("finishing the file")?;
+    Ok(stats)
+}

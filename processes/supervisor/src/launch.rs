@@ -1,0 +1,107 @@
+//! Starting, watching and stopping stage processes.
+
+use anyhow::{bail, Context};
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+/// Poll period while waiting for a stage to exit.
+const EXIT_POLL: Duration = Duration::from_millis(20);
+
+/// Finds the binary of stage `name` (`hubtrack-<name>`) next to the running `hubtrack`.
+pub fn stage_binary(name: &str) -> anyhow::Result<PathBuf> {
+    let exe = std::env::current_exe().context("locating the hubtrack executable")?;
+    let dir = exe.parent().context("hubtrack executable has no folder")?;
+    let bin = dir.join(format!("hubtrack-{name}"));
+    if !bin.is_file() {
+        bail!(
+            "stage binary {} not found next to {} (build all stages: cargo build --release --workspace)",
+            bin.display(),
+            exe.display()
+        );
+    }
+    Ok(bin)
+}
+
+/// A running stage process whose output is forwarded with a `[stage]` prefix.
+pub struct Stage {
+    /// Stage name.
+    pub name: String,
+    /// The process.
+    pub child: Child,
+    /// When it was started.
+    pub started: Instant,
+    /// Exit status once it ended.
+    pub exited: Option<ExitStatus>,
+}
+
+impl Stage {
+    /// Starts `binary args...`, forwarding its stdout and stderr line by line to ours.
+    pub fn spawn(name: &str, binary: &Path, args: &[String]) -> anyhow::Result<Stage> {
+        let mut child = Command::new(binary)
+            .args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .with_context(|| format!("starting stage {name} ({})", binary.display()))?;
+        forward(name, child.stdout.take().expect("piped"), false);
+        forward(name, child.stderr.take().expect("piped"), true);
+        Ok(Stage { name: name.into(), child, started: Instant::now(), exited: None })
+    }
+
+    /// Process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Checks (without blocking) whether the process ended.
+    pub fn poll(&mut self) -> Option<ExitStatus> {
+        if self.exited.is_none() {
+            self.exited = self.child.try_wait().ok().flatten();
+        }
+        self.exited
+    }
+
+    /// Sends SIGTERM, waits up to `timeout` for a clean exit, then SIGKILL.
+    pub fn stop(&mut self, timeout: Duration) -> Option<ExitStatus> {
+        if self.poll().is_some() {
+            return self.exited;
+        }
+        signal(self.pid(), libc::SIGTERM);
+        let deadline = Instant::now() + timeout;
+        while Instant::now() < deadline {
+            if self.poll().is_some() {
+                return self.exited;
+            }
+            std::thread::sleep(EXIT_POLL);
+        }
+        log::warn!("{} did not stop within {:?}: killing it", self.name, timeout);
+        let _ = self.child.kill();
+        self.exited = self.child.wait().ok();
+        self.exited
+    }
+}
+
+/// Sends `sig` to `pid`.
+pub fn signal(pid: u32, sig: i32) {
+    // SAFETY: plain kill(2) on a child pid we own.
+    unsafe {
+        libc::kill(pid as libc::pid_t, sig);
+    }
+}
+
+fn forward(name: &str, stream: impl std::io::Read + Send + 'static, to_stderr: bool) {
+    let prefix = format!("[{name}] ");
+    std::thread::spawn(move || {
+        for line in BufReader::new(stream).lines() {
+            let Ok(line) = line else { break };
+            if to_stderr {
+                let _ = writeln!(std::io::stderr().lock(), "{prefix}{line}");
+            } else {
+                let _ = writeln!(std::io::stdout().lock(), "{prefix}{line}");
+            }
+        }
+    });
+}

@@ -1,0 +1,446 @@
+//! Messages that cross process boundaries.
+//!
+//! Every type here is `#[repr(C)]`, fixed size, pointer free and `Copy`, so it can live in iceoryx2
+//! shared memory (`#[derive(ZeroCopySend)]`). They also derive `serde` and `schemars` so the
+//! recorder writes them as JSON with an embedded JSON schema, and replay reads them back exactly
+//! (all physical quantities are `f64`, which JSON round-trips bit for bit).
+
+use iceoryx2::prelude::ZeroCopySend;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// Frame sequence number, capture time and per-stage stamps carried by every result message.
+/// All times are `CLOCK_MONOTONIC` ns (see [`crate::time`]).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::Stamps")]
+pub struct Stamps {
+    /// Sequence number of the camera frame this result derives from.
+    pub seq: u64,
+    /// When that frame was captured.
+    pub capture_ns: u64,
+    /// When the publishing stage received its input.
+    pub recv_ns: u64,
+    /// When the publishing stage published this message.
+    pub publish_ns: u64,
+}
+
+/// Pixel layout of a frame's `[u8]` payload.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::PixelFormat")]
+pub enum PixelFormat {
+    /// 8-bit blue, green, red; `stride >= 3 * width`.
+    #[default]
+    Bgr8 = 1,
+    /// 8-bit luminance; `stride >= width`.
+    Gray8 = 2,
+}
+
+impl PixelFormat {
+    /// Bytes per pixel.
+    pub const fn bytes_per_pixel(self) -> usize {
+        match self {
+            PixelFormat::Bgr8 => 3,
+            PixelFormat::Gray8 => 1,
+        }
+    }
+}
+
+/// Which kind of source produced a frame.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::FrameSourceKind")]
+pub enum FrameSourceKind {
+    /// A V4L2 camera.
+    #[default]
+    Camera = 1,
+    /// A video file.
+    Video = 2,
+    /// A folder or glob of still images.
+    Images = 3,
+    /// The synthetic turbine renderer.
+    Synthetic = 4,
+    /// The flight simulator's rendered camera.
+    Sim = 5,
+    /// Frames replayed from a recording.
+    Replay = 6,
+}
+
+/// Exact ground truth of a rendered frame (synthetic source and simulator only; `valid == false`
+/// for real cameras). Pixel coordinates are in the frame's own resolution, origin top-left.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::FrameTruth")]
+pub struct FrameTruth {
+    /// The frame was rendered and the fields below hold its truth.
+    pub valid: bool,
+    /// A turbine is present and its hub lies inside the image.
+    pub turbine_in_view: bool,
+    /// Where the blade axes meet (rotor centre in the blade-root plane), px.
+    pub hub_px: [f64; 2],
+    /// Tip of the spinner nose cone, px.
+    pub nose_px: [f64; 2],
+    /// Tower axis at the top of the tower, px.
+    pub tower_top_px: [f64; 2],
+    /// Tower width in px, measured at image row `tower_width_row`.
+    pub tower_width_px: f64,
+    /// The image row at which `tower_width_px` is measured.
+    pub tower_width_row: f64,
+    /// Camera-to-hub distance, metres.
+    pub distance_m: f64,
+    /// Relative yaw, degrees: positive when the camera stands on the turbine's own left (the
+    /// viewer's right when facing the rotor) and looks at the hub; zero when facing the rotor.
+    pub relative_yaw_deg: f64,
+}
+
+/// User header of every sample on the frames service; the pixels are the sample's `[u8]` payload.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::FrameHeader")]
+pub struct FrameHeader {
+    /// Frame sequence number, +1 per frame the source produced (a gap means a lost frame).
+    pub seq: u64,
+    /// When the frame was captured (monotonic ns).
+    pub capture_ns: u64,
+    /// When the frame was captured (realtime, epoch ns).
+    pub capture_realtime_ns: u64,
+    /// When capture published the frame (monotonic ns).
+    pub publish_ns: u64,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Bytes per row (`>= width * bytes_per_pixel`).
+    pub stride: u32,
+    /// Pixel layout.
+    pub format: PixelFormat,
+    /// What produced the frame.
+    pub source: FrameSourceKind,
+    /// Ground truth for rendered frames.
+    pub truth: FrameTruth,
+}
+
+impl FrameHeader {
+    /// Payload bytes the header describes (`stride * height`).
+    pub fn payload_len(&self) -> usize {
+        self.stride as usize * self.height as usize
+    }
+}
+
+/// Maximum number of blade angles carried in a [`Detection`].
+pub const MAX_BLADES: usize = 6;
+
+/// Time spent in each step of one detection, microseconds.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::DetectTimings")]
+pub struct DetectTimings {
+    /// Pyramid downsampling (and colour conversion).
+    pub pyramid_us: f64,
+    /// Edge detection.
+    pub edges_us: f64,
+    /// Hough line (and circle) transforms.
+    pub hough_us: f64,
+    /// Tower, blade and hub geometry.
+    pub geometry_us: f64,
+    /// Whole detection.
+    pub total_us: f64,
+}
+
+/// Result of the detect stage for one frame.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::Detection")]
+pub struct Detection {
+    /// Frame identity and stage stamps.
+    pub stamps: Stamps,
+    /// Full-resolution image width of the frame, px.
+    pub image_width: u32,
+    /// Full-resolution image height of the frame, px.
+    pub image_height: u32,
+    /// A hub was found.
+    pub detected: bool,
+    /// Hub position, full-resolution px (valid when `detected`).
+    pub hub_px: [f64; 2],
+    /// 0..1; how much the detector believes this is a turbine hub.
+    pub confidence: f64,
+    /// A tower was found.
+    pub tower_found: bool,
+    /// Tower top on its axis, px.
+    pub tower_top_px: [f64; 2],
+    /// Tower width, px, measured at row `tower_width_row`.
+    pub tower_width_px: f64,
+    /// Image row of the tower width measurement, px.
+    pub tower_width_row: f64,
+    /// Signed horizontal gap hub minus tower axis, px (for yaw estimation).
+    pub hub_tower_gap_px: f64,
+    /// A spinner circle was found.
+    pub circle_found: bool,
+    /// Spinner circle `[x, y, radius]`, px.
+    pub circle: [f64; 3],
+    /// Number of valid entries in `blade_angles_deg`.
+    pub blade_count: u32,
+    /// Blade angles in the image, degrees, 0 = up, clockwise.
+    pub blade_angles_deg: [f64; MAX_BLADES],
+    /// Camera roll used for compensation, degrees.
+    pub roll_used_deg: f64,
+    /// Number of Hough lines.
+    pub line_count: u32,
+    /// Number of edge pixels.
+    pub edge_count: u32,
+    /// Frames the detector skipped to stay on the newest frame, since start.
+    pub frames_skipped: u64,
+    /// Per-step timings.
+    pub timings: DetectTimings,
+}
+
+/// Track mode of the hub tracker.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::TrackMode")]
+#[serde(rename_all = "snake_case")]
+pub enum TrackMode {
+    /// No track yet, collecting first detections.
+    #[default]
+    Acquiring = 0,
+    /// Detections arrive and update the track.
+    Tracking = 1,
+    /// Recent detections missing: predicting.
+    Coasting = 2,
+    /// The track is lost.
+    Lost = 3,
+}
+
+/// Output of the track stage.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::TrackState")]
+pub struct TrackState {
+    /// Frame identity and stage stamps.
+    pub stamps: Stamps,
+    /// Track mode.
+    pub mode: TrackMode,
+    /// The tracker asks for a search manoeuvre (prolonged loss).
+    pub search_requested: bool,
+    /// Full-resolution image width, px.
+    pub image_width: u32,
+    /// Full-resolution image height, px.
+    pub image_height: u32,
+    /// Filtered hub position, px.
+    pub hub_px: [f64; 2],
+    /// Filtered hub velocity, px/s.
+    pub hub_velocity_px_s: [f64; 2],
+    /// Position covariance `[xx, xy, yx, yy]`, px².
+    pub hub_covariance: [f64; 4],
+    /// Distance estimate is usable.
+    pub distance_valid: bool,
+    /// Distance to the hub, metres.
+    pub distance_m: f64,
+    /// Standard deviation of `distance_m`.
+    pub distance_std_m: f64,
+    /// Yaw estimate is usable.
+    pub yaw_valid: bool,
+    /// Relative yaw (sign as in [`FrameTruth::relative_yaw_deg`]), degrees.
+    pub yaw_deg: f64,
+    /// Standard deviation of `yaw_deg`.
+    pub yaw_std_deg: f64,
+    /// Frames since the last accepted detection.
+    pub frames_since_detection: u32,
+    /// Seconds since the last accepted detection.
+    pub time_since_detection_s: f64,
+}
+
+/// A fixed-capacity ASCII text (NUL padded) for reasons and error messages in shared memory.
+#[repr(C)]
+#[derive(Clone, Copy, PartialEq, Eq, ZeroCopySend)]
+#[type_name("hubtrack::Text64")]
+pub struct Text64(pub [u8; 64]);
+
+impl Default for Text64 {
+    fn default() -> Self {
+        Text64([0; 64])
+    }
+}
+
+impl Text64 {
+    /// Builds from a string, truncated at a char boundary to 64 bytes.
+    pub fn new(s: &str) -> Self {
+        let mut out = [0u8; 64];
+        let mut end = s.len().min(64);
+        while !s.is_char_boundary(end) {
+            end -= 1;
+        }
+        out[..end].copy_from_slice(&s.as_bytes()[..end]);
+        Text64(out)
+    }
+
+    /// The text up to the first NUL.
+    pub fn as_str(&self) -> &str {
+        let end = self.0.iter().position(|&b| b == 0).unwrap_or(64);
+        // Built only from &str, cut at a char boundary; fall back to "" for foreign bytes.
+        std::str::from_utf8(&self.0[..end]).unwrap_or("")
+    }
+}
+
+impl std::fmt::Debug for Text64 {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:?}", self.as_str())
+    }
+}
+
+impl Serialize for Text64 {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
+impl<'de> Deserialize<'de> for Text64 {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        Ok(Text64::new(&s))
+    }
+}
+
+impl JsonSchema for Text64 {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Text64".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({ "type": "string", "maxLength": 64 })
+    }
+}
+
+/// Which task of the approach produced a setpoint.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::ApproachTask")]
+#[serde(rename_all = "snake_case")]
+pub enum ApproachTask {
+    /// Hover in place.
+    #[default]
+    Hold = 0,
+    /// T1: keep the hub in the target box (climb/descend, yaw).
+    CentreHub = 1,
+    /// T2: reduce relative yaw by moving sideways.
+    ReduceYaw = 2,
+    /// T3: move forward to the distance target.
+    Approach = 3,
+    /// Rotate slowly to find the turbine.
+    Search = 4,
+    /// At target.
+    Done = 5,
+    /// Bad data or link loss.
+    Abort = 6,
+}
+
+/// Output of the control stage: a body-frame velocity and yaw-rate command.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::Setpoint")]
+pub struct Setpoint {
+    /// Frame identity and stage stamps.
+    pub stamps: Stamps,
+    /// Active task.
+    pub task: ApproachTask,
+    /// The setpoint was sent to the autopilot (armed, GUIDED, fresh inputs).
+    pub sent: bool,
+    /// Forward velocity, body frame, m/s.
+    pub vx_m_s: f64,
+    /// Right velocity, body frame, m/s.
+    pub vy_m_s: f64,
+    /// Down velocity, body frame, m/s.
+    pub vz_m_s: f64,
+    /// Yaw rate, rad/s, positive clockwise seen from above.
+    pub yaw_rate_rad_s: f64,
+    /// Why this task is active.
+    pub reason: Text64,
+}
+
+/// The vehicle's state as reported by the autopilot (or the simulator).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::VehicleState")]
+pub struct VehicleState {
+    /// When the newest autopilot message in this state was received (monotonic ns).
+    pub recv_ns: u64,
+    /// When this state was published (monotonic ns).
+    pub publish_ns: u64,
+    /// Autopilot HEARTBEAT seen recently.
+    pub link_ok: bool,
+    /// Motors armed.
+    pub armed: bool,
+    /// ArduCopter custom mode number (4 = GUIDED).
+    pub custom_mode: u32,
+    /// Attitude fields are valid.
+    pub attitude_valid: bool,
+    /// Roll, rad (right wing down positive).
+    pub roll_rad: f64,
+    /// Pitch, rad (nose up positive).
+    pub pitch_rad: f64,
+    /// Yaw, rad (clockwise from north).
+    pub yaw_rad: f64,
+    /// Body rates `[p, q, r]`, rad/s.
+    pub body_rates_rad_s: [f64; 3],
+    /// Position fields are valid.
+    pub position_valid: bool,
+    /// Local position north, east, down, metres.
+    pub position_ned_m: [f64; 3],
+    /// Local velocity north, east, down, m/s.
+    pub velocity_ned_m_s: [f64; 3],
+}
+
+/// Periodic status of a stage process (its heartbeat); read by the supervisor and recorded.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::StageStatus")]
+pub struct StageStatus {
+    /// Stage name (`capture`, `detect`, ...).
+    pub stage: Text64,
+    /// Process id.
+    pub pid: u32,
+    /// When this status was published (monotonic ns).
+    pub publish_ns: u64,
+    /// Process start (monotonic ns).
+    pub started_ns: u64,
+    /// Inputs received since start (frames, messages).
+    pub inputs: u64,
+    /// Outputs published since start.
+    pub outputs: u64,
+    /// Inputs skipped on purpose to stay on the newest one.
+    pub skipped: u64,
+    /// Inputs lost (overwritten before read, dropped because a queue was full).
+    pub dropped: u64,
+    /// Errors since start.
+    pub errors: u64,
+    /// The last error, if any.
+    pub last_error: Text64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text64_truncates_at_char_boundary() {
+        let s = "é".repeat(40); // 80 bytes
+        let t = Text64::new(&s);
+        assert_eq!(t.as_str().len(), 64);
+        assert_eq!(t.as_str(), &s[..64]);
+    }
+
+    #[test]
+    fn messages_round_trip_through_json_exactly() {
+        let mut d = Detection::default();
+        d.hub_px = [1234.567_890_123, 0.1 + 0.2];
+        d.stamps.seq = u64::MAX;
+        let json = serde_json::to_string(&d).unwrap();
+        let back: Detection = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, d);
+        let mut s = Setpoint::default();
+        s.reason = Text64::new("T1: hub outside target box");
+        s.task = ApproachTask::CentreHub;
+        let back: Setpoint = serde_json::from_str(&serde_json::to_string(&s).unwrap()).unwrap();
+        assert_eq!(back, s);
+    }
+}
