@@ -33,8 +33,9 @@ const FIELD_COL_SHIFT: u32 = 9;
 const FAR_M: f32 = 60_000.0;
 /// Offset added to texture-plane coordinates so they stay positive (m).
 const TEX_ORIGIN_OFFSET_M: f64 = 131_072.0;
-/// Fast-path ground cells must not span more haze than this (else they are done per pixel).
-const MAX_CELL_FOG_SPAN: f32 = 0.15;
+/// Cells whose texture footprint varies more than this factor between corners get exact
+/// per-pixel perspective instead of linear texture-coordinate interpolation.
+const MAX_CELL_FOOT_RATIO: f32 = 1.2;
 /// Crop-row stripes are 2^STRIPE_SHIFT ground texels wide (2 m period).
 const STRIPE_SHIFT: u32 = 2;
 /// Luminance drop of the dark crop-row stripes.
@@ -60,30 +61,47 @@ struct Node {
     k: f32,
     /// Texture footprint in metres per pixel (for mip selection).
     foot: f32,
+    /// Ground: ground/sea texel coordinates of the intersection. Sky: cloud texel coordinates.
+    u: f32,
+    v: f32,
 }
 
 impl Node {
     #[inline(always)]
+    fn to_arr(self) -> [f32; 16] {
+        let (d, a, b) = (self.d, self.a, self.b);
+        [d[0], d[1], d[2], self.du, self.dv, a[0], a[1], a[2], b[0], b[1], b[2], self.k, self.foot, self.u, self.v, 0.0]
+    }
+
+    #[inline(always)]
+    fn from_arr(v: [f32; 16]) -> Node {
+        Node { d: [v[0], v[1], v[2]], du: v[3], dv: v[4], a: [v[5], v[6], v[7]], b: [v[8], v[9], v[10]], k: v[11], foot: v[12], u: v[13], v: v[14] }
+    }
+
+    /// Linear interpolation of every field (written over a flat array so it vectorises).
+    #[inline(always)]
     fn lerp(&self, o: &Node, t: f32) -> Node {
-        let l = |a: f32, b: f32| a + (b - a) * t;
-        Node {
-            d: [l(self.d[0], o.d[0]), l(self.d[1], o.d[1]), l(self.d[2], o.d[2])],
-            du: l(self.du, o.du),
-            dv: l(self.dv, o.dv),
-            a: [l(self.a[0], o.a[0]), l(self.a[1], o.a[1]), l(self.a[2], o.a[2])],
-            b: [l(self.b[0], o.b[0]), l(self.b[1], o.b[1]), l(self.b[2], o.b[2])],
-            k: l(self.k, o.k),
-            foot: l(self.foot, o.foot),
+        let (x, y) = (self.to_arr(), o.to_arr());
+        let mut r = [0f32; 16];
+        for i in 0..16 {
+            r[i] = x[i] + (y[i] - x[i]) * t;
         }
+        Node::from_arr(r)
     }
 }
 
 /// What a grid cell needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum CellKind {
+    /// Sky; cloud coordinates (if any) interpolated linearly.
     Sky,
+    /// Sky near the horizon where the cloud plane recedes fast: per-pixel plane intersection.
+    SkyPersp,
+    /// Ground; texture coordinates interpolated linearly.
     Ground,
-    /// Straddles the horizon or has strongly non-linear haze: exact per-pixel evaluation.
+    /// Ground near the horizon: per-pixel plane intersection (one division per pixel).
+    GroundPersp,
+    /// Straddles the horizon: everything evaluated per pixel.
     Exact,
 }
 
@@ -106,10 +124,11 @@ struct FrameCtx {
     tex_sin: f32,
     water: [f32; 3],
     glint_strength: f32,
-    /// Palette per mip level: far levels fade toward the mean so field edges do not alias.
-    palette: [[[f32; 3]; PALETTE_N]; crate::texture::TEX_LEVELS],
-    /// Relative darkening of crop-row stripes per mip level (0 once they would alias).
-    stripe_amp: [f32; crate::texture::TEX_LEVELS],
+    /// Field palette (0..255 RGB) per mip level: far levels fade toward the mean so field edges
+    /// do not alias.
+    palette_i: [[[i32; 3]; PALETTE_N]; crate::texture::TEX_LEVELS],
+    /// Darkening (detail-texture units, 128 = 1.0) of crop-row stripes per mip level (0 once they would alias).
+    stripe_amp: [i32; crate::texture::TEX_LEVELS],
     field_seed: u32,
     cloud_alpha: [f32; 256],
     cloud_shade: [f32; 256],
@@ -182,20 +201,21 @@ impl Background {
                     &self.nodes[(j + 1) * self.gw + i],
                     &self.nodes[(j + 1) * self.gw + i + 1],
                 ];
-                let sky = c.iter().all(|n| n.d[2] > 0.0);
-                let ground = c.iter().all(|n| n.d[2] < 0.0);
-                let kind = if sky {
-                    CellKind::Sky
-                } else if ground {
-                    let haze = |n: &Node| 1.0 - n.a[0].min(1.0);
-                    let (mn, mx) = c.iter().fold((f32::MAX, f32::MIN), |(a, b), n| {
-                        let f = if ctx.ground == Ground::Sea { n.b[0] / ctx.haze[0].max(1.0) } else { haze(n) };
-                        (a.min(f), b.max(f))
-                    });
-                    if mx - mn < MAX_CELL_FOG_SPAN {
+                // Footprint spread over the cell says how non-linear the plane mapping is.
+                let (fmin, fmax) = c.iter().fold((f32::MAX, 0f32), |(a, b), n| (a.min(n.foot), b.max(n.foot)));
+                let linear = fmax <= fmin * MAX_CELL_FOOT_RATIO;
+                let kind = if c.iter().all(|n| n.d[2] > 0.0) {
+                    let clouds = ctx.has_clouds && c.iter().any(|n| n.k > 0.0);
+                    if !clouds || linear {
+                        CellKind::Sky
+                    } else {
+                        CellKind::SkyPersp
+                    }
+                } else if c.iter().all(|n| n.d[2] < 0.0) {
+                    if linear {
                         CellKind::Ground
                     } else {
-                        CellKind::Exact
+                        CellKind::GroundPersp
                     }
                 } else {
                     CellKind::Exact
@@ -220,17 +240,26 @@ impl Background {
                 let x1 = (x0 + GRID).min(w);
                 let seg = &mut orow[x0 * 3..x1 * 3];
                 let (n0, n1) = (&self.row[i], &self.row[i + 1]);
+                let tex = &self.tex;
                 match self.cells[j * cw + i] {
-                    CellKind::Sky => sky_span(&ctx, &self.tex, seg, n0, n1),
-                    CellKind::Ground => ground_span(&ctx, &self.tex, seg, n0, n1),
+                    CellKind::Sky => sky_span(&ctx, tex, seg, n0, n1, Affine::new(n0, n1)),
+                    CellKind::SkyPersp => {
+                        let g = Persp::new(&ctx, n0, n1, CLOUD_BASE_M as f32 - ctx.eye_z, 1.0 / CLOUD_TEXEL_M, true);
+                        sky_span(&ctx, tex, seg, n0, n1, g)
+                    }
+                    CellKind::Ground => ground_span(&ctx, tex, seg, n0, n1, Affine::new(n0, n1)),
+                    CellKind::GroundPersp => {
+                        let g = Persp::new(&ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false);
+                        ground_span(&ctx, tex, seg, n0, n1, g)
+                    }
                     CellKind::Exact => {
                         for (k, px) in seg.chunks_exact_mut(3).enumerate() {
                             let d = n0.lerp(n1, k as f32 / GRID as f32).d;
                             let n = eval_node(&ctx, d);
                             if d[2] > 0.0 {
-                                sky_span(&ctx, &self.tex, px, &n, &n);
+                                sky_span(&ctx, tex, px, &n, &n, Affine::new(&n, &n));
                             } else {
-                                ground_span(&ctx, &self.tex, px, &n, &n);
+                                ground_span(&ctx, tex, px, &n, &n, Affine::new(&n, &n));
                             }
                         }
                     }
@@ -286,9 +315,10 @@ impl Background {
                 }
             }
         }
-        let mut stripe_amp = [0f32; crate::texture::TEX_LEVELS];
-        stripe_amp[0] = STRIPE_DARKENING;
-        stripe_amp[1] = STRIPE_DARKENING * 0.5;
+        let mut stripe_amp = [0i32; crate::texture::TEX_LEVELS];
+        stripe_amp[0] = (128.0 * STRIPE_DARKENING) as i32;
+        stripe_amp[1] = (64.0 * STRIPE_DARKENING) as i32;
+        let palette_i = palette.map(|l| l.map(|p| p.map(|c| c as i32)));
         let coverage = match scene.sky {
             Sky::Clouds => rng.range(0.38, 0.62) as f32,
             _ => 0.0,
@@ -337,7 +367,7 @@ impl Background {
             tex_sin: tex_sin as f32,
             water,
             glint_strength,
-            palette,
+            palette_i,
             stripe_amp,
             field_seed: (hash64(scene.seed ^ 0xF1E1D) >> 32) as u32,
             cloud_alpha,
@@ -564,29 +594,48 @@ fn ground_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &N
     let level = mip_level(foot / GROUND_TEXEL_M);
     let det = tex.grass.view(level);
     let mac = tex.grass.view(level.saturating_sub(MACRO_SHIFT));
-    let pal = &ctx.palette[level as usize];
-    let stripe_amp = ctx.stripe_amp[level as usize];
+    let pal = &ctx.palette_i[level as usize];
     let aff = plane_affine(ctx.eye_u, ctx.eye_v, dh, n0, n1, 1.0 / GROUND_TEXEL_M as f64);
-    let (mut u, mut v) = (aff.u, aff.v);
     let n = (seg.len() / 3) as i32;
+    let (ue, ve) = (aff.u.wrapping_add(aff.du * (n - 1)), aff.v.wrapping_add(aff.dv * (n - 1)));
+    // Large-scale luminance is smooth: sample it at the segment ends only and fold it together
+    // with the haze attenuation into one fixed-point gain (131072 = 1.0), stepped per pixel.
+    let m0 = mac.get(aff.u >> (8 + MACRO_SHIFT), aff.v >> (8 + MACRO_SHIFT)) as f32;
+    let m1 = mac.get(ue >> (8 + MACRO_SHIFT), ve >> (8 + MACRO_SHIFT)) as f32;
+    let m1 = m0 + (m1 - m0) * GRID as f32 / (n.max(2) - 1) as f32;
+    const FIX: f32 = 65536.0;
+    let g0 = n0.a[0] * m0 * (2.0 * FIX / 128.0);
+    let g1 = n1.a[0] * m1 * (2.0 * FIX / 128.0);
+    let mut g = g0 as i32;
+    let dg = ((g1 - g0) * inv) as i32;
+    let mut bb = [(b[0] * FIX) as i32, (b[1] * FIX) as i32, (b[2] * FIX) as i32];
+    let dbb = [(db[0] * FIX) as i32, (db[1] * FIX) as i32, (db[2] * FIX) as i32];
+    let (mut u, mut v) = (aff.u, aff.v);
     let fs = ctx.field_seed;
+    let stripe_on = ctx.stripe_amp[level as usize];
     // Most segments lie inside one field: look its colour up once.
     let f0 = field_at(fs, u >> 8, v >> 8);
-    let f1 = field_at(fs, u.wrapping_add(aff.du * (n - 1)) >> 8, v.wrapping_add(aff.dv * (n - 1)) >> 8);
+    let f1 = field_at(fs, ue >> 8, ve >> 8);
     let single = f0.0 == f1.0 && f0.1 == f1.1;
-    const NORM: f32 = 1.0 / (128.0 * 128.0);
     for px in seg.chunks_exact_mut(3) {
         let (ui, vi) = (u >> 8, v >> 8);
         let h = if single { f0.2 } else { field_at(fs, ui, vi).2 };
         let p = &pal[(h >> 29) as usize];
-        // Crop rows / mowing stripes in some fields.
+        // Crop rows / mowing stripes in some fields: darker every other 2^STRIPE_SHIFT texels.
         let sv = if h & (1 << 27) != 0 { ui } else { vi };
-        let stripe = 1.0 - stripe_amp * ((h >> 28) & 1 & (sv >> STRIPE_SHIFT) as u32) as f32;
-        let lum = det.get(ui, vi) as f32 * mac.get(ui >> MACRO_SHIFT, vi >> MACRO_SHIFT) as f32 * (a[0] * NORM) * stripe;
-        store(px, p[0] * lum + b[0], p[1] * lum + b[1], p[2] * lum + b[2]);
+        let dark = ((h >> 28) as i32 & 1 & (sv >> STRIPE_SHIFT)) * stripe_on;
+        // Detail (128 = 1.0) times the gain (131072 = 1.0) -> luminance with 256 = 1.0.
+        let lum = ((det.get(ui, vi) as i32 - dark) * (g >> 8)) >> 8;
+        // p (0..255) * lum (256 = 1.0) >> 8, plus haze.
+        let r = ((p[0] * lum) >> 8) + (bb[0] >> 16);
+        let gg = ((p[1] * lum) >> 8) + (bb[1] >> 16);
+        let bl = ((p[2] * lum) >> 8) + (bb[2] >> 16);
+        px[0] = bl.min(255) as u8;
+        px[1] = gg.min(255) as u8;
+        px[2] = r.min(255) as u8;
         u = u.wrapping_add(aff.du);
         v = v.wrapping_add(aff.dv);
-        a[0] += da[0];
-        b = [b[0] + db[0], b[1] + db[1], b[2] + db[2]];
+        g += dg;
+        bb = [bb[0] + dbb[0], bb[1] + dbb[1], bb[2] + dbb[2]];
     }
 }

@@ -52,6 +52,18 @@ pub enum IpcError {
     },
 }
 
+/// Environment variable naming the IPC domain: processes see each other only within one domain
+/// (like `ROS_DOMAIN_ID`), so tests and a live pipeline on one machine never mix.
+pub const DOMAIN_ENV: &str = "HUBTRACK_DOMAIN";
+
+/// The iceoryx2 service name of `name` in the current domain.
+pub fn scoped_name(name: &str) -> String {
+    match std::env::var(DOMAIN_ENV) {
+        Ok(d) if !d.is_empty() => format!("{d}/{name}"),
+        _ => name.to_string(),
+    }
+}
+
 fn svc_err(spec: &ServiceSpec, e: impl Debug) -> IpcError {
     IpcError::Service { service: spec.name.into(), reason: format!("{e:?}") }
 }
@@ -88,7 +100,7 @@ pub fn cleanup_dead_nodes(node: &Node<Ipc>) -> u64 {
 }
 
 fn open_event(node: &Node<Ipc>, spec: &ServiceSpec) -> Result<PortFactoryEvent, IpcError> {
-    let name: ServiceName = spec.event_name.try_into().map_err(|e| svc_err(spec, e))?;
+    let name: ServiceName = scoped_name(spec.event_name).as_str().try_into().map_err(|e| svc_err(spec, e))?;
     node.service_builder(&name)
         .event()
         .max_notifiers(spec.qos.max_publishers + 2)
@@ -103,7 +115,7 @@ type PortFactoryEvent = iceoryx2::service::port_factory::event::PortFactory<Ipc>
 macro_rules! pubsub_builder {
     ($node:expr, $spec:expr, $payload:ty) => {{
         let spec: &ServiceSpec = $spec;
-        let name: ServiceName = spec.name.try_into().map_err(|e| svc_err(spec, e))?;
+        let name: ServiceName = scoped_name(spec.name).as_str().try_into().map_err(|e| svc_err(spec, e))?;
         $node
             .service_builder(&name)
             .publish_subscribe::<$payload>()

@@ -75,15 +75,23 @@ struct TapArgs {
 struct RenderArgs {
     #[command(flatten)]
     config: ConfigArgs,
-    /// Frame sequence number to render.
+    /// Frame sequence number to render (the first one with --frames).
     #[arg(long, default_value_t = 0)]
     seq: u64,
-    /// Output: `.png` writes an image, anything else the raw BGR8 bytes.
+    /// Number of frames: with an `.avi` output, a Motion-JPEG clip; with a folder, one PNG each.
+    #[arg(long, default_value_t = 1)]
+    frames: u64,
+    /// Output: `.png`/`.jpg` an image, `.avi` a video, an existing folder PNGs, anything else raw BGR8 bytes.
     #[arg(long, short = 'o')]
     out: PathBuf,
 }
 
 fn main() {
+    // Die quietly on a closed pipe (`hubtrack detect ... | head`), as Unix tools do.
+    // SAFETY: resetting a signal disposition at start, before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     hubtrack_runtime::logging::init("hubtrack");
     let cli = Cli::parse();
     let result = match cli.command {
@@ -309,17 +317,41 @@ fn tap(args: TapArgs) -> anyhow::Result<()> {
 }
 
 fn render(args: RenderArgs) -> anyhow::Result<()> {
+    use opencv::prelude::*;
     let config = args.config.load()?;
     let mut source = SyntheticSource::new(&config.capture.synthetic, config.capture.fps)?;
     let (w, h) = source.size();
     let mut pixels = vec![0u8; w as usize * h as usize * 3];
-    let truth = source.render_index(args.seq, &mut pixels)?;
-    if args.out.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-        hubtrack_capture::convert::write_bgr_image(&args.out, w, h, &pixels)?;
+    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let mut video = if ext == "avi" {
+        let fourcc = opencv::videoio::VideoWriter::fourcc('M', 'J', 'P', 'G')?;
+        let name = args.out.to_str().context("output path is not UTF-8")?;
+        let writer = opencv::videoio::VideoWriter::new_def(name, fourcc, config.capture.fps, opencv::core::Size::new(w as i32, h as i32))?;
+        if !writer.is_opened()? {
+            bail!("cannot write video {}", args.out.display());
+        }
+        Some(writer)
     } else {
-        std::fs::write(&args.out, &pixels).with_context(|| format!("writing {}", args.out.display()))?;
+        None
+    };
+    for seq in args.seq..args.seq + args.frames {
+        let truth = source.render_index(seq, &mut pixels)?;
+        if let Some(writer) = video.as_mut() {
+            let flat = Mat::new_rows_cols_with_data(h as i32, (w * 3) as i32, &pixels)?;
+            writer.write(&flat.reshape(3, h as i32)?)?;
+        } else if args.out.is_dir() {
+            let path = args.out.join(format!("frame_{seq:06}.png"));
+            hubtrack_capture::convert::write_bgr_image(&path, w, h, &pixels)?;
+        } else if ["png", "jpg", "jpeg", "bmp"].contains(&ext.as_str()) {
+            hubtrack_capture::convert::write_bgr_image(&args.out, w, h, &pixels)?;
+        } else {
+            std::fs::write(&args.out, &pixels).with_context(|| format!("writing {}", args.out.display()))?;
+        }
+        let t = hubtrack_capture::synthetic::frame_truth(&truth);
+        println!("{}", serde_json::json!({"seq": seq, "width": w, "height": h, "out": args.out, "truth": t}));
     }
-    let t = hubtrack_capture::synthetic::frame_truth(&truth);
-    println!("{}", serde_json::json!({"seq": args.seq, "width": w, "height": h, "out": args.out, "truth": t}));
+    if let Some(mut writer) = video {
+        writer.release()?;
+    }
     Ok(())
 }
