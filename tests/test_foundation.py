@@ -174,3 +174,15 @@ def test_config_file_unknown_key_stops_run_before_start(runner, tmp_path):
     assert res.returncode != 0
     assert "recorder.compresion" in res.stderr and str(cfg) in res.stderr, res.stderr
     assert "started" not in res.stderr
+
+
+def test_sample_recording_opens_with_independent_reader():
+    from conftest import ROOT
+    from mcap.reader import make_reader
+    from mcap_protobuf.decoder import DecoderFactory
+
+    with open(ROOT / "recordings" / "demo.mcap", "rb") as f:
+        frames = [(m.sequence, d) for _, _, m, d in
+                  make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages(topics=["/frames"])]
+    assert [s for s, _ in frames] == list(range(len(frames))) and len(frames) >= 10
+    assert all((d.width, d.height, d.encoding) == (640, 480, "bgr8") for _, d in frames)

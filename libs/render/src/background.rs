@@ -11,7 +11,7 @@
 use crate::camera::Camera;
 use crate::math::{hash64, Rng, WorldToCam};
 use crate::scene::{Ground, Scene, Sky};
-use crate::texture::{mip_level, Textures};
+use crate::texture::{mip_level, TexView, Textures};
 
 /// Node spacing of the direction grid (pixels).
 pub(crate) const GRID: usize = 8;
@@ -110,16 +110,20 @@ struct FrameCtx {
     ground: Ground,
     eye_z: f32,
     /// Camera position in texture-plane coordinates (m, offset positive).
-    eye_u: f64,
-    eye_v: f64,
-    cloud_eye_u: f64,
-    cloud_eye_v: f64,
+    eye_u: f32,
+    eye_v: f32,
+    cloud_eye_u: f32,
+    cloud_eye_v: f32,
+    /// Ground (or sea) texels per metre.
+    ground_tpm: f32,
+    glow_lut: [f32; GLOW_LUT_N],
+    fog_lut: [f32; FOG_LUT_N],
+    inv_visibility: f32,
     sun: [f32; 3],
     sky_lut: [[f32; 3]; SKY_LUT_N],
     glow_col: [f32; 3],
     glow_strength: f32,
     haze: [f32; 3],
-    visibility_m: f32,
     tex_cos: f32,
     tex_sin: f32,
     water: [f32; 3],
@@ -127,8 +131,8 @@ struct FrameCtx {
     /// Field palette (0..255 RGB) per mip level: far levels fade toward the mean so field edges
     /// do not alias.
     palette_i: [[[i32; 3]; PALETTE_N]; crate::texture::TEX_LEVELS],
-    /// Darkening (detail-texture units, 128 = 1.0) of crop-row stripes per mip level (0 once they would alias).
-    stripe_amp: [i32; crate::texture::TEX_LEVELS],
+    /// Darkening (detail-texture units, 128 = 1.0) of crop-row stripes (drawn at mip level 0 only).
+    stripe_amp: i32,
     field_seed: u32,
     cloud_alpha: [f32; 256],
     cloud_shade: [f32; 256],
@@ -186,12 +190,14 @@ impl Background {
 
     /// Fill `out` (BGR8, full frame) with sky and ground for this camera pose.
     pub fn render(&mut self, out: &mut [u8], scene: &Scene, w2c: &WorldToCam) {
+        let t0 = std::time::Instant::now();
         let ctx = self.frame_ctx(scene, w2c);
         // Nodes: rotate rays into the world, evaluate smooth quantities.
         for (n, r) in self.nodes.iter_mut().zip(&self.node_ray) {
             let dw = w2c.dir_to_world([r[0] as f64, r[1] as f64, 1.0]);
             *n = eval_node(&ctx, [dw[0] as f32, dw[1] as f32, dw[2] as f32]);
         }
+        let t1 = std::time::Instant::now();
         let cw = self.gw - 1;
         for j in 0..self.gh - 1 {
             for i in 0..cw {
@@ -223,14 +229,25 @@ impl Background {
                 self.cells[j * cw + i] = kind;
             }
         }
+        if std::env::var_os("HT_DEBUG_CELLS").is_some() {
+            let mut cnt = [0usize; 5];
+            for c in &self.cells {
+                cnt[*c as usize] += 1;
+            }
+            eprintln!("cells sky {} skyp {} ground {} groundp {} exact {}", cnt[0], cnt[1], cnt[2], cnt[3], cnt[4]);
+        }
+        let t2 = std::time::Instant::now();
+        let mut tl = std::time::Duration::ZERO;
         let w = self.w;
         for y in 0..self.h {
             let j = y / GRID;
             let t = (y % GRID) as f32 / GRID as f32;
             let (r0, r1) = (j * self.gw, (j + 1).min(self.gh - 1) * self.gw);
+            let tt = std::time::Instant::now();
             for i in 0..self.gw {
                 self.row[i] = self.nodes[r0 + i].lerp(&self.nodes[r1 + i], t);
             }
+            tl += tt.elapsed();
             let orow = &mut out[y * w * 3..(y + 1) * w * 3];
             for i in 0..cw {
                 let x0 = i * GRID;
@@ -241,30 +258,28 @@ impl Background {
                 let seg = &mut orow[x0 * 3..x1 * 3];
                 let (n0, n1) = (&self.row[i], &self.row[i + 1]);
                 let tex = &self.tex;
+                if std::env::var_os("HT_SKIP_GROUND").is_some() && self.cells[j * cw + i] == CellKind::Ground { seg.fill(0); continue; }
                 match self.cells[j * cw + i] {
-                    CellKind::Sky => sky_span(&ctx, tex, seg, n0, n1, Affine::new(n0, n1)),
-                    CellKind::SkyPersp => {
-                        let g = Persp::new(&ctx, n0, n1, CLOUD_BASE_M as f32 - ctx.eye_z, 1.0 / CLOUD_TEXEL_M, true);
-                        sky_span(&ctx, tex, seg, n0, n1, g)
-                    }
-                    CellKind::Ground => ground_span(&ctx, tex, seg, n0, n1, Affine::new(n0, n1)),
-                    CellKind::GroundPersp => {
-                        let g = Persp::new(&ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false);
-                        ground_span(&ctx, tex, seg, n0, n1, g)
-                    }
+                    CellKind::Sky => sky_span(&ctx, tex, seg, n0, n1, false),
+                    CellKind::SkyPersp => sky_span(&ctx, tex, seg, n0, n1, true),
+                    CellKind::Ground => ground_span(&ctx, tex, seg, n0, n1, false),
+                    CellKind::GroundPersp => ground_span(&ctx, tex, seg, n0, n1, true),
                     CellKind::Exact => {
                         for (k, px) in seg.chunks_exact_mut(3).enumerate() {
                             let d = n0.lerp(n1, k as f32 / GRID as f32).d;
                             let n = eval_node(&ctx, d);
                             if d[2] > 0.0 {
-                                sky_span(&ctx, tex, px, &n, &n, Affine::new(&n, &n));
+                                sky_span(&ctx, tex, px, &n, &n, false);
                             } else {
-                                ground_span(&ctx, tex, px, &n, &n, Affine::new(&n, &n));
+                                ground_span(&ctx, tex, px, &n, &n, false);
                             }
                         }
                     }
                 }
             }
+        }
+        if std::env::var_os("HT_DEBUG_TIME").is_some() {
+            eprintln!("nodes {:?} cells {:?} rows {:?} (lerp {:?})", t1 - t0, t2 - t1, t2.elapsed(), tl);
         }
     }
 
@@ -276,8 +291,11 @@ impl Background {
         let (ox, oy) = (rng.range(0.0, 20_000.0), rng.range(0.0, 20_000.0));
         let (cox, coy) = (rng.range(0.0, 20_000.0), rng.range(0.0, 20_000.0));
         let eye = w2c.origin;
-        let to_tex = |x: f64, y: f64| -> (f64, f64) {
-            (tex_cos * x + tex_sin * y + TEX_ORIGIN_OFFSET_M, -tex_sin * x + tex_cos * y + TEX_ORIGIN_OFFSET_M)
+        let to_tex = |x: f64, y: f64| -> (f32, f32) {
+            (
+                (tex_cos * x + tex_sin * y + TEX_ORIGIN_OFFSET_M) as f32,
+                (-tex_sin * x + tex_cos * y + TEX_ORIGIN_OFFSET_M) as f32,
+            )
         };
         let (eye_u, eye_v) = to_tex(eye[0] + ox, eye[1] + oy);
         let (cloud_eye_u, cloud_eye_v) = to_tex(eye[0] + cox, eye[1] + coy);
@@ -315,9 +333,7 @@ impl Background {
                 }
             }
         }
-        let mut stripe_amp = [0i32; crate::texture::TEX_LEVELS];
-        stripe_amp[0] = (128.0 * STRIPE_DARKENING) as i32;
-        stripe_amp[1] = (64.0 * STRIPE_DARKENING) as i32;
+        let stripe_amp = (128.0 * STRIPE_DARKENING) as i32;
         let palette_i = palette.map(|l| l.map(|p| p.map(|c| c as i32)));
         let coverage = match scene.sky {
             Sky::Clouds => rng.range(0.38, 0.62) as f32,
@@ -357,12 +373,15 @@ impl Background {
             eye_v,
             cloud_eye_u,
             cloud_eye_v,
+            ground_tpm: 1.0 / if scene.ground == Ground::Sea { WAVE_TEXEL_M } else { GROUND_TEXEL_M },
+            glow_lut: glow_lut(glow_strength),
+            fog_lut: fog_lut(),
+            inv_visibility: 1.0 / visibility_m(scene.sky) as f32,
             sun: [sun[0] as f32, sun[1] as f32, sun[2] as f32],
             haze: lut_sky(&sky_lut, 0.0),
             sky_lut,
             glow_col,
             glow_strength,
-            visibility_m: visibility_m(scene.sky) as f32,
             tex_cos: tex_cos as f32,
             tex_sin: tex_sin as f32,
             water,
@@ -413,20 +432,53 @@ fn lut_sky(lut: &[[f32; 3]; SKY_LUT_N], s: f32) -> [f32; 3] {
     lut[i.min(SKY_LUT_N - 1)]
 }
 
-/// Sun glow added to the sky around the sun, as a fraction of the glow colour.
-#[inline]
+/// Entries of the sun-glow table, indexed by the chord distance `sqrt(2 (1 - cos angle))` in [0, 2].
+const GLOW_LUT_N: usize = 512;
+/// Entries of the haze table, indexed by distance / visibility in [0, FOG_LUT_RANGE].
+const FOG_LUT_N: usize = 1024;
+/// Range of the haze table in units of the visibility.
+const FOG_LUT_RANGE: f32 = 8.0;
+
+/// Sun glow (fraction of the glow colour) per chord distance to the sun direction.
+fn glow_lut(strength: f32) -> [f32; GLOW_LUT_N] {
+    let mut lut = [0f32; GLOW_LUT_N];
+    for (i, v) in lut.iter_mut().enumerate() {
+        let chord = 2.0 * i as f32 / (GLOW_LUT_N - 1) as f32; // ≈ angle (rad) near the sun
+        *v = strength * (0.45 * (-chord / 0.10).exp() + 0.22 * (-chord / 0.5).exp());
+    }
+    lut
+}
+
+/// Haze fraction `1 - exp(-x)` for `x` = distance / visibility.
+fn fog_lut() -> [f32; FOG_LUT_N] {
+    let mut lut = [0f32; FOG_LUT_N];
+    for (i, v) in lut.iter_mut().enumerate() {
+        *v = 1.0 - (-(i as f32) * FOG_LUT_RANGE / (FOG_LUT_N - 1) as f32).exp();
+    }
+    lut
+}
+
+#[inline(always)]
 fn glow(ctx: &FrameCtx, cos_angle: f32) -> f32 {
-    let ang = (2.0 * (1.0 - cos_angle).max(0.0)).sqrt(); // ≈ angle in radians near the sun
-    ctx.glow_strength * (0.45 * (-ang / 0.10).exp() + 0.22 * (-ang / 0.5).exp())
+    let chord = (2.0 * (1.0 - cos_angle).max(0.0)).sqrt();
+    ctx.glow_lut[((chord * ((GLOW_LUT_N - 1) as f32 / 2.0)) as usize).min(GLOW_LUT_N - 1)]
+}
+
+#[inline(always)]
+fn fog(ctx: &FrameCtx, dist: f32) -> f32 {
+    let x = dist * ctx.inv_visibility * ((FOG_LUT_N - 1) as f32 / FOG_LUT_RANGE);
+    ctx.fog_lut[(x as usize).min(FOG_LUT_N - 1)]
 }
 
 /// Evaluate all smooth per-direction quantities for one world direction.
 fn eval_node(ctx: &FrameCtx, d: [f32; 3]) -> Node {
     let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-12);
-    let s = d[2] / len;
+    let inv_len = 1.0 / len;
+    let s = d[2] * inv_len;
     let du = ctx.tex_cos * d[0] + ctx.tex_sin * d[1];
     let dv = -ctx.tex_sin * d[0] + ctx.tex_cos * d[1];
-    let cos_sun = (d[0] * ctx.sun[0] + d[1] * ctx.sun[1] + d[2] * ctx.sun[2]) / len;
+    let horiz = (du * du + dv * dv).sqrt().max(1e-9);
+    let cos_sun = (d[0] * ctx.sun[0] + d[1] * ctx.sun[1] + d[2] * ctx.sun[2]) * inv_len;
     let g = glow(ctx, cos_sun);
     let mut n = Node { d, du, dv, ..Node::default() };
     if d[2] > 0.0 {
@@ -438,37 +490,44 @@ fn eval_node(ctx: &FrameCtx, d: [f32; 3]) -> Node {
             (sky[2] + ctx.glow_col[2] * g).min(255.0),
         ];
         if ctx.has_clouds {
-            let t = ((CLOUD_BASE_M as f32 - ctx.eye_z) / d[2]).clamp(0.0, FAR_M / len);
+            let t = ((CLOUD_BASE_M as f32 - ctx.eye_z) / d[2]).clamp(0.0, FAR_M / horiz);
             let dist = t * len;
             n.k = crate::math::smoothstep(0.0, 0.16, s as f64) as f32;
             n.foot = dist / ctx.f_px / s.max(0.02).sqrt();
+            n.u = (ctx.cloud_eye_u + t * du) / CLOUD_TEXEL_M;
+            n.v = (ctx.cloud_eye_v + t * dv) / CLOUD_TEXEL_M;
             // Clouds are lit from the sun side: brighter toward the sun.
             let lit = 0.92 + 0.25 * g / ctx.glow_strength.max(1e-3);
             n.b = [ctx.cloud_col[0] * lit, ctx.cloud_col[1] * lit, ctx.cloud_col[2] * lit];
         }
     } else {
-        let t = (-ctx.eye_z / d[2]).min(FAR_M / len);
+        let t = (-ctx.eye_z / d[2]).min(FAR_M / horiz);
         let dist = t * len;
-        let fog = 1.0 - (-dist / ctx.visibility_m).exp();
-        let haze = [ctx.haze[0] + ctx.glow_col[0] * g * 0.5, ctx.haze[1] + ctx.glow_col[1] * g * 0.5, ctx.haze[2] + ctx.glow_col[2] * g * 0.5];
-        n.b = [haze[0] * fog, haze[1] * fog, haze[2] * fog];
+        let f = fog(ctx, dist);
+        let hz = 0.5 * g;
+        n.b = [
+            (ctx.haze[0] + ctx.glow_col[0] * hz) * f,
+            (ctx.haze[1] + ctx.glow_col[1] * hz) * f,
+            (ctx.haze[2] + ctx.glow_col[2] * hz) * f,
+        ];
         let graze = (-s).max(1e-3);
         n.foot = dist / ctx.f_px / graze.sqrt();
+        n.u = (ctx.eye_u + t * du) * ctx.ground_tpm;
+        n.v = (ctx.eye_v + t * dv) * ctx.ground_tpm;
         if ctx.ground == Ground::Sea {
             // Fresnel (Schlick) mix of water body colour and reflected sky.
-            let fres = 0.02 + 0.98 * (1.0 - graze).powi(5);
+            let m = 1.0 - graze;
+            let fres = 0.02 + 0.98 * (m * m) * (m * m) * m;
             let refl = lut_sky(&ctx.sky_lut, graze);
-            let mut base = [0f32; 3];
             for c in 0..3 {
-                base[c] = (ctx.water[c] * (1.0 - fres) + refl[c] * fres * 0.9) * (1.0 - fog);
+                n.a[c] = (ctx.water[c] * (1.0 - fres) + refl[c] * fres * 0.9) * (1.0 - f);
             }
-            n.a = base;
-            // Glint: reflected ray (dx, dy, -dz) against the sun.
-            let cos_r = (d[0] * ctx.sun[0] + d[1] * ctx.sun[1] - d[2] * ctx.sun[2]) / len;
+            // Glint: reflected ray (dx, dy, -dz) against the sun, ~6° wide.
+            let cos_r = (d[0] * ctx.sun[0] + d[1] * ctx.sun[1] - d[2] * ctx.sun[2]) * inv_len;
             let ang2 = 2.0 * (1.0 - cos_r).max(0.0);
-            n.k = ctx.glint_strength * (-ang2 / 0.012).exp() * (1.0 - fog);
+            n.k = ctx.glint_strength * (-ang2 / 0.012).exp() * (1.0 - f);
         } else {
-            n.a = [1.0 - fog, 0.0, 0.0];
+            n.a = [1.0 - f, 0.0, 0.0];
         }
     }
     n
@@ -481,7 +540,15 @@ fn store(px: &mut [u8], r: f32, g: f32, b: f32) {
     px[2] = r as u8;
 }
 
-/// Fixed-point (8 fractional bits) texel coordinates of a segment's first pixel and per-pixel step.
+/// Produces the integer texel coordinates of successive pixels of a segment.
+trait UvGen {
+    /// Texel coordinates of the current pixel; then advance one pixel.
+    fn next_uv(&mut self) -> (i32, i32);
+    /// Texel coordinates of pixel `k` if they can be predicted exactly (linear generators).
+    fn predict(&self, k: i32) -> Option<(i32, i32)>;
+}
+
+/// Linear stepping of texture coordinates between two nodes (8 fractional bits).
 #[derive(Clone, Copy, Debug)]
 struct Affine {
     u: i32,
@@ -490,22 +557,91 @@ struct Affine {
     dv: i32,
 }
 
-/// Intersect the segment-end rays with a horizontal plane `dh` metres above the eye (negative =
-/// below) and return texture coordinates stepped linearly in between. Along a segment the depth
-/// changes very little, so this affine step is practically exact (it is exact for zero roll
-/// through a pinhole lens); cells where it is not are handled per pixel.
-#[inline]
-fn plane_affine(eye_u: f64, eye_v: f64, dh: f64, n0: &Node, n1: &Node, texels_per_m: f64) -> Affine {
-    let at = |n: &Node| -> (f64, f64) {
-        let horiz = ((n.du * n.du + n.dv * n.dv) as f64).sqrt().max(1e-9);
-        let t = (dh / n.d[2] as f64).clamp(0.0, FAR_M as f64 / horiz);
-        let k = texels_per_m * 256.0;
-        ((eye_u + t * n.du as f64) * k, (eye_v + t * n.dv as f64) * k)
-    };
-    let (u0, v0) = at(n0);
-    let (u1, v1) = at(n1);
-    let inv = 1.0 / GRID as f64;
-    Affine { u: u0 as i64 as i32, v: v0 as i64 as i32, du: ((u1 - u0) * inv) as i32, dv: ((v1 - v0) * inv) as i32 }
+impl Affine {
+    /// Coordinates in texels of mip `level` (node coordinates are level-0 texels).
+    #[inline(always)]
+    fn new(n0: &Node, n1: &Node, level: u32) -> Affine {
+        let k = 256.0 / (1u32 << level) as f32;
+        let ks = k / GRID as f32;
+        Affine {
+            u: (n0.u as f64 * k as f64) as i64 as i32,
+            v: (n0.v as f64 * k as f64) as i64 as i32,
+            du: ((n1.u - n0.u) * ks) as i32,
+            dv: ((n1.v - n0.v) * ks) as i32,
+        }
+    }
+}
+
+impl UvGen for Affine {
+    #[inline(always)]
+    fn next_uv(&mut self) -> (i32, i32) {
+        let r = (self.u >> 8, self.v >> 8);
+        self.u = self.u.wrapping_add(self.du);
+        self.v = self.v.wrapping_add(self.dv);
+        r
+    }
+
+    #[inline(always)]
+    fn predict(&self, k: i32) -> Option<(i32, i32)> {
+        Some((self.u.wrapping_add(self.du.wrapping_mul(k)) >> 8, self.v.wrapping_add(self.dv.wrapping_mul(k)) >> 8))
+    }
+}
+
+/// Exact per-pixel intersection with a horizontal plane `dh` metres above the eye, from linearly
+/// interpolated ray directions (one division per pixel).
+#[derive(Clone, Copy, Debug)]
+struct Persp {
+    dz: f32,
+    ddz: f32,
+    du: f32,
+    ddu: f32,
+    dv: f32,
+    ddv: f32,
+    eu: f32,
+    ev: f32,
+    dh: f32,
+    tpm: f32,
+    tmax: f32,
+}
+
+impl Persp {
+    /// Coordinates in texels of mip `level` (`texels_per_m` refers to level 0).
+    fn new(ctx: &FrameCtx, n0: &Node, n1: &Node, dh: f32, texels_per_m: f32, clouds: bool, level: u32) -> Persp {
+        let inv = 1.0 / GRID as f32;
+        let texels_per_m = texels_per_m / (1u32 << level) as f32;
+        let (eu, ev) = if clouds { (ctx.cloud_eye_u, ctx.cloud_eye_v) } else { (ctx.eye_u, ctx.eye_v) };
+        let horiz = |n: &Node| (n.du * n.du + n.dv * n.dv).sqrt();
+        Persp {
+            dz: n0.d[2],
+            ddz: (n1.d[2] - n0.d[2]) * inv,
+            du: n0.du * texels_per_m,
+            ddu: (n1.du - n0.du) * inv * texels_per_m,
+            dv: n0.dv * texels_per_m,
+            ddv: (n1.dv - n0.dv) * inv * texels_per_m,
+            eu: eu * texels_per_m,
+            ev: ev * texels_per_m,
+            dh,
+            tpm: texels_per_m,
+            tmax: FAR_M / horiz(n0).max(horiz(n1)).max(1e-9),
+        }
+    }
+}
+
+impl UvGen for Persp {
+    #[inline(always)]
+    fn next_uv(&mut self) -> (i32, i32) {
+        let t = (self.dh / self.dz).clamp(0.0, self.tmax);
+        let _ = self.tpm;
+        let r = ((self.eu + t * self.du) as i32, (self.ev + t * self.dv) as i32);
+        self.dz += self.ddz;
+        self.du += self.ddu;
+        self.dv += self.ddv;
+        r
+    }
+
+    fn predict(&self, _k: i32) -> Option<(i32, i32)> {
+        None
+    }
 }
 
 /// Field cell at ground texel `(u, v)`: rows of fixed height, columns staggered per row.
@@ -523,7 +659,7 @@ fn field_at(seed: u32, u: i32, v: i32) -> (u32, u32, u32) {
 }
 
 /// Sky pixels of one segment, interpolating between nodes `n0` and `n1` (one grid step apart).
-fn sky_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node) {
+fn sky_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, persp: bool) {
     if !ctx.has_clouds || (n0.k <= 0.0 && n1.k <= 0.0) {
         // Plain gradient: 16.16 fixed-point colour steps (node colours are clamped to 0..255).
         const ONE: f32 = 65536.0;
@@ -538,88 +674,127 @@ fn sky_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node
         }
         return;
     }
+    let level = mip_level(n0.foot.min(n1.foot) / CLOUD_TEXEL_M);
+    let view = tex.clouds.view(level);
+    if persp {
+        let g = Persp::new(ctx, n0, n1, CLOUD_BASE_M as f32 - ctx.eye_z, 1.0 / CLOUD_TEXEL_M, true, level);
+        cloud_pixels(ctx, view, seg, n0, n1, g);
+    } else {
+        cloud_pixels(ctx, view, seg, n0, n1, Affine::new(n0, n1, level));
+    }
+}
+
+fn cloud_pixels<G: UvGen>(ctx: &FrameCtx, view: TexView, seg: &mut [u8], n0: &Node, n1: &Node, mut gen: G) {
     let inv = 1.0 / GRID as f32;
     let mut a = n0.a;
     let da = [(n1.a[0] - a[0]) * inv, (n1.a[1] - a[1]) * inv, (n1.a[2] - a[2]) * inv];
-    let level = mip_level(n0.foot.min(n1.foot) / CLOUD_TEXEL_M);
-    let view = tex.clouds.view(level);
-    let aff = plane_affine(ctx.cloud_eye_u, ctx.cloud_eye_v, CLOUD_BASE_M - ctx.eye_z as f64, n0, n1, 1.0 / CLOUD_TEXEL_M as f64);
-    let (mut u, mut v) = (aff.u, aff.v);
     let mut k = n0.k;
     let dk = (n1.k - k) * inv;
     let b = n0.b;
     for px in seg.chunks_exact_mut(3) {
-        let c = view.get(u >> 8, v >> 8) as usize;
+        let (u, v) = gen.next_uv();
+        let c = view.get(u, v) as usize;
         let al = ctx.cloud_alpha[c] * k;
         let sh = ctx.cloud_shade[c] * al;
         let ia = 1.0 - al;
         store(px, a[0] * ia + b[0] * sh, a[1] * ia + b[1] * sh, a[2] * ia + b[2] * sh);
         a = [a[0] + da[0], a[1] + da[1], a[2] + da[2]];
-        u = u.wrapping_add(aff.du);
-        v = v.wrapping_add(aff.dv);
         k += dk;
     }
 }
 
-/// Ground pixels of one segment (land or sea).
-fn ground_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node) {
-    let inv = 1.0 / GRID as f32;
-    let mut a = n0.a;
-    let da = [(n1.a[0] - a[0]) * inv, (n1.a[1] - a[1]) * inv, (n1.a[2] - a[2]) * inv];
-    let mut b = n0.b;
-    let db = [(n1.b[0] - b[0]) * inv, (n1.b[1] - b[1]) * inv, (n1.b[2] - b[2]) * inv];
+/// Ground pixels of one segment (land or sea); `persp` = exact per-pixel plane intersection.
+fn ground_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, persp: bool) {
     let foot = n0.foot.min(n1.foot);
-    let dh = -(ctx.eye_z as f64);
-    if ctx.ground == Ground::Sea {
-        let level = mip_level(foot / WAVE_TEXEL_M);
-        let (w1, w2) = (tex.waves.view(level), tex.waves.view(level.saturating_sub(3)));
-        let aff = plane_affine(ctx.eye_u, ctx.eye_v, dh, n0, n1, 1.0 / WAVE_TEXEL_M as f64);
-        let (mut u, mut v) = (aff.u, aff.v);
-        let mut k = n0.k;
-        let dk = (n1.k - k) * inv;
-        for px in seg.chunks_exact_mut(3) {
-            let (ui, vi) = (u >> 8, v >> 8);
-            // Long swell: the same texture 8x larger and turned 90°.
-            let lum = w1.get(ui, vi) as f32 * w2.get(vi >> 3, ui >> 3) as f32 * (1.0 / (128.0 * 128.0));
-            let spark = k * (0.25 + (lum - 0.9).max(0.0) * 2.5);
-            store(px, a[0] * lum + b[0] + spark, a[1] * lum + b[1] + spark, a[2] * lum + b[2] + spark * 0.95);
-            u = u.wrapping_add(aff.du);
-            v = v.wrapping_add(aff.dv);
-            a = [a[0] + da[0], a[1] + da[1], a[2] + da[2]];
-            b = [b[0] + db[0], b[1] + db[1], b[2] + db[2]];
-            k += dk;
-        }
-        return;
+    let sea = ctx.ground == Ground::Sea;
+    let level = mip_level(foot / if sea { WAVE_TEXEL_M } else { GROUND_TEXEL_M });
+    match (sea, persp) {
+        (true, false) => sea_pixels(tex, seg, n0, n1, level, Affine::new(n0, n1, level)),
+        (true, true) => sea_pixels(tex, seg, n0, n1, level, Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level)),
+        (false, false) => land_pixels(ctx, tex, seg, n0, n1, level, Affine::new(n0, n1, level)),
+        (false, true) => land_pixels(ctx, tex, seg, n0, n1, level, Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level)),
     }
-    let level = mip_level(foot / GROUND_TEXEL_M);
+}
+
+/// Haze colour (16.16 fixed point) at the segment start and its per-pixel step.
+#[inline(always)]
+fn haze_fixed(n0: &Node, n1: &Node) -> ([i32; 3], [i32; 3]) {
+    const FIX: f32 = 65536.0;
+    let k = FIX / GRID as f32;
+    (
+        [(n0.b[0] * FIX) as i32, (n0.b[1] * FIX) as i32, (n0.b[2] * FIX) as i32],
+        [((n1.b[0] - n0.b[0]) * k) as i32, ((n1.b[1] - n0.b[1]) * k) as i32, ((n1.b[2] - n0.b[2]) * k) as i32],
+    )
+}
+
+fn sea_pixels<G: UvGen>(tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, level: u32, mut gen: G) {
+    let inv = 1.0 / GRID as f32;
+    let (mut bb, dbb) = haze_fixed(n0, n1);
+    let w1 = tex.waves.view(level);
+    // Long swell: the same texture 8x larger and turned 90°; smooth, so sampled per segment.
+    let l2 = level.saturating_sub(3);
+    let w2 = tex.waves.view(l2);
+    let sh = 3 + l2;
+    let s0 = w2.get(n0.v as i32 >> sh, n0.u as i32 >> sh) as f32;
+    let s1 = w2.get(n1.v as i32 >> sh, n1.u as i32 >> sh) as f32;
+    let mut a = [n0.a[0] * s0, n0.a[1] * s0, n0.a[2] * s0];
+    let e = [n1.a[0] * s1, n1.a[1] * s1, n1.a[2] * s1];
+    let da = [(e[0] - a[0]) * inv, (e[1] - a[1]) * inv, (e[2] - a[2]) * inv];
+    let mut sw = s0;
+    let dsw = (s1 - s0) * inv;
+    let mut k = n0.k;
+    let dk = (n1.k - k) * inv;
+    const NORM: f32 = 1.0 / (128.0 * 128.0);
+    for px in seg.chunks_exact_mut(3) {
+        let (u, v) = gen.next_uv();
+        let w = w1.get(u, v) as f32 * NORM;
+        let lum = w * sw;
+        let spark = k * (0.25 + (lum - 0.9).max(0.0) * 2.5);
+        store(
+            px,
+            a[0] * w + spark + (bb[0] >> 16) as f32,
+            a[1] * w + spark + (bb[1] >> 16) as f32,
+            a[2] * w + spark * 0.95 + (bb[2] >> 16) as f32,
+        );
+        a = [a[0] + da[0], a[1] + da[1], a[2] + da[2]];
+        bb = [bb[0] + dbb[0], bb[1] + dbb[1], bb[2] + dbb[2]];
+        sw += dsw;
+        k += dk;
+    }
+}
+
+fn land_pixels<G: UvGen>(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, level: u32, mut gen: G) {
+    let inv = 1.0 / GRID as f32;
+    let (mut bb, dbb) = haze_fixed(n0, n1);
     let det = tex.grass.view(level);
-    let mac = tex.grass.view(level.saturating_sub(MACRO_SHIFT));
+    let l2 = level.saturating_sub(MACRO_SHIFT);
+    let mac = tex.grass.view(l2);
     let pal = &ctx.palette_i[level as usize];
-    let aff = plane_affine(ctx.eye_u, ctx.eye_v, dh, n0, n1, 1.0 / GROUND_TEXEL_M as f64);
-    let n = (seg.len() / 3) as i32;
-    let (ue, ve) = (aff.u.wrapping_add(aff.du * (n - 1)), aff.v.wrapping_add(aff.dv * (n - 1)));
     // Large-scale luminance is smooth: sample it at the segment ends only and fold it together
     // with the haze attenuation into one fixed-point gain (131072 = 1.0), stepped per pixel.
-    let m0 = mac.get(aff.u >> (8 + MACRO_SHIFT), aff.v >> (8 + MACRO_SHIFT)) as f32;
-    let m1 = mac.get(ue >> (8 + MACRO_SHIFT), ve >> (8 + MACRO_SHIFT)) as f32;
-    let m1 = m0 + (m1 - m0) * GRID as f32 / (n.max(2) - 1) as f32;
-    const FIX: f32 = 65536.0;
-    let g0 = n0.a[0] * m0 * (2.0 * FIX / 128.0);
-    let g1 = n1.a[0] * m1 * (2.0 * FIX / 128.0);
+    let sh = MACRO_SHIFT + l2;
+    let m0 = mac.get(n0.u as i32 >> sh, n0.v as i32 >> sh) as f32;
+    let m1 = mac.get(n1.u as i32 >> sh, n1.v as i32 >> sh) as f32;
+    const GAIN_ONE: f32 = 131_072.0;
+    let g0 = n0.a[0] * m0 * (GAIN_ONE / 128.0);
+    let g1 = n1.a[0] * m1 * (GAIN_ONE / 128.0);
     let mut g = g0 as i32;
     let dg = ((g1 - g0) * inv) as i32;
-    let mut bb = [(b[0] * FIX) as i32, (b[1] * FIX) as i32, (b[2] * FIX) as i32];
-    let dbb = [(db[0] * FIX) as i32, (db[1] * FIX) as i32, (db[2] * FIX) as i32];
-    let (mut u, mut v) = (aff.u, aff.v);
     let fs = ctx.field_seed;
-    let stripe_on = ctx.stripe_amp[level as usize];
+    // Stripes only at full texture resolution (they would alias otherwise).
+    let stripe_on = if level == 0 { ctx.stripe_amp } else { 0 };
+    let n = (seg.len() / 3) as i32;
     // Most segments lie inside one field: look its colour up once.
-    let f0 = field_at(fs, u >> 8, v >> 8);
-    let f1 = field_at(fs, ue >> 8, ve >> 8);
-    let single = f0.0 == f1.0 && f0.1 == f1.1;
+    let (f0, single) = match (gen.predict(0), gen.predict(n - 1)) {
+        (Some((u0, v0)), Some((u1, v1))) => {
+            let (a, b) = (field_at(fs, u0 << level, v0 << level), field_at(fs, u1 << level, v1 << level));
+            (a.2, a.0 == b.0 && a.1 == b.1)
+        }
+        _ => (0, false),
+    };
     for px in seg.chunks_exact_mut(3) {
-        let (ui, vi) = (u >> 8, v >> 8);
-        let h = if single { f0.2 } else { field_at(fs, ui, vi).2 };
+        let (ui, vi) = gen.next_uv();
+        let h = if single { f0 } else { field_at(fs, ui << level, vi << level).2 };
         let p = &pal[(h >> 29) as usize];
         // Crop rows / mowing stripes in some fields: darker every other 2^STRIPE_SHIFT texels.
         let sv = if h & (1 << 27) != 0 { ui } else { vi };
@@ -633,8 +808,6 @@ fn ground_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &N
         px[0] = bl.min(255) as u8;
         px[1] = gg.min(255) as u8;
         px[2] = r.min(255) as u8;
-        u = u.wrapping_add(aff.du);
-        v = v.wrapping_add(aff.dv);
         g += dg;
         bb = [bb[0] + dbb[0], bb[1] + dbb[1], bb[2] + dbb[2]];
     }

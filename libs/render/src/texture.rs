@@ -20,19 +20,19 @@ pub(crate) struct MipTex {
 
 impl MipTex {
     fn from_level0(data: Vec<u8>) -> MipTex {
+        // Every level is stored with the level-0 row stride so texel addressing needs only
+        // constant shifts: index = (v & mask) << TEX_LOG2 | (u & mask).
         let mut levels = vec![data];
         let mut size = TEX_SIZE;
         while size > 1 {
             let prev = &levels[levels.len() - 1];
             let ns = size / 2;
-            let mut next = vec![0u8; ns * ns];
+            let mut next = vec![0u8; ns * TEX_SIZE];
             for y in 0..ns {
                 for x in 0..ns {
-                    let s = prev[2 * y * size + 2 * x] as u32
-                        + prev[2 * y * size + 2 * x + 1] as u32
-                        + prev[(2 * y + 1) * size + 2 * x] as u32
-                        + prev[(2 * y + 1) * size + 2 * x + 1] as u32;
-                    next[y * ns + x] = ((s + 2) / 4) as u8;
+                    let at = |yy: usize, xx: usize| prev[yy * TEX_SIZE + xx] as u32;
+                    let s = at(2 * y, 2 * x) + at(2 * y, 2 * x + 1) + at(2 * y + 1, 2 * x) + at(2 * y + 1, 2 * x + 1);
+                    next[y * TEX_SIZE + x] = ((s + 2) / 4) as u8;
                 }
             }
             levels.push(next);
@@ -41,17 +41,10 @@ impl MipTex {
         MipTex { levels }
     }
 
-    /// A view of one level with its addressing constants, hoisted out of pixel loops.
+    /// A view of one mip level, addressed in that level's own texel units (wrapping).
     #[inline(always)]
     pub fn view(&self, level: u32) -> TexView<'_> {
-        let shift = TEX_LOG2 - level;
-        TexView { data: &self.levels[level as usize], level, shift, mask: (1i32 << shift) - 1 }
-    }
-
-    /// Raw data of a level (for tests/debug).
-    #[allow(dead_code)]
-    pub fn level(&self, l: usize) -> &[u8] {
-        &self.levels[l]
+        TexView { data: &self.levels[level as usize], mask: (TEX_SIZE as i32 >> level) - 1 }
     }
 }
 
@@ -59,16 +52,14 @@ impl MipTex {
 #[derive(Clone, Copy)]
 pub(crate) struct TexView<'a> {
     data: &'a [u8],
-    level: u32,
-    shift: u32,
     mask: i32,
 }
 
 impl TexView<'_> {
-    /// Texel at level-0 integer texel coordinates (wrapping).
+    /// Texel at integer coordinates of this level (wrapping).
     #[inline(always)]
     pub fn get(&self, u: i32, v: i32) -> u8 {
-        let idx = ((((v >> self.level) & self.mask) << self.shift) | ((u >> self.level) & self.mask)) as usize;
+        let idx = (((v & self.mask) << TEX_LOG2) | (u & self.mask)) as usize;
         self.data[idx]
     }
 }

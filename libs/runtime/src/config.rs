@@ -464,6 +464,20 @@ mod tests {
     }
 
     #[test]
+    fn every_shipped_config_file_is_valid() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config");
+        let mut n = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                Config::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                n += 1;
+            }
+        }
+        assert!(n >= 2);
+    }
+
+    #[test]
     fn unknown_key_is_named_with_its_path() {
         let err = Config::parse("[capture.synthetic]\nfsp = 3\n", "t.toml").unwrap_err();
         let msg = err.to_string();

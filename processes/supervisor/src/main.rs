@@ -1,5 +1,6 @@
 //! `hubtrack`: launches and supervises the stage processes, and hosts the operator tools.
 
+mod bench;
 mod launch;
 
 use anyhow::{bail, Context};
@@ -44,6 +45,15 @@ enum Command {
     Tap(TapArgs),
     /// Render one synthetic frame exactly as the capture stage would publish it.
     Render(RenderArgs),
+    /// Benchmarks (commands that print a table; compare columns within one run).
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// The frames hop over iceoryx2 across real processes vs a Unix-socket copy; renderer cost.
+    Frames(bench::FramesBenchArgs),
 }
 
 #[derive(clap::Args)]
@@ -99,6 +109,7 @@ fn main() {
         Command::Recover { input, output } => recover(&input, output),
         Command::Tap(a) => tap(a),
         Command::Render(a) => render(a),
+        Command::Bench(BenchCommand::Frames(a)) => bench::frames(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

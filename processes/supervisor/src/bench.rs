@@ -1,0 +1,203 @@
+//! `hubtrack bench frames`: the frames hop measured across real processes, against a copying
+//! baseline. A command that prints a table, not a timed test: compare the columns of one run.
+
+use crate::launch::{stage_binary, Stage};
+use anyhow::Context;
+use hubtrack_capture::synthetic::SyntheticSource;
+use hubtrack_runtime::config::{Config, SyntheticCamera};
+use std::io::{BufRead, BufReader, Read, Write};
+use std::os::unix::net::UnixStream;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Arguments of `hubtrack bench frames`.
+#[derive(clap::Args)]
+pub struct FramesBenchArgs {
+    /// Seconds per measurement.
+    #[arg(long, default_value_t = 20.0)]
+    pub seconds: f64,
+    /// Frame rate.
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f64,
+    /// Lens / frame size: gopro (1920x1080) or usb (640x480).
+    #[arg(long, default_value = "gopro")]
+    pub camera: String,
+    /// Also run the recorder (as in flight).
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub record: bool,
+}
+
+/// p50, p99 and max of a sample, in the sample's unit.
+fn percentiles(v: &mut [f64]) -> (f64, f64, f64) {
+    if v.is_empty() {
+        return (f64::NAN, f64::NAN, f64::NAN);
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+    (at(0.5), at(0.99), v[v.len() - 1])
+}
+
+struct HopResult {
+    published: u64,
+    received: u64,
+    recorded: Option<u64>,
+    dropped: u64,
+    latency_us: Vec<f64>,
+}
+
+/// Runs the benchmark and prints the table.
+pub fn frames(args: FramesBenchArgs) -> anyhow::Result<()> {
+    let camera = match args.camera.as_str() {
+        "gopro" => SyntheticCamera::Gopro,
+        "usb" => SyntheticCamera::Usb,
+        other => anyhow::bail!("--camera {other}: expected gopro or usb"),
+    };
+    let mut config = Config::default();
+    config.capture.synthetic.camera = camera;
+    config.capture.fps = args.fps;
+
+    // Renderer cost, in this process (the capture process pays the same per frame).
+    let mut source = SyntheticSource::new(&config.capture.synthetic, args.fps)?;
+    let (w, h) = source.size();
+    let frame_len = w as usize * h as usize * 3;
+    let mut pixels = vec![0u8; frame_len];
+    let mut render_ms = Vec::new();
+    for i in 0..60 {
+        let t = Instant::now();
+        source.render_index(i, &mut pixels)?;
+        render_ms.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    let (r50, r99, _) = percentiles(&mut render_ms);
+
+    eprintln!("[bench] iceoryx2 hop: capture -> tap{} for {} s ...", if args.record { " + recorder" } else { "" }, args.seconds);
+    let shm = iceoryx2_hop(&args, camera)?;
+    eprintln!("[bench] Unix socket hop: same frame size and rate for {} s ...", args.seconds);
+    let uds = socket_hop(&pixels, args.fps, args.seconds)?;
+
+    let mut shm_lat = shm.latency_us.clone();
+    let mut uds_lat = uds.latency_us.clone();
+    let (s50, s99, smax) = percentiles(&mut shm_lat);
+    let (u50, u99, umax) = percentiles(&mut uds_lat);
+    println!(
+        "\nframes hop: {w}x{h} BGR8 ({:.1} MB) at {} fps for {} s, {} cores",
+        frame_len as f64 / 1e6,
+        args.fps,
+        args.seconds,
+        std::thread::available_parallelism().map_or(0, |n| n.get())
+    );
+    println!("{:<34}{:>22}{:>22}", "", "iceoryx2 (zero-copy)", "Unix socket (copy)");
+    println!("{:<34}{:>22}{:>22}", "frames published", shm.published, uds.published);
+    println!("{:<34}{:>22}{:>22}", "frames received by a reader", shm.received, uds.received);
+    println!(
+        "{:<34}{:>22}{:>22}",
+        "frames recorded (MCAP)",
+        shm.recorded.map_or("-".into(), |n| n.to_string()),
+        "-"
+    );
+    println!("{:<34}{:>22}{:>22}", "frames dropped / lost", shm.dropped, uds.dropped);
+    println!("{:<34}{:>22.0}{:>22.0}", "publish -> receive p50 [us]", s50, u50);
+    println!("{:<34}{:>22.0}{:>22.0}", "publish -> receive p99 [us]", s99, u99);
+    println!("{:<34}{:>22.0}{:>22.0}", "publish -> receive max [us]", smax, umax);
+    println!("{:<34}{:>22.1}{:>22}", "p50 ratio (socket / iceoryx2)", u50 / s50, "");
+    println!("renderer per {w}x{h} frame: median {r50:.2} ms, p99 {r99:.2} ms (budget at {} fps: {:.1} ms)", args.fps, 1e3 / args.fps);
+    Ok(())
+}
+
+fn iceoryx2_hop(args: &FramesBenchArgs, camera: SyntheticCamera) -> anyhow::Result<HopResult> {
+    // A private IPC domain so a running pipeline is not disturbed.
+    let domain = format!("bench-{}", std::process::id());
+    std::env::set_var(hubtrack_runtime::ipc::DOMAIN_ENV, &domain);
+    let cam = match camera {
+        SyntheticCamera::Gopro => "gopro",
+        SyntheticCamera::Usb => "usb",
+    };
+    let common = vec![
+        "--set".to_string(),
+        format!("capture.synthetic.camera={cam}"),
+        "--set".into(),
+        format!("capture.fps={}", args.fps),
+    ];
+    let dir = std::env::temp_dir().join(&domain);
+    std::fs::create_dir_all(&dir)?;
+    let rec_path = dir.join("bench.mcap");
+    let mut recorder = None;
+    if args.record {
+        let mut a = common.clone();
+        a.extend(["--output".to_string(), rec_path.display().to_string()]);
+        recorder = Some(Stage::spawn("recorder", &stage_binary("recorder")?, &a)?);
+        std::thread::sleep(Duration::from_millis(300));
+    }
+    let exe = std::env::current_exe()?;
+    let mut tap = Command::new(&exe)
+        .args(["tap", "--duration", &format!("{}", args.seconds + 1.0)])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .context("starting the tap reader")?;
+    let tap_out = tap.stdout.take().expect("piped");
+    std::thread::sleep(Duration::from_millis(300));
+    let mut capture = Stage::spawn("capture", &stage_binary("capture")?, &common)?;
+    std::thread::sleep(Duration::from_secs_f64(args.seconds));
+    capture.stop(Duration::from_secs(3));
+    let mut latency_us = Vec::new();
+    let mut received = 0;
+    let mut last = None;
+    let mut lost = 0;
+    for line in BufReader::new(tap_out).lines() {
+        let v: serde_json::Value = serde_json::from_str(&line?)?;
+        received += 1;
+        latency_us.push(v["latency_us"].as_f64().unwrap_or(f64::NAN));
+        last = v["seq"].as_u64();
+        lost = v["lost"].as_u64().unwrap_or(0);
+    }
+    let _ = tap.wait();
+    let published = last.map_or(0, |s| s + 1);
+    let mut recorded = None;
+    if let Some(mut r) = recorder {
+        r.stop(Duration::from_secs(30));
+        let info = hubtrack_record::inspect(&rec_path)?;
+        recorded = info.topic_counts.get("/frames").copied();
+        let _ = std::fs::remove_file(&rec_path);
+    }
+    let _ = std::fs::remove_dir(&dir);
+    Ok(HopResult { published, received, recorded, dropped: lost, latency_us })
+}
+
+/// The same frames, written whole into a Unix stream socket by one thread and read whole by
+/// another: every byte is copied into and out of the kernel.
+fn socket_hop(frame: &[u8], fps: f64, seconds: f64) -> anyhow::Result<HopResult> {
+    let (mut tx, mut rx) = UnixStream::pair()?;
+    let len = frame.len();
+    let period = Duration::from_secs_f64(1.0 / fps);
+    let n = (seconds * fps) as u64;
+    let epoch = Instant::now();
+    let reader = std::thread::spawn(move || -> std::io::Result<(u64, Vec<f64>)> {
+        let mut buf = vec![0u8; len];
+        let mut stamp = [0u8; 8];
+        let mut lat = Vec::new();
+        let mut got = 0;
+        loop {
+            if rx.read_exact(&mut stamp).is_err() {
+                break;
+            }
+            rx.read_exact(&mut buf)?;
+            let sent = u64::from_le_bytes(stamp);
+            lat.push((epoch.elapsed().as_nanos() as u64 - sent) as f64 / 1e3);
+            got += 1;
+        }
+        Ok((got, lat))
+    });
+    let mut next = Instant::now();
+    for _ in 0..n {
+        let now = Instant::now();
+        if next > now {
+            std::thread::sleep(next - now);
+        }
+        next += period;
+        tx.write_all(&(epoch.elapsed().as_nanos() as u64).to_le_bytes())?;
+        tx.write_all(frame)?;
+    }
+    drop(tx);
+    let (received, latency_us) = reader.join().map_err(|_| anyhow::anyhow!("reader panicked"))??;
+    Ok(HopResult { published: n, received, recorded: None, dropped: n - received, latency_us })
+}
