@@ -14,7 +14,9 @@ use crate::scene::{Ground, Scene, Sky};
 use crate::texture::{mip_level, TexView, Textures};
 
 /// Node spacing of the direction grid (pixels).
-pub(crate) const GRID: usize = 8;
+pub(crate) const GRID: usize = 16;
+/// log2 of [`GRID`].
+const GRID_LOG2: u32 = 4;
 /// Cloud base height above the ground (m).
 const CLOUD_BASE_M: f64 = 1500.0;
 /// Ground texel size (m).
@@ -35,11 +37,15 @@ const FAR_M: f32 = 60_000.0;
 const TEX_ORIGIN_OFFSET_M: f64 = 131_072.0;
 /// Cells whose texture footprint varies more than this factor between corners get exact
 /// per-pixel perspective instead of linear texture-coordinate interpolation.
-const MAX_CELL_FOOT_RATIO: f32 = 1.2;
+const MAX_CELL_FOOT_RATIO: f32 = 2.0;
 /// Crop-row stripes are 2^STRIPE_SHIFT ground texels wide (2 m period).
 const STRIPE_SHIFT: u32 = 2;
 /// Luminance drop of the dark crop-row stripes.
 const STRIPE_DARKENING: f32 = 0.10;
+/// Segments whose haze colour changes less than this (8-bit levels) use it as a constant.
+const MAX_FLAT_HAZE_STEP_FIX: i32 = 3 << 14; // 0.75 level in 16.16
+/// Segments whose gain (haze attenuation x macro luminance) changes by less than 2^-N of itself use it as a constant.
+const MAX_FLAT_GAIN_SHIFT: u32 = 6;
 /// Number of entries of the sky-gradient lookup table (by sine of elevation).
 const SKY_LUT_N: usize = 256;
 /// Number of field colours.
@@ -87,6 +93,40 @@ impl Node {
             r[i] = x[i] + (y[i] - x[i]) * t;
         }
         Node::from_arr(r)
+    }
+}
+
+/// Integer per-node data for the land kernel, computed once per row node (shared by the two
+/// segments that meet there).
+#[derive(Clone, Copy, Debug, Default)]
+struct LandNode {
+    /// Ground texel coordinates at mip level 0, 8 fractional bits.
+    u: i32,
+    v: i32,
+    /// Haze colour · haze fraction, 16.16 fixed point.
+    hz: [i32; 3],
+    /// Haze attenuation · macro luminance, 131072 = 1.0.
+    g: i32,
+    /// Detail mip level for this node's footprint.
+    level: u32,
+}
+
+impl LandNode {
+    #[inline(always)]
+    fn new(n: &Node, tex: &Textures) -> LandNode {
+        const FIX: f32 = 65536.0;
+        let level = mip_level(n.foot / GROUND_TEXEL_M);
+        let l2 = level.saturating_sub(MACRO_SHIFT);
+        let (u, v) = ((n.u as f64 * 256.0) as i64 as i32, (n.v as f64 * 256.0) as i64 as i32);
+        let sh = 8 + MACRO_SHIFT + l2;
+        let m = tex.grass.view(l2).get(u >> sh, v >> sh) as f32;
+        LandNode {
+            u,
+            v,
+            hz: [(n.b[0] * FIX) as i32, (n.b[1] * FIX) as i32, (n.b[2] * FIX) as i32],
+            g: (n.a[0] * m * (131_072.0 / 128.0)) as i32,
+            level,
+        }
     }
 }
 
@@ -152,6 +192,7 @@ pub(crate) struct Background {
     nodes: Vec<Node>,
     cells: Vec<CellKind>,
     row: Vec<Node>,
+    land_row: Vec<LandNode>,
     tex: Textures,
     f_px: f32,
 }
@@ -177,6 +218,7 @@ impl Background {
             nodes: vec![Node::default(); gw * gh],
             cells: vec![CellKind::Exact; (gw - 1) * (gh - 1)],
             row: vec![Node::default(); gw],
+            land_row: vec![LandNode::default(); gw],
             tex: Textures::new(),
             f_px: cam.fx as f32,
         }
@@ -238,6 +280,7 @@ impl Background {
         }
         let t2 = std::time::Instant::now();
         let mut tl = std::time::Duration::ZERO;
+        let skip = std::env::var_os("HT_SKIP").map(|v| v.to_string_lossy().parse::<u8>().unwrap_or(9)).unwrap_or(9);
         let w = self.w;
         for y in 0..self.h {
             let j = y / GRID;
@@ -246,6 +289,13 @@ impl Background {
             let tt = std::time::Instant::now();
             for i in 0..self.gw {
                 self.row[i] = self.nodes[r0 + i].lerp(&self.nodes[r1 + i], t);
+            }
+            if ctx.ground != Ground::Sea {
+                for i in 0..self.gw {
+                    if self.row[i].d[2] < 0.0 {
+                        self.land_row[i] = LandNode::new(&self.row[i], &self.tex);
+                    }
+                }
             }
             tl += tt.elapsed();
             let orow = &mut out[y * w * 3..(y + 1) * w * 3];
@@ -258,10 +308,13 @@ impl Background {
                 let seg = &mut orow[x0 * 3..x1 * 3];
                 let (n0, n1) = (&self.row[i], &self.row[i + 1]);
                 let tex = &self.tex;
-                if std::env::var_os("HT_SKIP_GROUND").is_some() && self.cells[j * cw + i] == CellKind::Ground { seg.fill(0); continue; }
+                let (l0, l1) = (&self.land_row[i], &self.land_row[i + 1]);
+                if self.cells[j * cw + i] as u8 == skip { seg.fill(0); continue; }
                 match self.cells[j * cw + i] {
                     CellKind::Sky => sky_span(&ctx, tex, seg, n0, n1, false),
                     CellKind::SkyPersp => sky_span(&ctx, tex, seg, n0, n1, true),
+                    CellKind::Ground if ctx.ground != Ground::Sea => land_span(&ctx, tex, seg, l0, l1, None),
+                    CellKind::GroundPersp if ctx.ground != Ground::Sea => land_span(&ctx, tex, seg, l0, l1, Some((n0, n1))),
                     CellKind::Ground => ground_span(&ctx, tex, seg, n0, n1, false),
                     CellKind::GroundPersp => ground_span(&ctx, tex, seg, n0, n1, true),
                     CellKind::Exact => {
@@ -270,8 +323,11 @@ impl Background {
                             let n = eval_node(&ctx, d);
                             if d[2] > 0.0 {
                                 sky_span(&ctx, tex, px, &n, &n, false);
-                            } else {
+                            } else if ctx.ground == Ground::Sea {
                                 ground_span(&ctx, tex, px, &n, &n, false);
+                            } else {
+                                let l = LandNode::new(&n, tex);
+                                land_span(&ctx, tex, px, &l, &l, None);
                             }
                         }
                     }
@@ -587,6 +643,30 @@ impl UvGen for Affine {
     }
 }
 
+/// Linear stepping from precomputed integer node coordinates (8 fractional bits, mip level applied).
+#[derive(Clone, Copy, Debug)]
+struct AffineI {
+    u: i32,
+    v: i32,
+    du: i32,
+    dv: i32,
+}
+
+impl UvGen for AffineI {
+    #[inline(always)]
+    fn next_uv(&mut self) -> (i32, i32) {
+        let r = (self.u >> 8, self.v >> 8);
+        self.u = self.u.wrapping_add(self.du);
+        self.v = self.v.wrapping_add(self.dv);
+        r
+    }
+
+    #[inline(always)]
+    fn predict(&self, k: i32) -> Option<(i32, i32)> {
+        Some((self.u.wrapping_add(self.du.wrapping_mul(k)) >> 8, self.v.wrapping_add(self.dv.wrapping_mul(k)) >> 8))
+    }
+}
+
 /// Exact per-pixel intersection with a horizontal plane `dh` metres above the eye, from linearly
 /// interpolated ray directions (one division per pixel).
 #[derive(Clone, Copy, Debug)]
@@ -703,16 +783,31 @@ fn cloud_pixels<G: UvGen>(ctx: &FrameCtx, view: TexView, seg: &mut [u8], n0: &No
     }
 }
 
-/// Ground pixels of one segment (land or sea); `persp` = exact per-pixel plane intersection.
+/// Sea pixels of one segment; `persp` = exact per-pixel plane intersection.
 fn ground_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, persp: bool) {
-    let foot = n0.foot.min(n1.foot);
-    let sea = ctx.ground == Ground::Sea;
-    let level = mip_level(foot / if sea { WAVE_TEXEL_M } else { GROUND_TEXEL_M });
-    match (sea, persp) {
-        (true, false) => sea_pixels(tex, seg, n0, n1, level, Affine::new(n0, n1, level)),
-        (true, true) => sea_pixels(tex, seg, n0, n1, level, Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level)),
-        (false, false) => land_pixels(ctx, tex, seg, n0, n1, level, Affine::new(n0, n1, level)),
-        (false, true) => land_pixels(ctx, tex, seg, n0, n1, level, Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level)),
+    let level = mip_level(n0.foot.min(n1.foot) / WAVE_TEXEL_M);
+    if persp {
+        sea_pixels(tex, seg, n0, n1, level, Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level));
+    } else {
+        sea_pixels(tex, seg, n0, n1, level, Affine::new(n0, n1, level));
+    }
+}
+
+/// Land pixels of one segment between row nodes `l0` and `l1`; with `persp` = the float nodes,
+/// texture coordinates come from an exact per-pixel plane intersection.
+fn land_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], l0: &LandNode, l1: &LandNode, persp: Option<(&Node, &Node)>) {
+    let level = l0.level.min(l1.level);
+    match persp {
+        None => {
+            let g = AffineI {
+                u: l0.u >> level,
+                v: l0.v >> level,
+                du: l1.u.wrapping_sub(l0.u) >> (level + GRID_LOG2),
+                dv: l1.v.wrapping_sub(l0.v) >> (level + GRID_LOG2),
+            };
+            land_pixels(ctx, tex, seg, l0, l1, level, g)
+        }
+        Some((n0, n1)) => land_pixels(ctx, tex, seg, l0, l1, level, Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level)),
     }
 }
 
@@ -763,23 +858,9 @@ fn sea_pixels<G: UvGen>(tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, le
     }
 }
 
-fn land_pixels<G: UvGen>(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, level: u32, mut gen: G) {
-    let inv = 1.0 / GRID as f32;
-    let (mut bb, dbb) = haze_fixed(n0, n1);
+fn land_pixels<G: UvGen>(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], l0: &LandNode, l1: &LandNode, level: u32, mut gen: G) {
     let det = tex.grass.view(level);
-    let l2 = level.saturating_sub(MACRO_SHIFT);
-    let mac = tex.grass.view(l2);
     let pal = &ctx.palette_i[level as usize];
-    // Large-scale luminance is smooth: sample it at the segment ends only and fold it together
-    // with the haze attenuation into one fixed-point gain (131072 = 1.0), stepped per pixel.
-    let sh = MACRO_SHIFT + l2;
-    let m0 = mac.get(n0.u as i32 >> sh, n0.v as i32 >> sh) as f32;
-    let m1 = mac.get(n1.u as i32 >> sh, n1.v as i32 >> sh) as f32;
-    const GAIN_ONE: f32 = 131_072.0;
-    let g0 = n0.a[0] * m0 * (GAIN_ONE / 128.0);
-    let g1 = n1.a[0] * m1 * (GAIN_ONE / 128.0);
-    let mut g = g0 as i32;
-    let dg = ((g1 - g0) * inv) as i32;
     let fs = ctx.field_seed;
     // Stripes only at full texture resolution (they would alias otherwise).
     let stripe_on = if level == 0 { ctx.stripe_amp } else { 0 };
@@ -792,6 +873,31 @@ fn land_pixels<G: UvGen>(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &No
         }
         _ => (0, false),
     };
+    // Fast path: one field, gain and haze nearly constant along the segment (the usual case):
+    // colour = (palette · gain) · detail + haze with per-segment constants.
+    let haze_flat = (0..3).all(|c| (l1.hz[c] - l0.hz[c]).abs() < MAX_FLAT_HAZE_STEP_FIX);
+    let gain_flat = (l1.g - l0.g).abs() < (l0.g.abs() >> MAX_FLAT_GAIN_SHIFT).max(1);
+    if single && haze_flat && gain_flat {
+        let p = &pal[(f0 >> 29) as usize];
+        // Stripe darkening: select the u or v coordinate with masks (no branch in the loop).
+        let amp = if (f0 >> 28) & 1 == 1 { stripe_on } else { 0 };
+        let (mu, mv) = if f0 & (1 << 27) != 0 { (-1i32, 0i32) } else { (0, -1) };
+        let gm = ((l0.g >> 1) + (l1.g >> 1)) >> 8;
+        let pg = [p[0] * gm, p[1] * gm, p[2] * gm];
+        let hz = [(l0.hz[0] + l1.hz[0]) >> 17, (l0.hz[1] + l1.hz[1]) >> 17, (l0.hz[2] + l1.hz[2]) >> 17];
+        for px in seg.chunks_exact_mut(3) {
+            let (ui, vi) = gen.next_uv();
+            let d = det.get(ui, vi) as i32 - ((((ui & mu) | (vi & mv)) >> STRIPE_SHIFT) & 1) * amp;
+            px[0] = (((pg[2] * d) >> 16) + hz[2]).min(255) as u8;
+            px[1] = (((pg[1] * d) >> 16) + hz[1]).min(255) as u8;
+            px[2] = (((pg[0] * d) >> 16) + hz[0]).min(255) as u8;
+        }
+        return;
+    }
+    let mut g = l0.g;
+    let dg = (l1.g - l0.g) >> GRID_LOG2;
+    let mut bb = l0.hz;
+    let dbb = [(l1.hz[0] - l0.hz[0]) >> GRID_LOG2, (l1.hz[1] - l0.hz[1]) >> GRID_LOG2, (l1.hz[2] - l0.hz[2]) >> GRID_LOG2];
     for px in seg.chunks_exact_mut(3) {
         let (ui, vi) = gen.next_uv();
         let h = if single { f0 } else { field_at(fs, ui << level, vi << level).2 };

@@ -173,7 +173,10 @@ impl Renderer {
         let hub = scene.hub_world();
         let w2c = pose.world_to_cam(hub);
 
+        let dbg = std::env::var_os("HT_DEBUG_TIME").is_some();
+        let t0 = std::time::Instant::now();
         self.background.render(out, scene, &w2c);
+        let t1 = std::time::Instant::now();
         let sun = scene.sun_dir();
         if scene.sky != Sky::Overcast && sun[2] > 0.0 {
             let sc = w2c.point(math::add(w2c.origin, sun));
@@ -233,7 +236,9 @@ impl Renderer {
             self.raster.draw_mesh(out, &self.mesh, &w2c, &light, DepthMode::TestWrite);
         }
 
+        let t2 = std::time::Instant::now();
         let truth = self.truth(scene, pose, &w2c);
+        let t3 = std::time::Instant::now();
 
         if scene.propellers_in_view {
             self.effects.propeller(out, scene.seed);
@@ -244,6 +249,9 @@ impl Renderer {
         self.effects.noise(out, scene.noise_sigma, scene.seed, scene.frame);
         if let Some(q) = scene.jpeg_quality {
             self.effects.jpeg(out, q);
+        }
+        if dbg {
+            eprintln!("bg {:?} geom {:?} truth {:?} fx {:?}", t1 - t0, t2 - t1, t3 - t2, t3.elapsed());
         }
         Ok(truth)
     }

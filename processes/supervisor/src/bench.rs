@@ -69,17 +69,28 @@ pub fn frames(args: FramesBenchArgs) -> anyhow::Result<()> {
     }
     let (r50, r99, _) = percentiles(&mut render_ms);
 
-    eprintln!("[bench] iceoryx2 hop: capture -> tap{} for {} s ...", if args.record { " + recorder" } else { "" }, args.seconds);
+    // Both hops run at the same time, so both see the same load (renderer, recorder, copies).
+    eprintln!(
+        "[bench] {} s: iceoryx2 hop capture -> reader{} and, concurrently, a Unix-socket hop of the same frames",
+        args.seconds,
+        if args.record { " (+ recorder)" } else { "" }
+    );
+    let frame = pixels.clone();
+    let (fps, seconds) = (args.fps, args.seconds);
+    let socket = std::thread::spawn(move || {
+        // Start once the capture process is up (it takes ~0.5 s to start and render).
+        std::thread::sleep(Duration::from_millis(900));
+        socket_hop(&frame, fps, seconds - 1.0)
+    });
     let shm = iceoryx2_hop(&args, camera)?;
-    eprintln!("[bench] Unix socket hop: same frame size and rate for {} s ...", args.seconds);
-    let uds = socket_hop(&pixels, args.fps, args.seconds)?;
+    let uds = socket.join().map_err(|_| anyhow::anyhow!("socket hop panicked"))??;
 
     let mut shm_lat = shm.latency_us.clone();
     let mut uds_lat = uds.latency_us.clone();
     let (s50, s99, smax) = percentiles(&mut shm_lat);
     let (u50, u99, umax) = percentiles(&mut uds_lat);
     println!(
-        "\nframes hop: {w}x{h} BGR8 ({:.1} MB) at {} fps for {} s, {} cores",
+        "\nframes hop: {w}x{h} BGR8 ({:.1} MB) at {} fps for {} s, {} cores, both hops concurrently",
         frame_len as f64 / 1e6,
         args.fps,
         args.seconds,
@@ -134,7 +145,9 @@ fn iceoryx2_hop(args: &FramesBenchArgs, camera: SyntheticCamera) -> anyhow::Resu
         .stderr(Stdio::null())
         .spawn()
         .context("starting the tap reader")?;
+    // Read the reader's lines while it runs: a full pipe would block it and lose frames.
     let tap_out = tap.stdout.take().expect("piped");
+    let lines = std::thread::spawn(move || BufReader::new(tap_out).lines().map_while(Result::ok).collect::<Vec<_>>());
     std::thread::sleep(Duration::from_millis(300));
     let mut capture = Stage::spawn("capture", &stage_binary("capture")?, &common)?;
     std::thread::sleep(Duration::from_secs_f64(args.seconds));
@@ -143,14 +156,14 @@ fn iceoryx2_hop(args: &FramesBenchArgs, camera: SyntheticCamera) -> anyhow::Resu
     let mut received = 0;
     let mut last = None;
     let mut lost = 0;
-    for line in BufReader::new(tap_out).lines() {
-        let v: serde_json::Value = serde_json::from_str(&line?)?;
+    let _ = tap.wait();
+    for line in lines.join().map_err(|_| anyhow::anyhow!("tap reader thread panicked"))? {
+        let v: serde_json::Value = serde_json::from_str(&line)?;
         received += 1;
         latency_us.push(v["latency_us"].as_f64().unwrap_or(f64::NAN));
         last = v["seq"].as_u64();
         lost = v["lost"].as_u64().unwrap_or(0);
     }
-    let _ = tap.wait();
     let published = last.map_or(0, |s| s + 1);
     let mut recorded = None;
     if let Some(mut r) = recorder {
