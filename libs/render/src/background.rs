@@ -109,6 +109,8 @@ struct LandNode {
     g: i32,
     /// Detail mip level for this node's footprint.
     level: u32,
+    /// Footprint (m per pixel), kept for interpolation.
+    foot: f32,
 }
 
 impl LandNode {
@@ -126,6 +128,22 @@ impl LandNode {
             hz: [(n.b[0] * FIX) as i32, (n.b[1] * FIX) as i32, (n.b[2] * FIX) as i32],
             g: (n.a[0] * m * (131_072.0 / 128.0)) as i32,
             level,
+            foot: n.foot,
+        }
+    }
+
+    /// Interpolate between two grid rows; `t` in 0..GRID.
+    #[inline(always)]
+    fn lerp(&self, o: &LandNode, t: i32) -> LandNode {
+        let l = |a: i32, b: i32| a.wrapping_add(((b.wrapping_sub(a) as i64 * t as i64) >> GRID_LOG2) as i32);
+        let foot = self.foot + (o.foot - self.foot) * (t as f32 / GRID as f32);
+        LandNode {
+            u: l(self.u, o.u),
+            v: l(self.v, o.v),
+            hz: [l(self.hz[0], o.hz[0]), l(self.hz[1], o.hz[1]), l(self.hz[2], o.hz[2])],
+            g: l(self.g, o.g),
+            level: mip_level(foot / GROUND_TEXEL_M),
+            foot,
         }
     }
 }
@@ -193,6 +211,7 @@ pub(crate) struct Background {
     cells: Vec<CellKind>,
     row: Vec<Node>,
     land_row: Vec<LandNode>,
+    land_nodes: Vec<LandNode>,
     tex: Textures,
     f_px: f32,
 }
@@ -219,6 +238,7 @@ impl Background {
             cells: vec![CellKind::Exact; (gw - 1) * (gh - 1)],
             row: vec![Node::default(); gw],
             land_row: vec![LandNode::default(); gw],
+            land_nodes: vec![LandNode::default(); gw * gh],
             tex: Textures::new(),
             f_px: cam.fx as f32,
         }
@@ -238,6 +258,11 @@ impl Background {
         for (n, r) in self.nodes.iter_mut().zip(&self.node_ray) {
             let dw = w2c.dir_to_world([r[0] as f64, r[1] as f64, 1.0]);
             *n = eval_node(&ctx, [dw[0] as f32, dw[1] as f32, dw[2] as f32]);
+        }
+        if ctx.ground != Ground::Sea {
+            for (l, n) in self.land_nodes.iter_mut().zip(&self.nodes) {
+                *l = if n.d[2] < 0.0 { LandNode::new(n, &self.tex) } else { LandNode::default() };
+            }
         }
         let t1 = std::time::Instant::now();
         let cw = self.gw - 1;
@@ -291,10 +316,9 @@ impl Background {
                 self.row[i] = self.nodes[r0 + i].lerp(&self.nodes[r1 + i], t);
             }
             if ctx.ground != Ground::Sea {
+                let ti = (y % GRID) as i32;
                 for i in 0..self.gw {
-                    if self.row[i].d[2] < 0.0 {
-                        self.land_row[i] = LandNode::new(&self.row[i], &self.tex);
-                    }
+                    self.land_row[i] = self.land_nodes[r0 + i].lerp(&self.land_nodes[r1 + i], ti);
                 }
             }
             tl += tt.elapsed();
@@ -310,6 +334,7 @@ impl Background {
                 let tex = &self.tex;
                 let (l0, l1) = (&self.land_row[i], &self.land_row[i + 1]);
                 if self.cells[j * cw + i] as u8 == skip { seg.fill(0); continue; }
+                if skip == 7 && (y % GRID == 0 || i % 2 == 0 && y % GRID == 1) { seg.fill(40 * self.cells[j * cw + i] as u8); continue; }
                 match self.cells[j * cw + i] {
                     CellKind::Sky => sky_span(&ctx, tex, seg, n0, n1, false),
                     CellKind::SkyPersp => sky_span(&ctx, tex, seg, n0, n1, true),
@@ -317,20 +342,7 @@ impl Background {
                     CellKind::GroundPersp if ctx.ground != Ground::Sea => land_span(&ctx, tex, seg, l0, l1, Some((n0, n1))),
                     CellKind::Ground => ground_span(&ctx, tex, seg, n0, n1, false),
                     CellKind::GroundPersp => ground_span(&ctx, tex, seg, n0, n1, true),
-                    CellKind::Exact => {
-                        for (k, px) in seg.chunks_exact_mut(3).enumerate() {
-                            let d = n0.lerp(n1, k as f32 / GRID as f32).d;
-                            let n = eval_node(&ctx, d);
-                            if d[2] > 0.0 {
-                                sky_span(&ctx, tex, px, &n, &n, false);
-                            } else if ctx.ground == Ground::Sea {
-                                ground_span(&ctx, tex, px, &n, &n, false);
-                            } else {
-                                let l = LandNode::new(&n, tex);
-                                land_span(&ctx, tex, px, &l, &l, None);
-                            }
-                        }
-                    }
+                    CellKind::Exact => exact_span(&ctx, tex, seg, n0, n1),
                 }
             }
         }
@@ -780,6 +792,49 @@ fn cloud_pixels<G: UvGen>(ctx: &FrameCtx, view: TexView, seg: &mut [u8], n0: &No
         store(px, a[0] * ia + b[0] * sh, a[1] * ia + b[1] * sh, a[2] * ia + b[2] * sh);
         a = [a[0] + da[0], a[1] + da[1], a[2] + da[2]];
         k += dk;
+    }
+}
+
+/// Sub-segment length (pixels) inside cells that straddle the horizon.
+const SUB: usize = 4;
+
+/// A segment of a cell that straddles the horizon: exact nodes every [`SUB`] pixels; sub-segments
+/// that are entirely sky or ground are interpolated (ground with exact perspective), the ones
+/// containing the horizon are evaluated per pixel.
+fn exact_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node) {
+    const NSUB: usize = GRID / SUB;
+    let mut e = [Node::default(); NSUB + 1];
+    for (q, en) in e.iter_mut().enumerate() {
+        *en = eval_node(ctx, n0.lerp(n1, (q * SUB) as f32 / GRID as f32).d);
+    }
+    // The span kernels step by 1/GRID of the node difference: stretch sub-segment ends.
+    let stretch = (GRID / SUB) as f32;
+    for (q, sub) in seg.chunks_mut(SUB * 3).enumerate() {
+        let (a, b) = (&e[q], &e[q + 1]);
+        if a.d[2] > 0.0 && b.d[2] > 0.0 {
+            let far = a.lerp(b, stretch);
+            sky_span(ctx, tex, sub, a, &far, true);
+        } else if a.d[2] < 0.0 && b.d[2] < 0.0 {
+            let far = a.lerp(b, stretch);
+            if ctx.ground == Ground::Sea {
+                ground_span(ctx, tex, sub, a, &far, true);
+            } else {
+                let (la, lb) = (LandNode::new(a, tex), LandNode::new(&far, tex));
+                land_span(ctx, tex, sub, &la, &lb, Some((a, &far)));
+            }
+        } else {
+            for (k, px) in sub.chunks_exact_mut(3).enumerate() {
+                let n = eval_node(ctx, a.lerp(b, k as f32 / SUB as f32).d);
+                if n.d[2] > 0.0 {
+                    sky_span(ctx, tex, px, &n, &n, false);
+                } else if ctx.ground == Ground::Sea {
+                    ground_span(ctx, tex, px, &n, &n, false);
+                } else {
+                    let l = LandNode::new(&n, tex);
+                    land_span(ctx, tex, px, &l, &l, None);
+                }
+            }
+        }
     }
 }
 
