@@ -444,3 +444,72 @@ mod tests {
         assert_eq!(back, s);
     }
 }
+
+/// Most lines one [`DetectOverlay`] carries.
+pub const MAX_OVERLAY_LINES: usize = 128;
+
+/// What an overlay line is.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[type_name("hubtrack::OverlayKind")]
+pub enum OverlayKind {
+    /// A line the detector did not use.
+    #[default]
+    Other = 0,
+    /// A tower edge.
+    Tower = 1,
+    /// A blade edge.
+    Blade = 2,
+    /// A line rejected by a check (voting, horizon, overlap).
+    Rejected = 3,
+}
+
+/// One line segment of the overlay, full-resolution px.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("hubtrack::OverlaySegment")]
+pub struct OverlaySegment {
+    /// Start `[x, y]`.
+    pub a: [f32; 2],
+    /// End `[x, y]`.
+    pub b: [f32; 2],
+    /// Classification.
+    pub kind: OverlayKind,
+}
+
+/// What the detector saw on one frame, for the recording (shown over the video in Foxglove).
+/// The hub, tower top and spinner circle are in the [`Detection`] with the same seq.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[type_name("hubtrack::DetectOverlay")]
+pub struct DetectOverlay {
+    /// Frame identity and stage stamps (same as the frame's Detection).
+    pub stamps: Stamps,
+    /// The detection this overlay belongs to.
+    pub detection: Detection,
+    /// Blade search circle `[x, y, r]` (r = 0: none).
+    pub search_circle: [f32; 3],
+    /// Valid entries of `segments`.
+    pub segment_count: u32,
+    /// Hough segments with their classification.
+    pub segments: [OverlaySegment; MAX_OVERLAY_LINES],
+}
+
+impl Default for DetectOverlay {
+    fn default() -> Self {
+        DetectOverlay {
+            stamps: Stamps::default(),
+            detection: Detection::default(),
+            search_circle: [0.0; 3],
+            segment_count: 0,
+            segments: [OverlaySegment::default(); MAX_OVERLAY_LINES],
+        }
+    }
+}
+
+impl DetectOverlay {
+    /// The valid segments.
+    pub fn segments(&self) -> &[OverlaySegment] {
+        &self.segments[..(self.segment_count as usize).min(MAX_OVERLAY_LINES)]
+    }
+}

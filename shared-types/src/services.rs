@@ -74,6 +74,22 @@ pub const DETECTIONS: ServiceSpec = ServiceSpec {
     qos: RESULT_QOS,
 };
 
+/// [`crate::DetectOverlay`]: what the detector saw, for the recorder.
+pub const OVERLAY: ServiceSpec = ServiceSpec {
+    channel: "overlay",
+    name: "hubtrack/overlay",
+    event_name: "hubtrack/overlay/event",
+    qos: Qos {
+        history_size: 0,
+        subscriber_max_buffer_size: 16,
+        subscriber_max_borrowed_samples: 2,
+        max_subscribers: 4,
+        max_publishers: 2,
+        max_nodes: 24,
+        safe_overflow: true,
+    },
+};
+
 /// [`crate::TrackState`] per detection (and predictions).
 pub const TRACK: ServiceSpec = ServiceSpec {
     channel: "track",

@@ -1,1 +1,321 @@
-//! placeholder
+//! Wind-turbine hub detection on single frames.
+//!
+//! Two pipelines share one [`Detector`]:
+//! * [`params::Mode::Thesis`]: a faithful reimplementation of the thesis's Hough-line
+//!   recognition (section 6.1.5), the reference;
+//! * [`params::Mode::Default`]: the project's robust pipeline (see `robust.rs`).
+//!
+//! Both wrap the caller's pixels in an OpenCV header without copying, convert to grey, pyrDown
+//! to a working size of 200–500 px, find edges and Hough segments there, and do all geometry on
+//! plain data ([`geometry`]). Every pixel coordinate in the [`Output`] is in the full-resolution
+//! input image (origin top-left, pixel centres at integers).
+
+#![warn(missing_docs)]
+
+pub mod geometry;
+pub mod params;
+
+mod image;
+mod robust;
+mod thesis;
+
+use std::time::Instant;
+
+use opencv::core::{Mat, Vec4i, Vector};
+use opencv::imgproc;
+
+use geometry::{Segment, P2};
+use hubtrack_types::{Detection, PixelFormat, MAX_BLADES};
+use params::{DetectConfig, Mode};
+
+pub use image::pyramid_levels;
+
+/// [`MAX_BLADES`] as f64 for parameter validation.
+pub(crate) const MAX_BLADES_F: f64 = MAX_BLADES as f64;
+
+/// Plain view of an 8-bit image (BGR8 or Gray8) in memory the caller owns (shared memory in flight).
+#[derive(Debug, Clone, Copy)]
+pub struct ImageView<'a> {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Bytes per row (`>= width * bytes_per_pixel`).
+    pub stride: usize,
+    /// Pixel layout.
+    pub format: PixelFormat,
+    /// At least `stride * height` bytes.
+    pub data: &'a [u8],
+}
+
+/// What the detector may use besides the image.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Hints {
+    /// Camera roll from the IMU, radians, positive = clockwise (the image content appears rotated
+    /// counter-clockwise). `None`: thesis mode assumes 0, default mode searches ± a few degrees.
+    pub roll_rad: Option<f64>,
+    /// Where a tracker expects the hub, full-resolution px; the default mode prefers candidates
+    /// near it.
+    pub predicted_hub_px: Option<[f64; 2]>,
+}
+
+/// Role of a Hough line in the overlay.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LineKind {
+    /// Not used by the recognition.
+    Other,
+    /// Part of the tower.
+    Tower,
+    /// Part of an accepted blade.
+    Blade,
+    /// Was a blade candidate but got removed (voting, pointing over the tower, horizon, ...).
+    Rejected,
+}
+
+/// One classified line for overlays, full-resolution px.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OverlayLine {
+    /// First end point.
+    pub a: [f64; 2],
+    /// Second end point.
+    pub b: [f64; 2],
+    /// Role.
+    pub kind: LineKind,
+}
+
+/// Everything a GUI needs to draw what the detector saw.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Overlay {
+    /// Classified Hough lines.
+    pub lines: Vec<OverlayLine>,
+    /// Blade search area `[x, y, r]`, full-resolution px.
+    pub search_circle: Option<[f64; 3]>,
+}
+
+/// Result of one detection.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Output {
+    /// The message to publish; stamps are left default for the caller to fill. All px are in
+    /// full-resolution input coordinates.
+    pub detection: Detection,
+    /// Camera-to-tower distance from the tower width (pinhole), metres.
+    pub distance_m: Option<f64>,
+    /// Relative yaw from the hub–tower gap (thesis eq. 7.14), degrees, positive when the camera
+    /// stands on the turbine's own left (viewer's right when facing the rotor).
+    pub yaw_deg: Option<f64>,
+    /// Lines and search area for display.
+    pub overlay: Overlay,
+}
+
+/// Errors of the detector.
+#[derive(Debug, thiserror::Error)]
+pub enum DetectError {
+    /// A configuration value is out of range.
+    #[error("invalid configuration: {0}")]
+    Config(#[from] params::ParamError),
+    /// The image view does not describe its buffer (size, stride, length).
+    #[error("bad image: {0}")]
+    BadImage(String),
+    /// OpenCV reported an error.
+    #[error("OpenCV: {0}")]
+    OpenCv(#[from] opencv::Error),
+}
+
+/// Reusable OpenCV buffers shared by both pipelines.
+#[derive(Default)]
+pub(crate) struct Scratch {
+    pub edges: Mat,
+    pub dx: Mat,
+    pub dy: Mat,
+    pub lines: Vector<Vec4i>,
+    pub segments: Vec<Segment>,
+    pub hist: Vec<u32>,
+}
+
+/// What a pipeline found, in working-image px.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Found {
+    pub detected: bool,
+    pub hub: P2,
+    pub confidence: f64,
+    pub tower_top: Option<P2>,
+    /// A line along the tower axis (for the hub–tower gap at the hub's row).
+    pub tower_axis: Option<Segment>,
+    /// `(width, row)` of the tower.
+    pub tower_width: Option<(f64, f64)>,
+    pub blade_angles: Vec<f64>,
+    pub roll_used_deg: f64,
+    pub line_count: u32,
+    pub edge_count: u32,
+    pub circle: Option<[f64; 3]>,
+    pub lines: Vec<(Segment, LineKind)>,
+    pub search_circle: Option<[f64; 3]>,
+    pub edges_us: f64,
+    pub hough_us: f64,
+    pub geometry_us: f64,
+}
+
+/// Microseconds since `t`.
+pub(crate) fn us_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e6
+}
+
+/// Run HoughLinesP on `edges` into `out` (working px).
+pub(crate) fn hough_segments(
+    edges: &Mat,
+    lines: &mut Vector<Vec4i>,
+    out: &mut Vec<Segment>,
+    rho: f64,
+    theta_deg: f64,
+    threshold: i32,
+    min_len: f64,
+    max_gap: f64,
+) -> Result<(), DetectError> {
+    lines.clear();
+    imgproc::hough_lines_p(edges, lines, rho, theta_deg.to_radians(), threshold.max(1), min_len, max_gap)?;
+    out.clear();
+    out.extend(lines.iter().map(|l| Segment::new([l[0] as f64, l[1] as f64], [l[2] as f64, l[3] as f64])));
+    Ok(())
+}
+
+/// The hub detector; owns all reusable buffers.
+pub struct Detector {
+    config: DetectConfig,
+    pyramid: image::Pyramid,
+    scratch: Scratch,
+}
+
+impl Detector {
+    /// Validate `config` and allocate the (empty) buffers.
+    pub fn new(config: DetectConfig) -> Result<Detector, DetectError> {
+        config.validate()?;
+        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default() })
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> &DetectConfig {
+        &self.config
+    }
+
+    /// Detect the hub in one frame.
+    pub fn detect(&mut self, image: &ImageView<'_>, hints: &Hints) -> Result<Output, DetectError> {
+        let t0 = Instant::now();
+        let (min_side, max_side) = match self.config.mode {
+            Mode::Thesis => (self.config.thesis.pyramid_min_side_px, self.config.thesis.pyramid_max_side_px),
+            Mode::Default => (self.config.default.pyramid_min_side_px, self.config.default.pyramid_max_side_px),
+        };
+        image::check_view(image)?;
+        let levels = pyramid_levels(image.width, image.height, min_side, max_side);
+        let small = self.pyramid.build(image, levels)?;
+        let pyramid_us = us_since(t0);
+        let k = (1u64 << levels) as f64;
+        // Hint in working px.
+        let hints_small = Hints {
+            roll_rad: hints.roll_rad,
+            predicted_hub_px: hints.predicted_hub_px.map(|p| [p[0] / k, p[1] / k]),
+        };
+        let found = match self.config.mode {
+            Mode::Thesis => thesis::run(&self.config.thesis, small, &mut self.scratch, &hints_small)?,
+            Mode::Default => robust::run(&self.config.default, small, &mut self.scratch, &hints_small)?,
+        };
+        let mut out = self.to_output(&found, k, image.width, image.height);
+        out.detection.timings.pyramid_us = pyramid_us;
+        out.detection.timings.total_us = us_since(t0);
+        Ok(out)
+    }
+
+    /// Focal length in full-resolution px.
+    fn focal_px(&self, width: u32) -> f64 {
+        let c = &self.config.camera;
+        c.focal_px.unwrap_or_else(|| (width as f64 / 2.0) / (c.hfov_deg.to_radians() / 2.0).tan())
+    }
+
+    /// Scale a pipeline result to full resolution and derive distance and yaw.
+    fn to_output(&self, f: &Found, k: f64, width: u32, height: u32) -> Output {
+        let mut d = Detection { image_width: width, image_height: height, ..Detection::default() };
+        d.detected = f.detected;
+        d.confidence = f.confidence.clamp(0.0, 1.0);
+        d.roll_used_deg = f.roll_used_deg;
+        d.line_count = f.line_count;
+        d.edge_count = f.edge_count;
+        d.timings.edges_us = f.edges_us;
+        d.timings.hough_us = f.hough_us;
+        d.timings.geometry_us = f.geometry_us;
+        if f.detected {
+            d.hub_px = geometry::scale_point(f.hub, k);
+        }
+        let n = f.blade_angles.len().min(MAX_BLADES);
+        d.blade_count = n as u32;
+        d.blade_angles_deg[..n].copy_from_slice(&f.blade_angles[..n]);
+        if let Some(c) = f.circle {
+            d.circle_found = true;
+            d.circle = [c[0] * k, c[1] * k, c[2] * k];
+        }
+        let mut distance_m = None;
+        let mut yaw_deg = None;
+        let focal = self.focal_px(width);
+        if let Some(top) = f.tower_top {
+            d.tower_found = true;
+            d.tower_top_px = geometry::scale_point(top, k);
+            if let Some((w, row)) = f.tower_width {
+                d.tower_width_px = w * k;
+                d.tower_width_row = row * k;
+                if d.tower_width_px > 0.0 {
+                    distance_m = Some(focal * self.config.camera.tower_top_diameter_m / d.tower_width_px);
+                }
+            }
+            if f.detected {
+                let axis_x = f.tower_axis.and_then(|a| a.x_at_y(f.hub[1])).unwrap_or(top[0]);
+                d.hub_tower_gap_px = (f.hub[0] - axis_x) * k;
+                if let Some(dist) = distance_m {
+                    // Thesis eq. 7.14: ψ = asin(δ·d / (f·|p1 − p2|)). The hub sits in front of the
+                    // tower, so a camera on the turbine's left (positive yaw) sees the hub to the
+                    // LEFT of the tower axis: the sign is flipped.
+                    let s = (d.hub_tower_gap_px * dist / (focal * self.config.camera.hub_tower_gap_m)).clamp(-1.0, 1.0);
+                    yaw_deg = Some(-s.asin().to_degrees());
+                }
+            }
+        }
+        let lines = f
+            .lines
+            .iter()
+            .map(|(s, kind)| OverlayLine { a: geometry::scale_point(s.a, k), b: geometry::scale_point(s.b, k), kind: *kind })
+            .collect();
+        let search_circle = f.search_circle.map(|c| [c[0] * k, c[1] * k, c[2] * k]);
+        Output { detection: d, distance_m, yaw_deg, overlay: Overlay { lines, search_circle } }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn full_resolution_mapping_distance_and_yaw_sign() {
+        let det = Detector::new(DetectConfig { mode: Mode::Thesis, ..DetectConfig::default() }).unwrap();
+        // Working image 480x270 (k = 4). Tower axis at x = 240, hub 5 px LEFT of it: a camera on
+        // the turbine's left (positive relative yaw) sees the hub left of the tower.
+        let f = Found {
+            detected: true,
+            hub: [235.0, 100.0],
+            confidence: 1.0,
+            tower_top: Some([240.0, 105.0]),
+            tower_axis: Some(Segment::new([240.0, 105.0], [240.0, 269.0])),
+            tower_width: Some((10.0, 118.5)),
+            ..Found::default()
+        };
+        let out = det.to_output(&f, 4.0, 1920, 1080);
+        let d = out.detection;
+        assert_eq!(d.hub_px, [940.0, 400.0]);
+        assert_eq!(d.tower_top_px, [960.0, 420.0]);
+        assert_eq!(d.tower_width_px, 40.0);
+        assert_eq!(d.tower_width_row, 474.0);
+        assert_eq!(d.hub_tower_gap_px, -20.0);
+        let focal = 960.0 / 59f64.to_radians().tan();
+        let dist = out.distance_m.unwrap();
+        assert!((dist - focal * 2.2 / 40.0).abs() < 1e-9);
+        let yaw = out.yaw_deg.unwrap();
+        let expect = (20.0 * dist / (focal * 4.2)).asin().to_degrees();
+        assert!(yaw > 0.0 && (yaw - expect).abs() < 1e-9, "{yaw} vs {expect}");
+    }
+}

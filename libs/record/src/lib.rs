@@ -2,6 +2,7 @@
 //!
 //! One MCAP file per run: chunked, indexed, lz4/zstd compressed, schemas embedded.
 //! - `/frames`: `foxglove.RawImage` (protobuf), so Foxglove and Lichtblick show the video;
+//! - `/frames/overlay`: what the detector saw (`foxglove.ImageAnnotations`, JSON), drawn over the video;
 //! - `/frames/header`: the [`hubtrack_types::FrameHeader`] of each frame (stamps and truth), JSON;
 //! - `/detections`, `/track`, `/setpoints`, `/vehicle`, `/status`: the stage messages, JSON with
 //!   an embedded JSON schema generated from the Rust types;
@@ -11,6 +12,8 @@
 //! gap is visible to any MCAP tool; `log_time` is the wall-clock receive time (epoch ns) and
 //! `publish_time` the wall-clock time the publishing stage sent it.
 
+pub mod annotations;
+pub mod latency;
 pub mod raw_image;
 pub mod reader;
 pub mod writer;

@@ -15,6 +15,8 @@ use std::path::{Path, PathBuf};
 pub const FRAMES_TOPIC: &str = "/frames";
 /// Topic of the frame headers (stamps and truth).
 pub const FRAME_HEADERS_TOPIC: &str = "/frames/header";
+/// Topic of the detector overlay (foxglove.ImageAnnotations).
+pub const OVERLAY_TOPIC: &str = "/frames/overlay";
 /// Topic of the recorder's own counters.
 pub const RECORDER_TOPIC: &str = "/recorder";
 /// The MCAP profile (none of the registered ones fits: mixed protobuf and JSON).
@@ -137,6 +139,7 @@ pub struct Recording {
     path: PathBuf,
     writer: mcap::Writer<BufWriter<File>>,
     frames_channel: u16,
+    overlay_channel: u16,
     json_channels: BTreeMap<ChannelKind, u16>,
     scratch: Vec<u8>,
     /// Wall-clock minus monotonic ns, to turn monotonic stamps into MCAP publish times.
@@ -175,6 +178,11 @@ impl Recording {
             .map_err(|e| mcap_err(path, e))?;
         let frames_channel =
             writer.add_channel(image_schema, FRAMES_TOPIC, "protobuf", &no_meta).map_err(|e| mcap_err(path, e))?;
+        let overlay_schema = writer
+            .add_schema(crate::annotations::SCHEMA_NAME, "jsonschema", &crate::annotations::json_schema())
+            .map_err(|e| mcap_err(path, e))?;
+        let overlay_channel =
+            writer.add_channel(overlay_schema, OVERLAY_TOPIC, "json", &no_meta).map_err(|e| mcap_err(path, e))?;
         let mut json_channels = BTreeMap::new();
         for kind in ChannelKind::ALL {
             let schema = writer
@@ -189,6 +197,7 @@ impl Recording {
             path: path.into(),
             writer,
             frames_channel,
+            overlay_channel,
             json_channels,
             scratch: Vec::new(),
             realtime_offset_ns,
@@ -224,6 +233,21 @@ impl Recording {
             self.writer.write_to_known_channel(&h, &self.scratch).map_err(|e| mcap_err(&self.path, e))?;
         }
         self.write_json(ChannelKind::FrameHeader, header.seq, log_time, publish_time, header)
+    }
+
+    /// Writes the detector overlay of a frame as `foxglove.ImageAnnotations`. `image_time_ns` is
+    /// the frame's capture wall-clock time (Foxglove matches annotations to images by it).
+    pub fn write_overlay(&mut self, overlay: &hubtrack_types::DetectOverlay, image_time_ns: u64, log_time: u64) -> Result<(), RecordError> {
+        self.scratch.clear();
+        serde_json::to_writer(&mut self.scratch, &crate::annotations::to_json(overlay, image_time_ns))
+            .map_err(|e| RecordError::Encode { channel: OVERLAY_TOPIC.into(), message: e.to_string() })?;
+        let h = MessageHeader {
+            channel_id: self.overlay_channel,
+            sequence: overlay.stamps.seq as u32,
+            log_time,
+            publish_time: self.to_realtime(overlay.stamps.publish_ns),
+        };
+        self.writer.write_to_known_channel(&h, &self.scratch).map_err(|e| mcap_err(&self.path, e))
     }
 
     /// Writes a JSON message to a hubtrack channel.

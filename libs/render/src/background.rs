@@ -3,10 +3,15 @@
 //! Every pixel needs its world viewing direction, which through the distorted lens is expensive to
 //! compute. Instead the (exactly undistorted) directions of a grid of nodes every [`GRID`] pixels
 //! are precomputed once per camera; per frame the nodes are rotated into the world and all smooth
-//! quantities (sky gradient, sun glow, haze, sea reflection) are evaluated per node. Pixels then
-//! interpolate linearly between nodes and only do the cheap per-pixel work: the ground/cloud plane
-//! intersection (one division, so texture perspective is exact) and texture lookups.
-//! Cells that straddle the horizon are evaluated exactly per pixel.
+//! quantities (sky gradient, sun glow, haze, sea reflection, ground/cloud plane intersection) are
+//! evaluated per node. Rows interpolate the nodes vertically (only the kinds of node data the
+//! adjacent cells need), then each 16-pixel segment steps linearly between its two row nodes and
+//! does only the per-pixel texture work, in fixed point where it matters.
+//!
+//! Cell kinds: plain sky / ground cells interpolate texture coordinates linearly; cells near the
+//! horizon where the footprint changes fast intersect the plane per pixel (one division) and
+//! compute the haze per pixel; cells that straddle the horizon are split into 4-pixel pieces with
+//! exact nodes, and only the pieces containing the horizon are evaluated per pixel.
 
 use crate::camera::Camera;
 use crate::math::{hash64, Rng, WorldToCam};
@@ -17,6 +22,7 @@ use crate::texture::{mip_level, TexView, Textures};
 pub(crate) const GRID: usize = 16;
 /// log2 of [`GRID`].
 const GRID_LOG2: u32 = 4;
+const _: () = assert!(1 << GRID_LOG2 == GRID);
 /// Cloud base height above the ground (m).
 const CLOUD_BASE_M: f64 = 1500.0;
 /// Ground texel size (m).
@@ -46,6 +52,14 @@ const STRIPE_DARKENING: f32 = 0.10;
 const MAX_FLAT_HAZE_STEP_FIX: i32 = 3 << 14; // 0.75 level in 16.16
 /// Segments whose gain (haze attenuation x macro luminance) changes by less than 2^-N of itself use it as a constant.
 const MAX_FLAT_GAIN_SHIFT: u32 = 6;
+/// Sky segments whose sky/cloud colours change less than this (8-bit levels) use them as constants.
+const MAX_FLAT_SKY_STEP: f32 = 0.75;
+/// Sky segments whose cloud fade changes less than this use it as a constant.
+const MAX_FLAT_CLOUD_K_STEP: f32 = 0.004;
+/// Sea segments whose colours/glint change less than this (8-bit levels) use them as constants.
+const MAX_FLAT_HAZE_STEP_LEVELS: f32 = 0.75;
+/// Sea segments whose haze fraction changes less than this use it as a constant.
+const MAX_FLAT_FOG_STEP: f32 = 0.003;
 /// Number of entries of the sky-gradient lookup table (by sine of elevation).
 const SKY_LUT_N: usize = 256;
 /// Number of field colours.
@@ -59,9 +73,9 @@ struct Node {
     /// Horizontal direction components along the texture axes.
     du: f32,
     dv: f32,
-    /// Sky: sky colour. Land: (1 - haze) in a[0]. Sea: water colour · (1 - haze).
+    /// Sky: sky colour. Sea: water colour (with reflected sky). Land: unused.
     a: [f32; 3],
-    /// Sky: cloud colour. Ground: haze colour · haze fraction.
+    /// Sky: cloud colour. Ground: haze colour.
     b: [f32; 3],
     /// Sky: cloud visibility (fades toward the horizon). Sea: sun glint strength.
     k: f32,
@@ -70,18 +84,20 @@ struct Node {
     /// Ground: ground/sea texel coordinates of the intersection. Sky: cloud texel coordinates.
     u: f32,
     v: f32,
+    /// Ground: haze fraction (0 = clear, 1 = only haze).
+    f: f32,
 }
 
 impl Node {
     #[inline(always)]
     fn to_arr(self) -> [f32; 16] {
         let (d, a, b) = (self.d, self.a, self.b);
-        [d[0], d[1], d[2], self.du, self.dv, a[0], a[1], a[2], b[0], b[1], b[2], self.k, self.foot, self.u, self.v, 0.0]
+        [d[0], d[1], d[2], self.du, self.dv, a[0], a[1], a[2], b[0], b[1], b[2], self.k, self.foot, self.u, self.v, self.f]
     }
 
     #[inline(always)]
     fn from_arr(v: [f32; 16]) -> Node {
-        Node { d: [v[0], v[1], v[2]], du: v[3], dv: v[4], a: [v[5], v[6], v[7]], b: [v[8], v[9], v[10]], k: v[11], foot: v[12], u: v[13], v: v[14] }
+        Node { d: [v[0], v[1], v[2]], du: v[3], dv: v[4], a: [v[5], v[6], v[7]], b: [v[8], v[9], v[10]], k: v[11], foot: v[12], u: v[13], v: v[14], f: v[15] }
     }
 
     /// Linear interpolation of every field (written over a flat array so it vectorises).
@@ -125,8 +141,8 @@ impl LandNode {
         LandNode {
             u,
             v,
-            hz: [(n.b[0] * FIX) as i32, (n.b[1] * FIX) as i32, (n.b[2] * FIX) as i32],
-            g: (n.a[0] * m * (131_072.0 / 128.0)) as i32,
+            hz: [(n.b[0] * n.f * FIX) as i32, (n.b[1] * n.f * FIX) as i32, (n.b[2] * n.f * FIX) as i32],
+            g: ((1.0 - n.f) * m * (131_072.0 / 128.0)) as i32,
             level,
             foot: n.foot,
         }
@@ -144,6 +160,51 @@ impl LandNode {
             g: l(self.g, o.g),
             level: mip_level(foot / GROUND_TEXEL_M),
             foot,
+        }
+    }
+}
+
+/// Integer per-node data for the sky kernels (see [`LandNode`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct SkyNode {
+    /// Sky colour, 16.16 fixed point.
+    a: [i32; 3],
+    /// Cloud colour, 0..255.
+    b: [i32; 3],
+    /// Cloud visibility, 16.16 fixed point (65536 = 1).
+    k: i32,
+    /// Cloud texel coordinates at mip level 0, 8 fractional bits.
+    u: i32,
+    v: i32,
+    /// Footprint (m per pixel) on the cloud plane.
+    foot: f32,
+}
+
+impl SkyNode {
+    #[inline(always)]
+    fn new(n: &Node) -> SkyNode {
+        const FIX: f32 = 65536.0;
+        SkyNode {
+            a: [(n.a[0] * FIX) as i32, (n.a[1] * FIX) as i32, (n.a[2] * FIX) as i32],
+            b: [n.b[0].min(255.0) as i32, n.b[1].min(255.0) as i32, n.b[2].min(255.0) as i32],
+            k: (n.k * FIX) as i32,
+            u: (n.u as f64 * 256.0) as i64 as i32,
+            v: (n.v as f64 * 256.0) as i64 as i32,
+            foot: n.foot,
+        }
+    }
+
+    /// Interpolate between two grid rows; `t` in 0..GRID.
+    #[inline(always)]
+    fn lerp(&self, o: &SkyNode, t: i32) -> SkyNode {
+        let l = |a: i32, b: i32| a.wrapping_add(((b.wrapping_sub(a) as i64 * t as i64) >> GRID_LOG2) as i32);
+        SkyNode {
+            a: [l(self.a[0], o.a[0]), l(self.a[1], o.a[1]), l(self.a[2], o.a[2])],
+            b: [l(self.b[0], o.b[0]), l(self.b[1], o.b[1]), l(self.b[2], o.b[2])],
+            k: l(self.k, o.k),
+            u: l(self.u, o.u),
+            v: l(self.v, o.v),
+            foot: self.foot + (o.foot - self.foot) * (t as f32 / GRID as f32),
         }
     }
 }
@@ -194,6 +255,12 @@ struct FrameCtx {
     field_seed: u32,
     cloud_alpha: [f32; 256],
     cloud_shade: [f32; 256],
+    /// `cloud_alpha` in 1/256 units.
+    cloud_alpha_q: [u32; 256],
+    /// Extra mip levels for the cloud texture (softer, cheaper; overcast decks are diffuse).
+    cloud_mip_bias: u32,
+    /// `cloud_alpha · cloud_shade` in 1/256 units.
+    cloud_ash_q: [u32; 256],
     cloud_col: [f32; 3],
     has_clouds: bool,
     f_px: f32,
@@ -212,6 +279,11 @@ pub(crate) struct Background {
     row: Vec<Node>,
     land_row: Vec<LandNode>,
     land_nodes: Vec<LandNode>,
+    sky_row: Vec<SkyNode>,
+    sky_nodes: Vec<SkyNode>,
+    /// Per grid row and node column: which interpolated node kinds the adjacent cells need
+    /// ([`NEED_NODE`], [`NEED_LAND`]), so rows only interpolate what is used.
+    need: Vec<u8>,
     tex: Textures,
     f_px: f32,
 }
@@ -239,6 +311,9 @@ impl Background {
             row: vec![Node::default(); gw],
             land_row: vec![LandNode::default(); gw],
             land_nodes: vec![LandNode::default(); gw * gh],
+            sky_row: vec![SkyNode::default(); gw],
+            sky_nodes: vec![SkyNode::default(); gw * gh],
+            need: vec![0; gw * gh],
             tex: Textures::new(),
             f_px: cam.fx as f32,
         }
@@ -252,19 +327,20 @@ impl Background {
 
     /// Fill `out` (BGR8, full frame) with sky and ground for this camera pose.
     pub fn render(&mut self, out: &mut [u8], scene: &Scene, w2c: &WorldToCam) {
-        let t0 = std::time::Instant::now();
         let ctx = self.frame_ctx(scene, w2c);
         // Nodes: rotate rays into the world, evaluate smooth quantities.
         for (n, r) in self.nodes.iter_mut().zip(&self.node_ray) {
             let dw = w2c.dir_to_world([r[0] as f64, r[1] as f64, 1.0]);
             *n = eval_node(&ctx, [dw[0] as f32, dw[1] as f32, dw[2] as f32]);
         }
+        for (l, n) in self.sky_nodes.iter_mut().zip(&self.nodes) {
+            *l = if n.d[2] > 0.0 { SkyNode::new(n) } else { SkyNode::default() };
+        }
         if ctx.ground != Ground::Sea {
             for (l, n) in self.land_nodes.iter_mut().zip(&self.nodes) {
                 *l = if n.d[2] < 0.0 { LandNode::new(n, &self.tex) } else { LandNode::default() };
             }
         }
-        let t1 = std::time::Instant::now();
         let cw = self.gw - 1;
         for j in 0..self.gh - 1 {
             for i in 0..cw {
@@ -296,32 +372,42 @@ impl Background {
                 self.cells[j * cw + i] = kind;
             }
         }
-        if std::env::var_os("HT_DEBUG_CELLS").is_some() {
-            let mut cnt = [0usize; 5];
-            for c in &self.cells {
-                cnt[*c as usize] += 1;
+        let land = ctx.ground != Ground::Sea;
+        for j in 0..self.gh - 1 {
+            for i in 0..self.gw {
+                let mut m = 0u8;
+                for c in [i.wrapping_sub(1), i] {
+                    if c >= cw {
+                        continue;
+                    }
+                    m |= match self.cells[j * cw + c] {
+                        CellKind::Sky => NEED_SKY,
+                        CellKind::Ground if land => NEED_LAND,
+                        CellKind::GroundPersp if land => NEED_LAND | NEED_NODE,
+                        _ => NEED_NODE,
+                    };
+                }
+                self.need[j * self.gw + i] = m;
             }
-            eprintln!("cells sky {} skyp {} ground {} groundp {} exact {}", cnt[0], cnt[1], cnt[2], cnt[3], cnt[4]);
         }
-        let t2 = std::time::Instant::now();
-        let mut tl = std::time::Duration::ZERO;
-        let skip = std::env::var_os("HT_SKIP").map(|v| v.to_string_lossy().parse::<u8>().unwrap_or(9)).unwrap_or(9);
         let w = self.w;
         for y in 0..self.h {
             let j = y / GRID;
             let t = (y % GRID) as f32 / GRID as f32;
             let (r0, r1) = (j * self.gw, (j + 1).min(self.gh - 1) * self.gw);
-            let tt = std::time::Instant::now();
+            let ti = (y % GRID) as i32;
+            let need = &self.need[j * self.gw..(j + 1) * self.gw];
             for i in 0..self.gw {
-                self.row[i] = self.nodes[r0 + i].lerp(&self.nodes[r1 + i], t);
-            }
-            if ctx.ground != Ground::Sea {
-                let ti = (y % GRID) as i32;
-                for i in 0..self.gw {
+                if need[i] & NEED_NODE != 0 {
+                    self.row[i] = self.nodes[r0 + i].lerp(&self.nodes[r1 + i], t);
+                }
+                if need[i] & NEED_LAND != 0 {
                     self.land_row[i] = self.land_nodes[r0 + i].lerp(&self.land_nodes[r1 + i], ti);
                 }
+                if need[i] & NEED_SKY != 0 {
+                    self.sky_row[i] = self.sky_nodes[r0 + i].lerp(&self.sky_nodes[r1 + i], ti);
+                }
             }
-            tl += tt.elapsed();
             let orow = &mut out[y * w * 3..(y + 1) * w * 3];
             for i in 0..cw {
                 let x0 = i * GRID;
@@ -333,28 +419,29 @@ impl Background {
                 let (n0, n1) = (&self.row[i], &self.row[i + 1]);
                 let tex = &self.tex;
                 let (l0, l1) = (&self.land_row[i], &self.land_row[i + 1]);
-                if self.cells[j * cw + i] as u8 == skip { seg.fill(0); continue; }
-                if skip == 7 && (y % GRID == 0 || i % 2 == 0 && y % GRID == 1) { seg.fill(40 * self.cells[j * cw + i] as u8); continue; }
                 match self.cells[j * cw + i] {
-                    CellKind::Sky => sky_span(&ctx, tex, seg, n0, n1, false),
+                    CellKind::Sky => sky_int_span(&ctx, tex, seg, &self.sky_row[i], &self.sky_row[i + 1]),
                     CellKind::SkyPersp => sky_span(&ctx, tex, seg, n0, n1, true),
                     CellKind::Ground if ctx.ground != Ground::Sea => land_span(&ctx, tex, seg, l0, l1, None),
                     CellKind::GroundPersp if ctx.ground != Ground::Sea => land_span(&ctx, tex, seg, l0, l1, Some((n0, n1))),
-                    CellKind::Ground => ground_span(&ctx, tex, seg, n0, n1, false),
-                    CellKind::GroundPersp => ground_span(&ctx, tex, seg, n0, n1, true),
+                    CellKind::Ground => sea_span(&ctx, tex, seg, n0, n1, false),
+                    CellKind::GroundPersp => sea_span(&ctx, tex, seg, n0, n1, true),
                     CellKind::Exact => exact_span(&ctx, tex, seg, n0, n1),
                 }
             }
-        }
-        if std::env::var_os("HT_DEBUG_TIME").is_some() {
-            eprintln!("nodes {:?} cells {:?} rows {:?} (lerp {:?})", t1 - t0, t2 - t1, t2.elapsed(), tl);
         }
     }
 
     fn frame_ctx(&self, scene: &Scene, w2c: &WorldToCam) -> FrameCtx {
         let mut rng = Rng::new(scene.seed, 0xB6);
         let (sky_lut, glow_col, glow_strength, cloud_col) = sky_palette(scene.sky);
-        let tex_angle = rng.range(0.0, std::f64::consts::TAU);
+        let tex_angle = if scene.ground == Ground::Sea {
+            // Wave crests (the texture's long axis) run across the wind, which blows along the
+            // rotor axis: perpendicular to the usual line of sight, as seen on real sea.
+            std::f64::consts::FRAC_PI_2 - scene.nacelle_yaw_deg.to_radians() + rng.range(-0.25, 0.25)
+        } else {
+            rng.range(0.0, std::f64::consts::TAU)
+        };
         let (tex_sin, tex_cos) = tex_angle.sin_cos();
         let (ox, oy) = (rng.range(0.0, 20_000.0), rng.range(0.0, 20_000.0));
         let (cox, coy) = (rng.range(0.0, 20_000.0), rng.range(0.0, 20_000.0));
@@ -457,6 +544,9 @@ impl Background {
             palette_i,
             stripe_amp,
             field_seed: (hash64(scene.seed ^ 0xF1E1D) >> 32) as u32,
+            cloud_mip_bias: if scene.sky == Sky::Overcast { 2 } else { 0 },
+            cloud_alpha_q: cloud_alpha.map(|a| (a * 256.0 + 0.5) as u32),
+            cloud_ash_q: std::array::from_fn(|i| (cloud_alpha[i] * cloud_shade[i] * 256.0 + 0.5) as u32),
             cloud_alpha,
             cloud_shade,
             cloud_col,
@@ -573,11 +663,8 @@ fn eval_node(ctx: &FrameCtx, d: [f32; 3]) -> Node {
         let dist = t * len;
         let f = fog(ctx, dist);
         let hz = 0.5 * g;
-        n.b = [
-            (ctx.haze[0] + ctx.glow_col[0] * hz) * f,
-            (ctx.haze[1] + ctx.glow_col[1] * hz) * f,
-            (ctx.haze[2] + ctx.glow_col[2] * hz) * f,
-        ];
+        n.f = f;
+        n.b = [ctx.haze[0] + ctx.glow_col[0] * hz, ctx.haze[1] + ctx.glow_col[1] * hz, ctx.haze[2] + ctx.glow_col[2] * hz];
         let graze = (-s).max(1e-3);
         n.foot = dist / ctx.f_px / graze.sqrt();
         n.u = (ctx.eye_u + t * du) * ctx.ground_tpm;
@@ -588,14 +675,13 @@ fn eval_node(ctx: &FrameCtx, d: [f32; 3]) -> Node {
             let fres = 0.02 + 0.98 * (m * m) * (m * m) * m;
             let refl = lut_sky(&ctx.sky_lut, graze);
             for c in 0..3 {
-                n.a[c] = (ctx.water[c] * (1.0 - fres) + refl[c] * fres * 0.9) * (1.0 - f);
+                n.a[c] = ctx.water[c] * (1.0 - fres) + refl[c] * fres * 0.9;
             }
-            // Glint: reflected ray (dx, dy, -dz) against the sun, ~6° wide.
+            // Glint: reflected ray (dx, dy, -dz) against the sun.
             let cos_r = (d[0] * ctx.sun[0] + d[1] * ctx.sun[1] - d[2] * ctx.sun[2]) * inv_len;
             let ang2 = 2.0 * (1.0 - cos_r).max(0.0);
-            n.k = ctx.glint_strength * (-ang2 / 0.012).exp() * (1.0 - f);
-        } else {
-            n.a = [1.0 - f, 0.0, 0.0];
+            // Glitter path: a bright core plus a wide halo (wave slopes spread the reflection).
+            n.k = ctx.glint_strength * (0.6 * (-ang2 / 0.004).exp() + 0.4 * (-ang2 / 0.04).exp());
         }
     }
     n
@@ -692,7 +778,8 @@ struct Persp {
     eu: f32,
     ev: f32,
     dh: f32,
-    tpm: f32,
+    /// 1 / (texels per metre), to recover metric ray lengths for the haze.
+    inv_tpm: f32,
     tmax: f32,
 }
 
@@ -713,22 +800,29 @@ impl Persp {
             eu: eu * texels_per_m,
             ev: ev * texels_per_m,
             dh,
-            tpm: texels_per_m,
+            inv_tpm: 1.0 / texels_per_m,
             tmax: FAR_M / horiz(n0).max(horiz(n1)).max(1e-9),
         }
+    }
+
+    /// Texel coordinates and the metric distance along the ray to the plane; then advance.
+    #[inline(always)]
+    fn next_uvd(&mut self) -> ((i32, i32), f32) {
+        let t = (self.dh / self.dz).clamp(0.0, self.tmax);
+        let r = ((self.eu + t * self.du) as i32, (self.ev + t * self.dv) as i32);
+        let h2 = (self.du * self.du + self.dv * self.dv) * (self.inv_tpm * self.inv_tpm);
+        let dist = t * (h2 + self.dz * self.dz).sqrt();
+        self.dz += self.ddz;
+        self.du += self.ddu;
+        self.dv += self.ddv;
+        (r, dist)
     }
 }
 
 impl UvGen for Persp {
     #[inline(always)]
     fn next_uv(&mut self) -> (i32, i32) {
-        let t = (self.dh / self.dz).clamp(0.0, self.tmax);
-        let _ = self.tpm;
-        let r = ((self.eu + t * self.du) as i32, (self.ev + t * self.dv) as i32);
-        self.dz += self.ddz;
-        self.du += self.ddu;
-        self.dv += self.ddv;
-        r
+        self.next_uvd().0
     }
 
     fn predict(&self, _k: i32) -> Option<(i32, i32)> {
@@ -777,6 +871,26 @@ fn sky_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node
 }
 
 fn cloud_pixels<G: UvGen>(ctx: &FrameCtx, view: TexView, seg: &mut [u8], n0: &Node, n1: &Node, mut gen: G) {
+    let flat = (0..3).all(|c| (n1.a[c] - n0.a[c]).abs() < MAX_FLAT_SKY_STEP && (n1.b[c] - n0.b[c]).abs() < MAX_FLAT_SKY_STEP)
+        && (n1.k - n0.k).abs() < MAX_FLAT_CLOUD_K_STEP;
+    if flat {
+        // Integer path: colour = (sky · (256 - alpha) + cloud · alpha · shade) / 256 with
+        // per-segment sky/cloud colours and fade, per-texel alpha from the tables.
+        let k = ((0.5 * (n0.k + n1.k)) * 256.0) as u32;
+        let a = [0, 1, 2].map(|c| (0.5 * (n0.a[c] + n1.a[c])).clamp(0.0, 255.0) as u32);
+        let b = [0, 1, 2].map(|c| (0.5 * (n0.b[c] + n1.b[c])).clamp(0.0, 255.0) as u32);
+        for px in seg.chunks_exact_mut(3) {
+            let (u, v) = gen.next_uv();
+            let c = view.get(u, v) as usize;
+            let al = (ctx.cloud_alpha_q[c] * k) >> 8;
+            let sh = (ctx.cloud_ash_q[c] * k) >> 8;
+            let ia = 256 - al;
+            px[0] = ((a[2] * ia + b[2] * sh) >> 8) as u8;
+            px[1] = ((a[1] * ia + b[1] * sh) >> 8) as u8;
+            px[2] = ((a[0] * ia + b[0] * sh) >> 8) as u8;
+        }
+        return;
+    }
     let inv = 1.0 / GRID as f32;
     let mut a = n0.a;
     let da = [(n1.a[0] - a[0]) * inv, (n1.a[1] - a[1]) * inv, (n1.a[2] - a[2]) * inv];
@@ -792,6 +906,53 @@ fn cloud_pixels<G: UvGen>(ctx: &FrameCtx, view: TexView, seg: &mut [u8], n0: &No
         store(px, a[0] * ia + b[0] * sh, a[1] * ia + b[1] * sh, a[2] * ia + b[2] * sh);
         a = [a[0] + da[0], a[1] + da[1], a[2] + da[2]];
         k += dk;
+    }
+}
+
+/// [`Background::need`] flag: the float node is used.
+const NEED_NODE: u8 = 1;
+/// [`Background::need`] flag: the integer land node is used.
+const NEED_LAND: u8 = 2;
+/// [`Background::need`] flag: the integer sky node is used.
+const NEED_SKY: u8 = 4;
+
+/// Sky pixels of one segment from integer row nodes (cells away from the horizon).
+fn sky_int_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], s0: &SkyNode, s1: &SkyNode) {
+    let dc = [0, 1, 2].map(|c| (s1.a[c] - s0.a[c]) >> GRID_LOG2);
+    if !ctx.has_clouds || (s0.k <= 0 && s1.k <= 0) {
+        // Plain gradient: 16.16 fixed-point colour steps (node colours are clamped to 0..255).
+        let mut c = s0.a;
+        for px in seg.chunks_exact_mut(3) {
+            px[0] = (c[2] >> 16) as u8;
+            px[1] = (c[1] >> 16) as u8;
+            px[2] = (c[0] >> 16) as u8;
+            c = [c[0] + dc[0], c[1] + dc[1], c[2] + dc[2]];
+        }
+        return;
+    }
+    let level = (mip_level(s0.foot.min(s1.foot) / CLOUD_TEXEL_M) + ctx.cloud_mip_bias).min(crate::texture::TEX_LEVELS as u32 - 1);
+    let view = tex.clouds.view(level);
+    let mut g = AffineI {
+        u: s0.u >> level,
+        v: s0.v >> level,
+        du: s1.u.wrapping_sub(s0.u) >> (level + GRID_LOG2),
+        dv: s1.v.wrapping_sub(s0.v) >> (level + GRID_LOG2),
+    };
+    // Sky colour, cloud colour and fade change slowly: constants per segment (midpoint), the
+    // sky gradient itself is stepped.
+    let k = ((s0.k >> 1) + (s1.k >> 1)) >> 8; // 0..256
+    let b = [0, 1, 2].map(|c| ((s0.b[c] + s1.b[c]) >> 1) as u32);
+    let mut a = s0.a;
+    for px in seg.chunks_exact_mut(3) {
+        let (u, v) = g.next_uv();
+        let t = view.get(u, v) as usize;
+        let al = (ctx.cloud_alpha_q[t] * k as u32) >> 8;
+        let sh = (ctx.cloud_ash_q[t] * k as u32) >> 8;
+        let ia = 256 - al;
+        px[0] = (((a[2] >> 16) as u32 * ia + b[2] * sh) >> 8) as u8;
+        px[1] = (((a[1] >> 16) as u32 * ia + b[1] * sh) >> 8) as u8;
+        px[2] = (((a[0] >> 16) as u32 * ia + b[0] * sh) >> 8) as u8;
+        a = [a[0] + dc[0], a[1] + dc[1], a[2] + dc[2]];
     }
 }
 
@@ -817,7 +978,7 @@ fn exact_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &No
         } else if a.d[2] < 0.0 && b.d[2] < 0.0 {
             let far = a.lerp(b, stretch);
             if ctx.ground == Ground::Sea {
-                ground_span(ctx, tex, sub, a, &far, true);
+                sea_span(ctx, tex, sub, a, &far, true);
             } else {
                 let (la, lb) = (LandNode::new(a, tex), LandNode::new(&far, tex));
                 land_span(ctx, tex, sub, &la, &lb, Some((a, &far)));
@@ -828,7 +989,7 @@ fn exact_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &No
                 if n.d[2] > 0.0 {
                     sky_span(ctx, tex, px, &n, &n, false);
                 } else if ctx.ground == Ground::Sea {
-                    ground_span(ctx, tex, px, &n, &n, false);
+                    sea_span(ctx, tex, px, &n, &n, false);
                 } else {
                     let l = LandNode::new(&n, tex);
                     land_span(ctx, tex, px, &l, &l, None);
@@ -838,18 +999,90 @@ fn exact_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &No
     }
 }
 
-/// Sea pixels of one segment; `persp` = exact per-pixel plane intersection.
-fn ground_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, persp: bool) {
+/// Sea pixels of one segment; `persp` = exact per-pixel plane intersection and haze.
+fn sea_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, persp: bool) {
     let level = mip_level(n0.foot.min(n1.foot) / WAVE_TEXEL_M);
-    if persp {
-        sea_pixels(tex, seg, n0, n1, level, Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level));
-    } else {
-        sea_pixels(tex, seg, n0, n1, level, Affine::new(n0, n1, level));
+    let inv = 1.0 / GRID as f32;
+    let w1 = tex.waves.view(level);
+    // Long swell: the same texture 8x larger and turned 90°; smooth, so sampled per segment.
+    let l2 = level.saturating_sub(3);
+    let w2 = tex.waves.view(l2);
+    let sh = 3 + l2;
+    let s0 = w2.get(n0.v as i32 >> sh, n0.u as i32 >> sh) as f32;
+    let s1 = w2.get(n1.v as i32 >> sh, n1.u as i32 >> sh) as f32;
+    let mut sw = s0;
+    let dsw = (s1 - s0) * inv;
+    let (mut a, mut b) = (n0.a, n0.b);
+    let da = [(n1.a[0] - a[0]) * inv, (n1.a[1] - a[1]) * inv, (n1.a[2] - a[2]) * inv];
+    let db = [(n1.b[0] - b[0]) * inv, (n1.b[1] - b[1]) * inv, (n1.b[2] - b[2]) * inv];
+    let (mut k, mut f) = (n0.k, n0.f);
+    let (dk, df) = ((n1.k - k) * inv, (n1.f - f) * inv);
+    let mut affine = Affine::new(n0, n1, level);
+    let flat = (0..3).all(|c| (n1.a[c] - n0.a[c]).abs() < MAX_FLAT_HAZE_STEP_LEVELS && (n1.b[c] - n0.b[c]).abs() < MAX_FLAT_HAZE_STEP_LEVELS)
+        && (n1.f - n0.f).abs() < MAX_FLAT_FOG_STEP
+        && (n1.k - n0.k).abs() < MAX_FLAT_HAZE_STEP_LEVELS;
+    if !persp && flat {
+        // Integer path with per-segment water colour, haze and glint (midpoints); the swell
+        // gain is stepped. With lum = w·swell/128²:
+        // colour = (water·lum + glint·(0.25 + 2.5·max(0, lum − 0.9)))·(1 − haze) + haze colour·haze
+        let m = |x: f32, y: f32| 0.5 * (x + y);
+        let fm = m(n0.f, n1.f);
+        let cf = 1.0 - fm;
+        let km = m(n0.k, n1.k) * cf;
+        // Fixed point: luminance `lum` in 1/128 units, colours accumulated in 1/256 units, so
+        // water·(1 − haze)·lum_real = (2·water·(1 − haze))·lum / 256.
+        let aq = [0, 1, 2].map(|c| (m(n0.a[c], n1.a[c]) * cf * 2.0) as i32);
+        let cq = [0, 1, 2].map(|c| ((km * 0.25 + m(n0.b[c], n1.b[c]) * fm) * 256.0) as i32);
+        let kq = (km * 2.5 * 2.0) as i32;
+        let thr = (0.9 * 128.0) as i32; // glitter threshold 0.9 in 1/128 units
+        let mut swq = (s0 * 256.0) as i32;
+        let dswq = ((s1 - s0) * 256.0 * inv) as i32;
+        for px in seg.chunks_exact_mut(3) {
+            let (u, v) = affine.next_uv();
+            // lum in 1/128 units: w (128 = 1) · swell (128 = 1) / 128.
+            let lum = (w1.get(u, v) as i32 * (swq >> 8)) >> 7;
+            let spark = kq * (lum - thr).max(0);
+            let r = (aq[0] * lum + spark + cq[0]) >> 8;
+            let g = (aq[1] * lum + spark + cq[1]) >> 8;
+            let b = (aq[2] * lum + spark + cq[2]) >> 8;
+            px[0] = b.clamp(0, 255) as u8;
+            px[1] = g.clamp(0, 255) as u8;
+            px[2] = r.clamp(0, 255) as u8;
+            swq += dswq;
+        }
+        return;
+    }
+    let mut persp_gen = persp.then(|| Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level));
+    const NORM: f32 = 1.0 / (128.0 * 128.0);
+    for px in seg.chunks_exact_mut(3) {
+        let ((u, v), fog_px) = match persp_gen.as_mut() {
+            Some(g) => {
+                let (uv, dist) = g.next_uvd();
+                (uv, fog(ctx, dist))
+            }
+            None => (affine.next_uv(), f),
+        };
+        let w = w1.get(u, v) as f32;
+        let lum = w * sw * NORM;
+        let spark = k * (0.25 + (lum - 0.9).max(0.0) * 2.5);
+        let cf = 1.0 - fog_px;
+        store(
+            px,
+            (a[0] * lum + spark) * cf + b[0] * fog_px,
+            (a[1] * lum + spark) * cf + b[1] * fog_px,
+            (a[2] * lum + spark * 0.95) * cf + b[2] * fog_px,
+        );
+        a = [a[0] + da[0], a[1] + da[1], a[2] + da[2]];
+        b = [b[0] + db[0], b[1] + db[1], b[2] + db[2]];
+        sw += dsw;
+        k += dk;
+        f += df;
     }
 }
 
-/// Land pixels of one segment between row nodes `l0` and `l1`; with `persp` = the float nodes,
-/// texture coordinates come from an exact per-pixel plane intersection.
+/// Land pixels of one segment between row nodes `l0` and `l1`. With `persp` (the float nodes),
+/// texture coordinates and haze come from an exact per-pixel plane intersection (cells near the
+/// horizon, where the haze changes within a few pixels).
 fn land_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], l0: &LandNode, l1: &LandNode, persp: Option<(&Node, &Node)>) {
     let level = l0.level.min(l1.level);
     match persp {
@@ -862,54 +1095,34 @@ fn land_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], l0: &LandNode, l1: 
             };
             land_pixels(ctx, tex, seg, l0, l1, level, g)
         }
-        Some((n0, n1)) => land_pixels(ctx, tex, seg, l0, l1, level, Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level)),
+        Some((n0, n1)) => land_persp_pixels(ctx, tex, seg, n0, n1, level),
     }
 }
 
-/// Haze colour (16.16 fixed point) at the segment start and its per-pixel step.
-#[inline(always)]
-fn haze_fixed(n0: &Node, n1: &Node) -> ([i32; 3], [i32; 3]) {
-    const FIX: f32 = 65536.0;
-    let k = FIX / GRID as f32;
-    (
-        [(n0.b[0] * FIX) as i32, (n0.b[1] * FIX) as i32, (n0.b[2] * FIX) as i32],
-        [((n1.b[0] - n0.b[0]) * k) as i32, ((n1.b[1] - n0.b[1]) * k) as i32, ((n1.b[2] - n0.b[2]) * k) as i32],
-    )
-}
-
-fn sea_pixels<G: UvGen>(tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, level: u32, mut gen: G) {
+/// Land pixels with exact per-pixel perspective and haze (float path, used near the horizon).
+fn land_persp_pixels(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, level: u32) {
     let inv = 1.0 / GRID as f32;
-    let (mut bb, dbb) = haze_fixed(n0, n1);
-    let w1 = tex.waves.view(level);
-    // Long swell: the same texture 8x larger and turned 90°; smooth, so sampled per segment.
-    let l2 = level.saturating_sub(3);
-    let w2 = tex.waves.view(l2);
-    let sh = 3 + l2;
-    let s0 = w2.get(n0.v as i32 >> sh, n0.u as i32 >> sh) as f32;
-    let s1 = w2.get(n1.v as i32 >> sh, n1.u as i32 >> sh) as f32;
-    let mut a = [n0.a[0] * s0, n0.a[1] * s0, n0.a[2] * s0];
-    let e = [n1.a[0] * s1, n1.a[1] * s1, n1.a[2] * s1];
-    let da = [(e[0] - a[0]) * inv, (e[1] - a[1]) * inv, (e[2] - a[2]) * inv];
-    let mut sw = s0;
-    let dsw = (s1 - s0) * inv;
-    let mut k = n0.k;
-    let dk = (n1.k - k) * inv;
+    let det = tex.grass.view(level);
+    let pal = &ctx.palette_i[level as usize];
+    let l2 = level.saturating_sub(MACRO_SHIFT);
+    let mac = tex.grass.view(l2);
+    let sh = MACRO_SHIFT + l2;
+    let m0 = mac.get(n0.u as i32 >> sh, n0.v as i32 >> sh) as f32;
+    let m1 = mac.get(n1.u as i32 >> sh, n1.v as i32 >> sh) as f32;
+    let (mut m, dm) = (m0, (m1 - m0) * inv);
+    let mut b = n0.b;
+    let db = [(n1.b[0] - b[0]) * inv, (n1.b[1] - b[1]) * inv, (n1.b[2] - b[2]) * inv];
+    let mut g = Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level);
+    let fs = ctx.field_seed;
     const NORM: f32 = 1.0 / (128.0 * 128.0);
     for px in seg.chunks_exact_mut(3) {
-        let (u, v) = gen.next_uv();
-        let w = w1.get(u, v) as f32 * NORM;
-        let lum = w * sw;
-        let spark = k * (0.25 + (lum - 0.9).max(0.0) * 2.5);
-        store(
-            px,
-            a[0] * w + spark + (bb[0] >> 16) as f32,
-            a[1] * w + spark + (bb[1] >> 16) as f32,
-            a[2] * w + spark * 0.95 + (bb[2] >> 16) as f32,
-        );
-        a = [a[0] + da[0], a[1] + da[1], a[2] + da[2]];
-        bb = [bb[0] + dbb[0], bb[1] + dbb[1], bb[2] + dbb[2]];
-        sw += dsw;
-        k += dk;
+        let ((ui, vi), dist) = g.next_uvd();
+        let f = fog(ctx, dist);
+        let p = &pal[(field_at(fs, ui << level, vi << level).2 >> 29) as usize];
+        let lum = det.get(ui, vi) as f32 * m * NORM * (1.0 - f);
+        store(px, p[0] as f32 * lum + b[0] * f, p[1] as f32 * lum + b[1] * f, p[2] as f32 * lum + b[2] * f);
+        m += dm;
+        b = [b[0] + db[0], b[1] + db[1], b[2] + db[2]];
     }
 }
 

@@ -22,6 +22,49 @@ pub(crate) struct Effects {
     y_plane: Vec<f32>,
     cb_plane: Vec<f32>,
     cr_plane: Vec<f32>,
+    prop: Option<PropellerShape>,
+}
+
+/// Propeller disc geometry for one seed: the covered pixels with their polar coordinates in the
+/// disc (cached, so per frame only the cheap shading runs).
+struct PropellerShape {
+    seed: u64,
+    /// (pixel index, normalised radius 0..1, angle rad)
+    pixels: Vec<(u32, f32, f32)>,
+    phase: f64,
+    bend: f32,
+    tone: f32,
+}
+
+impl PropellerShape {
+    fn new(seed: u64, w: usize, h: usize) -> PropellerShape {
+        let (wf, hf) = (w as f64, h as f64);
+        let mut rng = Rng::new(seed, 0x9409);
+        let left = rng.chance(0.5);
+        // Disc seen obliquely from below: an ellipse whose centre lies just outside the corner.
+        let rx = wf * rng.range(0.22, 0.30);
+        let ry = rx * rng.range(0.35, 0.5);
+        let cx = if left { wf * rng.range(-0.02, 0.06) } else { wf * rng.range(0.94, 1.02) };
+        let cy = -ry * rng.range(0.15, 0.45);
+        let phase = rng.range(0.0, std::f64::consts::TAU);
+        // Rolling shutter bends each blade image into an arc: angle grows with radius.
+        let bend = (rng.range(0.6, 1.6) * if rng.chance(0.5) { 1.0 } else { -1.0 }) as f32;
+        let tone = rng.range(20.0, 45.0) as f32;
+        let x0 = (cx - rx).floor().max(0.0) as usize;
+        let x1 = ((cx + rx).ceil().min(wf - 1.0)).max(0.0) as usize;
+        let y1 = ((cy + ry).ceil().min(hf - 1.0)).max(0.0) as usize;
+        let mut pixels = Vec::new();
+        for y in 0..=y1.min(h.saturating_sub(1)) {
+            for x in x0..=x1.min(w.saturating_sub(1)) {
+                let (ex, ey) = ((x as f64 - cx) / rx, (y as f64 - cy) / ry);
+                let r = (ex * ex + ey * ey).sqrt();
+                if r <= 1.0 {
+                    pixels.push(((y * w + x) as u32, r as f32, ey.atan2(ex) as f32));
+                }
+            }
+        }
+        PropellerShape { seed, pixels, phase, bend, tone }
+    }
 }
 
 impl Effects {
@@ -36,6 +79,7 @@ impl Effects {
             y_plane: Vec::new(),
             cb_plane: Vec::new(),
             cr_plane: Vec::new(),
+            prop: None,
         }
     }
 
@@ -79,13 +123,15 @@ impl Effects {
             return;
         }
         let rl = w * 3;
+        // Zipped slices (no indexing) so both passes vectorise.
         let hblur = |src: &[u8], dst: &mut [u16]| {
             for c in 0..3 {
                 dst[c] = 3 * src[c] as u16 + src[3 + c] as u16;
                 dst[rl - 3 + c] = 3 * src[rl - 3 + c] as u16 + src[rl - 6 + c] as u16;
             }
-            for i in 3..rl - 3 {
-                dst[i] = src[i - 3] as u16 + 2 * src[i] as u16 + src[i + 3] as u16;
+            let mid = dst[3..rl - 3].iter_mut().zip(src[..rl - 6].iter().zip(&src[3..rl - 3]).zip(&src[6..]));
+            for (d, ((&l, &m), &r)) in mid {
+                *d = l as u16 + 2 * m as u16 + r as u16;
             }
         };
         let [r0, r1, r2] = &mut self.blur_rows;
@@ -96,8 +142,8 @@ impl Effects {
             let ny = (y + 1).min(h - 1);
             hblur(&out[ny * rl..(ny + 1) * rl], next);
             let dst = &mut out[y * rl..(y + 1) * rl];
-            for i in 0..rl {
-                dst[i] = ((prev[i] + 2 * cur[i] + next[i] + 8) >> 4) as u8;
+            for (d, ((&p, &c), &n)) in dst.iter_mut().zip(prev.iter().zip(cur.iter()).zip(next.iter())) {
+                *d = ((p + 2 * c + n + 8) >> 4) as u8;
             }
             std::mem::swap(&mut prev, &mut cur);
             std::mem::swap(&mut cur, &mut next);
@@ -112,82 +158,80 @@ impl Effects {
         self.y_plane.resize(w * h, 0.0);
         self.cb_plane.resize(cw * ch, 0.0);
         self.cr_plane.resize(cw * ch, 0.0);
-        self.cb_plane.fill(0.0);
-        self.cr_plane.fill(0.0);
-        for y in 0..h {
-            for x in 0..w {
-                let p = &out[(y * w + x) * 3..(y * w + x) * 3 + 3];
-                let (b, g, r) = (p[0] as f32, p[1] as f32, p[2] as f32);
-                self.y_plane[y * w + x] = 0.299 * r + 0.587 * g + 0.114 * b - 128.0;
-                let ci = (y / 2) * cw + x / 2;
-                self.cb_plane[ci] += -0.168_736 * r - 0.331_264 * g + 0.5 * b;
-                self.cr_plane[ci] += 0.5 * r - 0.418_688 * g - 0.081_312 * b;
-            }
-        }
-        // Average the 2x2 chroma sums (edge cells may have fewer samples).
+        // Forward colour transform, one 2x2 chroma cell at a time (edge cells replicate).
         for cy in 0..ch {
-            let ny = if 2 * cy + 1 < h { 2.0 } else { 1.0 };
+            let (y0, y1) = (2 * cy, (2 * cy + 1).min(h - 1));
             for cx in 0..cw {
-                let nx = if 2 * cx + 1 < w { 2.0 } else { 1.0 };
-                self.cb_plane[cy * cw + cx] /= nx * ny;
-                self.cr_plane[cy * cw + cx] /= nx * ny;
+                let (x0, x1) = (2 * cx, (2 * cx + 1).min(w - 1));
+                let (mut sr, mut sg, mut sb) = (0.0f32, 0.0f32, 0.0f32);
+                for (yy, xx) in [(y0, x0), (y0, x1), (y1, x0), (y1, x1)] {
+                    let i = yy * w + xx;
+                    let p = &out[i * 3..i * 3 + 3];
+                    let (b, g, r) = (p[0] as f32, p[1] as f32, p[2] as f32);
+                    self.y_plane[i] = 0.299 * r + 0.587 * g + 0.114 * b - 128.0;
+                    sr += r;
+                    sg += g;
+                    sb += b;
+                }
+                let (r, g, b) = (sr * 0.25, sg * 0.25, sb * 0.25);
+                self.cb_plane[cy * cw + cx] = -0.168_736 * r - 0.331_264 * g + 0.5 * b;
+                self.cr_plane[cy * cw + cx] = 0.5 * r - 0.418_688 * g - 0.081_312 * b;
             }
         }
         let (ql, qc) = quant_tables(quality);
         dct_plane(&mut self.y_plane, w, h, &ql);
         dct_plane(&mut self.cb_plane, cw, ch, &qc);
         dct_plane(&mut self.cr_plane, cw, ch, &qc);
-        for y in 0..h {
-            for x in 0..w {
-                let yy = self.y_plane[y * w + x] + 128.0;
-                let ci = (y / 2) * cw + x / 2;
-                let (cb, cr) = (self.cb_plane[ci], self.cr_plane[ci]);
-                let p = &mut out[(y * w + x) * 3..(y * w + x) * 3 + 3];
-                p[2] = (yy + 1.402 * cr + 0.5) as u8;
-                p[1] = (yy - 0.344_136 * cb - 0.714_136 * cr + 0.5) as u8;
-                p[0] = (yy + 1.772 * cb + 0.5) as u8;
+        for cy in 0..ch {
+            for cx in 0..cw {
+                let (cb, cr) = (self.cb_plane[cy * cw + cx], self.cr_plane[cy * cw + cx]);
+                let (dr, dg, db) = (1.402 * cr + 128.5, -0.344_136 * cb - 0.714_136 * cr + 128.5, 1.772 * cb + 128.5);
+                for yy in 2 * cy..(2 * cy + 2).min(h) {
+                    for xx in 2 * cx..(2 * cx + 2).min(w) {
+                        let i = yy * w + xx;
+                        let yv = self.y_plane[i];
+                        let p = &mut out[i * 3..i * 3 + 3];
+                        p[2] = (yv + dr) as u8;
+                        p[1] = (yv + dg) as u8;
+                        p[0] = (yv + db) as u8;
+                    }
+                }
             }
         }
     }
 
     /// The UAV's own propeller: a motion-blurred, semi-transparent dark disc entering the frame
-    /// from a top corner (left or right from the seed).
-    pub fn propeller(&mut self, out: &mut [u8], seed: u64) {
-        let (w, h) = (self.w as f64, self.h as f64);
-        let mut rng = Rng::new(seed, 0x9409);
-        let left = rng.chance(0.5);
-        // Disc seen obliquely from below: an ellipse whose centre lies just outside the corner.
-        let rx = w * rng.range(0.22, 0.30);
-        let ry = rx * rng.range(0.35, 0.5);
-        let cx = if left { w * rng.range(-0.02, 0.06) } else { w * rng.range(0.94, 1.02) };
-        let cy = -ry * rng.range(0.15, 0.45);
-        let phase = rng.range(0.0, std::f64::consts::TAU);
-        let tone = rng.range(25.0, 60.0) as f32;
-        let x0 = (cx - rx).floor().max(0.0) as usize;
-        let x1 = ((cx + rx).ceil().min(w - 1.0)).max(0.0) as usize;
-        let y1 = ((cy + ry).ceil().min(h - 1.0)).max(0.0) as usize;
-        let hub_r = 0.08;
-        for y in 0..=y1 {
-            for x in x0..=x1 {
-                let (ex, ey) = ((x as f64 - cx) / rx, (y as f64 - cy) / ry);
-                let r = (ex * ex + ey * ey).sqrt();
-                if r > 1.0 {
-                    continue;
-                }
-                let ang = ey.atan2(ex);
-                // Two-bladed prop smeared by the exposure: denser near the hub and in two lobes
-                // (rolling shutter), soft rim.
-                let lobes = 0.5 + 0.5 * (2.0 * ang + phase + 3.0 * r).cos();
-                let rim = ((1.0 - r) / 0.06).clamp(0.0, 1.0);
-                let mut a = (0.22 + 0.33 * lobes * lobes) * rim * (1.0 - 0.4 * r);
-                if r < hub_r {
-                    a = 0.95;
-                }
-                let a = a as f32;
-                let p = &mut out[(y * self.w + x) * 3..(y * self.w + x) * 3 + 3];
-                for c in p.iter_mut() {
-                    *c = (*c as f32 * (1.0 - a) + tone * a) as u8;
-                }
+    /// from a top corner (side, size and shape from the seed). Two curved blade images (rolling
+    /// shutter) rotate from frame to frame.
+    pub fn propeller(&mut self, out: &mut [u8], seed: u64, frame: u64) {
+        if self.prop.as_ref().map(|p| p.seed) != Some(seed) {
+            self.prop = Some(PropellerShape::new(seed, self.w, self.h));
+        }
+        let Some(shape) = self.prop.as_ref() else { return };
+        // Blade images advance by an irrational fraction of a turn per frame.
+        let phase = shape.phase + frame as f64 * 2.399_963;
+        const HUB_R: f32 = 0.08;
+        const INV_BLADE_HALF_WIDTH: f32 = 1.0 / 0.16;
+        let tau = std::f32::consts::TAU;
+        let pi = std::f32::consts::PI;
+        let phase = phase.rem_euclid(std::f64::consts::TAU) as f32;
+        for &(idx, r, ang) in &shape.pixels {
+            // Motion-blurred disc: the blades cover a larger fraction of the circle near the hub.
+            let disc = (0.05 / r.max(0.05)).min(0.5) + 0.12;
+            let mut blade = 0.0f32;
+            for k in 0..2 {
+                let centre = phase + pi * k as f32 + shape.bend * r;
+                let d = (ang - centre).rem_euclid(tau);
+                let x = d.min(tau - d) * INV_BLADE_HALF_WIDTH;
+                // ≈ exp(-x²) without a libm call.
+                let x2 = x * x;
+                blade = blade.max(1.0 / (1.0 + x2 + 0.5 * x2 * x2 + x2 * x2 * x2 / 6.0));
+            }
+            let rim = ((1.0 - r) / 0.05).clamp(0.0, 1.0);
+            let a = if r < HUB_R { 0.95 } else { ((disc + 0.55 * blade) * rim).min(0.9) };
+            let p = &mut out[idx as usize * 3..idx as usize * 3 + 3];
+            for c in p.iter_mut() {
+                *c = (*c as f32 * (1.0 - a) + shape.tone * a) as u8;
             }
         }
     }
@@ -268,82 +312,155 @@ fn round_fast(x: f32) -> f32 {
     (x + MAGIC) - MAGIC
 }
 
-/// Quantise every 8x8 block of a plane in the DCT domain (edge blocks replicate the border).
-/// The loops run over contiguous rows of 8 so they vectorise.
-fn dct_plane(p: &mut [f32], w: usize, h: usize, q: &[f32; 64]) {
-    let c = dct_matrix();
-    let mut ct = [[0f32; 8]; 8];
-    for k in 0..8 {
-        for n in 0..8 {
-            ct[n][k] = c[k][n];
+/// Forward 8-point DCT (orthonormal) of the 8 rows of `b` taken as columns: output row `k` is
+/// coefficient `k` of every column. Even/odd split: 32 row-vector multiply-adds instead of 64.
+#[inline(always)]
+fn fdct_cols(c: &[[f32; 8]; 8], b: &[[f32; 8]; 8]) -> [[f32; 8]; 8] {
+    let mut s = [[0f32; 8]; 4];
+    let mut d = [[0f32; 8]; 4];
+    for i in 0..4 {
+        for x in 0..8 {
+            s[i][x] = b[i][x] + b[7 - i][x];
+            d[i][x] = b[i][x] - b[7 - i][x];
         }
     }
-    let inv_q: [f32; 64] = q.map(|v| 1.0 / v);
+    let mut out = [[0f32; 8]; 8];
+    for k in 0..8 {
+        let src = if k % 2 == 0 { &s } else { &d };
+        let mut acc = [0f32; 8];
+        for i in 0..4 {
+            let w = c[k][i];
+            for x in 0..8 {
+                acc[x] += w * src[i][x];
+            }
+        }
+        out[k] = acc;
+    }
+    out
+}
+
+/// Inverse of [`fdct_cols`].
+#[inline(always)]
+fn idct_cols(c: &[[f32; 8]; 8], b: &[[f32; 8]; 8]) -> [[f32; 8]; 8] {
+    let mut out = [[0f32; 8]; 8];
+    for i in 0..4 {
+        let (mut e, mut o) = ([0f32; 8], [0f32; 8]);
+        for k in (0..8).step_by(2) {
+            let (we, wo) = (c[k][i], c[k + 1][i]);
+            for x in 0..8 {
+                e[x] += we * b[k][x];
+                o[x] += wo * b[k + 1][x];
+            }
+        }
+        for x in 0..8 {
+            out[i][x] = e[x] + o[x];
+            out[7 - i][x] = e[x] - o[x];
+        }
+    }
+    out
+}
+
+#[inline(always)]
+fn transpose8(b: &[[f32; 8]; 8]) -> [[f32; 8]; 8] {
+    let mut t = [[0f32; 8]; 8];
+    for y in 0..8 {
+        for x in 0..8 {
+            t[x][y] = b[y][x];
+        }
+    }
+    t
+}
+
+/// Quantise every 8x8 block of a plane in the DCT domain (edge blocks replicate the border).
+fn dct_plane(p: &mut [f32], w: usize, h: usize, q: &[f32; 64]) {
+    let c = dct_matrix();
+    // After column pass + transpose + column pass the coefficient block is transposed:
+    // element [l][k] holds (vertical k, horizontal l), so the tables are used transposed.
+    let mut qt = [[0f32; 8]; 8];
+    let mut iqt = [[0f32; 8]; 8];
+    for k in 0..8 {
+        for l in 0..8 {
+            qt[l][k] = q[k * 8 + l];
+            iqt[l][k] = 1.0 / q[k * 8 + l];
+        }
+    }
     let mut blk = [[0f32; 8]; 8];
-    let mut tmp = [[0f32; 8]; 8];
     for by in (0..h).step_by(8) {
         for bx in (0..w).step_by(8) {
             for (y, row) in blk.iter_mut().enumerate() {
                 let sy = (by + y).min(h - 1);
                 if bx + 8 <= w {
-                    row.copy_from_slice(&p[sy * w + bx..sy * w + bx + 8]);
+                    // Element-wise copy: `copy_from_slice` here becomes a memmove call per row.
+                    for (d, s) in row.iter_mut().zip(&p[sy * w + bx..sy * w + bx + 8]) {
+                        *d = *s;
+                    }
                 } else {
                     for (x, v) in row.iter_mut().enumerate() {
                         *v = p[sy * w + (bx + x).min(w - 1)];
                     }
                 }
             }
-            // Forward: tmp = C · blk, then blk = tmp · Cᵀ, quantised.
-            for k in 0..8 {
-                let mut acc = [0f32; 8];
-                for n in 0..8 {
-                    let s = c[k][n];
-                    for x in 0..8 {
-                        acc[x] += s * blk[n][x];
-                    }
-                }
-                tmp[k] = acc;
-            }
-            for k in 0..8 {
-                let mut acc = [0f32; 8];
-                for n in 0..8 {
-                    let s = tmp[k][n];
-                    for l in 0..8 {
-                        acc[l] += s * ct[n][l];
-                    }
-                }
-                // The JPEG tables refer to the (1/4)-scaled 2D DCT, which equals the orthonormal
-                // transform used here, so the table values apply as they are.
-                for l in 0..8 {
-                    let qq = q[k * 8 + l];
-                    blk[k][l] = round_fast(acc[l] * inv_q[k * 8 + l]) * qq;
-                }
-            }
-            // Inverse: tmp = Cᵀ · blk, then out = tmp · C.
-            for n in 0..8 {
-                let mut acc = [0f32; 8];
+            let mut coef = fdct_cols(&c, &transpose8(&fdct_cols(&c, &blk)));
+            // The JPEG tables refer to the (1/4)-scaled 2D DCT, which equals the orthonormal
+            // transform used here, so the table values apply as they are.
+            for l in 0..8 {
                 for k in 0..8 {
-                    let s = ct[n][k];
-                    for l in 0..8 {
-                        acc[l] += s * blk[k][l];
-                    }
+                    coef[l][k] = round_fast(coef[l][k] * iqt[l][k]) * qt[l][k];
                 }
-                tmp[n] = acc;
             }
-            for y in 0..8 {
+            let out = idct_cols(&c, &transpose8(&idct_cols(&c, &coef)));
+            for (y, row) in out.iter().enumerate() {
                 if by + y >= h {
                     break;
                 }
-                let mut acc = [0f32; 8];
-                for l in 0..8 {
-                    let s = tmp[y][l];
-                    for x in 0..8 {
-                        acc[x] += s * c[l][x];
-                    }
-                }
                 let n = (w - bx).min(8);
-                p[(by + y) * w + bx..(by + y) * w + bx + n].copy_from_slice(&acc[..n]);
+                for (d, s) in p[(by + y) * w + bx..(by + y) * w + bx + n].iter_mut().zip(row) {
+                    *d = *s;
+                }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dct_round_trip_is_identity() {
+        let c = dct_matrix();
+        let mut b = [[0f32; 8]; 8];
+        let mut rng = Rng::new(3, 4);
+        for row in b.iter_mut() {
+            for v in row.iter_mut() {
+                *v = rng.range(-128.0, 127.0) as f32;
+            }
+        }
+        let coef = fdct_cols(&c, &transpose8(&fdct_cols(&c, &b)));
+        // DC of the orthonormal 2D DCT is 8 x the mean.
+        let mean: f32 = b.iter().flatten().sum::<f32>() / 64.0;
+        assert!((coef[0][0] - 8.0 * mean).abs() < 1e-3);
+        let back = idct_cols(&c, &transpose8(&idct_cols(&c, &coef)));
+        for y in 0..8 {
+            for x in 0..8 {
+                assert!((back[y][x] - b[y][x]).abs() < 1e-3);
+            }
+        }
+    }
+
+    #[test]
+    fn jpeg_quality_100_is_nearly_lossless_and_low_quality_is_not() {
+        let (w, h) = (37, 21);
+        let mut rng = Rng::new(5, 6);
+        let img: Vec<u8> = (0..w * h * 3).map(|i| ((i % 97) as f64 * 2.0 + rng.range(0.0, 20.0)) as u8).collect();
+        let mut fx = Effects::new(w, h);
+        let mut hi = img.clone();
+        fx.jpeg(&mut hi, 100);
+        let mut lo = img.clone();
+        fx.jpeg(&mut lo, 10);
+        let mad = |a: &[u8]| a.iter().zip(&img).map(|(&x, &y)| (x as f64 - y as f64).abs()).sum::<f64>() / img.len() as f64;
+        // Chroma subsampling alone costs a few levels on this busy pattern.
+        assert!(mad(&hi) < mad(&lo), "q100 {} vs q10 {}", mad(&hi), mad(&lo));
+        assert!(mad(&lo) > 3.0);
     }
 }

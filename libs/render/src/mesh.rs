@@ -586,36 +586,75 @@ pub(crate) fn build_power_lines(mesh: &mut Mesh, rng: &mut Rng) {
     }
 }
 
-/// Ring of hills on the horizon (2.5–6 km away), drawn behind everything else.
+/// Two rings of hills on the horizon (a nearer one 2.5–4 km away and a higher, farther one
+/// 5–7 km away), drawn far ridge first behind everything else. Heights are sums of random
+/// sinusoids; normals come from the actual surface so slopes shade with the sun.
 pub(crate) fn build_hills(mesh: &mut Mesh, seed: u64) {
-    const SEGMENTS: usize = 256;
-    const BASE_RADIUS_M: f64 = 3500.0;
     let mut rng = Rng::new(seed, 0x4111);
-    let mut harm = [[0.0f64; 3]; 7];
-    for (i, h) in harm.iter_mut().enumerate() {
-        let k = (i + 1) as f64 * 1.7 + rng.range(0.0, 1.5);
-        *h = [k, rng.range(0.0, std::f64::consts::TAU), 1.0 / (1.0 + i as f64 * 0.6)];
+    // (front radius m, depth m, mean height m, albedo)
+    let ridges = [
+        (rng.range(5000.0, 6500.0), 1500.0, rng.range(180.0, 320.0), [0.27f32, 0.34, 0.26]),
+        (rng.range(2500.0, 3500.0), 1000.0, rng.range(70.0, 160.0), [0.28f32, 0.38, 0.22]),
+    ];
+    for (front, depth, mean_h, albedo) in ridges {
+        build_ridge(mesh, &mut rng, front, depth, mean_h, albedo);
     }
-    let base_h = rng.range(60.0, 140.0);
-    let albedo = [0.30, 0.40, 0.24];
-    let first = mesh.verts.len() as u32;
-    for i in 0..SEGMENTS {
-        let a = std::f64::consts::TAU * i as f64 / SEGMENTS as f64;
+}
+
+fn build_ridge(mesh: &mut Mesh, rng: &mut Rng, front: f64, depth: f64, mean_h: f64, albedo: [f32; 3]) {
+    const SEGMENTS: usize = 360;
+    const ROWS: usize = 5;
+    let mut harm = [[0.0f64; 3]; 8];
+    for (i, h) in harm.iter_mut().enumerate() {
+        let k = ((i + 1) as f64 * 2.3 + rng.range(0.0, 2.0)).round();
+        *h = [k, rng.range(0.0, std::f64::consts::TAU), 1.0 / (1.0 + i as f64 * 0.7)];
+    }
+    let patch_seed = rng.next_u64();
+    let height = |a: f64, frac: f64| -> f64 {
         let mut prof = 0.0;
         for h in &harm {
-            prof += h[2] * (h[0] * a + h[1]).sin();
+            prof += h[2] * (h[0] * a + h[1] + 2.0 * frac).sin();
         }
-        let height = (base_h * (1.0 + 0.55 * prof)).max(8.0);
-        let radius = BASE_RADIUS_M * (1.0 + 0.3 * (2.0 * a + harm[0][1]).sin());
-        let (c, s) = (a.cos(), a.sin());
-        // Front slope faces the centre and upward.
-        let n = normalize([-c * height / 900.0, -s * height / 900.0, 1.0]);
-        mesh.vert([radius * c, radius * s, height], n, albedo);
-        mesh.vert([(radius - 900.0) * c, (radius - 900.0) * s, -2.0], n, albedo);
+        // Rises from the plain at the front edge to the crest at the back.
+        let rise = (frac * std::f64::consts::FRAC_PI_2).sin();
+        (mean_h * (1.0 + 0.45 * prof) * rise).max(0.0) - 3.0
+    };
+    // Positions first (the height function is costly), then normals from neighbours.
+    let mut grid = [[0.0f64; 3]; SEGMENTS * ROWS];
+    for i in 0..SEGMENTS {
+        let a = std::f64::consts::TAU * i as f64 / SEGMENTS as f64;
+        let (ca, sa) = (a.cos(), a.sin());
+        for r in 0..ROWS {
+            let frac = r as f64 / (ROWS - 1) as f64;
+            let rad = front + depth * frac;
+            grid[i * ROWS + r] = [rad * ca, rad * sa, height(a, frac)];
+        }
     }
-    for i in 0..SEGMENTS as u32 {
-        let j = (i + 1) % SEGMENTS as u32;
-        let (t0, b0, t1, b1) = (first + 2 * i, first + 2 * i + 1, first + 2 * j, first + 2 * j + 1);
-        mesh.quad(b0, b1, t1, t0, Tag::Other);
+    let pos = |i: usize, r: usize| grid[i * ROWS + r];
+    let first = mesh.verts.len() as u32;
+    for i in 0..SEGMENTS {
+        for r in 0..ROWS {
+            let p = pos(i, r);
+            // Normal from the surface: cross of the azimuthal and radial tangents.
+            let ta = sub(pos((i + 1) % SEGMENTS, r), pos((i + SEGMENTS - 1) % SEGMENTS, r));
+            let tr = sub(pos(i, (r + 1).min(ROWS - 1)), pos(i, r.saturating_sub(1)));
+            let mut n = normalize(cross(tr, ta));
+            if n[2] < 0.0 {
+                n = scale(n, -1.0);
+            }
+            // Patches of forest / fields on the slopes.
+            let h = crate::math::hash64(patch_seed ^ ((i / 6) as u64 * 31 + r as u64));
+            let k = 0.75 + 0.5 * ((h >> 40) as f32 / (1u64 << 24) as f32);
+            let alb = [albedo[0] * k, albedo[1] * k, albedo[2] * (0.9 + 0.2 * k)];
+            mesh.vert(p, n, alb);
+        }
+    }
+    // Back rows first: without depth testing the nearer slope must be drawn last.
+    for r in (0..ROWS - 1).rev() {
+        for i in 0..SEGMENTS as u32 {
+            let j = (i + 1) % SEGMENTS as u32;
+            let at = |seg: u32, row: usize| first + seg * ROWS as u32 + row as u32;
+            mesh.quad(at(i, r), at(j, r), at(j, r + 1), at(i, r + 1), Tag::Other);
+        }
     }
 }

@@ -199,8 +199,10 @@ impl Raster {
         }
     }
 
-    /// Fill one triangle (back faces culled). Front faces have negative signed area in
-    /// y-down pixel space (see the derivation in the crate's design notes in `lib.rs`).
+    /// Fill one triangle (back faces culled). Mesh triangles are wound counter-clockwise seen
+    /// from outside (right-handed normal = outward). The camera frame is right-handed with
+    /// y down, so a face turned toward the camera has a negative signed area
+    /// `(b - a) × (c - a)` in pixel space; the lens map is monotonic, so distortion keeps it.
     fn tri(&mut self, out: &mut [u8], a: &SVert, b: &SVert, c: &SVert, mode: DepthMode, tag: Tag) {
         let area0 = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
         if !(area0 < 0.0) || !area0.is_finite() {
@@ -213,10 +215,11 @@ impl Raster {
             return;
         }
         let (w, h) = (self.w as f64, self.h as f64);
-        let ymin = a.y.min(b.y).min(c.y).ceil().max(0.0);
-        let ymax = a.y.max(b.y).max(c.y).floor().min(h - 1.0);
-        let xmin = a.x.min(b.x).min(c.x).ceil().max(0.0);
-        let xmax = a.x.max(b.x).max(c.x).floor().min(w - 1.0);
+        // Clamp before converting so huge (off-screen) coordinates stay in range.
+        let ymin = ceil_i(a.y.min(b.y).min(c.y).max(-1.0)).max(0);
+        let ymax = floor_i(a.y.max(b.y).max(c.y).min(h)).min(self.h as i64 - 1);
+        let xmin = ceil_i(a.x.min(b.x).min(c.x).max(-1.0)).max(0) as f64;
+        let xmax = floor_i(a.x.max(b.x).max(c.x).min(w)).min(self.w as i64 - 1) as f64;
         if ymin > ymax || xmin > xmax {
             return;
         }
@@ -231,34 +234,55 @@ impl Raster {
         for k in 0..3 {
             cg[k] = grad(a.c[k] as f64, b.c[k] as f64, c.c[k] as f64);
         }
-        let edges = [(a, b), (b, c), (c, a)];
+        // Per edge p->q: interior is `dy * x <= (q.x - p.x)(y - p.y) + dy * p.x`, i.e. an upper
+        // bound on x when dy > 0 and a lower bound when dy < 0, linear in y.
+        let mut lower: [(f64, f64); 3] = [(f64::NEG_INFINITY, 0.0); 3];
+        let mut upper: [(f64, f64); 3] = [(f64::INFINITY, 0.0); 3];
+        let mut horizontal_reject: [(f64, f64, f64); 3] = [(0.0, 0.0, 0.0); 3];
+        let (mut nl, mut nu, mut nh) = (0, 0, 0);
+        for (p, q) in [(a, b), (b, c), (c, a)] {
+            let dy = q.y - p.y;
+            if dy != 0.0 {
+                let slope = (q.x - p.x) / dy;
+                // bound(y) = p.x + slope * (y - p.y)
+                let e = (p.x - slope * p.y, slope);
+                if dy > 0.0 {
+                    upper[nu] = e;
+                    nu += 1;
+                } else {
+                    lower[nl] = e;
+                    nl += 1;
+                }
+            } else {
+                // Horizontal edge: all-or-nothing per row, k = (q.x - p.x)(y - p.y) >= 0.
+                horizontal_reject[nh] = (q.x - p.x, p.y, 0.0);
+                nh += 1;
+            }
+        }
         let (y0, y1) = (ymin as usize, ymax as usize);
         let is_tower = tag == Tag::Tower;
         let mut touched: Option<(usize, usize)> = None;
         for y in y0..=y1 {
             let yf = y as f64;
             let (mut lo, mut hi) = (xmin, xmax);
-            for (p, q) in edges {
-                // E(x) = (q.x - p.x)(y - p.y) - (q.y - p.y)(x - p.x) >= 0  <=>  dy * x <= k
-                let dy = q.y - p.y;
-                let k = (q.x - p.x) * (yf - p.y) + dy * p.x;
-                if dy > 0.0 {
-                    hi = hi.min(k / dy);
-                } else if dy < 0.0 {
-                    lo = lo.max(k / dy);
-                } else if k < 0.0 {
-                    lo = f64::INFINITY;
-                }
+            for e in &lower[..nl] {
+                lo = lo.max(e.0 + e.1 * yf);
             }
-            // A tiny tolerance makes shared edges overlap instead of leaving cracks.
-            let (xl, xr) = ((lo - 1e-7).ceil(), (hi + 1e-7).floor());
-            if !(xl <= xr) {
+            for e in &upper[..nu] {
+                hi = hi.min(e.0 + e.1 * yf);
+            }
+            if horizontal_reject[..nh].iter().any(|e| e.0 * (yf - e.1) < 0.0) {
                 continue;
             }
-            let (xl, xr) = (xl.max(0.0) as usize, xr.min(w - 1.0) as usize);
+            // A tiny tolerance makes shared edges overlap instead of leaving cracks.
+            if !(lo - 1e-7 <= hi + 1e-7) {
+                continue;
+            }
+            let (xl, xr) = (ceil_i(lo - 1e-7), floor_i(hi + 1e-7));
             if xl > xr {
                 continue;
             }
+            let (xl, xr) = (xl as usize, xr as usize);
             touched = Some(match touched {
                 None => (xl, xr),
                 Some((l, r)) => (l.min(xl), r.max(xr)),
@@ -398,10 +422,27 @@ impl Raster {
             }
         }
     }
+}
 
-    /// Depth buffer value (1/z, 0 = empty) at a pixel, for tests and truth.
-    #[allow(dead_code)]
-    pub fn inv_depth_at(&self, x: usize, y: usize) -> f32 {
-        self.zbuf[y * self.w + x]
+/// `floor` without a libm call (the baseline x86-64 target has no rounding instruction).
+/// Inputs are pre-clamped to a few thousand pixels, far inside i64.
+#[inline(always)]
+fn floor_i(x: f64) -> i64 {
+    let i = x as i64;
+    if (i as f64) > x {
+        i - 1
+    } else {
+        i
+    }
+}
+
+/// `ceil` without a libm call; see [`floor_i`].
+#[inline(always)]
+fn ceil_i(x: f64) -> i64 {
+    let i = x as i64;
+    if (i as f64) < x {
+        i + 1
+    } else {
+        i
     }
 }

@@ -52,6 +52,10 @@ pub struct Config {
     pub capture: CaptureConfig,
     /// The recorder stage.
     pub recorder: RecorderConfig,
+    /// The detect stage (and `hubtrack detect` / `eval`).
+    pub detect: hubtrack_detect::params::DetectConfig,
+    /// The track stage (and `hubtrack track`).
+    pub track: hubtrack_track::params::TrackConfig,
 }
 
 /// `[run]`: which stages `hubtrack run` starts and how it stops them.
@@ -84,7 +88,7 @@ impl Default for RunConfig {
 }
 
 /// The stage names `[run].stages` may contain.
-pub const KNOWN_STAGES: &[&str] = &["capture", "recorder"];
+pub const KNOWN_STAGES: &[&str] = &["capture", "recorder", "detect", "track"];
 
 /// Which frame source the capture stage uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -431,6 +435,8 @@ impl Config {
         range("recorder.chunk_size_kib", rec.chunk_size_kib, 16, 1 << 20)?;
         range("recorder.queue_frames", rec.queue_frames, 1, 1024)?;
         range("recorder.flush_interval_ms", rec.flush_interval_ms, 10, 60_000)?;
+        self.detect.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
+        self.track.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
         Ok(())
     }
 }

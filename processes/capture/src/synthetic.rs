@@ -82,8 +82,8 @@ impl SyntheticSource {
         let (pose, nacelle_yaw) = path_pose(&self.cfg, t);
         self.scene.nacelle_yaw_deg = nacelle_yaw;
         self.scene.rotor_angle_deg = self.base_rotor_deg + self.cfg.rotor_rpm * 6.0 * t;
-        // Per-frame noise differs frame to frame but stays reproducible.
-        self.scene.seed = self.cfg.seed.wrapping_mul(1_000_003).wrapping_add(index);
+        // Fresh sensor noise per frame; texture and clouds stay put. Reproducible per index.
+        self.scene.frame = index;
         self.renderer
             .render(&self.scene, &pose, out)
             .map_err(|e| CaptureError::Render(e.to_string()))

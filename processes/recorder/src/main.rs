@@ -15,9 +15,9 @@ use hubtrack_runtime::config::{Compression, ConfigArgs, RecorderConfig};
 use hubtrack_runtime::ipc::{open_node, FrameSubscriber, MsgSubscriber};
 use hubtrack_runtime::shutdown::Shutdown;
 use hubtrack_runtime::status::StatusReporter;
-use hubtrack_types::services::{DETECTIONS, SETPOINTS, STATUS, TRACK, VEHICLE};
+use hubtrack_types::services::{DETECTIONS, OVERLAY, SETPOINTS, STATUS, TRACK, VEHICLE};
 use hubtrack_types::time::{monotonic_ns, realtime_ns};
-use hubtrack_types::{Detection, FrameHeader, Setpoint, StageStatus, TrackState, VehicleState};
+use hubtrack_types::{DetectOverlay, Detection, FrameHeader, Setpoint, StageStatus, TrackState, VehicleState};
 use std::path::PathBuf;
 use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
 use std::time::{Duration, Instant};
@@ -43,7 +43,12 @@ struct Args {
 enum Item {
     Frame { header: FrameHeader, pixels: Option<Vec<u8>>, log_time: u64 },
     Json { kind: ChannelKind, seq: u64, publish_ns: u64, log_time: u64, json: JsonMsg },
+    Overlay { overlay: Box<DetectOverlay>, log_time: u64 },
 }
+
+/// Frames whose wall-clock capture time the writer remembers, to stamp overlays exactly like
+/// their image (Foxglove pairs annotations with images by timestamp).
+const IMAGE_TIME_MEMORY: usize = 256;
 
 enum JsonMsg {
     Detection(Detection),
@@ -72,6 +77,7 @@ fn main() -> anyhow::Result<()> {
     let setpoints = MsgSubscriber::<Setpoint>::new(&node, &SETPOINTS, RESULT_BUFFER)?;
     let vehicle = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, RESULT_BUFFER)?;
     let status_in = MsgSubscriber::<StageStatus>::new(&node, &STATUS, RESULT_BUFFER)?;
+    let overlays = MsgSubscriber::<DetectOverlay>::new(&node, &OVERLAY, OVERLAY.qos.subscriber_max_buffer_size)?;
     let mut status = StatusReporter::new(&node, "recorder", config.run.status_interval_ms)?;
 
     // Fixed pool of frame buffers: `free` holds empty ones, `queue` carries filled ones.
@@ -127,6 +133,9 @@ fn main() -> anyhow::Result<()> {
         drain!(setpoints, ChannelKind::Setpoint, Setpoint, |m: &Setpoint| m.stamps.seq, |m: &Setpoint| m.stamps.publish_ns);
         drain!(vehicle, ChannelKind::Vehicle, Vehicle, |_: &VehicleState| 0, |m: &VehicleState| m.publish_ns);
         drain!(status_in, ChannelKind::Status, Status, |_: &StageStatus| 0, |m: &StageStatus| m.publish_ns);
+        while let Some(o) = overlays.receive()? {
+            enqueue(&queue_tx, Item::Overlay { overlay: Box::new(o), log_time: now }, &mut stats, &mut status);
+        }
 
         while let Ok(s) = stats_rx.try_recv() {
             stats.frames_recorded = s.frames_recorded;
@@ -224,6 +233,7 @@ fn write_loop(
     let mut reported = RecorderStats::default();
     let mut last_frame = FrameHeader::default();
     let mut reader_stats = RecorderStats::default();
+    let mut image_times = std::collections::VecDeque::<(u64, u64)>::with_capacity(IMAGE_TIME_MEMORY);
     loop {
         let item = match queue.recv_timeout(flush_interval) {
             Ok(item) => Some(item),
@@ -236,6 +246,10 @@ fn write_loop(
                 stats.frames_recorded += 1;
                 stats.bytes_written += pixels.as_ref().map_or(0, |p| p.len() as u64);
                 last_frame = header;
+                if image_times.len() == IMAGE_TIME_MEMORY {
+                    image_times.pop_front();
+                }
+                image_times.push_back((header.seq, header.capture_realtime_ns));
                 if let Some(buf) = pixels {
                     let _ = free.try_send(buf);
                 }
@@ -254,6 +268,16 @@ fn write_loop(
                     }
                 };
                 r.context("writing a message")?;
+                stats.messages_recorded += 1;
+            }
+            Some(Item::Overlay { overlay, log_time }) => {
+                let seq = overlay.stamps.seq;
+                let image_time = image_times
+                    .iter()
+                    .rev()
+                    .find(|(s, _)| *s == seq)
+                    .map_or_else(|| rec.to_realtime(overlay.stamps.capture_ns), |(_, t)| *t);
+                rec.write_overlay(&overlay, image_time, log_time).context("writing an overlay")?;
                 stats.messages_recorded += 1;
             }
             None => {}

@@ -1,7 +1,11 @@
 //! `hubtrack`: launches and supervises the stage processes, and hosts the operator tools.
 
 mod bench;
+mod detect_cmd;
+mod eval;
 mod launch;
+mod score;
+mod track_cmd;
 
 use anyhow::{bail, Context};
 use clap::{Parser, Subcommand};
@@ -19,7 +23,7 @@ use std::time::{Duration, Instant};
 
 /// Canonical start order; stages stop in reverse (control first, recorder last, so the vehicle is
 /// told to hold first and the recording sees everything).
-const PIPELINE_ORDER: &[&str] = &["recorder", "capture"];
+const PIPELINE_ORDER: &[&str] = &["recorder", "capture", "detect", "track"];
 /// Supervisor loop period.
 const TICK: Duration = Duration::from_millis(50);
 
@@ -45,6 +49,20 @@ enum Command {
     Tap(TapArgs),
     /// Render one synthetic frame exactly as the capture stage would publish it.
     Render(RenderArgs),
+    /// Detect the hub in photos: one JSON object per image on stdout.
+    Detect(detect_cmd::DetectArgs),
+    /// Detect and track over an image sequence offline: one JSON object per frame on stdout.
+    Track(track_cmd::TrackArgs),
+    /// Evaluate the detector on photos with truth and on synthetic frames, all modes side by side.
+    Eval(eval::EvalArgs),
+    /// Latency per stage and per hop, and end to end, from the stamps in a recording.
+    Latency {
+        /// The recording (live or replayed; a cut file is read as far as it goes).
+        file: PathBuf,
+        /// One JSON object with `stages`, `hops` and `end_to_end`.
+        #[arg(long)]
+        json: bool,
+    },
     /// Benchmarks (commands that print a table; compare columns within one run).
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -110,6 +128,10 @@ fn main() {
         Command::Tap(a) => tap(a),
         Command::Render(a) => render(a),
         Command::Bench(BenchCommand::Frames(a)) => bench::frames(a),
+        Command::Detect(a) => detect_cmd::run(a),
+        Command::Eval(a) => eval::run(a),
+        Command::Track(a) => track_cmd::run(a),
+        Command::Latency { file, json } => latency(&file, json),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
@@ -289,6 +311,17 @@ fn recover(input: &Path, output: Option<PathBuf>) -> anyhow::Result<()> {
     );
     if let Some(why) = report.stopped_by {
         println!("reading stopped at: {why}");
+    }
+    Ok(())
+}
+
+fn latency(file: &Path, json: bool) -> anyhow::Result<()> {
+    let report = hubtrack_record::latency::analyze(file)?;
+    if json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        println!("latency from the stamps in {}", file.display());
+        hubtrack_record::latency::print(&report);
     }
     Ok(())
 }

@@ -1,0 +1,77 @@
+//! Detection speed on rendered 1920x1080 BGR frames (GoPro model), including the downsampling.
+//!
+//! `cargo bench -p hubtrack-detect --bench detect` (or `cargo run --release --bench detect`).
+//! Prints, per mode and OpenCV thread count, median and p99 of the whole `detect` call and the
+//! median of each step.
+
+#[path = "../examples/common/synth.rs"]
+mod synth;
+
+use std::time::Instant;
+
+use hubtrack_detect::params::{DetectConfig, Mode};
+use hubtrack_detect::{Detector, Hints, ImageView};
+use hubtrack_render::{Camera, Renderer};
+use hubtrack_types::PixelFormat;
+
+const FRAMES: usize = 100;
+const REPEATS: usize = 3;
+
+fn pct(v: &mut [f64], q: f64) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * q).round() as usize]
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let cam = Camera::gopro_hero3();
+    let mut r = Renderer::new(cam);
+    let mut frames = Vec::new();
+    let classes = [synth::Class::Far, synth::Class::Medium, synth::Class::Close, synth::Class::Negative];
+    for k in 0..FRAMES {
+        let (scene, pose) = synth::sample(classes[k % classes.len()], 5000 + k as u64);
+        let mut buf = vec![0u8; cam.frame_bytes()];
+        r.render(&scene, &pose, &mut buf)?;
+        frames.push((buf, pose.roll_deg.to_radians()));
+    }
+    let default_threads = opencv::core::get_num_threads()?;
+    println!("{FRAMES} rendered 1920x1080 BGR frames x {REPEATS} repeats; times in ms (wall clock of detect(), per-step medians from Detection.timings)");
+    println!("{:<8} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}", "mode", "threads", "median", "p99", "pyramid", "edges", "hough", "geometry");
+    for mode in [Mode::Thesis, Mode::Default] {
+        for threads in [1, default_threads] {
+            opencv::core::set_num_threads(threads)?;
+            let mut det = Detector::new(DetectConfig { mode, ..DetectConfig::default() })?;
+            let (mut tot, mut py, mut ed, mut ho, mut ge) = (vec![], vec![], vec![], vec![], vec![]);
+            for rep in 0..=REPEATS {
+                for (buf, roll) in &frames {
+                    let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: buf };
+                    let t = Instant::now();
+                    let out = det.detect(&view, &Hints { roll_rad: Some(*roll), predicted_hub_px: None })?;
+                    let ms = t.elapsed().as_secs_f64() * 1e3;
+                    if rep == 0 {
+                        continue; // warm-up pass
+                    }
+                    let tm = out.detection.timings;
+                    tot.push(ms);
+                    py.push(tm.pyramid_us / 1e3);
+                    ed.push(tm.edges_us / 1e3);
+                    ho.push(tm.hough_us / 1e3);
+                    ge.push(tm.geometry_us / 1e3);
+                }
+            }
+            let name = if mode == Mode::Thesis { "thesis" } else { "default" };
+            println!(
+                "{:<8} {:>7} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+                name,
+                threads,
+                pct(&mut tot, 0.5),
+                pct(&mut tot, 0.99),
+                pct(&mut py, 0.5),
+                pct(&mut ed, 0.5),
+                pct(&mut ho, 0.5),
+                pct(&mut ge, 0.5)
+            );
+        }
+    }
+    opencv::core::set_num_threads(default_threads)?;
+    Ok(())
+}

@@ -1,0 +1,463 @@
+//! Every tunable number of the detector, as plain serde data (no OpenCV here).
+//!
+//! The configuration lives under the `detect` key of the project configuration, so error keys are
+//! full dotted paths such as `detect.thesis.canny_high`. Every struct denies unknown fields and
+//! fills missing ones from [`Default`], which holds the documented defaults.
+//!
+//! Pixel quantities are in the pixels of the *working* (downsampled) image unless the name says
+//! `_frac` (fraction of the working-image height, so they survive a change of working size).
+
+use serde::{Deserialize, Serialize};
+
+/// Which pipeline [`crate::Detector::detect`] runs.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// Faithful reimplementation of the thesis (section 6.1.5): the reference.
+    Thesis,
+    /// The project's robust pipeline (adaptive edges, convergence voting, confidence).
+    #[default]
+    Default,
+}
+
+/// A parameter outside its allowed range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{key} = {value} is invalid: allowed {allowed}")]
+pub struct ParamError {
+    /// Full dotted path, e.g. `detect.thesis.canny_high`.
+    pub key: String,
+    /// The offending value as text.
+    pub value: String,
+    /// What would be accepted.
+    pub allowed: String,
+}
+
+/// Whole detector configuration (`detect` section).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct DetectConfig {
+    /// Pipeline to run.
+    pub mode: Mode,
+    /// Camera and turbine dimensions for distance and yaw.
+    pub camera: CameraParams,
+    /// Parameters of the thesis pipeline.
+    pub thesis: ThesisParams,
+    /// Parameters of the default pipeline.
+    pub default: DefaultParams,
+}
+
+/// Camera optics and known turbine dimensions used for distance and yaw estimates.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraParams {
+    /// Horizontal field of view, degrees. 118 = GoPro HERO3+ Black 1080p wide (the thesis camera).
+    /// The pinhole focal length is `f = (width / 2) / tan(hfov / 2)` at full resolution.
+    pub hfov_deg: f64,
+    /// Focal length in full-resolution pixels; overrides `hfov_deg` when set. Useful for lenses
+    /// with strong barrel distortion, whose centre focal length is much longer than the
+    /// pinhole value from the edge FOV (GoPro: 834 px vs 577 px at 1920 wide).
+    pub focal_px: Option<f64>,
+    /// Tower diameter at the top, metres (2.2 m on the thesis's ~1.5 MW turbines); the distance
+    /// estimate divides it by the measured tower width.
+    pub tower_top_diameter_m: f64,
+    /// Distance from the hub centre to the tower axis along the rotor axis, metres (~4 m); the
+    /// yaw estimate (thesis eq. 7.14) divides the image gap by it.
+    pub hub_tower_gap_m: f64,
+}
+
+impl Default for CameraParams {
+    fn default() -> Self {
+        CameraParams { hfov_deg: 118.0, focal_px: None, tower_top_diameter_m: 2.2, hub_tower_gap_m: 4.2 }
+    }
+}
+
+/// Parameters of the thesis pipeline (section 6.1.5, 8.1 and table 9.1). Defaults are the
+/// thesis's values; where the thesis gives no number the choice is documented.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ThesisParams {
+    /// Downsample with pyrDown (at least once) until both sides are at most this, px (thesis 8.1: 200–500).
+    pub pyramid_max_side_px: u32,
+    /// Stop downsampling before any side would drop below this, px (thesis 8.1).
+    pub pyramid_min_side_px: u32,
+    /// Canny low hysteresis threshold (thesis: 300).
+    pub canny_low: f64,
+    /// Canny high hysteresis threshold (thesis: 400).
+    pub canny_high: f64,
+    /// Hough accumulator distance resolution, px (thesis: 1).
+    pub hough_rho_px: f64,
+    /// Hough accumulator angle resolution, degrees (thesis: 1).
+    pub hough_theta_deg: f64,
+    /// Hough accumulator threshold, votes (thesis table 9.1: 43).
+    pub hough_threshold: i32,
+    /// Minimum Hough segment length, px at the working size (thesis table 9.1: 50 at 270 px height).
+    pub hough_min_length_px: f64,
+    /// Maximum gap bridged inside one Hough segment, px (thesis table 9.1: 13).
+    pub hough_max_gap_px: f64,
+    /// A tower line may deviate this much from vertical after roll compensation, degrees
+    /// ("a few degrees" in the thesis).
+    pub tower_max_tilt_deg: f64,
+    /// A tower line must have an end point in this lowest fraction of the image (thesis: 20 %).
+    pub tower_bottom_frac: f64,
+    /// Blade search radius around the tower top, fraction of image height (thesis: 0.3).
+    pub search_radius_frac: f64,
+    /// Blade lines whose directions differ by at most this are one blade, degrees (thesis: "adjacent angles"; 10° separates 120°-spaced blades safely while merging both edges of a tapered blade).
+    pub blade_group_tol_deg: f64,
+    /// A blade pointing down within this of the tower direction is removed, degrees.
+    pub blade_over_tower_tol_deg: f64,
+    /// Expected angle between blades, degrees (thesis: 120).
+    pub vote_target_deg: f64,
+    /// Tolerance on the blade separation, degrees (thesis: 20).
+    pub vote_tol_deg: f64,
+    /// A blade with this many votes is removed (thesis: 3).
+    pub vote_limit: u32,
+    /// Intersections farther than this from the tower axis line horizontally are discarded,
+    /// fraction of the search radius (thesis gives no number; 0.35 R ≈ 0.1 image height covers
+    /// the hub–tower gap up to ~45° yaw at 30 m).
+    pub hub_max_dx_frac: f64,
+    /// Intersections farther than this vertically from the tower top are discarded, fraction of
+    /// the search radius ("less strict" than the horizontal limit).
+    pub hub_max_dy_frac: f64,
+    /// Minimum number of blades for a detection (thesis: 2).
+    pub min_blades: u32,
+    /// The tower width is measured this far below the tower top, fraction of image height (just
+    /// under the nacelle, where the tower diameter is the known top diameter).
+    pub tower_width_below_top_frac: f64,
+}
+
+impl Default for ThesisParams {
+    fn default() -> Self {
+        ThesisParams {
+            pyramid_max_side_px: 500,
+            pyramid_min_side_px: 200,
+            canny_low: 300.0,
+            canny_high: 400.0,
+            hough_rho_px: 1.0,
+            hough_theta_deg: 1.0,
+            hough_threshold: 43,
+            hough_min_length_px: 50.0,
+            hough_max_gap_px: 13.0,
+            tower_max_tilt_deg: 5.0,
+            tower_bottom_frac: 0.2,
+            search_radius_frac: 0.3,
+            blade_group_tol_deg: 10.0,
+            blade_over_tower_tol_deg: 15.0,
+            vote_target_deg: 120.0,
+            vote_tol_deg: 20.0,
+            vote_limit: 3,
+            hub_max_dx_frac: 0.35,
+            hub_max_dy_frac: 0.7,
+            min_blades: 2,
+            tower_width_below_top_frac: 0.05,
+        }
+    }
+}
+
+/// Parameters of the default (robust) pipeline; see `robust.rs` for the steps.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DefaultParams {
+    /// Downsample (at least once) until both sides are at most this, px. 500 keeps the
+    /// 1920×1080 → 480×270 working size of the thesis, which fits the 5 ms budget.
+    pub pyramid_max_side_px: u32,
+    /// Stop downsampling before any side would drop below this, px.
+    pub pyramid_min_side_px: u32,
+    /// Canny high threshold = this percentile (0..1) of the Sobel L1 gradient magnitude, so the
+    /// edge density follows the image contrast instead of a fixed level.
+    pub canny_high_percentile: f64,
+    /// Lower clamp of the adaptive high threshold (Sobel L1 units, max 2040): below this a
+    /// "gradient" is sensor noise even in a flat sky.
+    pub canny_high_min: f64,
+    /// Upper clamp of the adaptive high threshold: the thesis's 400 already keeps every turbine
+    /// edge, more would drop low-contrast blades against textured ground.
+    pub canny_high_max: f64,
+    /// Canny low threshold as a fraction of the high one (the classic 1:2 – 1:3 ratio).
+    pub canny_low_ratio: f64,
+    /// Hough accumulator distance resolution, px.
+    pub hough_rho_px: f64,
+    /// Hough accumulator angle resolution, degrees.
+    pub hough_theta_deg: f64,
+    /// Hough accumulator threshold, as a fraction of image height (votes).
+    pub hough_threshold_frac: f64,
+    /// Minimum Hough segment length, fraction of image height.
+    pub hough_min_length_frac: f64,
+    /// Maximum gap inside one Hough segment, fraction of image height.
+    pub hough_max_gap_frac: f64,
+    /// At most this many segments (the longest) enter the geometry, bounding its O(n²) steps.
+    pub max_segments: usize,
+    /// Collinear merge: maximum angle between two segments, degrees.
+    pub merge_angle_deg: f64,
+    /// Collinear merge: maximum perpendicular offset, px.
+    pub merge_offset_px: f64,
+    /// Collinear merge: maximum gap between the segments along the line, fraction of image height.
+    pub merge_gap_frac: f64,
+    /// Lines longer than this fraction of the image width and within `horizon_max_tilt_deg` of
+    /// horizontal (after roll) are horizon/ridge candidates and never blades.
+    pub horizon_min_length_frac: f64,
+    /// See `horizon_min_length_frac`, degrees from horizontal.
+    pub horizon_max_tilt_deg: f64,
+    /// Convergence: only segments at least this long (fraction of image height) propose hub candidates.
+    pub candidate_min_length_frac: f64,
+    /// Convergence: two proposing segments must differ in direction by at least this, degrees.
+    pub candidate_min_angle_deg: f64,
+    /// Convergence: a proposal must lie within this fraction of a segment's length beyond its
+    /// nearer end (blades start at the hub, they do not pass through it).
+    pub candidate_end_reach_frac: f64,
+    /// Convergence: a proposal may lie at most this fraction of a segment's length inside it.
+    pub candidate_inside_frac: f64,
+    /// Clustering radius of the candidate proposals, fraction of image height.
+    pub cluster_radius_frac: f64,
+    /// A supporting blade line must pass within this of the hub candidate, fraction of image height
+    /// (blade edges are offset from the blade axis by half the root chord).
+    pub support_line_dist_frac: f64,
+    /// A supporting blade line's nearer end must lie within this of the candidate, fraction of
+    /// image height.
+    pub support_end_dist_frac: f64,
+    /// Lines within this angle are one blade, degrees.
+    pub blade_group_tol_deg: f64,
+    /// Two blades closer than this in angle are merged / not counted apart, degrees.
+    pub blade_min_separation_deg: f64,
+    /// Expected angle between blades, degrees.
+    pub blade_target_deg: f64,
+    /// Tolerance on the blade separation (larger than the thesis's to allow oblique views), degrees.
+    pub blade_sep_tol_deg: f64,
+    /// Tower lines: maximum tilt from vertical after roll, degrees (larger than the thesis's
+    /// because the wide lens bends lines and unknown roll is searched).
+    pub tower_max_tilt_deg: f64,
+    /// Tower lines must reach above this far below the candidate hub, fraction of image height.
+    pub tower_top_max_below_frac: f64,
+    /// Tower lines may start at most this far above the candidate hub, fraction of image height
+    /// (the tower top hides behind the nacelle; a line passing the hub is no tower top).
+    pub tower_top_max_above_frac: f64,
+    /// Tower lines may be this far horizontally from the hub candidate, fraction of image height.
+    pub tower_max_dx_frac: f64,
+    /// Without a roll hint, the roll is searched in ±this range, degrees.
+    pub roll_search_deg: f64,
+    /// Search radius around `hints.predicted_hub_px`, fraction of image height: candidates
+    /// inside it get `prediction_bonus` added to their score.
+    pub prediction_radius_frac: f64,
+    /// Score bonus (confidence units) for candidates near the predicted hub.
+    pub prediction_bonus: f64,
+    /// Confidence weight of having 2 blades.
+    pub conf_two_blades: f64,
+    /// Confidence weight of having 3 blades.
+    pub conf_three_blades: f64,
+    /// Confidence added when a tower supports the candidate.
+    pub conf_tower: f64,
+    /// Confidence added when the blade separations fit a (possibly skewed) 120° rotor.
+    pub conf_geometry: f64,
+    /// Confidence added when at least two blades show both edges (a blade is a band with two
+    /// edges on either side of its axis; field borders, wires and horizons give single lines).
+    pub conf_paired: f64,
+    /// Confidence removed per blade beyond three (clutter: textured ground, lattice masts).
+    pub conf_extra_blade_penalty: f64,
+    /// `detected` requires at least this confidence.
+    pub min_confidence: f64,
+    /// The tower width is measured this far below the tower top, fraction of image height.
+    pub tower_width_below_top_frac: f64,
+}
+
+impl Default for DefaultParams {
+    fn default() -> Self {
+        DefaultParams {
+            pyramid_max_side_px: 500,
+            pyramid_min_side_px: 200,
+            canny_high_percentile: 0.95,
+            canny_high_min: 100.0,
+            canny_high_max: 200.0,
+            canny_low_ratio: 0.5,
+            hough_rho_px: 1.0,
+            hough_theta_deg: 1.0,
+            hough_threshold_frac: 0.1,
+            hough_min_length_frac: 0.08,
+            hough_max_gap_frac: 0.02,
+            max_segments: 200,
+            merge_angle_deg: 3.0,
+            merge_offset_px: 2.0,
+            merge_gap_frac: 0.05,
+            horizon_min_length_frac: 0.4,
+            horizon_max_tilt_deg: 8.0,
+            candidate_min_length_frac: 0.1,
+            candidate_min_angle_deg: 25.0,
+            candidate_end_reach_frac: 0.6,
+            candidate_inside_frac: 0.1,
+            cluster_radius_frac: 0.04,
+            support_line_dist_frac: 0.03,
+            support_end_dist_frac: 0.15,
+            blade_group_tol_deg: 8.0,
+            blade_min_separation_deg: 30.0,
+            blade_target_deg: 120.0,
+            blade_sep_tol_deg: 45.0,
+            tower_max_tilt_deg: 8.0,
+            tower_top_max_below_frac: 0.15,
+            tower_top_max_above_frac: 0.03,
+            tower_max_dx_frac: 0.12,
+            roll_search_deg: 10.0,
+            prediction_radius_frac: 0.15,
+            prediction_bonus: 0.1,
+            conf_two_blades: 0.3,
+            conf_three_blades: 0.5,
+            conf_tower: 0.25,
+            conf_geometry: 0.15,
+            conf_paired: 0.1,
+            conf_extra_blade_penalty: 0.1,
+            min_confidence: 0.6,
+            tower_width_below_top_frac: 0.05,
+        }
+    }
+}
+
+/// Collects range checks with their dotted keys.
+struct Check {
+    prefix: &'static str,
+}
+
+impl Check {
+    fn range(&self, name: &str, v: f64, lo: f64, hi: f64) -> Result<(), ParamError> {
+        if v.is_finite() && v >= lo && v <= hi {
+            Ok(())
+        } else {
+            Err(ParamError { key: format!("{}.{}", self.prefix, name), value: v.to_string(), allowed: format!("{lo} ..= {hi}") })
+        }
+    }
+    fn less(&self, name_lo: &str, lo: f64, name_hi: &str, hi: f64) -> Result<(), ParamError> {
+        if lo < hi {
+            Ok(())
+        } else {
+            Err(ParamError {
+                key: format!("{}.{}", self.prefix, name_lo),
+                value: lo.to_string(),
+                allowed: format!("less than {}.{} = {hi}", self.prefix, name_hi),
+            })
+        }
+    }
+}
+
+impl DetectConfig {
+    /// Check every parameter's range; the error names the first offending key.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        self.camera.validate()?;
+        self.thesis.validate()?;
+        self.default.validate()
+    }
+}
+
+impl CameraParams {
+    fn validate(&self) -> Result<(), ParamError> {
+        let c = Check { prefix: "detect.camera" };
+        c.range("hfov_deg", self.hfov_deg, 1.0, 179.0)?;
+        if let Some(f) = self.focal_px {
+            c.range("focal_px", f, 1.0, 1e6)?;
+        }
+        c.range("tower_top_diameter_m", self.tower_top_diameter_m, 0.1, 30.0)?;
+        c.range("hub_tower_gap_m", self.hub_tower_gap_m, 0.1, 50.0)
+    }
+}
+
+impl ThesisParams {
+    fn validate(&self) -> Result<(), ParamError> {
+        let c = Check { prefix: "detect.thesis" };
+        c.range("pyramid_min_side_px", self.pyramid_min_side_px as f64, 16.0, 4096.0)?;
+        c.range("pyramid_max_side_px", self.pyramid_max_side_px as f64, 16.0, 4096.0)?;
+        c.less("pyramid_min_side_px", self.pyramid_min_side_px as f64, "pyramid_max_side_px", self.pyramid_max_side_px as f64)?;
+        c.range("canny_low", self.canny_low, 0.0, 4096.0)?;
+        c.range("canny_high", self.canny_high, 0.0, 4096.0)?;
+        c.less("canny_low", self.canny_low, "canny_high", self.canny_high + f64::EPSILON)?;
+        c.range("hough_rho_px", self.hough_rho_px, 0.1, 10.0)?;
+        c.range("hough_theta_deg", self.hough_theta_deg, 0.05, 10.0)?;
+        c.range("hough_threshold", self.hough_threshold as f64, 1.0, 10_000.0)?;
+        c.range("hough_min_length_px", self.hough_min_length_px, 1.0, 4096.0)?;
+        c.range("hough_max_gap_px", self.hough_max_gap_px, 0.0, 4096.0)?;
+        c.range("tower_max_tilt_deg", self.tower_max_tilt_deg, 0.0, 45.0)?;
+        c.range("tower_bottom_frac", self.tower_bottom_frac, 0.0, 1.0)?;
+        c.range("search_radius_frac", self.search_radius_frac, 0.01, 2.0)?;
+        c.range("blade_group_tol_deg", self.blade_group_tol_deg, 0.0, 60.0)?;
+        c.range("blade_over_tower_tol_deg", self.blade_over_tower_tol_deg, 0.0, 90.0)?;
+        c.range("vote_target_deg", self.vote_target_deg, 0.0, 180.0)?;
+        c.range("vote_tol_deg", self.vote_tol_deg, 0.0, 180.0)?;
+        c.range("vote_limit", self.vote_limit as f64, 1.0, 100.0)?;
+        c.range("hub_max_dx_frac", self.hub_max_dx_frac, 0.0, 10.0)?;
+        c.range("hub_max_dy_frac", self.hub_max_dy_frac, 0.0, 10.0)?;
+        c.range("min_blades", self.min_blades as f64, 2.0, crate::MAX_BLADES_F)?;
+        c.range("tower_width_below_top_frac", self.tower_width_below_top_frac, 0.0, 1.0)
+    }
+}
+
+impl DefaultParams {
+    fn validate(&self) -> Result<(), ParamError> {
+        let c = Check { prefix: "detect.default" };
+        c.range("pyramid_min_side_px", self.pyramid_min_side_px as f64, 16.0, 4096.0)?;
+        c.range("pyramid_max_side_px", self.pyramid_max_side_px as f64, 16.0, 4096.0)?;
+        c.less("pyramid_min_side_px", self.pyramid_min_side_px as f64, "pyramid_max_side_px", self.pyramid_max_side_px as f64)?;
+        c.range("canny_high_percentile", self.canny_high_percentile, 0.0, 1.0)?;
+        c.range("canny_high_min", self.canny_high_min, 1.0, 4096.0)?;
+        c.range("canny_high_max", self.canny_high_max, 1.0, 4096.0)?;
+        c.less("canny_high_min", self.canny_high_min, "canny_high_max", self.canny_high_max + f64::EPSILON)?;
+        c.range("canny_low_ratio", self.canny_low_ratio, 0.05, 1.0)?;
+        c.range("hough_rho_px", self.hough_rho_px, 0.1, 10.0)?;
+        c.range("hough_theta_deg", self.hough_theta_deg, 0.05, 10.0)?;
+        c.range("hough_threshold_frac", self.hough_threshold_frac, 0.001, 1.0)?;
+        c.range("hough_min_length_frac", self.hough_min_length_frac, 0.001, 1.0)?;
+        c.range("hough_max_gap_frac", self.hough_max_gap_frac, 0.0, 1.0)?;
+        c.range("max_segments", self.max_segments as f64, 2.0, 10_000.0)?;
+        c.range("merge_angle_deg", self.merge_angle_deg, 0.0, 30.0)?;
+        c.range("merge_offset_px", self.merge_offset_px, 0.0, 50.0)?;
+        c.range("merge_gap_frac", self.merge_gap_frac, 0.0, 1.0)?;
+        c.range("horizon_min_length_frac", self.horizon_min_length_frac, 0.0, 2.0)?;
+        c.range("horizon_max_tilt_deg", self.horizon_max_tilt_deg, 0.0, 45.0)?;
+        c.range("candidate_min_length_frac", self.candidate_min_length_frac, 0.0, 2.0)?;
+        c.range("candidate_min_angle_deg", self.candidate_min_angle_deg, 0.0, 90.0)?;
+        c.range("candidate_end_reach_frac", self.candidate_end_reach_frac, 0.0, 10.0)?;
+        c.range("candidate_inside_frac", self.candidate_inside_frac, 0.0, 0.5)?;
+        c.range("cluster_radius_frac", self.cluster_radius_frac, 0.001, 1.0)?;
+        c.range("support_line_dist_frac", self.support_line_dist_frac, 0.0, 1.0)?;
+        c.range("support_end_dist_frac", self.support_end_dist_frac, 0.0, 2.0)?;
+        c.range("blade_group_tol_deg", self.blade_group_tol_deg, 0.0, 60.0)?;
+        c.range("blade_min_separation_deg", self.blade_min_separation_deg, 0.0, 120.0)?;
+        c.range("blade_target_deg", self.blade_target_deg, 0.0, 180.0)?;
+        c.range("blade_sep_tol_deg", self.blade_sep_tol_deg, 0.0, 180.0)?;
+        c.range("tower_max_tilt_deg", self.tower_max_tilt_deg, 0.0, 45.0)?;
+        c.range("tower_top_max_below_frac", self.tower_top_max_below_frac, 0.0, 2.0)?;
+        c.range("tower_top_max_above_frac", self.tower_top_max_above_frac, 0.0, 2.0)?;
+        c.range("tower_max_dx_frac", self.tower_max_dx_frac, 0.0, 2.0)?;
+        c.range("roll_search_deg", self.roll_search_deg, 0.0, 45.0)?;
+        c.range("prediction_radius_frac", self.prediction_radius_frac, 0.0, 2.0)?;
+        c.range("prediction_bonus", self.prediction_bonus, 0.0, 1.0)?;
+        c.range("conf_two_blades", self.conf_two_blades, 0.0, 1.0)?;
+        c.range("conf_three_blades", self.conf_three_blades, 0.0, 1.0)?;
+        c.range("conf_tower", self.conf_tower, 0.0, 1.0)?;
+        c.range("conf_geometry", self.conf_geometry, 0.0, 1.0)?;
+        c.range("conf_paired", self.conf_paired, 0.0, 1.0)?;
+        c.range("conf_extra_blade_penalty", self.conf_extra_blade_penalty, 0.0, 1.0)?;
+        c.range("min_confidence", self.min_confidence, 0.0, 1.0)?;
+        c.range("tower_width_below_top_frac", self.tower_width_below_top_frac, 0.0, 1.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_validate_and_roundtrip() {
+        let c = DetectConfig::default();
+        c.validate().unwrap();
+        let s = serde_json::to_string(&c).unwrap();
+        let back: DetectConfig = serde_json::from_str(&s).unwrap();
+        assert_eq!(back, c);
+        let m: DetectConfig = serde_json::from_str(r#"{"mode":"thesis"}"#).unwrap();
+        assert_eq!(m.mode, Mode::Thesis);
+    }
+
+    #[test]
+    fn bad_values_name_their_key() {
+        let mut c = DetectConfig::default();
+        c.thesis.canny_high = 100.0;
+        let e = c.validate().unwrap_err();
+        assert_eq!(e.key, "detect.thesis.canny_low");
+        let mut c = DetectConfig::default();
+        c.default.min_confidence = 2.0;
+        assert_eq!(c.validate().unwrap_err().key, "detect.default.min_confidence");
+        assert!(serde_json::from_str::<DetectConfig>(r#"{"thesis":{"nope":1}}"#).is_err());
+    }
+}

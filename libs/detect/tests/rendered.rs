@@ -1,0 +1,60 @@
+//! End-to-end checks on rendered frames (hubtrack-render).
+
+use hubtrack_detect::params::{DetectConfig, Mode};
+use hubtrack_detect::{Detector, Hints, ImageView};
+use hubtrack_render::{Camera, CameraPose, Ground, Renderer, Scene};
+use hubtrack_types::PixelFormat;
+
+/// Sunlit turbine over a dark sea, sun behind the camera: the high-contrast situation the
+/// thesis's fixed Canny thresholds (300/400) were tuned for.
+fn sunlit_sea() -> Scene {
+    Scene { ground: Ground::Sea, sun_azimuth_deg: 0.0, sun_elevation_deg: 20.0, ..Scene::default_clear() }
+}
+
+fn run(mode: Mode, pose: CameraPose) -> (hubtrack_detect::Output, hubtrack_render::Truth) {
+    let cam = Camera::gopro_hero3();
+    let mut r = Renderer::new(cam);
+    let mut buf = vec![0u8; cam.frame_bytes()];
+    let truth = r.render(&sunlit_sea(), &pose, &mut buf).unwrap();
+    let mut det = Detector::new(DetectConfig { mode, ..DetectConfig::default() }).unwrap();
+    let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
+    (det.detect(&view, &Hints { roll_rad: Some(0.0), predicted_hub_px: None }).unwrap(), truth)
+}
+
+#[test]
+fn front_view_hub_found_by_both_modes() {
+    for mode in [Mode::Thesis, Mode::Default] {
+        let (out, truth) = run(mode, CameraPose::front(30.0));
+        let d = out.detection;
+        assert!(d.detected, "{mode:?}: not detected");
+        let hub = truth.hub_px.unwrap();
+        let err = ((d.hub_px[0] - hub[0]).powi(2) + (d.hub_px[1] - hub[1]).powi(2)).sqrt();
+        assert!(err <= 0.03 * 1080.0, "{mode:?}: hub {:?} truth {hub:?} err {err:.1}px", d.hub_px);
+        assert_eq!((d.image_width, d.image_height), (1920, 1080));
+        assert!(d.timings.total_us > 0.0 && d.line_count > 0 && d.edge_count > 0);
+    }
+}
+
+#[test]
+fn yaw_sign_follows_project_convention() {
+    // Camera on the turbine's own left (viewer's right, lateral > 0): positive relative yaw.
+    // The hub, 4.2 m in front of the tower, then appears LEFT of the tower axis.
+    // The formula and sign are unit-tested in lib.rs; here the rendered geometry must agree
+    // whenever a mode reports hub and tower.
+    for mode in [Mode::Thesis, Mode::Default] {
+    let (out, truth) = run(mode, CameraPose::looking_at_hub(30.0, 12.0, 0.0));
+    assert!(truth.relative_yaw_deg > 0.0);
+    let d = out.detection;
+    let hub = truth.hub_px.unwrap();
+    let hit = ((d.hub_px[0] - hub[0]).powi(2) + (d.hub_px[1] - hub[1]).powi(2)).sqrt() <= 0.03 * 1080.0;
+    // The truth itself: the hub appears left of the tower top.
+    assert!(hub[0] < truth.tower_top_px.unwrap()[0]);
+    // Only a correct detection with both tower edges (known width) can be held to the sign.
+    if d.detected && d.tower_found && hit && d.tower_width_px > 0.0 {
+        assert!(d.hub_tower_gap_px < 0.0, "gap {}", d.hub_tower_gap_px);
+        if let Some(y) = out.yaw_deg {
+            assert!(y > 0.0, "yaw {y}");
+        }
+    }
+    }
+}

@@ -1,0 +1,356 @@
+//! Distance and relative-yaw measurements from one detection, with their uncertainty.
+//!
+//! All functions are pure. Distances are metres, angles radians (unless a name says `_deg`),
+//! pixel quantities are at the frame's own resolution.
+//!
+//! ## Distance (thesis section 7.3, eq. 7.2)
+//! A pinhole camera sees an object of real size `D` at depth `d` with size `w = f·D/d` px, so
+//! `d = f·D/w`. A width error `σ_w` propagates to first order into `σ_d = d·σ_w/w` (the thesis's
+//! example: one pixel of tower width moved the estimate from 35 m to 40 m). The tower width gives
+//! the depth of the **tower axis**; the spinner (`d = f·D_spinner / (2r)`) gives the depth of the
+//! rotor centre. Independent estimates are fused by inverse variance ([`fuse`]).
+//!
+//! ## Yaw from the hub–tower gap (thesis section 7.4.2, eq. 7.14)
+//! Seen from top, the rotor centre lies `L` in front of the tower axis along the rotor axis. With
+//! the camera at relative yaw ψ looking at the hub, the tower axis is displaced sideways by
+//! `L·sin ψ` and lies at depth `d_t = d_hub + L·cos ψ`, so it appears `f·L·sin ψ / d_t` px from
+//! the hub. **Sign:** when the camera stands on the viewer's right (ψ > 0, the turbine's own
+//! left), the tower axis appears to the **right** of the hub (near objects shift against the
+//! viewer's motion, the hub is nearer), so the gap `hub_x − tower_x` is **negative**:
+//! `gap = −f·L·sin ψ / d_t`, i.e. `ψ = asin(−gap·d_t / (f·L))` — eq. 7.14 with the sign of the
+//! project contract and `d` the depth of the tower axis (what the tower width measures).
+//!
+//! ## Yaw from the blade skew
+//! The rotor plane seen at relative yaw ψ is foreshortened horizontally by `cos ψ`: a blade at
+//! true angle θ from vertical (clockwise) appears at `α = atan2(sin θ·cos ψ, cos θ)`. The blades
+//! are equally spaced (`θ_k = θ₀ + k·360°/N`), so the detected angles determine θ₀ and |ψ| (not its
+//! sign: the foreshortening is symmetric). [`blade_skew_yaw`] fits both by least squares in the
+//! measured angles and returns |ψ| with its Cramér–Rao standard deviation.
+
+use std::f64::consts::{PI, TAU};
+
+/// A scalar estimate with its standard deviation (same unit as the value).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// The value.
+    pub value: f64,
+    /// Its standard deviation (> 0).
+    pub std: f64,
+}
+
+impl Estimate {
+    /// Variance `std²`.
+    pub fn var(&self) -> f64 {
+        self.std * self.std
+    }
+}
+
+/// Depth of an object of real size `real_size_m` that appears `size_px` large:
+/// `d = f·D/w`, `σ_d = d·σ_w/w`. `None` for a non-positive or non-finite size.
+pub fn distance_from_size(f_px: f64, real_size_m: f64, size_px: f64, size_std_px: f64) -> Option<Estimate> {
+    if !(size_px.is_finite() && size_px > 0.0 && f_px > 0.0 && real_size_m > 0.0) {
+        return None;
+    }
+    let d = f_px * real_size_m / size_px;
+    Some(Estimate { value: d, std: d * size_std_px / size_px })
+}
+
+/// Depth of the tower axis from the tower width: [`distance_from_size`] with the tower diameter.
+pub fn distance_from_tower_width(f_px: f64, tower_diameter_m: f64, width_px: f64, width_std_px: f64) -> Option<Estimate> {
+    distance_from_size(f_px, tower_diameter_m, width_px, width_std_px)
+}
+
+/// Distance of the rotor centre from the spinner circle radius: `d = f·D_spinner / (2r)`,
+/// `σ_d = d·σ_r / r`.
+pub fn distance_from_spinner(f_px: f64, spinner_diameter_m: f64, radius_px: f64, radius_std_px: f64) -> Option<Estimate> {
+    distance_from_size(f_px, spinner_diameter_m, 2.0 * radius_px, 2.0 * radius_std_px)
+}
+
+/// Inverse-variance fusion of independent estimates: `x = Σ(xᵢ/σᵢ²) / Σ(1/σᵢ²)`,
+/// `σ² = 1 / Σ(1/σᵢ²)`. `None` if there is none (non-finite or non-positive std are skipped).
+pub fn fuse(estimates: &[Estimate]) -> Option<Estimate> {
+    let (mut w_sum, mut wx_sum) = (0.0, 0.0);
+    for e in estimates.iter().filter(|e| e.value.is_finite() && e.std.is_finite() && e.std > 0.0) {
+        let w = 1.0 / e.var();
+        w_sum += w;
+        wx_sum += w * e.value;
+    }
+    (w_sum > 0.0).then(|| Estimate { value: wx_sum / w_sum, std: (1.0 / w_sum).sqrt() })
+}
+
+/// Relative yaw from the hub–tower gap (eq. 7.14 with the project sign, see the module docs):
+/// `ψ = asin(−gap·d_t / (f·L))`, clipped to ±`max_abs_rad`.
+///
+/// `gap_px` = hub x − tower-axis x (px), `tower_depth` = depth of the tower axis (m, with std),
+/// `offset_m` = L. The std propagates `σ_s² = (d_t·σ_gap / (f·L))² + (gap·σ_d / (f·L))²` through
+/// the asin: `σ_ψ = σ_s / cos ψ`.
+pub fn yaw_from_gap(
+    gap_px: f64,
+    gap_std_px: f64,
+    tower_depth: Estimate,
+    f_px: f64,
+    offset_m: f64,
+    max_abs_rad: f64,
+) -> Option<Estimate> {
+    if !(gap_px.is_finite() && tower_depth.value.is_finite() && tower_depth.value > 0.0 && f_px > 0.0 && offset_m > 0.0)
+    {
+        return None;
+    }
+    let k = f_px * offset_m;
+    let s_max = max_abs_rad.sin();
+    let s = (-gap_px * tower_depth.value / k).clamp(-s_max, s_max);
+    let sigma_s = ((tower_depth.value * gap_std_px / k).powi(2) + (gap_px * tower_depth.std / k).powi(2)).sqrt();
+    let psi = s.asin();
+    Some(Estimate { value: psi, std: sigma_s / psi.cos() })
+}
+
+/// Apparent image angle (clockwise from up) of a blade at true angle `theta` in a rotor plane
+/// seen at relative yaw `psi`: `atan2(sin θ·cos ψ, cos θ)`.
+pub fn apparent_blade_angle(theta: f64, psi: f64) -> f64 {
+    (theta.sin() * psi.cos()).atan2(theta.cos())
+}
+
+/// Grid points over [0, max] for the initial search of the blade-skew yaw.
+const BLADE_GRID_STEPS: usize = 180;
+/// Golden-section iterations refining the grid minimum (bracket shrinks by 0.618 each).
+const BLADE_REFINE_ITERS: usize = 60;
+/// Gauss–Newton iterations for the rotor angle θ₀ at a given yaw.
+const BLADE_THETA_ITERS: usize = 4;
+
+/// Least-squares fit of the rotor angle at a fixed yaw; returns (θ₀, Σ residual²).
+fn fit_theta0(alphas: &[f64], n_blades: f64, psi: f64) -> (f64, f64) {
+    let c = psi.cos();
+    let spacing = TAU / n_blades;
+    // Start: circular mean of the un-foreshortened angles, folded by the blade symmetry.
+    let (mut sx, mut sy) = (0.0, 0.0);
+    for &a in alphas {
+        let th = (a.sin() / c).atan2(a.cos());
+        sx += (n_blades * th).cos();
+        sy += (n_blades * th).sin();
+    }
+    let mut theta0 = sy.atan2(sx) / n_blades;
+    let residuals = |theta0: f64| -> Vec<(f64, f64)> {
+        alphas
+            .iter()
+            .map(|&a| {
+                let th = (a.sin() / c).atan2(a.cos());
+                let k = ((th - theta0) / spacing).round();
+                let t = theta0 + k * spacing;
+                let r = crate::camera::wrap_pi(a - apparent_blade_angle(t, psi));
+                let dadt = c / (t.cos().powi(2) + (t.sin() * c).powi(2));
+                (r, dadt)
+            })
+            .collect()
+    };
+    for _ in 0..BLADE_THETA_ITERS {
+        let rs = residuals(theta0);
+        let (num, den) = rs.iter().fold((0.0, 0.0), |(n, d), (r, j)| (n + r * j, d + j * j));
+        if den > 0.0 {
+            theta0 += num / den;
+        }
+    }
+    let cost = residuals(theta0).iter().map(|(r, _)| r * r).sum();
+    (theta0, cost)
+}
+
+/// Magnitude of the relative yaw from the detected blade angles (degrees, 0 = up, clockwise).
+///
+/// Fits θ₀ and |ψ| ∈ [0, `max_abs_rad`] by least squares on the angles (grid search, golden
+/// section, Gauss–Newton for θ₀). Returns `None` with fewer than 2 angles, more than `n_blades`,
+/// or when the fit residual exceeds `fit_chi2` per remaining degree of freedom (with
+/// `angle_std_rad` per angle) — e.g. a false blade line.
+///
+/// The std is the Cramér–Rao bound `σ_α·sqrt([(JᵀJ)⁻¹]_ψψ)` for the two parameters (θ₀, ψ). Near
+/// ψ = 0 the angles change only with ψ² (a blade at 45° moves by ≈ ψ²/4), so the bound is
+/// evaluated at no less than the resolvable yaw `ψ_res = 2·sqrt(σ_α)`: below it the method cannot
+/// tell ψ from 0 and reports a correspondingly large std.
+pub fn blade_skew_yaw(
+    angles_deg: &[f64],
+    n_blades: u32,
+    angle_std_rad: f64,
+    max_abs_rad: f64,
+    fit_chi2: f64,
+) -> Option<Estimate> {
+    let n = angles_deg.len();
+    if n < 2 || n > n_blades as usize || angles_deg.iter().any(|a| !a.is_finite()) {
+        return None;
+    }
+    let nb = f64::from(n_blades);
+    let alphas: Vec<f64> = angles_deg.iter().map(|a| a.to_radians()).collect();
+    let cost = |psi: f64| fit_theta0(&alphas, nb, psi).1;
+
+    // Grid search, then golden-section refinement around the best grid point.
+    let step = max_abs_rad / BLADE_GRID_STEPS as f64;
+    let best_k = (0..=BLADE_GRID_STEPS)
+        .map(|k| (k, cost(k as f64 * step)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(k, _)| k)?;
+    let (mut lo, mut hi) = ((best_k as f64 - 1.0).max(0.0) * step, (best_k as f64 + 1.0).min(BLADE_GRID_STEPS as f64) * step);
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+    let (mut f1, mut f2) = (cost(x1), cost(x2));
+    for _ in 0..BLADE_REFINE_ITERS {
+        if f1 <= f2 {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = cost(x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = cost(x2);
+        }
+    }
+    let psi = 0.5 * (lo + hi);
+    let (theta0, rss) = fit_theta0(&alphas, nb, psi);
+
+    // Fit quality: chi-square per remaining degree of freedom.
+    let dof = n.saturating_sub(2);
+    let chi2 = rss / (angle_std_rad * angle_std_rad);
+    if dof > 0 && chi2 / dof as f64 > fit_chi2 {
+        return None;
+    }
+
+    // Cramér–Rao std at max(ψ, ψ_res).
+    let psi_res = 2.0 * angle_std_rad.sqrt();
+    let psi_eval = psi.max(psi_res).min(max_abs_rad);
+    let c = psi_eval.cos();
+    let spacing = TAU / nb;
+    let (mut a11, mut a12, mut a22) = (0.0, 0.0, 0.0);
+    for &a in &alphas {
+        let th = (a.sin() / psi.cos()).atan2(a.cos());
+        let t = theta0 + ((th - theta0) / spacing).round() * spacing;
+        let den = t.cos().powi(2) + (t.sin() * c).powi(2);
+        let j_theta = c / den;
+        let j_psi = -psi_eval.sin() * t.sin() * t.cos() / den;
+        a11 += j_theta * j_theta;
+        a12 += j_theta * j_psi;
+        a22 += j_psi * j_psi;
+    }
+    let det = a11 * a22 - a12 * a12;
+    let var_psi = if det > 0.0 { a11 / det } else { f64::INFINITY };
+    let std = angle_std_rad * var_psi.sqrt();
+    // Never claim more than the whole range is known.
+    let std = if std.is_finite() { std } else { PI };
+    Some(Estimate { value: psi, std })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn distance_pinhole_hand_case_and_std() {
+        // f = 1000 px, D = 2.2 m, w = 55 px → 40 m; ±1 px → σ = 40/55 m.
+        let e = distance_from_tower_width(1000.0, 2.2, 55.0, 1.0).unwrap();
+        assert!((e.value - 40.0).abs() < 1e-12);
+        assert!((e.std - 40.0 / 55.0).abs() < 1e-12);
+        // The first-order std matches the finite difference of one pixel.
+        let e54 = distance_from_tower_width(1000.0, 2.2, 54.0, 1.0).unwrap();
+        assert!(((e54.value - e.value) - e.std).abs() < 0.02 * e.std);
+        // Spinner: D = 3.2 m, r = 40 px → 1000·3.2/80 = 40 m, σ_r = 1 px → σ = 40/40 = 1 m.
+        let s = distance_from_spinner(1000.0, 3.2, 40.0, 1.0).unwrap();
+        assert!((s.value - 40.0).abs() < 1e-12);
+        assert!((s.std - 1.0).abs() < 1e-12);
+        assert!(distance_from_tower_width(1000.0, 2.2, 0.0, 1.0).is_none());
+        assert!(distance_from_tower_width(1000.0, 2.2, f64::NAN, 1.0).is_none());
+    }
+
+    #[test]
+    fn fusion_weights_the_lower_variance_more() {
+        let a = Estimate { value: 40.0, std: 1.0 };
+        let b = Estimate { value: 30.0, std: 3.0 };
+        let f = fuse(&[a, b]).unwrap();
+        // Weights 1 and 1/9: (40 + 30/9) / (1 + 1/9) = 39.0
+        assert!((f.value - 39.0).abs() < 1e-12, "{f:?}");
+        assert!((f.std - (1.0f64 / (1.0 + 1.0 / 9.0)).sqrt()).abs() < 1e-12);
+        assert!(f.std < a.std);
+        assert!(fuse(&[]).is_none());
+        assert_eq!(fuse(&[a]).unwrap(), a);
+    }
+
+    #[test]
+    fn yaw_from_gap_hand_case_and_sign() {
+        // f = 1000 px, L = 5 m, tower depth 40 m, gap −62.5 px: sin ψ = 62.5·40/5000 = 0.5 → +30°.
+        let d = Estimate { value: 40.0, std: 0.0 };
+        let e = yaw_from_gap(-62.5, 1.0, d, 1000.0, 5.0, 85f64.to_radians()).unwrap();
+        assert!((e.value.to_degrees() - 30.0).abs() < 1e-9, "{}", e.value.to_degrees());
+        // σ_s = 40·1/5000 = 0.008 → σ_ψ = 0.008 / cos 30°.
+        assert!((e.std - 0.008 / 30f64.to_radians().cos()).abs() < 1e-12);
+        // Hub right of the tower → camera on the viewer's left → negative yaw.
+        let e = yaw_from_gap(62.5, 1.0, d, 1000.0, 5.0, 85f64.to_radians()).unwrap();
+        assert!((e.value.to_degrees() + 30.0).abs() < 1e-9);
+        // Clipped at the configured maximum.
+        let e = yaw_from_gap(-1000.0, 1.0, d, 1000.0, 5.0, 80f64.to_radians()).unwrap();
+        assert!((e.value.to_degrees() - 80.0).abs() < 1e-9);
+    }
+
+    /// The gap sign from first principles: place hub, tower and camera in a top view and project.
+    #[test]
+    fn gap_sign_from_geometry() {
+        let (f, l, d) = (1000.0, 4.2, 30.0);
+        for &psi_deg in &[-40.0f64, -10.0, 10.0, 40.0] {
+            let psi = psi_deg.to_radians();
+            // World top view: rotor axis +X (towards the viewer), turbine's own left +Y.
+            let hub = [0.0, 0.0];
+            let tower = [-l, 0.0]; // behind the hub
+            let cam = [d * psi.cos(), d * psi.sin()]; // ψ > 0: on the turbine's left
+            let fwd = [(hub[0] - cam[0]) / d, (hub[1] - cam[1]) / d];
+            let right = [fwd[1], -fwd[0]]; // forward × up, up out of the page
+            let proj = |p: [f64; 2]| {
+                let rel = [p[0] - cam[0], p[1] - cam[1]];
+                f * (rel[0] * right[0] + rel[1] * right[1]) / (rel[0] * fwd[0] + rel[1] * fwd[1])
+            };
+            // Check the right vector: ψ = 0 → camera on +X looking at −X, its right is +Y
+            // (the turbine's left = the viewer's right). The camera sits on the +Y side for ψ > 0.
+            let gap = proj(hub) - proj(tower);
+            assert_eq!(gap < 0.0, psi > 0.0, "ψ = {psi_deg}: gap {gap}");
+            let depth = d + l * psi.cos();
+            let e = yaw_from_gap(gap, 1.0, Estimate { value: depth, std: 0.0 }, f, l, 1.5).unwrap();
+            assert!((e.value - psi).abs() < 1e-9, "ψ = {psi_deg}: got {}", e.value.to_degrees());
+        }
+    }
+
+    fn blades(theta0_deg: f64, psi_deg: f64) -> Vec<f64> {
+        (0..3)
+            .map(|k| {
+                let t = (theta0_deg + 120.0 * k as f64).to_radians();
+                apparent_blade_angle(t, psi_deg.to_radians()).to_degrees().rem_euclid(360.0)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn blade_skew_recovers_30_degrees() {
+        let max = 85f64.to_radians();
+        let s = 2f64.to_radians();
+        for &theta0 in &[0.0, 17.0, 45.0, 90.0, 200.0] {
+            let a = blades(theta0, 30.0);
+            let e = blade_skew_yaw(&a, 3, s, max, 10.83).unwrap();
+            assert!((e.value.to_degrees() - 30.0).abs() < 0.05, "θ0 {theta0}: {}", e.value.to_degrees());
+            assert!(e.std > 0.0 && e.std.to_degrees() < 30.0, "std {}", e.std.to_degrees());
+            // The sign of ψ is invisible: −30° gives the same magnitude.
+            let e = blade_skew_yaw(&blades(theta0, -30.0), 3, s, max, 10.83).unwrap();
+            assert!((e.value.to_degrees() - 30.0).abs() < 0.05);
+        }
+        // Facing the rotor: ψ ≈ 0 with a large std (weakly observable).
+        let e = blade_skew_yaw(&blades(10.0, 0.0), 3, s, max, 10.83).unwrap();
+        assert!(e.value.to_degrees() < 1.0);
+        assert!(e.std.to_degrees() > 5.0);
+        // Larger yaw is better observable.
+        let e30 = blade_skew_yaw(&blades(10.0, 30.0), 3, s, max, 10.83).unwrap();
+        let e60 = blade_skew_yaw(&blades(10.0, 60.0), 3, s, max, 10.83).unwrap();
+        assert!((e60.value.to_degrees() - 60.0).abs() < 0.05);
+        assert!(e60.std < e30.std);
+    }
+
+    #[test]
+    fn blade_skew_rejects_inconsistent_blades() {
+        // Three lines 30° apart cannot be a foreshortened 120° star.
+        assert!(blade_skew_yaw(&[0.0, 30.0, 60.0], 3, 2f64.to_radians(), 85f64.to_radians(), 10.83).is_none());
+        assert!(blade_skew_yaw(&[0.0], 3, 0.03, 1.4, 10.83).is_none());
+    }
+}

@@ -1,0 +1,473 @@
+//! Configuration of the track stage (`[track]` in `config/hubtrack.toml`).
+//!
+//! Plain serde data: every struct is `#[serde(deny_unknown_fields, default)]`, so keys left out
+//! take the defaults below and a misspelt key is an error. [`TrackConfig::validate`] checks every
+//! number against its allowed range and names the offending key by its full dotted path
+//! (`track.filter.damping`).
+//!
+//! ## Pixel-valued parameters and the reference resolution
+//! The thesis ran its filter on frames downscaled to about 480×270 px. Every parameter given in
+//! pixels here (noise, gates, radii) is specified **at the reference width**
+//! [`FilterConfig::reference_width_px`] and scaled by `image_width / reference_width_px` to the
+//! resolution of the actual frame (variances by the square of that factor), so behaviour does not
+//! depend on the resolution the detector reports in.
+//!
+//! ## Times and the reference step
+//! The thesis filter stepped once per video frame (24 fps GoPro clips). Its per-step values (γ, Q)
+//! are converted to continuous time with the reference frame rate
+//! [`FilterConfig::reference_rate_hz`], and the filter then runs on the real `capture_ns` stamps.
+
+use serde::{Deserialize, Serialize};
+
+/// A configuration value outside its allowed range.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("config key `{key}` = {value} is out of range: allowed {allowed}")]
+pub struct ParamError {
+    /// Full dotted key path, e.g. `track.filter.damping`.
+    pub key: String,
+    /// The value given.
+    pub value: String,
+    /// The allowed range or set.
+    pub allowed: String,
+}
+
+/// `[track]`: everything the tracker needs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrackConfig {
+    /// The camera model (pinhole).
+    pub camera: CameraConfig,
+    /// The damped constant-velocity Kalman filter of the hub position (thesis section 6.2).
+    pub filter: FilterConfig,
+    /// Outlier gating of hub measurements.
+    pub gating: GatingConfig,
+    /// Track modes and their time limits.
+    pub modes: ModeConfig,
+    /// Prediction of the hub's image motion from the vehicle's attitude, rates and velocity.
+    pub ego_motion: EgoMotionConfig,
+    /// Distance estimation (thesis section 7.3).
+    pub distance: DistanceConfig,
+    /// Relative yaw estimation (thesis section 7.4).
+    pub yaw: YawConfig,
+}
+
+/// `[track.camera]`: the pinhole camera model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraConfig {
+    /// Horizontal field of view, degrees. The focal length in px is
+    /// `f = (image_width / 2) / tan(hfov / 2)` with the width of each frame. Default 118 (GoPro
+    /// HERO3+ wide, thesis table C.1).
+    pub hfov_deg: f64,
+    /// Focal length divided by the image width (dimensionless), overriding `hfov_deg` when > 0.
+    /// For a lens with barrel distortion the pinhole focal length at the image centre differs
+    /// from the one implied by the edge FOV: the GoPro model of the renderer has f = 833.9 px at
+    /// 1920 px wide (0.4343), while 118° gives 576.8 px (0.3004). Default 0 (use `hfov_deg`).
+    pub focal_length_per_width: f64,
+    /// Camera mount pitch relative to the body x axis, degrees, positive up. Default 0 (camera
+    /// looks along the body's nose).
+    pub mount_pitch_deg: f64,
+}
+
+impl Default for CameraConfig {
+    fn default() -> Self {
+        CameraConfig { hfov_deg: 118.0, focal_length_per_width: 0.0, mount_pitch_deg: 0.0 }
+    }
+}
+
+/// `[track.filter]`: the thesis's damped constant-velocity filter, state `x, y, ẋ, ẏ`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FilterConfig {
+    /// Velocity damping γ per reference step (eq. 6.4), dimensionless in [0, 1]: the velocity
+    /// decays to γ of its value every `1 / reference_rate_hz` s without measurements (1 = no
+    /// damping). The thesis gives no value; default 0.95 (velocity time constant ≈ 0.8 s).
+    pub damping: f64,
+    /// Process noise Q per reference step and state, thesis value 1e-4 (Q = 1e-4·I, section
+    /// 9.2.2): px² for the positions and (px / reference step)² for the velocities, at the
+    /// reference width. Converted to a continuous white-noise density.
+    pub process_noise: f64,
+    /// Measurement noise R per axis, px² at the reference width; thesis value 1e-1 (R = 1e-1·I).
+    pub measurement_noise: f64,
+    /// Image width at which all pixel-valued parameters are given, px (thesis: 480).
+    pub reference_width_px: f64,
+    /// Frame rate the per-step values (γ, Q) refer to, Hz (thesis: 24 fps GoPro clips).
+    pub reference_rate_hz: f64,
+    /// Standard deviation of the velocity when a track starts, px/s at the reference width.
+    pub initial_velocity_std_px_s: f64,
+    /// Detections with a lower `confidence` (0..1) are treated as missed frames. Default 0.
+    pub min_confidence: f64,
+}
+
+impl Default for FilterConfig {
+    fn default() -> Self {
+        FilterConfig {
+            damping: 0.95,
+            process_noise: 1e-4,
+            measurement_noise: 1e-1,
+            reference_width_px: 480.0,
+            reference_rate_hz: 24.0,
+            initial_velocity_std_px_s: 50.0,
+            min_confidence: 0.0,
+        }
+    }
+}
+
+/// `[track.gating]`: rejection of measurements that do not fit the track.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GatingConfig {
+    /// Gate hub measurements at all (the [`crate::BaselineTracker`] never gates).
+    pub enabled: bool,
+    /// Chi-square threshold of the squared Mahalanobis distance of the innovation (2 degrees of
+    /// freedom); default 13.82 = 99.9 % of true measurements pass.
+    pub chi2_threshold: f64,
+    /// Innovations shorter than this are always accepted, px at the reference width. The thesis R
+    /// is a smoothing weight rather than the detector's true noise; this floor keeps an
+    /// over-confident covariance from rejecting ordinary detector jitter.
+    pub min_gate_px: f64,
+    /// A gated-out measurement that persists for this many consecutive consistent detections
+    /// (e.g. the true hub after a re-acquisition) restarts the track there.
+    pub jump_accept_count: u32,
+    /// Two gated-out measurements are consistent when they lie within this distance of each
+    /// other (after the ego-motion prediction), px at the reference width.
+    pub jump_consistency_px: f64,
+}
+
+impl Default for GatingConfig {
+    fn default() -> Self {
+        GatingConfig {
+            enabled: true,
+            chi2_threshold: 13.82,
+            min_gate_px: 5.0,
+            jump_accept_count: 3,
+            jump_consistency_px: 5.0,
+        }
+    }
+}
+
+/// `[track.modes]`: the track mode machine (acquiring, tracking, coasting, lost).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ModeConfig {
+    /// Consistent detections needed to go from `acquiring` to `tracking`.
+    pub confirm_count: u32,
+    /// Consecutive frames without an accepted detection after which `tracking` becomes
+    /// `coasting`.
+    pub coast_after_missed: u32,
+    /// Seconds without an accepted detection after which the track is `lost`.
+    pub lost_after_s: f64,
+    /// Seconds without an accepted detection (or since the first frame if there never was one)
+    /// after which `search_requested` is set. Must be at least `lost_after_s`.
+    pub search_after_s: f64,
+}
+
+impl Default for ModeConfig {
+    fn default() -> Self {
+        ModeConfig { confirm_count: 3, coast_after_missed: 1, lost_after_s: 1.0, search_after_s: 5.0 }
+    }
+}
+
+/// `[track.ego_motion]`: predicting the hub's image motion from the vehicle state.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EgoMotionConfig {
+    /// Use the vehicle's attitude and body rates to predict the image shift of a rotation
+    /// (yaw: horizontal ≈ f·Δψ, pitch: vertical ≈ f·Δθ, roll: rotation about the image centre).
+    pub enabled: bool,
+    /// Also use the vehicle's velocity (with the distance estimate) for the parallax of
+    /// translation, the distance change and the relative-yaw change.
+    pub use_velocity: bool,
+    /// A vehicle state older (or newer) than this relative to the frame is not used, s. Within
+    /// it, the attitude is extrapolated to the frame time with the body rates.
+    pub max_state_age_s: f64,
+    /// Standard deviation of the predicted ego-motion shift as a fraction of the shift (added to
+    /// the position process noise), dimensionless.
+    pub shift_std_fraction: f64,
+}
+
+impl Default for EgoMotionConfig {
+    fn default() -> Self {
+        EgoMotionConfig { enabled: true, use_velocity: true, max_state_age_s: 0.5, shift_std_fraction: 0.1 }
+    }
+}
+
+/// `[track.distance]`: distance from tower width and spinner diameter, fused and filtered.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DistanceConfig {
+    /// Real tower diameter where the detector measures its width (just under the nacelle), m.
+    /// Default 2.2 (tower top of the modelled turbine; the thesis assumed 2 m).
+    pub tower_diameter_m: f64,
+    /// Standard deviation of the measured tower width, px at the reference width (the thesis: one
+    /// pixel moved the estimate from 35 m to 40 m).
+    pub tower_width_std_px: f64,
+    /// Real spinner (nose cone) diameter at the blade roots, m. Default 3.2.
+    pub spinner_diameter_m: f64,
+    /// Standard deviation of the detected spinner radius, px at the reference width.
+    pub spinner_radius_std_px: f64,
+    /// Tower widths and spinner diameters smaller than this are not used, px at the reference
+    /// width.
+    pub min_size_px: f64,
+    /// Process noise of the distance filter (random walk), m²/s: the variance a static estimate
+    /// gains per second (the UAV approaches at ≤ 1–2 m/s; with velocity aiding the motion itself
+    /// is predicted).
+    pub process_noise_m2_s: f64,
+    /// Chi-square threshold (1 degree of freedom) for gating distance measurements; default
+    /// 10.83 = 99.9 %.
+    pub gate_chi2: f64,
+    /// Consecutive consistent gated-out distance measurements after which the filter restarts at
+    /// the new value.
+    pub jump_accept_count: u32,
+    /// The distance is reported valid only while its standard deviation is at most this, m.
+    pub max_std_m: f64,
+    /// The distance is reported valid only within this many seconds of its last accepted
+    /// measurement, s.
+    pub stale_after_s: f64,
+}
+
+impl Default for DistanceConfig {
+    fn default() -> Self {
+        DistanceConfig {
+            tower_diameter_m: 2.2,
+            tower_width_std_px: 1.0,
+            spinner_diameter_m: 3.2,
+            spinner_radius_std_px: 1.0,
+            min_size_px: 2.0,
+            process_noise_m2_s: 1.0,
+            gate_chi2: 10.83,
+            jump_accept_count: 3,
+            max_std_m: 10.0,
+            stale_after_s: 2.0,
+        }
+    }
+}
+
+/// `[track.yaw]`: relative yaw from the hub–tower gap and the blade skew, fused and filtered.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct YawConfig {
+    /// L: horizontal offset from the tower axis to the rotor centre along the rotor axis, m
+    /// (eq. 7.14). Default 4.2 (modelled turbine; the thesis assumed 5 m hub-to-tower-top).
+    pub hub_tower_offset_m: f64,
+    /// Standard deviation of the hub–tower gap, px at the reference width.
+    pub gap_std_px: f64,
+    /// Standard deviation of each detected blade angle, degrees.
+    pub blade_angle_std_deg: f64,
+    /// Number of blades of the rotor (equally spaced).
+    pub rotor_blades: u32,
+    /// Fewest detected blades for a blade-skew estimate (2 fits exactly, 3 or more also checks
+    /// the fit).
+    pub min_blades: u32,
+    /// Chi-square threshold (per degree of freedom left after the fit) on the blade-angle fit
+    /// residual; a worse fit is not used. Default 10.83.
+    pub blade_fit_chi2: f64,
+    /// Largest relative yaw the estimators report, degrees (asin and the blade fit are clipped).
+    pub max_abs_deg: f64,
+    /// Process noise of the yaw filter (random walk), deg²/s.
+    pub process_noise_deg2_s: f64,
+    /// Chi-square threshold (1 degree of freedom) for gating yaw measurements.
+    pub gate_chi2: f64,
+    /// Consecutive consistent gated-out yaw measurements after which the filter restarts.
+    pub jump_accept_count: u32,
+    /// The yaw is reported valid only while its standard deviation is at most this, degrees.
+    pub max_std_deg: f64,
+    /// The yaw is reported valid only within this many seconds of its last accepted measurement.
+    pub stale_after_s: f64,
+}
+
+impl Default for YawConfig {
+    fn default() -> Self {
+        YawConfig {
+            hub_tower_offset_m: 4.2,
+            gap_std_px: 1.0,
+            blade_angle_std_deg: 2.0,
+            rotor_blades: 3,
+            min_blades: 3,
+            blade_fit_chi2: 10.83,
+            max_abs_deg: 85.0,
+            process_noise_deg2_s: 4.0,
+            gate_chi2: 10.83,
+            jump_accept_count: 3,
+            max_std_deg: 10.0,
+            stale_after_s: 2.0,
+        }
+    }
+}
+
+/// Range checks that name the key.
+struct Check<'a> {
+    prefix: &'a str,
+}
+
+impl Check<'_> {
+    fn err(&self, key: &str, value: String, allowed: String) -> ParamError {
+        ParamError { key: format!("{}.{}", self.prefix, key), value, allowed }
+    }
+
+    /// `lo <= v <= hi` (closed interval), finite.
+    fn closed(&self, key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ParamError> {
+        if v.is_finite() && v >= lo && v <= hi {
+            Ok(())
+        } else {
+            Err(self.err(key, v.to_string(), format!("[{lo}, {hi}]")))
+        }
+    }
+
+    /// `lo < v <= hi`, finite.
+    fn open_closed(&self, key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ParamError> {
+        if v.is_finite() && v > lo && v <= hi {
+            Ok(())
+        } else {
+            Err(self.err(key, v.to_string(), format!("({lo}, {hi}]")))
+        }
+    }
+
+    /// `lo < v < hi`, finite.
+    fn open(&self, key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ParamError> {
+        if v.is_finite() && v > lo && v < hi {
+            Ok(())
+        } else {
+            Err(self.err(key, v.to_string(), format!("({lo}, {hi})")))
+        }
+    }
+
+    /// Integer in `[lo, hi]`.
+    fn count(&self, key: &str, v: u32, lo: u32, hi: u32) -> Result<(), ParamError> {
+        if v >= lo && v <= hi {
+            Ok(())
+        } else {
+            Err(self.err(key, v.to_string(), format!("[{lo}, {hi}]")))
+        }
+    }
+}
+
+/// Upper bound for pixel-valued parameters (px at the reference width).
+const MAX_PX: f64 = 1e4;
+/// Upper bound for times, s.
+const MAX_TIME_S: f64 = 3600.0;
+/// Upper bound for counts.
+const MAX_COUNT: u32 = 1000;
+/// Upper bound for chi-square thresholds.
+const MAX_CHI2: f64 = 1e6;
+/// Upper bound for noise parameters.
+const MAX_NOISE: f64 = 1e6;
+/// Upper bound for real sizes, m.
+const MAX_SIZE_M: f64 = 100.0;
+
+impl TrackConfig {
+    /// Checks every value against its allowed range; the error names the first bad key.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let c = Check { prefix: "track.camera" };
+        c.open("hfov_deg", self.camera.hfov_deg, 0.0, 180.0)?;
+        c.closed("focal_length_per_width", self.camera.focal_length_per_width, 0.0, MAX_PX)?;
+        c.closed("mount_pitch_deg", self.camera.mount_pitch_deg, -90.0, 90.0)?;
+
+        let c = Check { prefix: "track.filter" };
+        let f = &self.filter;
+        // Strictly positive for the continuous-time conversion (ln γ); 1 = no damping.
+        c.open_closed("damping", f.damping, 0.0, 1.0)?;
+        c.open_closed("process_noise", f.process_noise, 0.0, MAX_NOISE)?;
+        c.open_closed("measurement_noise", f.measurement_noise, 0.0, MAX_NOISE)?;
+        c.open_closed("reference_width_px", f.reference_width_px, 0.0, MAX_PX)?;
+        c.open_closed("reference_rate_hz", f.reference_rate_hz, 0.0, 1000.0)?;
+        c.open_closed("initial_velocity_std_px_s", f.initial_velocity_std_px_s, 0.0, MAX_PX)?;
+        c.closed("min_confidence", f.min_confidence, 0.0, 1.0)?;
+
+        let c = Check { prefix: "track.gating" };
+        let g = &self.gating;
+        c.open_closed("chi2_threshold", g.chi2_threshold, 0.0, MAX_CHI2)?;
+        c.closed("min_gate_px", g.min_gate_px, 0.0, MAX_PX)?;
+        c.count("jump_accept_count", g.jump_accept_count, 1, MAX_COUNT)?;
+        c.open_closed("jump_consistency_px", g.jump_consistency_px, 0.0, MAX_PX)?;
+
+        let c = Check { prefix: "track.modes" };
+        let m = &self.modes;
+        c.count("confirm_count", m.confirm_count, 1, MAX_COUNT)?;
+        c.count("coast_after_missed", m.coast_after_missed, 1, MAX_COUNT)?;
+        c.open_closed("lost_after_s", m.lost_after_s, 0.0, MAX_TIME_S)?;
+        c.closed("search_after_s", m.search_after_s, m.lost_after_s, MAX_TIME_S)?;
+
+        let c = Check { prefix: "track.ego_motion" };
+        let e = &self.ego_motion;
+        c.open_closed("max_state_age_s", e.max_state_age_s, 0.0, MAX_TIME_S)?;
+        c.closed("shift_std_fraction", e.shift_std_fraction, 0.0, 10.0)?;
+
+        let c = Check { prefix: "track.distance" };
+        let d = &self.distance;
+        c.open_closed("tower_diameter_m", d.tower_diameter_m, 0.0, MAX_SIZE_M)?;
+        c.open_closed("tower_width_std_px", d.tower_width_std_px, 0.0, MAX_PX)?;
+        c.open_closed("spinner_diameter_m", d.spinner_diameter_m, 0.0, MAX_SIZE_M)?;
+        c.open_closed("spinner_radius_std_px", d.spinner_radius_std_px, 0.0, MAX_PX)?;
+        c.closed("min_size_px", d.min_size_px, 0.0, MAX_PX)?;
+        c.open_closed("process_noise_m2_s", d.process_noise_m2_s, 0.0, MAX_NOISE)?;
+        c.open_closed("gate_chi2", d.gate_chi2, 0.0, MAX_CHI2)?;
+        c.count("jump_accept_count", d.jump_accept_count, 1, MAX_COUNT)?;
+        c.open_closed("max_std_m", d.max_std_m, 0.0, 1e4)?;
+        c.open_closed("stale_after_s", d.stale_after_s, 0.0, MAX_TIME_S)?;
+
+        let c = Check { prefix: "track.yaw" };
+        let y = &self.yaw;
+        c.open_closed("hub_tower_offset_m", y.hub_tower_offset_m, 0.0, MAX_SIZE_M)?;
+        c.open_closed("gap_std_px", y.gap_std_px, 0.0, MAX_PX)?;
+        c.open_closed("blade_angle_std_deg", y.blade_angle_std_deg, 0.0, 90.0)?;
+        c.count("rotor_blades", y.rotor_blades, 2, hubtrack_types::MAX_BLADES as u32)?;
+        c.count("min_blades", y.min_blades, 2, y.rotor_blades)?;
+        c.open_closed("blade_fit_chi2", y.blade_fit_chi2, 0.0, MAX_CHI2)?;
+        c.open("max_abs_deg", y.max_abs_deg, 0.0, 90.0)?;
+        c.open_closed("process_noise_deg2_s", y.process_noise_deg2_s, 0.0, MAX_NOISE)?;
+        c.open_closed("gate_chi2", y.gate_chi2, 0.0, MAX_CHI2)?;
+        c.count("jump_accept_count", y.jump_accept_count, 1, MAX_COUNT)?;
+        c.open_closed("max_std_deg", y.max_std_deg, 0.0, 180.0)?;
+        c.open_closed("stale_after_s", y.stale_after_s, 0.0, MAX_TIME_S)?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_thesis_values() {
+        let c = TrackConfig::default();
+        c.validate().unwrap();
+        assert_eq!(c.filter.process_noise, 1e-4);
+        assert_eq!(c.filter.measurement_noise, 1e-1);
+        assert_eq!(c.camera.hfov_deg, 118.0);
+    }
+
+    #[test]
+    fn bad_values_name_the_full_key() {
+        let mut c = TrackConfig::default();
+        c.filter.damping = 1.5;
+        let e = c.validate().unwrap_err();
+        assert_eq!(e.key, "track.filter.damping");
+        assert_eq!(e.value, "1.5");
+        assert_eq!(e.allowed, "(0, 1]");
+
+        let mut c = TrackConfig::default();
+        c.modes.search_after_s = 0.5; // below lost_after_s
+        assert_eq!(c.validate().unwrap_err().key, "track.modes.search_after_s");
+
+        let mut c = TrackConfig::default();
+        c.camera.hfov_deg = f64::NAN;
+        assert_eq!(c.validate().unwrap_err().key, "track.camera.hfov_deg");
+
+        let mut c = TrackConfig::default();
+        c.yaw.min_blades = 4;
+        assert_eq!(c.validate().unwrap_err().key, "track.yaw.min_blades");
+    }
+
+    #[test]
+    fn serde_is_strict_and_fills_defaults() {
+        let c: TrackConfig = serde_json::from_str(r#"{"filter": {"damping": 0.9}}"#).unwrap();
+        assert_eq!(c.filter.damping, 0.9);
+        assert_eq!(c.filter.process_noise, 1e-4);
+        assert_eq!(c.gating, GatingConfig::default());
+        assert!(serde_json::from_str::<TrackConfig>(r#"{"filter": {"dampnig": 0.9}}"#).is_err());
+        assert!(serde_json::from_str::<TrackConfig>(r#"{"filtre": {}}"#).is_err());
+        let back: TrackConfig = serde_json::from_str(&serde_json::to_string(&c).unwrap()).unwrap();
+        assert_eq!(back, c);
+    }
+}

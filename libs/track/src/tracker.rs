@@ -1,0 +1,596 @@
+//! [`Tracker`] (gated, attitude-aided, with filtered distance and yaw) and [`BaselineTracker`]
+//! (the thesis filter), sharing one implementation.
+
+use hubtrack_types::{Detection, TrackMode, TrackState, VehicleState};
+use nalgebra::Rotation3;
+
+use crate::camera::{camera_pose_at, camera_to_body, dt_s, ego_motion, focal_length_px, CameraPose, Pinhole};
+use crate::estimate::{
+    blade_skew_yaw, distance_from_spinner, distance_from_tower_width, fuse, yaw_from_gap, Estimate,
+};
+use crate::filter::{CvModel, HubFilter, ScalarFilter};
+use crate::params::{ParamError, TrackConfig};
+
+/// Variance of a uniform distribution over a unit interval (`w²/12` for width `w`).
+const UNIFORM_VAR_PER_WIDTH2: f64 = 1.0 / 12.0;
+
+/// Height / width of the assumed frame before any detection told the size (16:9, as the thesis's
+/// 480×270).
+const FALLBACK_ASPECT: f64 = 9.0 / 16.0;
+
+/// What distinguishes the two trackers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Options {
+    /// Gate measurements (also requires `gating.enabled`).
+    gating: bool,
+    /// Use the vehicle state (also requires `ego_motion.enabled`).
+    ego_motion: bool,
+    /// Report the thesis's raw per-frame distance and yaw instead of the filtered ones.
+    raw_estimates: bool,
+}
+
+/// The hub track.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct HubTrack {
+    filter: HubFilter,
+    /// Reached `tracking` (enough consistent detections).
+    confirmed: bool,
+    /// Consistent detections since the track started.
+    consistent: u32,
+    /// Declared lost (no accepted detection for `lost_after_s`); still predicted.
+    lost: bool,
+}
+
+/// Gated-out detections that might be the true hub after a jump.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Candidate {
+    px: [f64; 2],
+    count: u32,
+    t_ns: u64,
+}
+
+/// The shared implementation.
+#[derive(Debug, Clone)]
+struct Core {
+    cfg: TrackConfig,
+    opts: Options,
+    r_bc: Rotation3<f64>,
+    track: Option<HubTrack>,
+    candidate: Option<Candidate>,
+    /// Time of the state, ns.
+    t_ns: Option<u64>,
+    /// Time of the first update, ns.
+    first_ns: Option<u64>,
+    /// Time of the last accepted detection, ns.
+    last_accept_ns: Option<u64>,
+    frames_since: u32,
+    missed_streak: u32,
+    ever_confirmed: bool,
+    image: Option<(u32, u32)>,
+    /// Newest vehicle state with a valid attitude.
+    vehicle: Option<VehicleState>,
+    /// Camera pose at `t_ns`.
+    pose: Option<CameraPose>,
+    distance: ScalarFilter,
+    yaw: ScalarFilter,
+    /// Raw per-frame (distance, yaw) of the baseline.
+    raw: (Option<Estimate>, Option<Estimate>),
+    last_seq: u64,
+}
+
+impl Core {
+    fn new(cfg: TrackConfig, opts: Options) -> Result<Core, ParamError> {
+        cfg.validate()?;
+        let r_bc = camera_to_body(cfg.camera.mount_pitch_deg.to_radians());
+        Ok(Core {
+            cfg,
+            opts,
+            r_bc,
+            track: None,
+            candidate: None,
+            t_ns: None,
+            first_ns: None,
+            last_accept_ns: None,
+            frames_since: 0,
+            missed_streak: 0,
+            ever_confirmed: false,
+            image: None,
+            vehicle: None,
+            pose: None,
+            distance: ScalarFilter::default(),
+            yaw: ScalarFilter::default(),
+            raw: (None, None),
+            last_seq: 0,
+        })
+    }
+
+    fn reset(&mut self) {
+        *self = Core::new(self.cfg.clone(), self.opts).expect("config was validated");
+    }
+
+    /// Frame size (the reference resolution until a frame told us).
+    fn image_size(&self) -> (u32, u32) {
+        self.image.unwrap_or_else(|| {
+            let w = self.cfg.filter.reference_width_px.round() as u32;
+            (w, (f64::from(w) * FALLBACK_ASPECT).round() as u32)
+        })
+    }
+
+    /// Resolution scale: image width / reference width.
+    fn scale(&self) -> f64 {
+        f64::from(self.image_size().0) / self.cfg.filter.reference_width_px
+    }
+
+    fn camera(&self) -> Pinhole {
+        let (w, h) = self.image_size();
+        let c = &self.cfg.camera;
+        let f = if c.focal_length_per_width > 0.0 {
+            c.focal_length_per_width * f64::from(w)
+        } else {
+            focal_length_px(f64::from(w), c.hfov_deg)
+        };
+        Pinhole::with_focal(w, h, f)
+    }
+
+    /// Measurement variance R, px² at the frame's resolution.
+    fn r(&self) -> f64 {
+        self.cfg.filter.measurement_noise * self.scale().powi(2)
+    }
+
+    fn initial_velocity_var(&self) -> f64 {
+        (self.cfg.filter.initial_velocity_std_px_s * self.scale()).powi(2)
+    }
+
+    fn ego_enabled(&self) -> bool {
+        self.opts.ego_motion && self.cfg.ego_motion.enabled
+    }
+
+    fn gating_enabled(&self) -> bool {
+        self.opts.gating && self.cfg.gating.enabled
+    }
+
+    /// Camera pose at `t_ns` from the newest vehicle state.
+    fn pose_at(&self, t_ns: u64) -> Option<CameraPose> {
+        if !self.ego_enabled() {
+            return None;
+        }
+        let v = self.vehicle.as_ref()?;
+        let e = &self.cfg.ego_motion;
+        camera_pose_at(v, t_ns, e.max_state_age_s, &self.r_bc, e.use_velocity)
+    }
+
+    /// Adopts a new frame size, rescaling everything in pixels.
+    fn set_image_size(&mut self, w: u32, h: u32) {
+        if w == 0 || h == 0 {
+            return;
+        }
+        if let Some((ow, oh)) = self.image {
+            if (ow, oh) != (w, h) {
+                let (rx, ry) = (f64::from(w) / f64::from(ow), f64::from(h) / f64::from(oh));
+                if let Some(t) = self.track.as_mut() {
+                    t.filter.rescale(rx, ry);
+                }
+                if let Some(c) = self.candidate.as_mut() {
+                    c.px = [c.px[0] * rx, c.px[1] * ry];
+                }
+                log::info!("track: frame size changed {ow}x{oh} → {w}x{h}, state rescaled");
+            }
+        }
+        self.image = Some((w, h));
+    }
+
+    /// Moves the state to `t_ns` (never backwards): damped prediction plus the ego-motion
+    /// between the stored pose and the pose at `t_ns`.
+    fn advance_to(&mut self, t_ns: u64) -> u64 {
+        self.first_ns.get_or_insert(t_ns);
+        let t0 = self.t_ns.unwrap_or(t_ns);
+        let dt = dt_s(t_ns, t0);
+        let t = if dt < 0.0 {
+            log::warn!("track: time stamp went backwards by {:.3} s; not predicting", -dt);
+            t0
+        } else {
+            t_ns
+        };
+        let dt = dt.max(0.0);
+        let cam = self.camera();
+        let pose1 = self.pose_at(t);
+        let model = CvModel::from_thesis(
+            self.cfg.filter.damping,
+            self.cfg.filter.process_noise,
+            self.cfg.filter.reference_rate_hz,
+            self.scale(),
+        );
+        let range = self.distance.estimate().map(|e| e.value);
+        let frac2 = self.cfg.ego_motion.shift_std_fraction.powi(2);
+        let pose0 = self.pose;
+        let warp = move |px: [f64; 2], range: Option<f64>| match (pose0.as_ref(), pose1.as_ref()) {
+            (Some(p0), Some(p1)) => ego_motion(&cam, px, p0, p1, dt, range),
+            _ => None,
+        };
+
+        // Hub track (and, through its position, the distance and yaw changes).
+        let hub_px = self.track.map_or([cam.cx, cam.cy], |t| t.filter.position());
+        let ego = warp(hub_px, range);
+        if let Some(track) = self.track.as_mut() {
+            let (shift, var) = match ego {
+                Some(m) => {
+                    let s = [m.px[0] - hub_px[0], m.px[1] - hub_px[1]];
+                    (s, frac2 * (s[0] * s[0] + s[1] * s[1]))
+                }
+                None => ([0.0, 0.0], 0.0),
+            };
+            track.filter.predict(&model, dt, shift, var);
+        }
+        if let Some(c) = self.candidate.as_mut() {
+            if let Some(m) = warp(c.px, None) {
+                c.px = m.px;
+            }
+        }
+        let d_shift = match (ego.and_then(|m| m.range_m), range) {
+            (Some(r1), Some(r0)) => r1 - r0,
+            _ => 0.0,
+        };
+        self.distance.predict(dt, self.cfg.distance.process_noise_m2_s, d_shift, frac2 * d_shift * d_shift);
+        let y_shift = ego.and_then(|m| m.relative_yaw_change_rad).unwrap_or(0.0);
+        let q_yaw = self.cfg.yaw.process_noise_deg2_s * 1f64.to_radians().powi(2);
+        self.yaw.predict(dt, q_yaw, y_shift, frac2 * y_shift * y_shift);
+
+        self.pose = pose1;
+        self.t_ns = Some(t);
+        t
+    }
+
+    /// Declares timeouts: a confirmed track becomes lost, a tentative one is dropped, an old jump
+    /// candidate is forgotten.
+    fn apply_timeouts(&mut self, t_ns: u64) {
+        let lost_after = self.cfg.modes.lost_after_s;
+        let since = self.last_accept_ns.map(|a| dt_s(t_ns, a));
+        if let (Some(track), Some(since)) = (self.track.as_mut(), since) {
+            if since >= lost_after {
+                if track.confirmed {
+                    if !track.lost {
+                        log::info!("track: lost ({since:.2} s without an accepted detection)");
+                    }
+                    track.lost = true;
+                } else {
+                    self.track = None;
+                }
+            }
+        }
+        if self.candidate.is_some_and(|c| dt_s(t_ns, c.t_ns) >= lost_after) {
+            self.candidate = None;
+        }
+    }
+
+    fn start_track(&mut self, z: [f64; 2], consistent: u32) {
+        let confirmed = consistent >= self.cfg.modes.confirm_count;
+        self.ever_confirmed |= confirmed;
+        self.track = Some(HubTrack {
+            filter: HubFilter::new(z, self.r(), self.initial_velocity_var()),
+            confirmed,
+            consistent,
+            lost: false,
+        });
+        self.candidate = None;
+    }
+
+    /// Handles one hub measurement at `t_ns`; returns whether it was accepted into the track.
+    fn measure_hub(&mut self, z: [f64; 2], t_ns: u64) -> bool {
+        let r = self.r();
+        let gating = self.gating_enabled();
+        let g = self.cfg.gating.clone();
+        let scale = self.scale();
+        let confirm = self.cfg.modes.confirm_count;
+        let Some(track) = self.track.as_mut().filter(|t| !t.lost) else {
+            // No track, or it is lost: any detection starts a new one.
+            self.start_track(z, 1);
+            return true;
+        };
+        let (nu, _, d2) = track.filter.innovation(z, r);
+        let inside = !gating || d2 <= g.chi2_threshold || nu.norm() <= g.min_gate_px * scale;
+        if inside {
+            track.filter.update(z, r);
+            track.consistent = track.consistent.saturating_add(1);
+            if !track.confirmed && track.consistent >= confirm {
+                track.confirmed = true;
+                self.ever_confirmed = true;
+            }
+            self.candidate = None;
+            return true;
+        }
+        if !track.confirmed {
+            // Acquiring: an inconsistent detection restarts the tentative track.
+            self.start_track(z, 1);
+            return true;
+        }
+        // A confirmed track rejects the measurement; count it towards a persistent jump.
+        let radius = g.jump_consistency_px * scale;
+        let count = match self.candidate {
+            Some(c) if ((c.px[0] - z[0]).powi(2) + (c.px[1] - z[1]).powi(2)).sqrt() <= radius => c.count + 1,
+            _ => 1,
+        };
+        if count >= g.jump_accept_count {
+            log::info!("track: persistent jump to ({:.1}, {:.1}) accepted after {count} detections", z[0], z[1]);
+            self.start_track(z, count);
+            return true;
+        }
+        log::debug!("track: gated out ({:.1}, {:.1}), Mahalanobis² {d2:.1}", z[0], z[1]);
+        self.candidate = Some(Candidate { px: z, count, t_ns });
+        false
+    }
+
+    fn update(&mut self, det: &Detection, vehicle: Option<&VehicleState>) -> TrackState {
+        if let Some(v) = vehicle.filter(|v| v.attitude_valid) {
+            self.vehicle = Some(*v);
+        }
+        self.set_image_size(det.image_width, det.image_height);
+        let t = self.advance_to(det.stamps.capture_ns);
+
+        let usable = det.detected
+            && det.confidence >= self.cfg.filter.min_confidence
+            && det.hub_px.iter().all(|v| v.is_finite());
+        let accepted = usable && self.measure_hub(det.hub_px, t);
+        if accepted {
+            self.last_accept_ns = Some(t);
+            self.missed_streak = 0;
+            self.frames_since = 0;
+        } else {
+            self.missed_streak = self.missed_streak.saturating_add(1);
+            self.frames_since = self.frames_since.saturating_add(1);
+        }
+        if self.opts.raw_estimates {
+            self.raw = if usable { self.raw_estimates(det) } else { (None, None) };
+        } else if accepted {
+            self.filtered_estimates(det, t);
+        }
+        self.apply_timeouts(t);
+        self.last_seq = det.stamps.seq;
+        self.output(t, det.stamps.seq, det.stamps.capture_ns)
+    }
+
+    /// Tower-depth measurement of a detection.
+    fn tower_depth(&self, det: &Detection) -> Option<Estimate> {
+        let d = &self.cfg.distance;
+        let s = self.scale();
+        if !det.tower_found || det.tower_width_px < d.min_size_px * s {
+            return None;
+        }
+        distance_from_tower_width(self.camera().f_px, d.tower_diameter_m, det.tower_width_px, d.tower_width_std_px * s)
+    }
+
+    /// The thesis's per-frame estimates: distance from the tower width (depth of the tower, eq.
+    /// 7.2) and yaw from the gap with that distance (eq. 7.14).
+    fn raw_estimates(&self, det: &Detection) -> (Option<Estimate>, Option<Estimate>) {
+        let tower = self.tower_depth(det);
+        let y = &self.cfg.yaw;
+        let yaw = tower.and_then(|td| {
+            yaw_from_gap(
+                det.hub_tower_gap_px,
+                y.gap_std_px * self.scale(),
+                td,
+                self.camera().f_px,
+                y.hub_tower_offset_m,
+                y.max_abs_deg.to_radians(),
+            )
+        });
+        (tower, yaw)
+    }
+
+    /// Yaw and distance measurements of an accepted detection into their filters.
+    fn filtered_estimates(&mut self, det: &Detection, t: u64) {
+        let s = self.scale();
+        let f = self.camera().f_px;
+        let (dc, yc) = (self.cfg.distance.clone(), self.cfg.yaw.clone());
+        let offset = yc.hub_tower_offset_m;
+        let max_yaw = yc.max_abs_deg.to_radians();
+
+        // Yaw. The gap needs the depth of the tower axis: this frame's tower width, else the
+        // filtered hub distance plus the overhang.
+        let tower = self.tower_depth(det);
+        let yaw_prior = self.yaw.estimate();
+        let tower_depth = tower.or_else(|| {
+            let d = self.distance.estimate()?;
+            let psi = yaw_prior.map_or(0.0, |e| e.value);
+            Some(Estimate { value: d.value + offset * psi.cos(), std: d.std })
+        });
+        let gap = if det.tower_found && det.detected {
+            tower_depth.and_then(|td| yaw_from_gap(det.hub_tower_gap_px, yc.gap_std_px * s, td, f, offset, max_yaw))
+        } else {
+            None
+        };
+        let n = (det.blade_count as usize).min(det.blade_angles_deg.len());
+        let blade = if n >= yc.min_blades as usize {
+            blade_skew_yaw(&det.blade_angles_deg[..n], yc.rotor_blades, yc.blade_angle_std_deg.to_radians(), max_yaw, yc.blade_fit_chi2)
+        } else {
+            None
+        };
+        // The blade skew gives |ψ|; its sign comes from the gap (and the filtered yaw).
+        let sign_ref = fuse(&[gap, yaw_prior].into_iter().flatten().collect::<Vec<_>>());
+        let blade_signed = blade.zip(sign_ref).map(|(b, r)| Estimate { value: b.value.copysign(r.value), std: b.std });
+        if let Some(m) = fuse(&[gap, blade_signed].into_iter().flatten().collect::<Vec<_>>()) {
+            self.yaw.update(m, yc.gate_chi2, yc.jump_accept_count, t);
+        }
+
+        // Distance of the hub: tower depth minus the overhang, and the spinner.
+        let yaw_now = self.yaw.estimate();
+        let tower_hub = tower.and_then(|td| {
+            let (psi, sig) = yaw_now.map_or((0.0, 0.0), |e| (e.value, e.std));
+            let value = td.value - offset * psi.cos();
+            (value > 0.0).then(|| Estimate { value, std: td.std.hypot(offset * psi.sin() * sig) })
+        });
+        let spinner = if det.circle_found && 2.0 * det.circle[2] >= dc.min_size_px * s {
+            distance_from_spinner(f, dc.spinner_diameter_m, det.circle[2], dc.spinner_radius_std_px * s)
+        } else {
+            None
+        };
+        if let Some(m) = fuse(&[tower_hub, spinner].into_iter().flatten().collect::<Vec<_>>()) {
+            self.distance.update(m, dc.gate_chi2, dc.jump_accept_count, t);
+        }
+    }
+
+    fn mode(&self, t_ns: u64) -> TrackMode {
+        match &self.track {
+            None if self.ever_confirmed => TrackMode::Lost,
+            None => TrackMode::Acquiring,
+            Some(tr) if !tr.confirmed => TrackMode::Acquiring,
+            Some(tr) if tr.lost => TrackMode::Lost,
+            Some(_) => {
+                let since = self.time_since_detection(t_ns);
+                if self.missed_streak < self.cfg.modes.coast_after_missed {
+                    TrackMode::Tracking
+                } else if since < self.cfg.modes.lost_after_s {
+                    TrackMode::Coasting
+                } else {
+                    TrackMode::Lost
+                }
+            }
+        }
+    }
+
+    /// Seconds since the last accepted detection (since the first frame if there was none).
+    fn time_since_detection(&self, t_ns: u64) -> f64 {
+        self.last_accept_ns.or(self.first_ns).map_or(0.0, |a| dt_s(t_ns, a).max(0.0))
+    }
+
+    fn output(&self, t_ns: u64, seq: u64, capture_ns: u64) -> TrackState {
+        let (w, h) = self.image_size();
+        let mode = self.mode(t_ns);
+        let since = self.time_since_detection(t_ns);
+        let (hub_px, vel, cov) = match &self.track {
+            Some(tr) => {
+                let (x, p) = (&tr.filter.x, &tr.filter.p);
+                ([x[0], x[1]], [x[2], x[3]], [p[(0, 0)], p[(0, 1)], p[(1, 0)], p[(1, 1)]])
+            }
+            None => {
+                // No track: "anywhere in the image".
+                let cam = self.camera();
+                let (vx, vy) = (
+                    f64::from(w).powi(2) * UNIFORM_VAR_PER_WIDTH2,
+                    f64::from(h).powi(2) * UNIFORM_VAR_PER_WIDTH2,
+                );
+                ([cam.cx, cam.cy], [0.0, 0.0], [vx, 0.0, 0.0, vy])
+            }
+        };
+        let (distance, yaw) = if self.opts.raw_estimates {
+            self.raw
+        } else {
+            let fresh = |f: &ScalarFilter, stale_s: f64, max_std: f64| {
+                f.estimate().filter(|e| {
+                    e.std <= max_std && f.last_accept_ns.is_some_and(|a| dt_s(t_ns, a) <= stale_s)
+                })
+            };
+            (
+                fresh(&self.distance, self.cfg.distance.stale_after_s, self.cfg.distance.max_std_m),
+                fresh(&self.yaw, self.cfg.yaw.stale_after_s, self.cfg.yaw.max_std_deg.to_radians()),
+            )
+        };
+        // Report the last values (flagged invalid) rather than zeros when they went stale.
+        let distance_any = distance.or(if self.opts.raw_estimates { None } else { self.distance.estimate() });
+        let yaw_any = yaw.or(if self.opts.raw_estimates { None } else { self.yaw.estimate() });
+        TrackState {
+            stamps: hubtrack_types::Stamps { seq, capture_ns, recv_ns: 0, publish_ns: 0 },
+            mode,
+            search_requested: matches!(mode, TrackMode::Lost | TrackMode::Acquiring)
+                && since >= self.cfg.modes.search_after_s,
+            image_width: w,
+            image_height: h,
+            hub_px,
+            hub_velocity_px_s: vel,
+            hub_covariance: cov,
+            distance_valid: distance.is_some(),
+            distance_m: distance_any.map_or(0.0, |e| e.value),
+            distance_std_m: distance_any.map_or(0.0, |e| e.std),
+            yaw_valid: yaw.is_some(),
+            yaw_deg: yaw_any.map_or(0.0, |e| e.value.to_degrees()),
+            yaw_std_deg: yaw_any.map_or(0.0, |e| e.std.to_degrees()),
+            frames_since_detection: self.frames_since,
+            time_since_detection_s: since,
+        }
+    }
+
+    fn predict_at(&self, capture_ns: u64) -> TrackState {
+        let mut c = self.clone();
+        let t = c.advance_to(capture_ns);
+        c.apply_timeouts(t);
+        c.output(t, self.last_seq, capture_ns)
+    }
+}
+
+/// The hub tracker (the default): the thesis's damped constant-velocity Kalman filter driven by
+/// the frame time stamps, with outlier gating, track modes, attitude-aided prediction, and
+/// filtered distance and relative-yaw estimates. See the crate docs.
+#[derive(Debug, Clone)]
+pub struct Tracker {
+    core: Core,
+}
+
+impl Tracker {
+    /// A tracker with a validated configuration.
+    pub fn new(config: crate::params::TrackConfig) -> Result<Tracker, crate::params::ParamError> {
+        Ok(Tracker {
+            core: Core::new(config, Options { gating: true, ego_motion: true, raw_estimates: false })?,
+        })
+    }
+
+    /// One step per processed frame: `detection.detected == false` means a missed frame (predict only).
+    ///
+    /// `vehicle` is the newest vehicle state (if any); without one, the newest earlier state is
+    /// used while it is within `ego_motion.max_state_age_s` of the frame.
+    pub fn update(&mut self, detection: &Detection, vehicle: Option<&VehicleState>) -> TrackState {
+        self.core.update(detection, vehicle)
+    }
+
+    /// Prediction at a time without a new frame (e.g. to publish at a fixed rate); does not change the state.
+    ///
+    /// The stamps carry the last frame's `seq` and the requested `capture_ns`; the attitude is
+    /// extrapolated from the newest vehicle state with its body rates.
+    pub fn predict_at(&self, capture_ns: u64) -> TrackState {
+        self.core.predict_at(capture_ns)
+    }
+
+    /// Forgets everything (back to `acquiring`), keeping the configuration.
+    pub fn reset(&mut self) {
+        self.core.reset();
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> &TrackConfig {
+        &self.core.cfg
+    }
+}
+
+/// The thesis's tracker (section 6.2) for side-by-side evaluation: the same damped
+/// constant-velocity filter on real time stamps with the same modes, but **no gating** (every
+/// detection is fused), **no vehicle input**, and the thesis's raw per-frame distance (tower
+/// width, eq. 7.2, the depth of the tower) and yaw (eq. 7.14 with that distance), valid only on
+/// frames that measured them.
+#[derive(Debug, Clone)]
+pub struct BaselineTracker {
+    core: Core,
+}
+
+impl BaselineTracker {
+    /// A baseline tracker; uses `camera`, `filter`, `modes`, and the sizes and noise of
+    /// `distance` and `yaw` from the configuration.
+    pub fn new(config: crate::params::TrackConfig) -> Result<BaselineTracker, crate::params::ParamError> {
+        Ok(BaselineTracker {
+            core: Core::new(config, Options { gating: false, ego_motion: false, raw_estimates: true })?,
+        })
+    }
+
+    /// One step per processed frame, as [`Tracker::update`]; `vehicle` is ignored.
+    pub fn update(&mut self, detection: &Detection, vehicle: Option<&VehicleState>) -> TrackState {
+        let _ = vehicle;
+        self.core.update(detection, None)
+    }
+
+    /// Prediction at a time without a new frame; does not change the state.
+    pub fn predict_at(&self, capture_ns: u64) -> TrackState {
+        self.core.predict_at(capture_ns)
+    }
+
+    /// Forgets everything, keeping the configuration.
+    pub fn reset(&mut self) {
+        self.core.reset();
+    }
+}

@@ -1,0 +1,640 @@
+//! Behaviour of `Tracker` and `BaselineTracker` on synthetic detection sequences.
+
+use hubtrack_track::camera::focal_length_px;
+use hubtrack_track::params::TrackConfig;
+use hubtrack_track::{BaselineTracker, Detection, TrackMode, TrackState, Tracker, VehicleState};
+
+const W: u32 = 1920;
+const H: u32 = 1080;
+const CX: f64 = (W as f64 - 1.0) / 2.0;
+const CY: f64 = (H as f64 - 1.0) / 2.0;
+const NS: f64 = 1e9;
+
+/// xorshift64* with Box–Muller normals; deterministic, no dependencies.
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: u64) -> Rng {
+        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+    fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in (0, 1).
+    fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn normal(&mut self) -> f64 {
+        let (u1, u2) = (self.uniform(), self.uniform());
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    }
+}
+
+fn ns(t: f64) -> u64 {
+    (t * NS).round() as u64
+}
+
+fn det(seq: u64, t: f64, px: Option<[f64; 2]>) -> Detection {
+    let mut d = Detection { image_width: W, image_height: H, ..Default::default() };
+    d.stamps.seq = seq;
+    d.stamps.capture_ns = ns(t);
+    if let Some(p) = px {
+        d.detected = true;
+        d.hub_px = p;
+        d.confidence = 1.0;
+    }
+    d
+}
+
+fn vehicle(t: f64, roll: f64, pitch: f64, yaw: f64, rates: [f64; 3]) -> VehicleState {
+    VehicleState {
+        recv_ns: ns(t),
+        publish_ns: ns(t),
+        attitude_valid: true,
+        roll_rad: roll,
+        pitch_rad: pitch,
+        yaw_rad: yaw,
+        body_rates_rad_s: rates,
+        ..Default::default()
+    }
+}
+
+/// Time of frame `k` at `fps`, starting at 1 s (stamps are monotonic-clock values, not 0).
+fn frame_t(k: u64, fps: f64) -> f64 {
+    1.0 + k as f64 / fps
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// Feeds a static hub at `p` for `secs` at `fps` with noise `sigma`; returns the last state and
+/// the next frame index.
+fn settle(tr: &mut Tracker, p: [f64; 2], secs: f64, fps: f64, sigma: f64, rng: &mut Rng) -> (TrackState, u64) {
+    let n = (secs * fps) as u64;
+    let mut s = TrackState::default();
+    for k in 0..n {
+        let z = [p[0] + sigma * rng.normal(), p[1] + sigma * rng.normal()];
+        s = tr.update(&det(k, frame_t(k, fps), Some(z)), None);
+    }
+    (s, n)
+}
+
+#[test]
+fn converges_on_a_constant_velocity_target_with_noise() {
+    let fps = 30.0;
+    let v = [60.0, -25.0];
+    let p0 = [400.0, 700.0];
+    for (damping, pos_tol, vel_tol) in [(1.0, 2.0, 8.0), (TrackConfig::default().filter.damping, 6.0, 0.4 * 65.0)] {
+        let mut cfg = TrackConfig::default();
+        cfg.filter.damping = damping;
+        let mut tr = Tracker::new(cfg.clone()).unwrap();
+        let mut base = BaselineTracker::new(cfg).unwrap();
+        let mut rng = Rng::new(7);
+        let (mut s, mut b) = (TrackState::default(), TrackState::default());
+        let mut truth = p0;
+        let mut raw_err2 = 0.0;
+        let mut filt_err2 = 0.0;
+        let n = (15.0 * fps) as u64;
+        for k in 0..n {
+            let t = k as f64 / fps;
+            truth = [p0[0] + v[0] * t, p0[1] + v[1] * t];
+            let z = [truth[0] + 2.0 * rng.normal(), truth[1] + 2.0 * rng.normal()];
+            s = tr.update(&det(k, frame_t(k, fps), Some(z)), None);
+            b = base.update(&det(k, frame_t(k, fps), Some(z)), None);
+            if t > 10.0 {
+                raw_err2 += dist(z, truth).powi(2);
+                filt_err2 += dist(s.hub_px, truth).powi(2);
+            }
+        }
+        assert_eq!(s.mode, TrackMode::Tracking);
+        let e = dist(s.hub_px, truth);
+        let ev = dist(s.hub_velocity_px_s, v);
+        assert!(e < pos_tol, "γ {damping}: position error {e:.2} px");
+        assert!(ev < vel_tol, "γ {damping}: velocity error {ev:.2} px/s ({:?})", s.hub_velocity_px_s);
+        // Same filter without gating on clean data: the baseline agrees.
+        assert!(dist(b.hub_px, s.hub_px) < 1e-6, "baseline {:?} vs {:?}", b.hub_px, s.hub_px);
+        if damping == 1.0 {
+            assert!(filt_err2 < 0.5 * raw_err2, "filter does not reduce noise: {filt_err2} vs {raw_err2}");
+        }
+        // The covariance is symmetric and positive.
+        let c = s.hub_covariance;
+        assert!(c[0] > 0.0 && c[3] > 0.0 && (c[1] - c[2]).abs() < 1e-9);
+    }
+}
+
+#[test]
+fn damping_through_a_long_dropout() {
+    let cfg = TrackConfig::default();
+    let gamma = cfg.filter.damping;
+    let t_ref = 1.0 / cfg.filter.reference_rate_hz;
+    let mut tr = Tracker::new(cfg).unwrap();
+    // A target moving at 120 px/s for 5 s, noise free.
+    let fps = 30.0;
+    let mut s = TrackState::default();
+    let mut k = 0;
+    while frame_t(k, fps) < 6.0 {
+        let t = frame_t(k, fps) - 1.0;
+        s = tr.update(&det(k, frame_t(k, fps), Some([300.0 + 120.0 * t, 500.0])), None);
+        k += 1;
+    }
+    let t0 = frame_t(k - 1, fps);
+    let (x0, v0) = (s.hub_px[0], s.hub_velocity_px_s[0]);
+    assert!(v0 > 80.0, "velocity before the dropout {v0}");
+    // 20 s without detections, one missed frame per reference step.
+    let mut prev_v = v0;
+    let steps = (20.0 / t_ref) as u64;
+    for j in 1..=steps {
+        let t = t0 + j as f64 * t_ref;
+        s = tr.update(&det(k, t, None), None);
+        k += 1;
+        let ratio = s.hub_velocity_px_s[0] / prev_v;
+        if prev_v.abs() > 1e-6 {
+            assert!((ratio - gamma).abs() < 1e-6, "step {j}: velocity ratio {ratio}");
+        }
+        prev_v = s.hub_velocity_px_s[0];
+        // Bounded: never beyond the limit of the damped motion.
+        let bound = v0 * t_ref / (1.0 / gamma).ln();
+        assert!(s.hub_px[0] - x0 <= bound + 1e-6, "position ran away: {} > {bound}", s.hub_px[0] - x0);
+    }
+    assert_eq!(s.mode, TrackMode::Lost);
+    assert!(s.hub_velocity_px_s[0].abs() < 1e-6 * v0);
+    let bound = v0 * t_ref / (1.0 / gamma).ln();
+    assert!((s.hub_px[0] - x0 - bound).abs() < 0.01 * bound, "final travel {} vs {bound}", s.hub_px[0] - x0);
+    assert!(s.hub_px[0] < W as f64, "the predicted hub left the image");
+}
+
+#[test]
+fn gating_rejects_an_injected_outlier_the_baseline_jumps() {
+    let fps = 30.0;
+    let p = [900.0, 500.0];
+    let mut tr = Tracker::new(TrackConfig::default()).unwrap();
+    let mut base = BaselineTracker::new(TrackConfig::default()).unwrap();
+    let mut rng = Rng::new(11);
+    let mut k = 0;
+    let (mut s, mut b) = (TrackState::default(), TrackState::default());
+    while k < 90 {
+        let z = [p[0] + 1.5 * rng.normal(), p[1] + 1.5 * rng.normal()];
+        s = tr.update(&det(k, frame_t(k, fps), Some(z)), None);
+        b = base.update(&det(k, frame_t(k, fps), Some(z)), None);
+        k += 1;
+    }
+    let (before_t, before_b) = (s.hub_px, b.hub_px);
+    // A false detection 400 px away (e.g. the horizon crossing a blade line).
+    let outlier = [p[0] + 400.0, p[1] - 150.0];
+    s = tr.update(&det(k, frame_t(k, fps), Some(outlier)), None);
+    b = base.update(&det(k, frame_t(k, fps), Some(outlier)), None);
+    assert!(dist(s.hub_px, before_t) < 1.0, "tracker moved {} px", dist(s.hub_px, before_t));
+    assert!(dist(b.hub_px, before_b) > 20.0, "baseline moved only {} px", dist(b.hub_px, before_b));
+    assert_eq!(s.mode, TrackMode::Coasting, "a gated-out frame counts as missed");
+    assert_eq!(s.frames_since_detection, 1);
+    // The next good detection: tracking again, still on the hub.
+    k += 1;
+    s = tr.update(&det(k, frame_t(k, fps), Some(p)), None);
+    assert_eq!(s.mode, TrackMode::Tracking);
+    assert!(dist(s.hub_px, p) < 2.0);
+}
+
+#[test]
+fn a_persistent_jump_is_accepted_after_the_configured_count() {
+    for count in [3u32, 5] {
+        let mut cfg = TrackConfig::default();
+        cfg.gating.jump_accept_count = count;
+        let mut tr = Tracker::new(cfg).unwrap();
+        let mut rng = Rng::new(3);
+        let fps = 30.0;
+        let old = [800.0, 450.0];
+        let (_, mut k) = settle(&mut tr, old, 2.0, fps, 1.0, &mut rng);
+        let new = [1300.0, 600.0];
+        for i in 1..=count {
+            let z = [new[0] + rng.normal(), new[1] + rng.normal()];
+            let s = tr.update(&det(k, frame_t(k, fps), Some(z)), None);
+            k += 1;
+            if i < count {
+                assert!(dist(s.hub_px, old) < 2.0, "count {count}: moved after {i} detections");
+                assert_eq!(s.mode, TrackMode::Coasting);
+            } else {
+                assert!(dist(s.hub_px, new) < 5.0, "count {count}: not accepted after {i}: {:?}", s.hub_px);
+                assert_eq!(s.mode, TrackMode::Tracking);
+                assert_eq!(s.frames_since_detection, 0);
+            }
+        }
+    }
+    // Scattered outliers never add up to a jump.
+    let mut tr = Tracker::new(TrackConfig::default()).unwrap();
+    let mut rng = Rng::new(5);
+    let old = [800.0, 450.0];
+    let (_, mut k) = settle(&mut tr, old, 2.0, 30.0, 1.0, &mut rng);
+    for i in 0..6 {
+        let z = [200.0 + 250.0 * i as f64, 100.0 + 120.0 * (i % 3) as f64];
+        let s = tr.update(&det(k, frame_t(k, 30.0), Some(z)), None);
+        k += 1;
+        assert!(dist(s.hub_px, old) < 3.0, "scattered outlier {i} moved the track to {:?}", s.hub_px);
+    }
+}
+
+#[test]
+fn mode_transitions_with_their_time_limits() {
+    let cfg = TrackConfig::default();
+    let (confirm, lost_after, search_after) =
+        (cfg.modes.confirm_count as u64, cfg.modes.lost_after_s, cfg.modes.search_after_s);
+    let mut tr = Tracker::new(cfg).unwrap();
+    let fps = 30.0;
+    let p = [960.0, 540.0];
+    let mut k = 0;
+    // Before any detection: acquiring, and a search is requested after T_search of nothing.
+    let s = tr.update(&det(k, frame_t(k, fps), None), None);
+    assert_eq!(s.mode, TrackMode::Acquiring);
+    assert!(!s.search_requested);
+    assert_eq!(tr.predict_at(ns(frame_t(0, fps) + search_after + 0.01)).mode, TrackMode::Acquiring);
+    assert!(tr.predict_at(ns(frame_t(0, fps) + search_after + 0.01)).search_requested);
+    k += 1;
+    for i in 1..=confirm {
+        let s = tr.update(&det(k, frame_t(k, fps), Some(p)), None);
+        k += 1;
+        let want = if i < confirm { TrackMode::Acquiring } else { TrackMode::Tracking };
+        assert_eq!(s.mode, want, "after {i} detections");
+    }
+    let t_last = frame_t(k - 1, fps);
+    // Misses: coasting at once, lost after T_lost, search after T_search.
+    let mut seen_lost_at = None;
+    let mut seen_search_at = None;
+    loop {
+        let t = frame_t(k, fps);
+        let s = tr.update(&det(k, t, None), None);
+        k += 1;
+        let since = t - t_last;
+        assert!((s.time_since_detection_s - since).abs() < 1e-6);
+        assert_eq!(s.frames_since_detection as f64, (since * fps).round());
+        if since < lost_after - 1e-9 {
+            assert_eq!(s.mode, TrackMode::Coasting, "at {since:.3} s");
+        } else {
+            assert_eq!(s.mode, TrackMode::Lost, "at {since:.3} s");
+            seen_lost_at.get_or_insert(since);
+        }
+        assert_eq!(s.search_requested, since >= search_after - 1e-9, "at {since:.3} s");
+        if s.search_requested {
+            seen_search_at.get_or_insert(since);
+        }
+        if since > search_after + 0.5 {
+            break;
+        }
+    }
+    assert!((seen_lost_at.unwrap() - lost_after).abs() <= 1.0 / fps + 1e-9);
+    assert!((seen_search_at.unwrap() - search_after).abs() <= 1.0 / fps + 1e-9);
+    // Re-acquisition somewhere else: acquiring, then tracking after the confirm count.
+    let q = [400.0, 300.0];
+    for i in 1..=confirm {
+        let s = tr.update(&det(k, frame_t(k, fps), Some(q)), None);
+        k += 1;
+        assert!(!s.search_requested);
+        let want = if i < confirm { TrackMode::Acquiring } else { TrackMode::Tracking };
+        assert_eq!(s.mode, want, "re-acquisition after {i} detections");
+        assert!(dist(s.hub_px, q) < 1e-6);
+    }
+}
+
+#[test]
+fn a_tentative_track_that_stops_is_dropped() {
+    let mut tr = Tracker::new(TrackConfig::default()).unwrap();
+    let s = tr.update(&det(0, 1.0, Some([500.0, 500.0])), None);
+    assert_eq!(s.mode, TrackMode::Acquiring);
+    let s = tr.update(&det(1, 2.5, None), None);
+    assert_eq!(s.mode, TrackMode::Acquiring);
+    // No track: centred, with the covariance of "anywhere in the image".
+    assert_eq!(s.hub_px, [CX, CY]);
+    assert!((s.hub_covariance[0] - (W as f64).powi(2) / 12.0).abs() < 1e-6);
+}
+
+/// Runs a noise-free constant-velocity target observed for 4 s, then 1 s of missed frames.
+fn run_at(fps: f64, damping: f64) -> TrackState {
+    let mut cfg = TrackConfig::default();
+    cfg.filter.damping = damping;
+    let mut tr = Tracker::new(cfg).unwrap();
+    let mut s = TrackState::default();
+    let mut k = 0;
+    loop {
+        let t = k as f64 / fps;
+        if t > 5.0 + 1e-9 {
+            break;
+        }
+        let p = (t <= 4.0 + 1e-9).then_some([600.0 + 50.0 * t, 400.0 + 20.0 * t]);
+        s = tr.update(&det(k, 1.0 + t, p), None);
+        k += 1;
+    }
+    s
+}
+
+#[test]
+fn dt_comes_from_the_stamps_not_the_frame_count() {
+    // Undamped: both runs converge to the true motion and coast to the same place. Truth at
+    // 5 s: (850, 500).
+    let a = run_at(30.0, 1.0);
+    let b = run_at(15.0, 1.0);
+    assert_eq!(a.stamps.capture_ns, b.stamps.capture_ns);
+    assert!(dist(a.hub_px, b.hub_px) < 0.5, "30 fps {:?} vs 15 fps {:?}", a.hub_px, b.hub_px);
+    assert!(dist(a.hub_px, [850.0, 500.0]) < 1.0, "{:?}", a.hub_px);
+    assert!(dist(a.hub_velocity_px_s, b.hub_velocity_px_s) < 1.0, "{:?} vs {:?}", a.hub_velocity_px_s, b.hub_velocity_px_s);
+    assert_eq!(a.mode, TrackMode::Lost);
+    assert!((a.time_since_detection_s - 1.0).abs() < 1e-9 && (b.time_since_detection_s - 1.0).abs() < 1e-9);
+    // Default damping: the damped model's velocity bias depends a little on the measurement rate,
+    // but both coast by the same damped law in time. (Stepping once per frame, as the thesis did,
+    // the 15 fps run would coast ≈ 10 px further than the 30 fps one.)
+    let a = run_at(30.0, TrackConfig::default().filter.damping);
+    let b = run_at(15.0, TrackConfig::default().filter.damping);
+    assert!(dist(a.hub_px, b.hub_px) < 3.0, "30 fps {:?} vs 15 fps {:?}", a.hub_px, b.hub_px);
+
+    // Pure prediction composes exactly: one 1 s step equals 30 small ones.
+    let mut tr = Tracker::new(TrackConfig::default()).unwrap();
+    for k in 0..60 {
+        let t = k as f64 / 30.0;
+        tr.update(&det(k, 1.0 + t, Some([600.0 + 50.0 * t, 400.0])), None);
+    }
+    let t_last = 1.0 + 59.0 / 30.0;
+    let one = tr.predict_at(ns(t_last + 1.0));
+    let mut many = tr.clone();
+    let mut s = TrackState::default();
+    for j in 1..=30 {
+        s = many.update(&det(100 + j, t_last + j as f64 / 30.0, None), None);
+    }
+    assert_eq!(s.stamps.capture_ns, one.stamps.capture_ns);
+    assert!(dist(one.hub_px, s.hub_px) < 1e-6, "{:?} vs {:?}", one.hub_px, s.hub_px);
+    for i in 0..4 {
+        assert!((one.hub_covariance[i] - s.hub_covariance[i]).abs() < 1e-6 * one.hub_covariance[0]);
+    }
+}
+
+#[test]
+fn attitude_aided_prediction_through_a_yaw_turn() {
+    let fps = 30.0;
+    let cfg = TrackConfig::default();
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let mut tr = Tracker::new(cfg.clone()).unwrap();
+    let mut base = BaselineTracker::new(cfg).unwrap();
+    let p = [CX, CY];
+    let mut k = 0;
+    while k < 60 {
+        let t = frame_t(k, fps);
+        let v = vehicle(t, 0.0, 0.0, 0.3, [0.0, 0.0, 0.0]);
+        tr.update(&det(k, t, Some(p)), Some(&v));
+        base.update(&det(k, t, Some(p)), Some(&v));
+        k += 1;
+    }
+    // Dropout of 0.5 s while yawing right at 0.4 rad/s: Δψ = 0.2 rad.
+    let (rate, t0) = (0.4, frame_t(k - 1, fps));
+    let (mut s, mut b) = (TrackState::default(), TrackState::default());
+    for j in 1..=15u64 {
+        let t = t0 + j as f64 / fps;
+        let yaw = 0.3 + rate * (t - t0);
+        let v = vehicle(t, 0.0, 0.0, yaw, [0.0, 0.0, rate]);
+        // Every other frame comes without a vehicle state: the rates extrapolate.
+        let v = (j % 2 == 0).then_some(v);
+        s = tr.update(&det(k, t, None), v.as_ref());
+        b = base.update(&det(k, t, None), v.as_ref());
+        k += 1;
+    }
+    let dpsi: f64 = 0.2;
+    let expected = CX - f * dpsi.tan();
+    assert!((s.hub_px[0] - expected).abs() < 1.0, "x {} expected {expected} (f·Δψ = {})", s.hub_px[0], f * dpsi);
+    assert!((s.hub_px[1] - CY).abs() < 1.0);
+    assert!(s.hub_px[0] < CX - 0.9 * f * dpsi, "moved the wrong way");
+    assert_eq!(s.mode, TrackMode::Coasting);
+    assert!((b.hub_px[0] - CX).abs() < 1.0, "baseline ignores the vehicle: {:?}", b.hub_px);
+
+    // predict_at extrapolates the turn with the last body rates, without changing the state.
+    let before = tr.clone().update(&det(999, t0 + 0.6, None), None);
+    let ahead = tr.predict_at(ns(t0 + 0.6));
+    assert!(ahead.hub_px[0] < s.hub_px[0] - 0.5 * f * rate * 0.1 * 0.9, "{:?}", ahead.hub_px);
+    assert!((ahead.hub_px[0] - before.hub_px[0]).abs() < 1e-9);
+    let again = tr.predict_at(ns(t0 + 0.6));
+    assert_eq!(again, ahead);
+}
+
+#[test]
+fn attitude_aided_prediction_of_a_pitch() {
+    let fps = 30.0;
+    let cfg = TrackConfig::default();
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let mut tr = Tracker::new(cfg).unwrap();
+    let p = [CX + 100.0, CY - 50.0];
+    for k in 0..30 {
+        let t = frame_t(k, fps);
+        tr.update(&det(k, t, Some(p)), Some(&vehicle(t, 0.0, 0.0, 0.0, [0.0; 3])));
+    }
+    let t = frame_t(30, fps);
+    let dtheta: f64 = 0.05;
+    let s = tr.update(&det(30, t, None), Some(&vehicle(t, 0.0, dtheta, 0.0, [0.0; 3])));
+    // Nose up: the scene moves down by ≈ f·Δθ.
+    assert!((s.hub_px[1] - p[1] - f * dtheta).abs() < 0.05 * f * dtheta, "{:?}", s.hub_px);
+    assert!((s.hub_px[0] - p[0]).abs() < 0.05 * f * dtheta);
+}
+
+#[test]
+fn tracking_through_a_turn_keeps_detections_inside_the_gate() {
+    // The hub sweeps across the image at 0.8 rad/s yaw; with the attitude the prediction
+    // follows it, so no detection is gated out.
+    let fps = 30.0;
+    let cfg = TrackConfig::default();
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let mut tr = Tracker::new(cfg.clone()).unwrap();
+    let mut rng = Rng::new(21);
+    let rate = 0.8;
+    let mut worst: f64 = 0.0;
+    for k in 0..45 {
+        let t = frame_t(k, fps);
+        let yaw = if k < 15 { 0.0 } else { rate * (k - 15) as f64 / fps };
+        let r = if k < 15 { 0.0 } else { rate };
+        let x = CX + 300.0 - f * yaw.tan();
+        let z = [x + rng.normal(), CY + rng.normal()];
+        let s = tr.update(&det(k, t, Some(z)), Some(&vehicle(t, 0.0, 0.0, yaw, [0.0, 0.0, r])));
+        if k >= 3 {
+            assert_eq!(s.mode, TrackMode::Tracking, "frame {k}: {:?}", s);
+            worst = worst.max((s.hub_px[0] - x).abs());
+        }
+    }
+    assert!(worst < 5.0, "worst error {worst}");
+}
+
+/// A detection of a turbine at hub distance `d_hub` and relative yaw `psi_deg`, pixel noise `noise`.
+fn full_det(seq: u64, t: f64, d_hub: f64, psi_deg: f64, cfg: &TrackConfig, rng: &mut Rng, noise: f64) -> Detection {
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let psi = psi_deg.to_radians();
+    let l = cfg.yaw.hub_tower_offset_m;
+    let d_tower = d_hub + l * psi.cos();
+    let mut d = det(seq, t, Some([CX, CY]));
+    d.tower_found = true;
+    d.tower_width_px = f * cfg.distance.tower_diameter_m / d_tower + noise * rng.normal();
+    d.hub_tower_gap_px = -f * l * psi.sin() / d_tower + noise * rng.normal();
+    d.circle_found = true;
+    d.circle = [CX, CY, f * cfg.distance.spinner_diameter_m / (2.0 * d_hub) + 0.5 * noise * rng.normal()];
+    d.blade_count = 3;
+    for k in 0..3 {
+        let th = (37.0 + 120.0 * k as f64).to_radians();
+        d.blade_angles_deg[k] = hubtrack_track::estimate::apparent_blade_angle(th, psi).to_degrees()
+            + 0.5 * noise * rng.normal();
+    }
+    d
+}
+
+#[test]
+fn distance_and_yaw_are_fused_and_filtered() {
+    let cfg = TrackConfig::default();
+    let fps = 30.0;
+    for psi_deg in [25.0, -25.0] {
+        let mut tr = Tracker::new(cfg.clone()).unwrap();
+        let mut base = BaselineTracker::new(cfg.clone()).unwrap();
+        let mut rng = Rng::new(99);
+        let (mut s, mut b) = (TrackState::default(), TrackState::default());
+        let mut raw_dist_err2 = 0.0;
+        let mut filt_dist_err2 = 0.0;
+        let mut n_err = 0.0;
+        for k in 0..150 {
+            let d = full_det(k, frame_t(k, fps), 30.0, psi_deg, &cfg, &mut rng, 1.0);
+            s = tr.update(&d, None);
+            b = base.update(&d, None);
+            if k > 60 {
+                raw_dist_err2 += (b.distance_m - (30.0 + cfg.yaw.hub_tower_offset_m * psi_deg.to_radians().cos())).powi(2);
+                filt_dist_err2 += (s.distance_m - 30.0).powi(2);
+                n_err += 1.0;
+            }
+        }
+        assert!(s.distance_valid && s.yaw_valid);
+        assert!((s.distance_m - 30.0).abs() < 1.0, "ψ {psi_deg}: distance {} ± {}", s.distance_m, s.distance_std_m);
+        assert!((s.yaw_deg - psi_deg).abs() < 3.0, "yaw {} ± {}", s.yaw_deg, s.yaw_std_deg);
+        assert_eq!(s.yaw_deg > 0.0, psi_deg > 0.0, "yaw sign");
+        assert!(s.distance_std_m > 0.0 && s.distance_std_m < b.distance_std_m);
+        assert!(s.yaw_std_deg > 0.0 && s.yaw_std_deg < b.yaw_std_deg);
+        assert!(filt_dist_err2 < raw_dist_err2, "filtered {} vs raw {}", (filt_dist_err2 / n_err).sqrt(), (raw_dist_err2 / n_err).sqrt());
+        // The baseline reports the raw tower depth and the thesis yaw with its sign.
+        assert!(b.distance_valid && b.yaw_valid);
+        assert_eq!(b.yaw_deg > 0.0, psi_deg > 0.0);
+        // A missed frame: the baseline has no distance, the tracker keeps its filtered one.
+        let t = frame_t(150, fps);
+        let s = tr.update(&det(150, t, None), None);
+        let b = base.update(&det(150, t, None), None);
+        assert!(s.distance_valid && s.yaw_valid);
+        assert!(!b.distance_valid && !b.yaw_valid);
+        // They go stale without measurements.
+        let later = tr.predict_at(ns(t + cfg.distance.stale_after_s.max(cfg.yaw.stale_after_s) + 0.1));
+        assert!(!later.distance_valid && !later.yaw_valid);
+        assert!(later.distance_std_m > s.distance_std_m);
+    }
+}
+
+#[test]
+fn blades_give_yaw_when_the_gap_is_weak() {
+    // At a large yaw the blade skew is well observable and adds to the gap: lower yaw std.
+    let cfg = TrackConfig::default();
+    let run = |blades: bool| {
+        let mut tr = Tracker::new(cfg.clone()).unwrap();
+        let mut rng = Rng::new(4);
+        let mut s = TrackState::default();
+        for k in 0..5 {
+            let mut d = full_det(k, frame_t(k, 30.0), 40.0, 40.0, &cfg, &mut rng, 0.0);
+            if !blades {
+                d.blade_count = 0;
+            }
+            s = tr.update(&d, None);
+        }
+        s
+    };
+    let with = run(true);
+    let without = run(false);
+    assert!((with.yaw_deg - 40.0).abs() < 1.0, "{}", with.yaw_deg);
+    assert!(with.yaw_std_deg < without.yaw_std_deg, "{} vs {}", with.yaw_std_deg, without.yaw_std_deg);
+}
+
+#[test]
+fn a_distance_spike_is_gated() {
+    // The thesis saw spikes to near zero when another turbine's tower was measured.
+    let cfg = TrackConfig::default();
+    let mut tr = Tracker::new(cfg.clone()).unwrap();
+    let mut rng = Rng::new(8);
+    let mut k = 0;
+    while k < 60 {
+        tr.update(&full_det(k, frame_t(k, 30.0), 25.0, 0.0, &cfg, &mut rng, 0.5), None);
+        k += 1;
+    }
+    let mut d = full_det(k, frame_t(k, 30.0), 25.0, 0.0, &cfg, &mut rng, 0.5);
+    d.tower_width_px *= 8.0;
+    d.circle_found = false;
+    let s = tr.update(&d, None);
+    assert!((s.distance_m - 25.0).abs() < 1.0, "{}", s.distance_m);
+}
+
+#[test]
+fn behaviour_does_not_depend_on_the_resolution() {
+    let run = |w: u32, h: u32| {
+        let sx = w as f64 / 1920.0;
+        let mut tr = Tracker::new(TrackConfig::default()).unwrap();
+        let mut rng = Rng::new(12);
+        let mut out = Vec::new();
+        for k in 0..90u64 {
+            let t = frame_t(k, 30.0);
+            let mut d = det(k, t, None);
+            d.image_width = w;
+            d.image_height = h;
+            if k % 7 != 3 {
+                d.detected = true;
+                d.confidence = 1.0;
+                let s = k as f64 / 30.0;
+                d.hub_px = [(700.0 + 80.0 * s + 2.0 * rng.normal()) * sx, (300.0 + 2.0 * rng.normal()) * sx];
+                if k == 50 {
+                    d.hub_px = [100.0 * sx, 900.0 * sx]; // an outlier
+                }
+            }
+            out.push(tr.update(&d, None));
+        }
+        out
+    };
+    let big = run(1920, 1080);
+    let small = run(480, 270);
+    for (a, b) in big.iter().zip(&small) {
+        assert_eq!(a.mode, b.mode);
+        assert!((a.hub_px[0] - 4.0 * b.hub_px[0]).abs() < 1e-6 * a.hub_px[0].abs().max(1.0));
+        assert!((a.hub_covariance[0] - 16.0 * b.hub_covariance[0]).abs() < 1e-6 * a.hub_covariance[0]);
+    }
+}
+
+#[test]
+fn output_fields_and_predict_at_do_not_change_the_state() {
+    let mut tr = Tracker::new(TrackConfig::default()).unwrap();
+    let mut d = det(42, 3.0, Some([500.0, 400.0]));
+    d.stamps.recv_ns = 123;
+    d.stamps.publish_ns = 456;
+    let s = tr.update(&d, None);
+    assert_eq!(s.stamps.seq, 42);
+    assert_eq!(s.stamps.capture_ns, ns(3.0));
+    assert_eq!((s.stamps.recv_ns, s.stamps.publish_ns), (0, 0));
+    assert_eq!((s.image_width, s.image_height), (W, H));
+    assert_eq!(s.frames_since_detection, 0);
+    let mut twin = tr.clone();
+    let p = tr.predict_at(ns(3.5));
+    assert_eq!(p.stamps.seq, 42);
+    assert_eq!(p.stamps.capture_ns, ns(3.5));
+    let a = tr.update(&det(43, 3.1, Some([505.0, 400.0])), None);
+    let b = twin.update(&det(43, 3.1, Some([505.0, 400.0])), None);
+    assert_eq!(a, b);
+    tr.reset();
+    let s = tr.update(&det(44, 4.0, None), None);
+    assert_eq!(s.mode, TrackMode::Acquiring);
+    assert_eq!(s.hub_px, [CX, CY]);
+}
+
+#[test]
+fn low_confidence_and_bad_config() {
+    let mut cfg = TrackConfig::default();
+    cfg.filter.min_confidence = 0.5;
+    let mut tr = Tracker::new(cfg).unwrap();
+    let mut d = det(0, 1.0, Some([500.0, 400.0]));
+    d.confidence = 0.3;
+    let s = tr.update(&d, None);
+    assert_eq!(s.hub_px, [CX, CY], "a low-confidence detection is a missed frame");
+    let mut bad = TrackConfig::default();
+    bad.modes.lost_after_s = -1.0;
+    assert_eq!(Tracker::new(bad.clone()).unwrap_err().key, "track.modes.lost_after_s");
+    assert!(BaselineTracker::new(bad).is_err());
+}

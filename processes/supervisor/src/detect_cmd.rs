@@ -1,0 +1,172 @@
+//! `hubtrack detect`: batch detection on photos, one JSON object per image on stdout (a contract
+//! evaluation tools rely on: keep the keys).
+
+use anyhow::Context;
+use hubtrack_capture::images::{has_image_extension, read_image};
+use hubtrack_detect::params::{DetectConfig, Mode};
+use hubtrack_detect::{Detector, Hints, ImageView, LineKind, Output};
+use hubtrack_runtime::config::ConfigArgs;
+use hubtrack_types::PixelFormat;
+use opencv::core::{Mat, MatTraitConst, MatTraitConstManual, Point, Scalar};
+use opencv::imgproc;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Detection mode on the command line.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum ModeArg {
+    /// The thesis's pipeline (reference).
+    Thesis,
+    /// The default, robust pipeline.
+    Default,
+}
+
+impl From<ModeArg> for Mode {
+    fn from(m: ModeArg) -> Mode {
+        match m {
+            ModeArg::Thesis => Mode::Thesis,
+            ModeArg::Default => Mode::Default,
+        }
+    }
+}
+
+/// Arguments of `hubtrack detect`.
+#[derive(clap::Args)]
+pub struct DetectArgs {
+    #[command(flatten)]
+    pub config: ConfigArgs,
+    /// Detection mode (default: `[detect].mode` of the config).
+    #[arg(long, value_enum)]
+    pub mode: Option<ModeArg>,
+    /// Write an overlay PNG per image into this folder.
+    #[arg(long, value_name = "DIR")]
+    pub annotate: Option<PathBuf>,
+    /// Image files or folders of images (taken in file-name order).
+    #[arg(required = true, value_name = "PATH")]
+    pub paths: Vec<PathBuf>,
+}
+
+/// Expands folders into their images (name order); files stay as given.
+pub fn expand(paths: &[PathBuf]) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            let mut files: Vec<PathBuf> = std::fs::read_dir(p)
+                .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|f| f.is_file() && has_image_extension(f)).collect())
+                .unwrap_or_default();
+            files.sort();
+            out.extend(files);
+        } else {
+            out.push(p.clone());
+        }
+    }
+    out
+}
+
+/// A BGR8 OpenCV image as a detector view (no copy).
+pub fn view_of(mat: &Mat) -> anyhow::Result<ImageView<'_>> {
+    anyhow::ensure!(mat.is_continuous() && mat.channels() == 3, "image is not continuous BGR8");
+    Ok(ImageView {
+        width: mat.cols() as u32,
+        height: mat.rows() as u32,
+        stride: mat.cols() as usize * 3,
+        format: PixelFormat::Bgr8,
+        data: mat.data_bytes()?,
+    })
+}
+
+/// The detector configured by `config` with an optional mode override.
+pub fn detector(config: &DetectConfig, mode: Option<Mode>) -> anyhow::Result<Detector> {
+    let mut c = config.clone();
+    if let Some(m) = mode {
+        c.mode = m;
+    }
+    Ok(Detector::new(c)?)
+}
+
+/// Runs the command.
+pub fn run(args: DetectArgs) -> anyhow::Result<()> {
+    let config = args.config.load()?;
+    let mut det = detector(&config.detect, args.mode.map(Into::into))?;
+    if let Some(dir) = &args.annotate {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    for path in expand(&args.paths) {
+        let line = match detect_one(&mut det, &path, args.annotate.as_deref()) {
+            Ok(v) => v,
+            Err(e) => json!({"path": path, "error": format!("{e:#}")}),
+        };
+        println!("{line}");
+    }
+    Ok(())
+}
+
+fn detect_one(det: &mut Detector, path: &Path, annotate: Option<&Path>) -> anyhow::Result<serde_json::Value> {
+    if !path.exists() {
+        anyhow::bail!("no such file");
+    }
+    let mat = read_image(path)?;
+    let view = view_of(&mat)?;
+    let t = Instant::now();
+    let out = det.detect(&view, &Hints::default())?;
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    if let Some(dir) = annotate {
+        let stem = path.file_stem().map_or("image".into(), |s| s.to_string_lossy().into_owned());
+        draw_overlay(&mat, &out, &dir.join(format!("{stem}.png")))?;
+    }
+    Ok(result_json(path, view.width, view.height, &out, ms))
+}
+
+/// The JSON object of one image (keys are a contract: path, width, height, detected, hub,
+/// confidence, distance_m, yaw_deg, ms; the rest are extras).
+pub fn result_json(path: &Path, width: u32, height: u32, out: &Output, ms: f64) -> serde_json::Value {
+    let d = &out.detection;
+    json!({
+        "path": path, "width": width, "height": height, "detected": d.detected,
+        "hub": d.detected.then_some(d.hub_px), "confidence": d.confidence,
+        "distance_m": out.distance_m, "yaw_deg": out.yaw_deg, "ms": ms,
+        "tower_top": d.tower_found.then_some(d.tower_top_px),
+        "tower_width_px": d.tower_found.then_some(d.tower_width_px),
+        "circle": d.circle_found.then_some(d.circle),
+        "blade_angles_deg": &d.blade_angles_deg[..(d.blade_count as usize).min(d.blade_angles_deg.len())],
+        "lines": d.line_count,
+    })
+}
+
+/// Draws what the detector saw over the image and writes it.
+pub fn draw_overlay(image: &Mat, out: &Output, path: &Path) -> anyhow::Result<()> {
+    let mut canvas = image.try_clone()?;
+    let scale = (image.rows() as f64 / 540.0).max(1.0);
+    let thickness = (2.0 * scale).round() as i32;
+    let pt = |p: [f64; 2]| Point::new(p[0].round() as i32, p[1].round() as i32);
+    for l in &out.overlay.lines {
+        let color = match l.kind {
+            LineKind::Tower => Scalar::new(40.0, 40.0, 230.0, 0.0),
+            LineKind::Blade => Scalar::new(40.0, 220.0, 40.0, 0.0),
+            LineKind::Rejected => Scalar::new(0.0, 160.0, 240.0, 0.0),
+            LineKind::Other => Scalar::new(200.0, 120.0, 100.0, 0.0),
+        };
+        imgproc::line(&mut canvas, pt(l.a), pt(l.b), color, thickness, imgproc::LINE_AA, 0)?;
+    }
+    if let Some([x, y, r]) = out.overlay.search_circle {
+        imgproc::circle(&mut canvas, pt([x, y]), r.round() as i32, Scalar::new(60.0, 200.0, 60.0, 0.0), 1, imgproc::LINE_AA, 0)?;
+    }
+    let d = &out.detection;
+    if d.tower_found {
+        imgproc::circle(&mut canvas, pt(d.tower_top_px), (8.0 * scale) as i32, Scalar::new(255.0, 80.0, 20.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
+    }
+    if d.circle_found {
+        imgproc::circle(&mut canvas, pt([d.circle[0], d.circle[1]]), d.circle[2].round() as i32, Scalar::new(255.0, 0.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
+    }
+    if d.detected {
+        let c = pt(d.hub_px);
+        let r = (14.0 * scale) as i32;
+        imgproc::circle(&mut canvas, c, r, Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
+        imgproc::line(&mut canvas, Point::new(c.x - 2 * r, c.y), Point::new(c.x + 2 * r, c.y), Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
+        imgproc::line(&mut canvas, Point::new(c.x, c.y - 2 * r), Point::new(c.x, c.y + 2 * r), Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
+    }
+    let name = path.to_str().context("non-UTF-8 path")?;
+    anyhow::ensure!(opencv::imgcodecs::imwrite_def(name, &canvas)?, "cannot write {name}");
+    Ok(())
+}

@@ -1,0 +1,217 @@
+//! `hubtrack eval`: the detector over real photos with truth (`truth.jsonl` as in
+//! `../shared/data`) and over synthetic frames with exact truth, every mode side by side.
+
+use crate::detect_cmd::{detector, view_of};
+use crate::score::{print_table, score, Table, Tally, Truth};
+use anyhow::Context;
+use hubtrack_capture::images::read_image;
+use hubtrack_detect::params::Mode;
+use hubtrack_detect::{Hints, ImageView};
+use hubtrack_render::{Camera, CameraPose, Distractor, Renderer, Scene};
+use hubtrack_runtime::config::ConfigArgs;
+use hubtrack_types::PixelFormat;
+use std::path::{Path, PathBuf};
+
+/// The modes compared, in column order.
+const MODES: [(Mode, &str); 2] = [(Mode::Thesis, "thesis"), (Mode::Default, "default")];
+/// Distance classes of the synthetic set, metres: far ≥ 25, medium 12–25, close < 12.
+const CLASSES: [(&str, f64, f64); 3] = [("far", 25.0, 45.0), ("medium", 12.0, 25.0), ("close", 6.0, 12.0)];
+/// Largest relative yaw in the synthetic set, degrees.
+const MAX_REL_YAW_DEG: f64 = 30.0;
+/// Largest camera pointing error (hub away from the image centre), degrees.
+const MAX_POINTING_DEG: f64 = 12.0;
+/// Largest camera roll, degrees.
+const MAX_ROLL_DEG: f64 = 10.0;
+/// Camera height relative to the hub, metres; within ±HORIZON_NEAR_M the horizon is near the hub.
+const HEIGHT_RANGE_M: (f64, f64) = (-12.0, 6.0);
+const HORIZON_NEAR_M: f64 = 3.0;
+/// Relative yaw beyond which a view counts as oblique, degrees.
+const OBLIQUE_DEG: f64 = 15.0;
+
+/// Arguments of `hubtrack eval`.
+#[derive(clap::Args)]
+pub struct EvalArgs {
+    #[command(flatten)]
+    pub config: ConfigArgs,
+    /// Truth file(s) in the format of ../shared/data/*/truth.jsonl (default: ../shared/data/real-dev/truth.jsonl if present).
+    #[arg(long, value_name = "FILE")]
+    pub truth: Vec<PathBuf>,
+    /// Synthetic frames per distance class (0: none), plus as many negatives (no turbine) / 4.
+    #[arg(long, default_value_t = 200)]
+    pub synthetic: u64,
+    /// Seed of the synthetic set.
+    #[arg(long, default_value_t = 2026)]
+    pub seed: u64,
+}
+
+/// Runs the command.
+pub fn run(args: EvalArgs) -> anyhow::Result<()> {
+    let config = args.config.load()?;
+    let mut detectors = MODES.iter().map(|(m, _)| detector(&config.detect, Some(*m))).collect::<anyhow::Result<Vec<_>>>()?;
+    let names: Vec<&str> = MODES.iter().map(|(_, n)| *n).collect();
+    let mut truths = args.truth.clone();
+    if truths.is_empty() {
+        let default = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/real-dev/truth.jsonl");
+        if default.is_file() {
+            truths.push(default);
+        } else {
+            eprintln!("[eval] skipping real photos: {} not found (../shared absent)", default.display());
+        }
+    }
+    for truth in &truths {
+        let table = eval_truth_file(truth, &mut detectors)?;
+        print_table(&format!("real photos: {}", truth.display()), &names, &table);
+    }
+    if args.synthetic > 0 {
+        let table = eval_synthetic(args.synthetic, args.seed, &mut detectors)?;
+        print_table(&format!("synthetic frames: {} per distance class, seed {}", args.synthetic, args.seed), &names, &table);
+    }
+    Ok(())
+}
+
+fn add(table: &mut Table, categories: &[String], truth: &Truth, outcomes: &[crate::score::Outcome]) {
+    for cat in categories {
+        let row = table.entry(cat.clone()).or_insert_with(|| vec![Tally::default(); outcomes.len()]);
+        for (t, o) in row.iter_mut().zip(outcomes) {
+            t.add(truth, o);
+        }
+    }
+}
+
+fn detect_all(detectors: &mut [hubtrack_detect::Detector], view: &ImageView<'_>, hints: &Hints) -> anyhow::Result<Vec<Option<[f64; 2]>>> {
+    detectors
+        .iter_mut()
+        .map(|d| Ok(d.detect(view, hints).map(|o| o.detection.detected.then_some(o.detection.hub_px))?))
+        .collect()
+}
+
+fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector]) -> anyhow::Result<Table> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let mut table = Table::new();
+    for (n, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let v: serde_json::Value = serde_json::from_str(line).with_context(|| format!("{}:{}", path.display(), n + 1))?;
+        let file = dir.join(v["file"].as_str().context("truth line without `file`")?);
+        let xy = |k: &str| v[k].as_array().and_then(|a| Some([a.first()?.as_f64()?, a.get(1)?.as_f64()?]));
+        let truth = match (v["set"].as_str(), v["hub_visible"].as_bool()) {
+            (Some("negative"), _) => Truth::Negative,
+            (_, Some(false)) => Truth::Hidden,
+            _ => {
+                let hub = xy("hub").context("positive without hub")?;
+                Truth::Visible { axis: xy("axis_point").unwrap_or(hub), hub }
+            }
+        };
+        let mat = match read_image(&file) {
+            Ok(m) => m,
+            Err(e) => {
+                eprintln!("[eval] {e}");
+                continue;
+            }
+        };
+        let view = view_of(&mat)?;
+        let hubs = detect_all(detectors, &view, &Hints::default())?;
+        let outcomes: Vec<_> = hubs.iter().map(|h| score(&truth, *h, view.height as f64)).collect();
+        let mut cats = vec!["all".to_string()];
+        for key in ["distance_class", "view", "env"] {
+            if let Some(c) = v[key].as_str() {
+                cats.push(format!("{}:{c}", key.trim_end_matches("_class")));
+            }
+        }
+        add(&mut table, &cats, &truth, &outcomes);
+    }
+    Ok(table)
+}
+
+/// A small deterministic generator (SplitMix64) for the synthetic set.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// One synthetic evaluation case: scene, pose, lens and the roll the vehicle would report.
+pub struct SynthCase {
+    /// Scene.
+    pub scene: Scene,
+    /// Camera pose.
+    pub pose: CameraPose,
+    /// GoPro (3 of 4) or USB camera.
+    pub wide: bool,
+    /// Categories the case counts in.
+    pub categories: Vec<String>,
+}
+
+/// The `index`-th case of a distance class (deterministic in `seed`).
+pub fn synth_case(seed: u64, class: usize, index: u64, negative: bool) -> SynthCase {
+    let mut r = Rng(seed ^ (class as u64) << 40 ^ index.wrapping_mul(0x9E37));
+    let (name, lo, hi) = CLASSES[class];
+    let mut scene = Scene::random(r.next());
+    scene.turbine_present = !negative;
+    if negative && scene.distractor == Distractor::None {
+        scene.distractor = Distractor::Mast;
+    }
+    let distance = r.range(lo, hi);
+    let rel_yaw = r.range(-MAX_REL_YAW_DEG, MAX_REL_YAW_DEG);
+    let nacelle = r.range(-0.5, 0.5) * rel_yaw;
+    let lateral = distance * (rel_yaw - nacelle).to_radians().tan();
+    scene.nacelle_yaw_deg = nacelle;
+    let height = r.range(HEIGHT_RANGE_M.0, HEIGHT_RANGE_M.1);
+    let mut pose = CameraPose::looking_at_hub(distance, lateral, height);
+    pose.yaw_deg += r.range(-MAX_POINTING_DEG, MAX_POINTING_DEG);
+    pose.pitch_deg += r.range(-0.6, 0.6) * MAX_POINTING_DEG;
+    pose.roll_deg = r.range(-MAX_ROLL_DEG, MAX_ROLL_DEG);
+    let wide = r.next() % 4 != 0;
+    let mut categories = vec!["all".to_string(), format!("distance:{name}")];
+    categories.push(format!("sky:{:?}", scene.sky).to_lowercase());
+    categories.push(if rel_yaw.abs() > OBLIQUE_DEG { "view:oblique".into() } else { "view:front".into() });
+    if height.abs() < HORIZON_NEAR_M {
+        categories.push("effects:horizon_near_hub".into());
+    }
+    if scene.propellers_in_view {
+        categories.push("effects:propellers".into());
+    }
+    if scene.nacelle_shadow {
+        categories.push("effects:nacelle_shadow".into());
+    }
+    categories.push(if wide { "camera:gopro".into() } else { "camera:usb".into() });
+    if negative {
+        categories = vec!["negatives".into()];
+    }
+    SynthCase { scene, pose, wide, categories }
+}
+
+fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::Detector]) -> anyhow::Result<Table> {
+    let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
+    let mut buffers: Vec<Vec<u8>> = renderers.iter().map(|r| vec![0u8; r.camera().frame_bytes()]).collect();
+    let mut table = Table::new();
+    for class in 0..CLASSES.len() {
+        for i in 0..per_class + per_class / 12 {
+            let negative = i >= per_class;
+            let case = synth_case(seed, class, i, negative);
+            let k = if case.wide { 0 } else { 1 };
+            let truth = renderers[k].render(&case.scene, &case.pose, &mut buffers[k]).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let cam = renderers[k].camera();
+            let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buffers[k] };
+            let t = match (negative, truth.turbine_in_view, truth.hub_px, truth.nose_px) {
+                (true, _, _, _) => Truth::Negative,
+                (false, true, Some(hub), Some(nose)) => Truth::Visible { axis: hub, hub: nose },
+                _ => Truth::Hidden,
+            };
+            let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), predicted_hub_px: None };
+            let hubs = detect_all(detectors, &view, &hints)?;
+            let outcomes: Vec<_> = hubs.iter().map(|h| score(&t, *h, view.height as f64)).collect();
+            add(&mut table, &case.categories, &t, &outcomes);
+        }
+        eprintln!("[eval] synthetic class {} done", CLASSES[class].0);
+    }
+    Ok(table)
+}

@@ -1,0 +1,64 @@
+//! `hubtrack-track`: one `TrackState` per `Detection` (a prediction when the frame had no hub),
+//! using the newest vehicle state to predict the hub's motion through turns.
+
+use clap::Parser;
+use hubtrack_runtime::config::ConfigArgs;
+use hubtrack_runtime::ipc::{open_node, MsgPublisher, MsgSubscriber};
+use hubtrack_runtime::shutdown::Shutdown;
+use hubtrack_runtime::status::StatusReporter;
+use hubtrack_track::Tracker;
+use hubtrack_types::services::{DETECTIONS, TRACK, VEHICLE};
+use hubtrack_types::time::monotonic_ns;
+use hubtrack_types::{Detection, Stamps, TrackState, VehicleState};
+use std::time::Duration;
+
+/// Longest sleep between checks for shutdown when no detection comes.
+const INPUT_WAIT: Duration = Duration::from_millis(50);
+/// Detections buffered between wake-ups (every detection is used, in order).
+const DETECTION_BUFFER: usize = 16;
+
+#[derive(Parser)]
+#[command(name = "hubtrack-track", about = "Track the hub through the detections")]
+struct Args {
+    #[command(flatten)]
+    config: ConfigArgs,
+}
+
+fn main() -> anyhow::Result<()> {
+    hubtrack_runtime::logging::init("track");
+    let args = Args::parse();
+    let config = args.config.load()?;
+    let shutdown = Shutdown::install()?;
+    let mut tracker = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
+
+    let node = open_node("track")?;
+    let detections = MsgSubscriber::<Detection>::new(&node, &DETECTIONS, DETECTION_BUFFER)?;
+    let vehicle = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, 4)?;
+    let track = MsgPublisher::<TrackState>::new(&node, &TRACK)?;
+    let mut status = StatusReporter::new(&node, "track", config.run.status_interval_ms)?;
+    let mut last_vehicle: Option<VehicleState> = None;
+    let mut last_seq: Option<u64> = None;
+
+    while !shutdown.requested() {
+        status.tick();
+        detections.wait(INPUT_WAIT);
+        if let Some(v) = vehicle.receive_newest()? {
+            last_vehicle = Some(v);
+        }
+        while let Some(det) = detections.receive()? {
+            let recv_ns = monotonic_ns();
+            status.status.inputs += 1;
+            if let Some(last) = last_seq {
+                status.status.skipped += det.stamps.seq.saturating_sub(last + 1);
+            }
+            last_seq = Some(det.stamps.seq);
+            let mut state = tracker.update(&det, last_vehicle.as_ref());
+            state.stamps = Stamps { seq: det.stamps.seq, capture_ns: det.stamps.capture_ns, recv_ns, publish_ns: monotonic_ns() };
+            track.publish(state)?;
+            status.status.outputs += 1;
+        }
+    }
+    status.publish_now();
+    log::info!("published {} track states", status.status.outputs);
+    Ok(())
+}
