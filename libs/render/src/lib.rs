@@ -107,6 +107,20 @@ use raster::{DepthMode, Lighting, Raster};
 pub const TOWER_WIDTH_REF_BELOW_TOP_M: f64 = 4.0;
 /// The fallback tower-width row is never below the tower-axis point this high above the ground (m).
 pub const TOWER_WIDTH_MIN_HEIGHT_M: f64 = 3.0;
+/// Lighting (direct sun factor, sky ambient, ground-bounce ambient) under a clear sky.
+const LIGHT_CLEAR: (f32, f32, f32) = (0.72, 0.42, 0.22);
+/// Lighting under a partly cloudy sky (sun slightly dimmed, more sky light).
+const LIGHT_CLOUDS: (f32, f32, f32) = (0.60, 0.46, 0.22);
+/// Lighting under an overcast deck: almost no direct sun, strong diffuse sky light.
+const LIGHT_OVERCAST: (f32, f32, f32) = (0.12, 0.74, 0.30);
+/// Sun disc brightness behind scattered clouds relative to a clear sky.
+const SUN_DISC_STRENGTH_CLOUDS: f32 = 0.8;
+/// Second turbine: distance behind the main tower along -X (m, range).
+const SECOND_TURBINE_BEHIND_M: (f64, f64) = (450.0, 1100.0);
+/// Second turbine: sideways offset along ±Y (m, range).
+const SECOND_TURBINE_SIDEWAYS_M: (f64, f64) = (120.0, 420.0);
+/// Second turbine: size relative to the main one (range).
+const SECOND_TURBINE_SCALE: (f64, f64) = (0.8, 1.0);
 /// The camera must be at least this high above the ground (m).
 pub const MIN_CAMERA_HEIGHT_M: f64 = 0.5;
 
@@ -218,16 +232,16 @@ impl Renderer {
         if scene.sky != Sky::Overcast && sun[2] > 0.0 {
             let sc = w2c.point(math::add(w2c.origin, sun));
             if let Some(px) = self.camera.project(sc) {
-                let strength = if scene.sky == Sky::Clouds { 0.8 } else { 1.0 };
+                let strength = if scene.sky == Sky::Clouds { SUN_DISC_STRENGTH_CLOUDS } else { 1.0 };
                 self.effects.sun_disc(out, px, self.camera.fx, strength);
             }
         }
 
         let (haze, visibility_m) = Background::haze_and_visibility(scene);
         let (sun_k, amb_sky, amb_ground) = match scene.sky {
-            Sky::Clear => (0.72, 0.42, 0.22),
-            Sky::Clouds => (0.60, 0.46, 0.22),
-            Sky::Overcast => (0.12, 0.74, 0.30),
+            Sky::Clear => LIGHT_CLEAR,
+            Sky::Clouds => LIGHT_CLOUDS,
+            Sky::Overcast => LIGHT_OVERCAST,
         };
         let light = Lighting {
             sun,
@@ -260,9 +274,11 @@ impl Renderer {
         if scene.second_turbine {
             let side = if layout.chance(0.5) { 1.0 } else { -1.0 };
             let mut spec = TurbineSpec::main(scene);
-            spec.base = [-layout.range(450.0, 1100.0), side * layout.range(120.0, 420.0), 0.0];
-            spec.hub_height_m = scene.hub_height_m * layout.range(0.8, 1.0);
-            spec.blade_length_m = scene.blade_length_m * layout.range(0.8, 1.0);
+            // Behind the main turbine as seen from the usual camera positions (which are at +X).
+            let (bx, by) = (SECOND_TURBINE_BEHIND_M, SECOND_TURBINE_SIDEWAYS_M);
+            spec.base = [-layout.range(bx.0, bx.1), side * layout.range(by.0, by.1), 0.0];
+            spec.hub_height_m = scene.hub_height_m * layout.range(SECOND_TURBINE_SCALE.0, SECOND_TURBINE_SCALE.1);
+            spec.blade_length_m = scene.blade_length_m * layout.range(SECOND_TURBINE_SCALE.0, SECOND_TURBINE_SCALE.1);
             spec.rotor_angle_deg = layout.range(0.0, 120.0);
             spec.detail = Detail::Low;
             spec.shadow_sun = None;
