@@ -84,6 +84,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod camera;
+pub mod dataset;
 pub mod scene;
 
 mod background;

@@ -24,14 +24,12 @@ pub fn path_pose(cfg: &SyntheticConfig, t: f64) -> (CameraPose, f64) {
     let dur = cfg.path_duration_s;
     let phase = (t % dur) / dur;
     let distance = cfg.start_distance_m + (cfg.end_distance_m - cfg.start_distance_m) * phase;
-    let pose = CameraPose {
-        distance_m: distance,
-        lateral_m: cfg.lateral_sway_m * (TAU * t / (dur * SWAY_PERIOD_FACTOR)).sin(),
-        height_m: cfg.height_m,
-        yaw_deg: POINTING_JITTER_DEG * (TAU * t / POINTING_PERIOD_S).sin(),
-        pitch_deg: 0.5 * POINTING_JITTER_DEG * (TAU * t / (POINTING_PERIOD_S * 1.37)).cos(),
-        roll_deg: cfg.roll_jitter_deg * (TAU * t / ROLL_PERIOD_S).sin(),
-    };
+    let lateral = cfg.lateral_sway_m * (TAU * t / (dur * SWAY_PERIOD_FACTOR)).sin();
+    // Aim at the hub, then add the pointing error of a real flight.
+    let mut pose = CameraPose::looking_at_hub(distance, lateral, cfg.height_m);
+    pose.yaw_deg += POINTING_JITTER_DEG * (TAU * t / POINTING_PERIOD_S).sin();
+    pose.pitch_deg += 0.5 * POINTING_JITTER_DEG * (TAU * t / (POINTING_PERIOD_S * 1.37)).cos();
+    pose.roll_deg = cfg.roll_jitter_deg * (TAU * t / ROLL_PERIOD_S).sin();
     let nacelle_yaw = cfg.yaw_swing_deg * (TAU * t / (dur * YAW_PERIOD_FACTOR)).sin();
     (pose, nacelle_yaw)
 }

@@ -63,6 +63,14 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Check a config file (exit 1 with the offending key), or print the defaults as TOML.
+    Config {
+        #[command(flatten)]
+        config: ConfigArgs,
+        /// Print the complete configuration (file + overrides, or the defaults) as TOML.
+        #[arg(long)]
+        print: bool,
+    },
     /// Benchmarks (commands that print a table; compare columns within one run).
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -131,6 +139,7 @@ fn main() {
         Command::Detect(a) => detect_cmd::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Track(a) => track_cmd::run(a),
+        Command::Config { config, print } => check_config(&config, print),
         Command::Latency { file, json } => latency(&file, json),
     };
     if let Err(e) = result {
@@ -311,6 +320,16 @@ fn recover(input: &Path, output: Option<PathBuf>) -> anyhow::Result<()> {
     );
     if let Some(why) = report.stopped_by {
         println!("reading stopped at: {why}");
+    }
+    Ok(())
+}
+
+fn check_config(args: &ConfigArgs, print: bool) -> anyhow::Result<()> {
+    let config = args.load()?;
+    if print {
+        print!("{}", toml::to_string(&config)?);
+    } else {
+        println!("{}: ok", args.config.as_ref().map_or("built-in defaults".into(), |p| p.display().to_string()));
     }
     Ok(())
 }
