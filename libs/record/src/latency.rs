@@ -5,7 +5,7 @@
 //! `recv_ns` − producer `publish_ns` for the same seq; end to end = setpoint `publish_ns` −
 //! `capture_ns`. Frames a stage never produced a result for count as dropped at that stage.
 
-use crate::writer::{ChannelKind, FRAME_HEADERS_TOPIC};
+use crate::writer::ChannelKind;
 use crate::RecordError;
 use hubtrack_types::{Detection, FrameHeader, Setpoint, Stamps, TrackState};
 use mcap::sans_io::LinearReaderOptions;

@@ -239,7 +239,12 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
         let was_running = stage.exited.is_none();
         let st = stage.stop(timeout);
         if was_running {
-            log::info!("stopped {} ({})", stage.name, st.map_or("unknown".into(), |s| s.to_string()));
+            log::info!(
+                "stopped {} after {:.1} s ({})",
+                stage.name,
+                stage.started.elapsed().as_secs_f64(),
+                st.map_or("unknown".into(), |s| s.to_string())
+            );
         }
     }
     // Let the final heartbeats arrive.
