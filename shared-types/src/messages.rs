@@ -513,3 +513,61 @@ impl DetectOverlay {
         &self.segments[..(self.segment_count as usize).min(MAX_OVERLAY_LINES)]
     }
 }
+
+/// Most stages one [`SupervisorStatus`] describes.
+pub const MAX_STAGES: usize = 8;
+
+/// Lifecycle state of a supervised stage.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::StageState")]
+#[serde(rename_all = "snake_case")]
+pub enum StageState {
+    /// Started, no heartbeat yet.
+    #[default]
+    Starting = 0,
+    /// Running and heart-beating.
+    Running = 1,
+    /// Ended; a restart is scheduled.
+    Restarting = 2,
+    /// Ended and not restarted (policy, or a clean end).
+    Stopped = 3,
+    /// Crashed too often: given up on.
+    Failed = 4,
+}
+
+/// The supervisor's view of one stage.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::SupervisedStage")]
+pub struct SupervisedStage {
+    /// Stage name.
+    pub name: Text64,
+    /// Current process id (0 when not running).
+    pub pid: u32,
+    /// Lifecycle state.
+    pub state: StageState,
+    /// Restarts since the run began.
+    pub restarts: u32,
+    /// When the current process started (monotonic ns).
+    pub started_ns: u64,
+    /// Exit code or `-signal` of the last end, 0 if none.
+    pub last_exit: i32,
+    /// Why the last restart happened.
+    pub last_reason: Text64,
+}
+
+/// Published by `hubtrack run` (history 1: a late subscriber gets the latest at once).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::SupervisorStatus")]
+pub struct SupervisorStatus {
+    /// Supervisor process id.
+    pub pid: u32,
+    /// When this status was published (monotonic ns).
+    pub publish_ns: u64,
+    /// Valid entries of `stages`.
+    pub stage_count: u32,
+    /// The stages in start order.
+    pub stages: [SupervisedStage; MAX_STAGES],
+}

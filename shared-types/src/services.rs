@@ -130,5 +130,21 @@ pub const STATUS: ServiceSpec = ServiceSpec {
     },
 };
 
+/// [`crate::SupervisorStatus`] from `hubtrack run`, read by `hubtrack status`.
+pub const SUPERVISOR: ServiceSpec = ServiceSpec {
+    channel: "supervisor",
+    name: "hubtrack/supervisor",
+    event_name: "hubtrack/supervisor/event",
+    qos: Qos {
+        history_size: 1,
+        subscriber_max_buffer_size: 4,
+        subscriber_max_borrowed_samples: 2,
+        max_subscribers: 8,
+        max_publishers: 2,
+        max_nodes: 24,
+        safe_overflow: true,
+    },
+};
+
 /// All fixed-size result services, in pipeline order (frames excluded).
 pub const RESULT_SERVICES: [ServiceSpec; 5] = [DETECTIONS, TRACK, SETPOINTS, VEHICLE, STATUS];

@@ -73,6 +73,61 @@ pub struct RunConfig {
     pub startup_timeout_ms: u64,
     /// Interval of each stage's status heartbeat, ms.
     pub status_interval_ms: u64,
+    /// What the supervisor does when a stage dies or hangs.
+    pub restart: RestartConfig,
+}
+
+/// When a stage is restarted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RestartPolicy {
+    /// Never: a stage that ends stays down.
+    Never,
+    /// When it exits with an error, is killed by a signal, or stops heart-beating.
+    OnFailure,
+    /// Whenever it ends, also after a clean exit.
+    Always,
+}
+
+/// `[run.restart]`: restart policy, back-off, crash-loop limit and liveness.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RestartConfig {
+    /// Policy of every stage not listed in `policy`.
+    pub default_policy: RestartPolicy,
+    /// Per-stage policy, e.g. `capture = "never"`.
+    pub policy: std::collections::BTreeMap<String, RestartPolicy>,
+    /// Delay before the first restart, ms; doubled after each restart inside the window.
+    pub backoff_initial_ms: u64,
+    /// Longest delay between restarts, ms.
+    pub backoff_max_ms: u64,
+    /// A stage restarted this many times within `window_s` is given up on (the others go on).
+    pub max_restarts: u32,
+    /// The crash-loop window, seconds.
+    pub window_s: f64,
+    /// A running stage that sends no heartbeat for this long is hung: it is killed and restarted, ms.
+    pub liveness_timeout_ms: u64,
+}
+
+impl Default for RestartConfig {
+    fn default() -> Self {
+        RestartConfig {
+            default_policy: RestartPolicy::OnFailure,
+            policy: Default::default(),
+            backoff_initial_ms: 100,
+            backoff_max_ms: 5000,
+            max_restarts: 5,
+            window_s: 60.0,
+            liveness_timeout_ms: 1500,
+        }
+    }
+}
+
+impl RestartConfig {
+    /// The policy of `stage`.
+    pub fn policy_of(&self, stage: &str) -> RestartPolicy {
+        self.policy.get(stage).copied().unwrap_or(self.default_policy)
+    }
 }
 
 impl Default for RunConfig {
@@ -83,6 +138,7 @@ impl Default for RunConfig {
             stop_timeout_ms: 3000,
             startup_timeout_ms: 5000,
             status_interval_ms: 250,
+            restart: RestartConfig::default(),
         }
     }
 }
@@ -411,6 +467,17 @@ impl Config {
         range("run.stop_timeout_ms", r.stop_timeout_ms, 100, 60_000)?;
         range("run.startup_timeout_ms", r.startup_timeout_ms, 100, 60_000)?;
         range("run.status_interval_ms", r.status_interval_ms, 20, 10_000)?;
+        let rs = &r.restart;
+        for stage in rs.policy.keys() {
+            if !KNOWN_STAGES.contains(&stage.as_str()) {
+                return Err(out_of_range(&format!("run.restart.policy.{stage}"), stage, format!("a stage of {KNOWN_STAGES:?}")));
+            }
+        }
+        range("run.restart.backoff_initial_ms", rs.backoff_initial_ms, 0, 60_000)?;
+        range("run.restart.backoff_max_ms", rs.backoff_max_ms, rs.backoff_initial_ms, 600_000)?;
+        range("run.restart.max_restarts", rs.max_restarts, 0, 1000)?;
+        range("run.restart.window_s", rs.window_s, 1.0, 86_400.0)?;
+        range("run.restart.liveness_timeout_ms", rs.liveness_timeout_ms, 4 * r.status_interval_ms, 600_000)?;
         let c = &self.capture;
         range("capture.fps", c.fps, 0.0, 1000.0)?;
         if c.source != SourceKind::Video && c.fps <= 0.0 {

@@ -12,3 +12,12 @@ pub mod shutdown;
 pub mod status;
 
 pub use config::{Config, ConfigError};
+
+/// Ends a stage process: on error, logs `error: <cause chain>` (one line, no backtrace dump) and
+/// exits with status 1, so the supervisor and the operator see why.
+pub fn exit_with<E: std::fmt::Display>(result: Result<(), E>) {
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}

@@ -22,7 +22,11 @@ struct Args {
     config: ConfigArgs,
 }
 
-fn main() -> anyhow::Result<()> {
+fn main() {
+    hubtrack_runtime::exit_with(run());
+}
+
+fn run() -> anyhow::Result<()> {
     hubtrack_runtime::logging::init("capture");
     let args = Args::parse();
     let config = args.config.load()?;

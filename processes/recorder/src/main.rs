@@ -60,7 +60,11 @@ enum JsonMsg {
     Recorder(RecorderStats),
 }
 
-fn main() -> anyhow::Result<()> {
+fn main() {
+    hubtrack_runtime::exit_with(run());
+}
+
+fn run() -> anyhow::Result<()> {
     hubtrack_runtime::logging::init("recorder");
     let args = Args::parse();
     let config = args.config.load()?;

@@ -9,10 +9,18 @@ use std::time::{Duration, Instant};
 /// Poll period while waiting for a stage to exit.
 const EXIT_POLL: Duration = Duration::from_millis(20);
 
-/// Finds the binary of stage `name` (`hubtrack-<name>`) next to the running `hubtrack`.
+/// Environment variable naming the folder of the stage binaries (default: next to `hubtrack`).
+pub const STAGE_DIR_ENV: &str = "HUBTRACK_STAGE_DIR";
+
+/// Finds the binary of stage `name` (`hubtrack-<name>`) in `$HUBTRACK_STAGE_DIR` or next to the
+/// running `hubtrack`.
 pub fn stage_binary(name: &str) -> anyhow::Result<PathBuf> {
     let exe = std::env::current_exe().context("locating the hubtrack executable")?;
-    let dir = exe.parent().context("hubtrack executable has no folder")?;
+    let dir = match std::env::var_os(STAGE_DIR_ENV) {
+        Some(d) => PathBuf::from(d),
+        None => exe.parent().context("hubtrack executable has no folder")?.to_path_buf(),
+    };
+    let dir = dir.as_path();
     let bin = dir.join(format!("hubtrack-{name}"));
     if !bin.is_file() {
         bail!(
@@ -32,6 +40,8 @@ pub struct Stage {
     pub child: Child,
     /// When it was started.
     pub started: Instant,
+    /// When it was started (monotonic ns, the stamps' clock).
+    pub started_ns: u64,
     /// Exit status once it ended.
     pub exited: Option<ExitStatus>,
 }
@@ -48,7 +58,13 @@ impl Stage {
             .with_context(|| format!("starting stage {name} ({})", binary.display()))?;
         forward(name, child.stdout.take().expect("piped"), false);
         forward(name, child.stderr.take().expect("piped"), true);
-        Ok(Stage { name: name.into(), child, started: Instant::now(), exited: None })
+        Ok(Stage {
+            name: name.into(),
+            child,
+            started: Instant::now(),
+            started_ns: hubtrack_types::time::monotonic_ns(),
+            exited: None,
+        })
     }
 
     /// Process id.
@@ -70,6 +86,8 @@ impl Stage {
             return self.exited;
         }
         signal(self.pid(), libc::SIGTERM);
+        // A stopped (SIGSTOP) process must run again to act on SIGTERM.
+        signal(self.pid(), libc::SIGCONT);
         let deadline = Instant::now() + timeout;
         while Instant::now() < deadline {
             if self.poll().is_some() {

@@ -5,6 +5,7 @@ mod detect_cmd;
 mod eval;
 mod launch;
 mod score;
+mod supervise;
 mod track_cmd;
 
 use anyhow::{bail, Context};
@@ -12,20 +13,16 @@ use clap::{Parser, Subcommand};
 use hubtrack_capture::synthetic::SyntheticSource;
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_runtime::ipc::{open_node, FrameSubscriber, MsgSubscriber};
+use hubtrack_types::services::SUPERVISOR;
+use hubtrack_types::SupervisorStatus;
 use hubtrack_runtime::shutdown::Shutdown;
 use hubtrack_types::services::STATUS;
 use hubtrack_types::time::monotonic_ns;
 use hubtrack_types::StageStatus;
-use launch::{stage_binary, Stage};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-/// Canonical start order; stages stop in reverse (control first, recorder last, so the vehicle is
-/// told to hold first and the recording sees everything).
-const PIPELINE_ORDER: &[&str] = &["recorder", "capture", "detect", "track"];
-/// Supervisor loop period.
-const TICK: Duration = Duration::from_millis(50);
 
 #[derive(Parser)]
 #[command(name = "hubtrack", version, about = "Find, track and approach a wind-turbine hub: launcher and tools")]
@@ -63,6 +60,15 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Show each stage of the running pipeline: pid, state, uptime, restarts, rates, drops, last error.
+    Status {
+        /// One JSON object with a `stages` list.
+        #[arg(long)]
+        json: bool,
+        /// How long to listen for heartbeats to measure rates, seconds.
+        #[arg(long, default_value_t = 1.0)]
+        listen: f64,
+    },
     /// Check a config file (exit 1 with the offending key), or print the defaults as TOML.
     Config {
         #[command(flatten)]
@@ -83,15 +89,15 @@ enum BenchCommand {
 }
 
 #[derive(clap::Args)]
-struct RunArgs {
+pub(crate) struct RunArgs {
     #[command(flatten)]
-    config: ConfigArgs,
+    pub(crate) config: ConfigArgs,
     /// Recording file (default: a timestamped file in [run].record_dir, printed at start).
     #[arg(long, value_name = "PATH.mcap")]
-    record: Option<PathBuf>,
+    pub(crate) record: Option<PathBuf>,
     /// Stop after this many seconds (default: run until Ctrl-C / SIGTERM).
     #[arg(long, value_name = "SECONDS")]
-    duration: Option<f64>,
+    pub(crate) duration: Option<f64>,
 }
 
 #[derive(clap::Args)]
@@ -131,7 +137,7 @@ fn main() {
     hubtrack_runtime::logging::init("hubtrack");
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run(a) => run(a),
+        Command::Run(a) => supervise::run(a),
         Command::Recover { input, output } => recover(&input, output),
         Command::Tap(a) => tap(a),
         Command::Render(a) => render(a),
@@ -140,6 +146,7 @@ fn main() {
         Command::Eval(a) => eval::run(a),
         Command::Track(a) => track_cmd::run(a),
         Command::Config { config, print } => check_config(&config, print),
+        Command::Status { json, listen } => status(json, listen),
         Command::Latency { file, json } => latency(&file, json),
     };
     if let Err(e) = result {
@@ -149,7 +156,7 @@ fn main() {
 }
 
 /// Config arguments forwarded to every stage.
-fn forwarded(config: &ConfigArgs) -> Vec<String> {
+pub(crate) fn forwarded(config: &ConfigArgs) -> Vec<String> {
     let mut args = Vec::new();
     if let Some(c) = &config.config {
         args.push("--config".into());
@@ -162,120 +169,34 @@ fn forwarded(config: &ConfigArgs) -> Vec<String> {
     args
 }
 
-fn run(args: RunArgs) -> anyhow::Result<()> {
-    let config = args.config.load()?;
-    let record = args.record.clone().unwrap_or_else(|| config.run.record_dir.join(timestamped_name()));
-    let shutdown = Shutdown::install()?;
-    let node = open_node("supervisor")?;
-    let status_sub = MsgSubscriber::<StageStatus>::new(&node, &STATUS, 64)?;
-    let mut statuses: BTreeMap<String, StageStatus> = BTreeMap::new();
-    let drain = |statuses: &mut BTreeMap<String, StageStatus>| -> anyhow::Result<()> {
-        while let Some(s) = status_sub.receive()? {
-            statuses.insert(s.stage.as_str().to_string(), s);
-        }
-        Ok(())
-    };
-
-    let order: Vec<&str> = PIPELINE_ORDER.iter().copied().filter(|s| config.run.stages.iter().any(|c| c == s)).collect();
-    let binaries = order.iter().map(|s| stage_binary(s)).collect::<anyhow::Result<Vec<_>>>()?;
-    println!("hubtrack run: stages {}; recording to {}", order.join(", "), record.display());
-
-    let mut stages: Vec<Stage> = Vec::new();
-    let startup = Duration::from_millis(config.run.startup_timeout_ms);
-    let mut failure: Option<String> = None;
-    for (name, bin) in order.iter().zip(&binaries) {
-        let mut stage_args = forwarded(&args.config);
-        if *name == "recorder" {
-            stage_args.push("--output".into());
-            stage_args.push(record.display().to_string());
-        }
-        let mut stage = Stage::spawn(name, bin, &stage_args)?;
-        log::info!("started {name} (pid {})", stage.pid());
-        // Ready = its first heartbeat: its ports exist, so nothing published after this is missed.
-        let t0 = Instant::now();
-        loop {
-            drain(&mut statuses)?;
-            if statuses.get(*name).is_some_and(|s| s.pid == stage.pid()) {
-                break;
-            }
-            if let Some(st) = stage.poll() {
-                failure = Some(format!("stage {name} exited during start-up ({st})"));
-                break;
-            }
-            if t0.elapsed() > startup || shutdown.requested() {
-                failure = Some(format!("stage {name} sent no heartbeat within {startup:?}"));
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(5));
-        }
-        stages.push(stage);
-        if failure.is_some() {
-            break;
-        }
-    }
-
-    let started = Instant::now();
-    let deadline = args.duration.map(Duration::from_secs_f64);
-    while failure.is_none() && !shutdown.requested() {
-        if deadline.is_some_and(|d| started.elapsed() >= d) {
-            break;
-        }
-        std::thread::sleep(TICK);
-        drain(&mut statuses)?;
-        if let Some(s) = stages.iter_mut().find_map(|s| s.poll().is_some().then_some(s)) {
-            let st = s.exited.expect("polled");
-            if st.success() {
-                log::info!("{} finished", s.name);
-            } else {
-                failure = Some(format!("stage {} exited ({st})", s.name));
-            }
-            break;
-        }
-    }
-    let elapsed = started.elapsed();
-
-    let timeout = Duration::from_millis(config.run.stop_timeout_ms);
-    for stage in stages.iter_mut().rev() {
-        let was_running = stage.exited.is_none();
-        let st = stage.stop(timeout);
-        if was_running {
-            log::info!(
-                "stopped {} after {:.1} s ({})",
-                stage.name,
-                stage.started.elapsed().as_secs_f64(),
-                st.map_or("unknown".into(), |s| s.to_string())
-            );
-        }
-    }
-    // Let the final heartbeats arrive.
-    std::thread::sleep(Duration::from_millis(20));
-    drain(&mut statuses)?;
-    print_summary(elapsed, &statuses, order.contains(&"recorder").then_some(record.as_path()));
-    match failure {
-        Some(f) => bail!(f),
-        None => Ok(()),
-    }
-}
-
-fn print_summary(elapsed: Duration, statuses: &BTreeMap<String, StageStatus>, record: Option<&Path>) {
+pub(crate) fn print_summary(elapsed: Duration, statuses: &BTreeMap<String, StageStatus>, segments: &[PathBuf]) {
     let secs = elapsed.as_secs_f64();
     println!("\n== hubtrack run summary ({secs:.1} s) ==");
     if let Some(c) = statuses.get("capture") {
+        let up = c.publish_ns.saturating_sub(c.started_ns) as f64 / 1e9;
         println!(
             "  capture   {} frames published ({:.1} fps), {} errors{}",
             c.outputs,
-            c.outputs as f64 / secs.max(1e-9),
+            c.outputs as f64 / up.max(1e-9),
             c.errors,
             if c.errors > 0 { format!(" (last: {})", c.last_error.as_str()) } else { String::new() }
         );
     }
+    for stage in ["detect", "track"] {
+        if let Some(s) = statuses.get(stage) {
+            println!("  {stage:<9} {} in, {} out, {} skipped, {} errors", s.inputs, s.outputs, s.skipped, s.errors);
+        }
+    }
     if let Some(r) = statuses.get("recorder") {
         println!(
-            "  recorder  {} frames received, {} recorded, {} dropped (disk behind or lost in shared memory)",
-            r.inputs, r.outputs, r.dropped
+            "  recorder  {} frames received, {} recorded, {} dropped (disk behind or lost in shared memory){}",
+            r.inputs,
+            r.outputs,
+            r.dropped,
+            if segments.len() > 1 { " (last segment)" } else { "" }
         );
     }
-    if let Some(path) = record {
+    for path in segments {
         match hubtrack_record::inspect(path) {
             Ok(info) => {
                 println!(
@@ -286,15 +207,17 @@ fn print_summary(elapsed: Duration, statuses: &BTreeMap<String, StageStatus>, re
                 );
                 let channels: Vec<String> = info.topic_counts.iter().map(|(t, n)| format!("{t} {n}")).collect();
                 println!("  channels  {}", channels.join(", "));
-                println!("  open it   in Foxglove or Lichtblick (Open local file), or `mcap info {}`", path.display());
             }
             Err(e) => println!("  file      {} unreadable: {e}", path.display()),
         }
     }
+    if let Some(path) = segments.first() {
+        println!("  open it   in Foxglove or Lichtblick (Open local file), or `hubtrack latency {}`", path.display());
+    }
 }
 
 /// `hubtrack-YYYYmmdd-HHMMSS.mcap` in UTC.
-fn timestamped_name() -> String {
+pub(crate) fn timestamped_name() -> String {
     let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
     let (days, rem) = (secs / 86_400, secs % 86_400);
     // Civil-from-days (Howard Hinnant's algorithm), proleptic Gregorian, UTC.
@@ -325,6 +248,83 @@ fn recover(input: &Path, output: Option<PathBuf>) -> anyhow::Result<()> {
     );
     if let Some(why) = report.stopped_by {
         println!("reading stopped at: {why}");
+    }
+    Ok(())
+}
+
+fn status(json: bool, listen: f64) -> anyhow::Result<()> {
+    let node = open_node("status")?;
+    let sup_sub = MsgSubscriber::<SupervisorStatus>::new(&node, &SUPERVISOR, 4)?;
+    let hb_sub = MsgSubscriber::<StageStatus>::new(&node, &STATUS, 64)?;
+    let mut sup: Option<SupervisorStatus> = None;
+    let mut first: BTreeMap<String, StageStatus> = BTreeMap::new();
+    let mut last: BTreeMap<String, StageStatus> = BTreeMap::new();
+    let t0 = Instant::now();
+    while t0.elapsed().as_secs_f64() < listen.max(0.3) {
+        hb_sub.wait(Duration::from_millis(20));
+        if let Some(s) = sup_sub.receive_newest()? {
+            sup = Some(s);
+        }
+        while let Some(hb) = hb_sub.receive()? {
+            let name = hb.stage.as_str().to_string();
+            // A restarted stage (new pid) starts its counters again.
+            if first.get(&name).is_none_or(|f| f.pid != hb.pid) {
+                first.insert(name.clone(), hb);
+            }
+            last.insert(name, hb);
+        }
+    }
+    let now = monotonic_ns();
+    let mut stages = Vec::new();
+    let names: Vec<String> = match &sup {
+        Some(s) => s.stages[..s.stage_count as usize].iter().map(|x| x.name.as_str().to_string()).collect(),
+        None => last.keys().cloned().collect(),
+    };
+    for name in names {
+        let sv = sup.as_ref().and_then(|s| s.stages.iter().find(|x| x.name.as_str() == name)).copied();
+        let hb = last.get(&name).copied();
+        let rate = |f: fn(&StageStatus) -> u64| -> Option<f64> {
+            let (a, b) = (first.get(&name)?, last.get(&name)?);
+            let dt = b.publish_ns.saturating_sub(a.publish_ns) as f64 / 1e9;
+            (dt > 0.0).then(|| f(b).saturating_sub(f(a)) as f64 / dt)
+        };
+        let pid = sv.map(|s| s.pid).or(hb.map(|h| h.pid)).unwrap_or(0);
+        let started = sv.map(|s| s.started_ns).filter(|n| *n > 0).or(hb.map(|h| h.started_ns));
+        let state = sv.map_or(if hb.is_some() { "running".to_string() } else { "unknown".into() }, |s| {
+            serde_json::to_value(s.state).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default()
+        });
+        stages.push(serde_json::json!({
+            "name": name, "pid": pid, "state": state,
+            "restarts": sv.map_or(0, |s| s.restarts),
+            "uptime_s": started.map(|s| now.saturating_sub(s) as f64 / 1e9),
+            "inputs_per_s": rate(|h| h.inputs), "outputs_per_s": rate(|h| h.outputs),
+            "inputs": hb.map(|h| h.inputs), "outputs": hb.map(|h| h.outputs),
+            "skipped": hb.map(|h| h.skipped), "dropped": hb.map(|h| h.dropped), "errors": hb.map(|h| h.errors),
+            "last_error": hb.map(|h| h.last_error.as_str().to_string()).filter(|e| !e.is_empty())
+                .or(sv.map(|s| s.last_reason.as_str().to_string()).filter(|e| !e.is_empty())),
+        }));
+    }
+    if sup.is_none() && stages.is_empty() {
+        bail!(
+            "no hubtrack pipeline is running in this IPC domain (HUBTRACK_DOMAIN={})",
+            std::env::var(hubtrack_runtime::ipc::DOMAIN_ENV).unwrap_or_default()
+        );
+    }
+    let report = serde_json::json!({"supervisor_pid": sup.map(|s| s.pid), "stages": stages});
+    if json {
+        println!("{report}");
+        return Ok(());
+    }
+    println!("{:<10}{:>8}{:>12}{:>10}{:>10}{:>10}{:>10}{:>9}{:>8}  last error", "stage", "pid", "state", "uptime s", "restarts", "in/s", "out/s", "dropped", "errors");
+    let f = |v: &serde_json::Value| v.as_f64().map_or("-".into(), |x| format!("{x:.1}"));
+    let n = |v: &serde_json::Value| v.as_u64().map_or("-".into(), |x| x.to_string());
+    for s in report["stages"].as_array().into_iter().flatten() {
+        println!(
+            "{:<10}{:>8}{:>12}{:>10}{:>10}{:>10}{:>10}{:>9}{:>8}  {}",
+            s["name"].as_str().unwrap_or(""), n(&s["pid"]), s["state"].as_str().unwrap_or(""), f(&s["uptime_s"]),
+            n(&s["restarts"]), f(&s["inputs_per_s"]), f(&s["outputs_per_s"]), n(&s["dropped"]), n(&s["errors"]),
+            s["last_error"].as_str().unwrap_or("")
+        );
     }
     Ok(())
 }

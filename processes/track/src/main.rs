@@ -24,7 +24,11 @@ struct Args {
     config: ConfigArgs,
 }
 
-fn main() -> anyhow::Result<()> {
+fn main() {
+    hubtrack_runtime::exit_with(run());
+}
+
+fn run() -> anyhow::Result<()> {
     hubtrack_runtime::logging::init("track");
     let args = Args::parse();
     let config = args.config.load()?;

@@ -1,0 +1,322 @@
+//! `hubtrack run`: starts the configured stages, keeps them alive by their restart policy, and
+//! stops them in order.
+//!
+//! Each stage is a small state machine: `starting` (until its first heartbeat) → `running` →
+//! (exit, or no heartbeat for `liveness_timeout_ms`: killed) → `restarting` after a back-off that
+//! doubles inside the crash-loop window → ... → `failed` after `max_restarts` in `window_s`, or
+//! `stopped`. One stage's fate never touches another's: the camera keeps streaming while a
+//! detector is restarted. A restarted recorder writes the next segment file (`NAME.1.mcap`, ...).
+
+use crate::launch::{signal, stage_binary, Stage};
+use anyhow::bail;
+use hubtrack_runtime::config::{Config, ConfigArgs, RestartPolicy};
+use hubtrack_runtime::ipc::{open_node, MsgPublisher, MsgSubscriber};
+use hubtrack_runtime::shutdown::Shutdown;
+use hubtrack_types::services::{STATUS, SUPERVISOR};
+use hubtrack_types::time::monotonic_ns;
+use hubtrack_types::{StageState, StageStatus, SupervisedStage, SupervisorStatus, Text64, MAX_STAGES};
+use std::collections::{BTreeMap, VecDeque};
+use std::os::unix::process::ExitStatusExt;
+use std::path::{Path, PathBuf};
+use std::process::ExitStatus;
+use std::time::{Duration, Instant};
+
+/// Canonical start order; stages stop in reverse (control first, so the vehicle is told to hold
+/// first; recorder last, so the recording sees everything).
+pub const PIPELINE_ORDER: &[&str] = &["recorder", "capture", "detect", "track"];
+/// Supervisor loop period (bounds restart and liveness reaction time).
+const TICK: Duration = Duration::from_millis(20);
+/// How often the supervisor publishes its status.
+const STATUS_PERIOD: Duration = Duration::from_millis(250);
+
+/// One supervised stage.
+struct Supervised {
+    name: &'static str,
+    binary: PathBuf,
+    policy: RestartPolicy,
+    process: Option<Stage>,
+    state: StageState,
+    /// When restarts happened, for the crash-loop window.
+    restart_times: VecDeque<Instant>,
+    restarts: u32,
+    next_start: Option<Instant>,
+    last_heartbeat: Option<Instant>,
+    last_exit: i32,
+    last_reason: String,
+    /// Recorder only: segment number of the current file.
+    segment: u32,
+}
+
+fn exit_code(st: ExitStatus) -> i32 {
+    st.code().unwrap_or_else(|| -st.signal().unwrap_or(0))
+}
+
+/// The recording file of segment `n` (0: the path itself; n: `stem.n.mcap`).
+pub fn segment_path(record: &Path, n: u32) -> PathBuf {
+    if n == 0 {
+        return record.to_path_buf();
+    }
+    let stem = record.file_stem().map_or("recording".into(), |s| s.to_string_lossy().into_owned());
+    record.with_file_name(format!("{stem}.{n}.mcap"))
+}
+
+struct Supervisor {
+    config: Config,
+    config_args: ConfigArgs,
+    record: PathBuf,
+    stages: Vec<Supervised>,
+}
+
+impl Supervisor {
+    fn args_for(&self, s: &Supervised) -> Vec<String> {
+        let mut args = crate::forwarded(&self.config_args);
+        if s.name == "recorder" {
+            args.push("--output".into());
+            args.push(segment_path(&self.record, s.segment).display().to_string());
+        }
+        args
+    }
+
+    fn start(&mut self, i: usize) -> anyhow::Result<()> {
+        let args = self.args_for(&self.stages[i]);
+        let s = &mut self.stages[i];
+        let stage = Stage::spawn(s.name, &s.binary, &args)?;
+        log::info!("started {} (pid {})", s.name, stage.pid());
+        s.process = Some(stage);
+        s.state = StageState::Starting;
+        s.last_heartbeat = None;
+        s.next_start = None;
+        Ok(())
+    }
+
+    /// A stage ended (by itself, or killed for hanging): decide on a restart.
+    fn ended(&mut self, i: usize, code: i32, reason: String, failure: bool) {
+        let restart = self.config.run.restart.clone();
+        let s = &mut self.stages[i];
+        s.process = None;
+        s.last_exit = code;
+        s.last_reason = reason.clone();
+        let wanted = match s.policy {
+            RestartPolicy::Never => false,
+            RestartPolicy::OnFailure => failure,
+            RestartPolicy::Always => true,
+        };
+        if !wanted {
+            s.state = StageState::Stopped;
+            log::info!("{} ended ({reason}); policy {:?}: not restarted", s.name, s.policy);
+            return;
+        }
+        let now = Instant::now();
+        let window = Duration::from_secs_f64(restart.window_s);
+        while s.restart_times.front().is_some_and(|t| now.duration_since(*t) > window) {
+            s.restart_times.pop_front();
+        }
+        if s.restart_times.len() as u32 >= restart.max_restarts {
+            s.state = StageState::Failed;
+            log::error!(
+                "{} ended ({reason}) {} times within {:.0} s: giving up on it; the other stages keep running",
+                s.name,
+                s.restart_times.len() + 1,
+                restart.window_s
+            );
+            return;
+        }
+        let backoff = (restart.backoff_initial_ms << s.restart_times.len().min(20)).min(restart.backoff_max_ms);
+        s.restart_times.push_back(now);
+        s.restarts += 1;
+        if s.name == "recorder" {
+            s.segment += 1;
+        }
+        s.state = StageState::Restarting;
+        s.next_start = Some(now + Duration::from_millis(backoff));
+        log::warn!("{} ended ({reason}): restart {} in {backoff} ms", s.name, s.restarts);
+    }
+
+    fn status(&self) -> SupervisorStatus {
+        let mut out = SupervisorStatus { pid: std::process::id(), publish_ns: monotonic_ns(), ..Default::default() };
+        for (slot, s) in out.stages.iter_mut().zip(&self.stages) {
+            *slot = SupervisedStage {
+                name: Text64::new(s.name),
+                pid: s.process.as_ref().map_or(0, |p| p.pid()),
+                state: s.state,
+                restarts: s.restarts,
+                started_ns: s.process.as_ref().map_or(0, |p| p.started_ns),
+                last_exit: s.last_exit,
+                last_reason: Text64::new(&s.last_reason),
+            };
+        }
+        out.stage_count = self.stages.len().min(MAX_STAGES) as u32;
+        out
+    }
+}
+
+/// Runs the pipeline until the duration ends, a signal arrives, or the source ends.
+pub fn run(args: crate::RunArgs) -> anyhow::Result<()> {
+    let config = args.config.load()?;
+    let record = args.record.clone().unwrap_or_else(|| config.run.record_dir.join(crate::timestamped_name()));
+    let shutdown = Shutdown::install()?;
+    let node = open_node("supervisor")?;
+    let heartbeats = MsgSubscriber::<StageStatus>::new(&node, &STATUS, 64)?;
+    let status_pub = MsgPublisher::<SupervisorStatus>::new(&node, &SUPERVISOR)?;
+    let mut last_status: BTreeMap<String, StageStatus> = BTreeMap::new();
+
+    let names: Vec<&'static str> =
+        PIPELINE_ORDER.iter().copied().filter(|s| config.run.stages.iter().any(|c| c == s)).collect();
+    let mut stages = Vec::new();
+    for name in &names {
+        stages.push(Supervised {
+            name,
+            binary: stage_binary(name)?,
+            policy: config.run.restart.policy_of(name),
+            process: None,
+            state: StageState::Stopped,
+            restart_times: VecDeque::new(),
+            restarts: 0,
+            next_start: None,
+            last_heartbeat: None,
+            last_exit: 0,
+            last_reason: String::new(),
+            segment: 0,
+        });
+    }
+    println!("hubtrack run: stages {}; recording to {}", names.join(", "), record.display());
+    let mut sup = Supervisor { config: config.clone(), config_args: args.config.clone(), record: record.clone(), stages };
+    let startup = Duration::from_millis(config.run.startup_timeout_ms);
+    let liveness = Duration::from_millis(config.run.restart.liveness_timeout_ms);
+
+    // Start in order, each after the previous one's first heartbeat: its ports exist then, so
+    // nothing published later is missed (the recorder sees frame 0). A stage that dies or stays
+    // silent at start goes through its restart policy like any other failure.
+    let mut failure: Option<String> = None;
+    for i in 0..sup.stages.len() {
+        if shutdown.requested() {
+            break;
+        }
+        sup.start(i)?;
+        let t0 = Instant::now();
+        loop {
+            drain(&heartbeats, &mut sup, &mut last_status)?;
+            if sup.stages[i].last_heartbeat.is_some() || shutdown.requested() {
+                break;
+            }
+            if let Some(st) = sup.stages[i].process.as_mut().and_then(|p| p.poll()) {
+                sup.ended(i, exit_code(st), format!("exit {st} during start-up"), true);
+                break;
+            }
+            if t0.elapsed() > startup {
+                if let Some(p) = sup.stages[i].process.as_mut() {
+                    signal(p.pid(), libc::SIGKILL);
+                    let _ = p.child.wait();
+                }
+                sup.ended(i, -9, format!("no heartbeat within {} ms of start", startup.as_millis()), true);
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    let started = Instant::now();
+    let deadline = args.duration.map(Duration::from_secs_f64);
+    let mut status_at = Instant::now() - STATUS_PERIOD;
+    while failure.is_none() && !shutdown.requested() && !deadline.is_some_and(|d| started.elapsed() >= d) {
+        std::thread::sleep(TICK);
+        drain(&heartbeats, &mut sup, &mut last_status)?;
+        let now = Instant::now();
+        for i in 0..sup.stages.len() {
+            let s = &mut sup.stages[i];
+            if let Some(p) = s.process.as_mut() {
+                if let Some(st) = p.poll() {
+                    let code = exit_code(st);
+                    let clean = st.success();
+                    if clean && s.name == "capture" {
+                        // The source ended (end of file, max_frames): the run is complete.
+                        log::info!("capture finished: ending the run");
+                        s.process = None;
+                        s.state = StageState::Stopped;
+                        failure = Some(String::new());
+                        break;
+                    }
+                    sup.ended(i, code, format!("exit {st}"), !clean);
+                    continue;
+                }
+                // Liveness: running stages must keep heart-beating (a SIGSTOPped or deadlocked
+                // process still exists but does nothing).
+                let last = s.last_heartbeat.unwrap_or(p.started);
+                let limit = if s.last_heartbeat.is_some() { liveness } else { startup };
+                if now.duration_since(last) > limit {
+                    log::error!("{} sent no heartbeat for {:?}: killing it (hung)", s.name, now.duration_since(last));
+                    signal(p.pid(), libc::SIGKILL);
+                    let st = p.child.wait().ok();
+                    let code = st.map_or(-9, exit_code);
+                    sup.ended(i, code, format!("no heartbeat for {} ms", limit.as_millis()), true);
+                }
+            } else if s.next_start.is_some_and(|t| now >= t) {
+                if let Err(e) = sup.start(i) {
+                    log::error!("{e:#}");
+                    sup.ended(i, -1, format!("{e:#}"), true);
+                }
+            }
+        }
+        if status_at.elapsed() >= STATUS_PERIOD {
+            status_at = Instant::now();
+            let _ = status_pub.publish(sup.status());
+        }
+    }
+    let elapsed = started.elapsed();
+    let failure = failure.filter(|f| !f.is_empty());
+
+    let timeout = Duration::from_millis(config.run.stop_timeout_ms);
+    for s in sup.stages.iter_mut().rev() {
+        if let Some(p) = s.process.as_mut() {
+            let st = p.stop(timeout);
+            log::info!(
+                "stopped {} after {:.1} s ({})",
+                s.name,
+                p.started.elapsed().as_secs_f64(),
+                st.map_or("unknown".into(), |x| x.to_string())
+            );
+            s.state = StageState::Stopped;
+        }
+        s.process = None;
+    }
+    let _ = status_pub.publish(sup.status());
+    std::thread::sleep(Duration::from_millis(20));
+    drain(&heartbeats, &mut sup, &mut last_status)?;
+    let segments: Vec<PathBuf> = match sup.stages.iter().find(|s| s.name == "recorder") {
+        Some(r) => (0..=r.segment).map(|n| segment_path(&record, n)).filter(|p| p.exists()).collect(),
+        None => Vec::new(),
+    };
+    crate::print_summary(elapsed, &last_status, &segments);
+    for s in &sup.stages {
+        if s.restarts > 0 || s.state == StageState::Failed {
+            println!("  {:<9} {} restarts{}", s.name, s.restarts, if s.state == StageState::Failed { ", given up" } else { "" });
+        }
+    }
+    if let Some(f) = failure {
+        bail!(f);
+    }
+    if let Some(s) = sup.stages.iter().find(|s| s.state == StageState::Failed) {
+        bail!("stage {} was given up on ({})", s.name, s.last_reason);
+    }
+    Ok(())
+}
+
+fn drain(
+    heartbeats: &MsgSubscriber<StageStatus>,
+    sup: &mut Supervisor,
+    last: &mut BTreeMap<String, StageStatus>,
+) -> anyhow::Result<()> {
+    while let Some(hb) = heartbeats.receive()? {
+        let name = hb.stage.as_str().to_string();
+        if let Some(s) = sup.stages.iter_mut().find(|s| s.name == name) {
+            if s.process.as_ref().is_some_and(|p| p.pid() == hb.pid) {
+                s.last_heartbeat = Some(Instant::now());
+                if s.state == StageState::Starting {
+                    s.state = StageState::Running;
+                }
+            }
+        }
+        last.insert(name, hb);
+    }
+    Ok(())
+}
