@@ -4,6 +4,7 @@ mod bench;
 mod detect_cmd;
 mod eval;
 mod launch;
+mod replay;
 mod score;
 mod supervise;
 mod track_cmd;
@@ -60,6 +61,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Replay a recording's inputs through chosen stages and record their new outputs.
+    Replay(replay::ReplayArgs),
     /// Show each stage of the running pipeline: pid, state, uptime, restarts, rates, drops, last error.
     Status {
         /// One JSON object with a `stages` list.
@@ -147,6 +150,7 @@ fn main() {
         Command::Track(a) => track_cmd::run(a),
         Command::Config { config, print } => check_config(&config, print),
         Command::Status { json, listen } => status(json, listen),
+        Command::Replay(a) => replay::run(a),
         Command::Latency { file, json } => latency(&file, json),
     };
     if let Err(e) = result {
