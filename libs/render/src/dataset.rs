@@ -89,3 +89,85 @@ pub fn synth_case(seed: u64, class: usize, index: u64, negative: bool) -> SynthC
     SynthCase { scene, pose, wide, categories }
 }
 
+
+/// Frames per second of the evaluation flights.
+pub const FLIGHT_FPS: f64 = 15.0;
+/// Approach of an evaluation flight: start and end distance to the hub, metres.
+pub const FLIGHT_DISTANCE_M: (f64, f64) = (30.0, 6.0);
+/// Largest lateral drift, metres.
+pub const FLIGHT_MAX_DRIFT_M: f64 = 5.0;
+/// Camera height relative to the hub at the start (climbs to 0), metres.
+pub const FLIGHT_START_HEIGHT_M: (f64, f64) = (-10.0, -2.0);
+/// Amplitude of a yaw turn of the vehicle (the hub sweeps across the image), degrees.
+pub const FLIGHT_TURN_DEG: f64 = 15.0;
+/// Roll jitter amplitude, degrees.
+pub const FLIGHT_ROLL_DEG: f64 = 5.0;
+/// Dropouts per flight (frames whose detection is suppressed, as by an occlusion), and their length range.
+pub const FLIGHT_DROPOUTS: usize = 2;
+/// Length range of a dropout, frames.
+pub const FLIGHT_DROPOUT_FRAMES: (u64, u64) = (5, 15);
+
+/// One frame of an evaluation flight.
+#[derive(Debug, Clone)]
+pub struct FlightFrame {
+    /// Scene (fixed per flight except the noise frame counter).
+    pub scene: Scene,
+    /// Camera pose.
+    pub pose: CameraPose,
+    /// Vehicle heading change since the flight start, radians (camera yaw in the world), for the
+    /// tracker's ego-motion input.
+    pub heading_rad: f64,
+    /// The detection of this frame is suppressed (simulated occlusion / dropout).
+    pub dropout: bool,
+}
+
+/// A deterministic evaluation flight of `frames` frames at [`FLIGHT_FPS`]: approach from 30 to 6 m
+/// with lateral drift, a climb to hub height, a yaw turn, roll jitter and dropouts.
+pub fn flight(seed: u64, frames: u64) -> Vec<FlightFrame> {
+    use std::f64::consts::TAU;
+    let mut r = Rng(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0xF1_1647);
+    let mut scene = Scene::random(r.next());
+    scene.turbine_present = true;
+    scene.distractor = Distractor::None;
+    let nacelle = r.range(-20.0, 20.0);
+    scene.nacelle_yaw_deg = nacelle;
+    let drift = r.range(-FLIGHT_DRIFT_FACTOR, FLIGHT_DRIFT_FACTOR) * FLIGHT_MAX_DRIFT_M;
+    let drift_period = r.range(0.6, 1.4);
+    let h0 = r.range(FLIGHT_START_HEIGHT_M.0, FLIGHT_START_HEIGHT_M.1);
+    let turn_at = r.range(0.3, 0.6);
+    let turn_sign = if r.next() % 2 == 0 { 1.0 } else { -1.0 };
+    let roll_phase = r.range(0.0, TAU);
+    let mut drop_ranges = Vec::new();
+    for _ in 0..FLIGHT_DROPOUTS {
+        let start = (r.range(0.15, 0.9) * frames as f64) as u64;
+        let len = FLIGHT_DROPOUT_FRAMES.0 + r.next() % (FLIGHT_DROPOUT_FRAMES.1 - FLIGHT_DROPOUT_FRAMES.0 + 1);
+        drop_ranges.push(start..start + len);
+    }
+    let n = frames.max(2) as f64;
+    (0..frames)
+        .map(|i| {
+            let u = i as f64 / (n - 1.0);
+            let t = i as f64 / FLIGHT_FPS;
+            let distance = FLIGHT_DISTANCE_M.0 + (FLIGHT_DISTANCE_M.1 - FLIGHT_DISTANCE_M.0) * u;
+            // Drift shrinks with distance so the turbine stays in view when close.
+            let lateral = drift * (distance / FLIGHT_DISTANCE_M.0) * (TAU * u / drift_period).sin();
+            let height = h0 * (1.0 - u);
+            let mut pose = CameraPose::looking_at_hub(distance, lateral, height);
+            // A yaw turn: the vehicle turns away and back (raised cosine, 2 s), plus small wander.
+            let turn_u = ((t - turn_at * n / FLIGHT_FPS) / 2.0).clamp(0.0, 1.0);
+            let turn = turn_sign * FLIGHT_TURN_DEG * 0.5 * (1.0 - (TAU * turn_u).cos());
+            pose.yaw_deg += turn + 1.5 * (TAU * t / 3.1).sin();
+            pose.pitch_deg += 1.0 * (TAU * t / 2.3).sin();
+            pose.roll_deg = FLIGHT_ROLL_DEG * (TAU * t / 1.7 + roll_phase).sin();
+            let mut s = scene.clone();
+            s.frame = i;
+            // The heading that keeps the hub centred changes with the lateral offset: camera to the
+            // viewer's right must turn left to see the hub.
+            let heading_rad = (-(lateral.atan2(distance)).to_degrees() + pose.yaw_deg).to_radians();
+            FlightFrame { scene: s, pose, heading_rad, dropout: drop_ranges.iter().any(|r| r.contains(&i)) }
+        })
+        .collect()
+}
+
+/// Fraction of [`FLIGHT_MAX_DRIFT_M`] a flight's drift amplitude is drawn from (±).
+const FLIGHT_DRIFT_FACTOR: f64 = 1.0;

@@ -26,14 +26,26 @@ pub struct EvalArgs {
     /// Synthetic frames per distance class (0: none), plus as many negatives (no turbine) / 4.
     #[arg(long, default_value_t = 200)]
     pub synthetic: u64,
-    /// Seed of the synthetic set.
+    /// Seed of the synthetic set and flights.
     #[arg(long, default_value_t = 2026)]
     pub seed: u64,
+    /// Evaluate tracking on rendered flights instead: detect -> track per frame, with truth.
+    #[arg(long)]
+    pub sequence: bool,
+    /// Flights for --sequence.
+    #[arg(long, default_value_t = 10)]
+    pub flights: u64,
+    /// Frames per flight for --sequence.
+    #[arg(long, default_value_t = 300)]
+    pub frames: u64,
 }
 
 /// Runs the command.
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let config = args.config.load()?;
+    if args.sequence {
+        return crate::eval_seq::run(&config, args.flights, args.frames, args.seed);
+    }
     let mut detectors = MODES.iter().map(|(m, _)| detector(&config.detect, Some(*m))).collect::<anyhow::Result<Vec<_>>>()?;
     let names: Vec<&str> = MODES.iter().map(|(_, n)| *n).collect();
     let mut truths = args.truth.clone();

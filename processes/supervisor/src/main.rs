@@ -3,6 +3,7 @@
 mod bench;
 mod detect_cmd;
 mod eval;
+mod eval_seq;
 mod launch;
 mod replay;
 mod score;
