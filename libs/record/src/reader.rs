@@ -123,7 +123,12 @@ pub fn inspect(path: &Path) -> Result<FileInfo, RecordError> {
     let finished = is_finished(path).map_err(io)?;
     let mut topic_counts = std::collections::BTreeMap::new();
     if finished {
-        let data = std::fs::read(path).map_err(io)?;
+        // Map, don't read: only the summary pages at the end of the file are touched (a flight's
+        // recording is many GB).
+        let file = std::fs::File::open(path).map_err(io)?;
+        // SAFETY: the file is opened read-only; a concurrent writer would only make the summary
+        // unreadable, which falls back to the linear count below.
+        let data = unsafe { memmap2::Mmap::map(&file) }.map_err(io)?;
         if let Ok(Some(summary)) = mcap::Summary::read(&data) {
             if let Some(stats) = &summary.stats {
                 for (id, n) in &stats.channel_message_counts {

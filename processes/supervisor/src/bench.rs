@@ -5,7 +5,9 @@ use crate::launch::{stage_binary, Stage};
 use anyhow::Context;
 use hubtrack_capture::synthetic::SyntheticSource;
 use hubtrack_runtime::config::{Config, SyntheticCamera};
+use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read, Write};
+use std::path::Path;
 use std::os::unix::net::UnixStream;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -213,4 +215,182 @@ fn socket_hop(frame: &[u8], fps: f64, seconds: f64) -> anyhow::Result<HopResult>
     drop(tx);
     let (received, latency_us) = reader.join().map_err(|_| anyhow::anyhow!("reader panicked"))??;
     Ok(HopResult { published: n, received, recorded: None, dropped: n - received, latency_us })
+}
+
+/// Arguments of `hubtrack bench pipeline`.
+#[derive(clap::Args)]
+pub struct PipelineBenchArgs {
+    /// Seconds per configuration.
+    #[arg(long, default_value_t = 60.0)]
+    pub seconds: f64,
+    /// Only the 1920x1080 at 30 fps configuration (skip 640x480 at 60 fps).
+    #[arg(long)]
+    pub only_hd: bool,
+    /// CPU list to pin the pipeline to (taskset syntax).
+    #[arg(long, default_value = "0,1")]
+    pub cpus: String,
+}
+
+/// CPU time and peak memory of one process, from /proc.
+#[derive(Debug, Clone, Copy, Default)]
+struct ProcSample {
+    cpu_ticks: u64,
+    peak_rss_kb: u64,
+}
+
+fn proc_sample(pid: u32) -> Option<ProcSample> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let cpu_ticks = f.get(11)?.parse::<u64>().ok()? + f.get(12)?.parse::<u64>().ok()?;
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let peak_rss_kb = status
+        .lines()
+        .find(|l| l.starts_with("VmHWM:"))
+        .and_then(|l| l.split_whitespace().nth(1))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    Some(ProcSample { cpu_ticks, peak_rss_kb })
+}
+
+fn children(pid: u32) -> Vec<u32> {
+    let mut out = Vec::new();
+    if let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) {
+        for t in tasks.flatten() {
+            if let Ok(c) = std::fs::read_to_string(t.path().join("children")) {
+                out.extend(c.split_whitespace().filter_map(|p| p.parse::<u32>().ok()));
+            }
+        }
+    }
+    out
+}
+
+fn proc_name(pid: u32) -> String {
+    std::fs::read_to_string(format!("/proc/{pid}/comm")).map(|s| s.trim().to_string()).unwrap_or_default()
+}
+
+/// Runs the pipeline benchmark: each configuration pinned to `--cpus`, recorder on.
+pub fn pipeline(args: PipelineBenchArgs) -> anyhow::Result<()> {
+    let mut configs = vec![("gopro", 30.0)];
+    if !args.only_hd {
+        configs.push(("usb", 60.0));
+    }
+    for (camera, fps) in configs {
+        pipeline_one(&args, camera, fps)?;
+    }
+    Ok(())
+}
+
+fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Result<()> {
+    let domain = format!("bench-pipe-{}", std::process::id());
+    let dir = std::env::temp_dir().join(&domain);
+    std::fs::create_dir_all(&dir)?;
+    let rec = dir.join("pipeline.mcap");
+    let exe = std::env::current_exe()?;
+    let taskset = ["/usr/bin/taskset", "/bin/taskset"].into_iter().find(|p| Path::new(p).exists());
+    let run_args: Vec<String> = vec![
+        "run".into(),
+        "--record".into(),
+        rec.display().to_string(),
+        "--duration".into(),
+        args.seconds.to_string(),
+        "--set".into(),
+        r#"run.stages=["capture","detect","track","recorder"]"#.into(),
+        "--set".into(),
+        format!("capture.synthetic.camera={camera}"),
+        "--set".into(),
+        format!("capture.fps={fps}"),
+    ];
+    let mut cmd = match taskset {
+        Some(ts) => {
+            let mut c = Command::new(ts);
+            c.arg("-c").arg(&args.cpus).arg(&exe).args(&run_args);
+            c
+        }
+        None => {
+            eprintln!("[bench] taskset not found: running unpinned");
+            let mut c = Command::new(&exe);
+            c.args(&run_args);
+            c
+        }
+    };
+    eprintln!("[bench] {camera} at {fps} fps for {} s, pinned to cpus {} ...", args.seconds, args.cpus);
+    let mut run = cmd.env(hubtrack_runtime::ipc::DOMAIN_ENV, &domain).stdout(Stdio::null()).stderr(Stdio::null()).spawn()?;
+    let run_pid = run.id();
+    // The copying baseline, concurrently (same frames, same rate).
+    let mut source = SyntheticSource::new(
+        &hubtrack_runtime::config::SyntheticConfig {
+            camera: if camera == "usb" { SyntheticCamera::Usb } else { SyntheticCamera::Gopro },
+            ..Default::default()
+        },
+        fps,
+    )?;
+    let (w, h) = source.size();
+    let mut frame = vec![0u8; w as usize * h as usize * 3];
+    source.render_index(0, &mut frame)?;
+    let seconds = args.seconds;
+    let socket = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_secs(2));
+        socket_hop(&frame, fps, (seconds - 3.0).max(1.0))
+    });
+    // Sample every process of the run once a second; keep the last sample of each pid.
+    let mut first: BTreeMap<u32, (String, ProcSample, Instant)> = BTreeMap::new();
+    let mut last: BTreeMap<u32, (ProcSample, Instant)> = BTreeMap::new();
+    while run.try_wait()?.is_none() {
+        let mut pids = vec![run_pid];
+        pids.extend(children(run_pid));
+        let all: Vec<u32> = pids.iter().flat_map(|p| std::iter::once(*p).chain(children(*p))).collect();
+        for pid in all {
+            if let Some(s) = proc_sample(pid) {
+                let name = proc_name(pid);
+                first.entry(pid).or_insert((name, s, Instant::now()));
+                last.insert(pid, (s, Instant::now()));
+            }
+        }
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    let uds = socket.join().map_err(|_| anyhow::anyhow!("socket hop panicked"))??;
+    let tick = 100.0; // USER_HZ on Linux
+    let mut per_name: BTreeMap<String, (f64, u64)> = BTreeMap::new();
+    for (pid, (name, s0, t0)) in &first {
+        if let Some((s1, t1)) = last.get(pid) {
+            let secs = t1.duration_since(*t0).as_secs_f64().max(1e-3);
+            let cpu = (s1.cpu_ticks - s0.cpu_ticks) as f64 / tick / secs * 100.0;
+            let e = per_name.entry(name.clone()).or_insert((0.0, 0));
+            e.0 += cpu;
+            e.1 = e.1.max(s1.peak_rss_kb);
+        }
+    }
+    let report = hubtrack_record::latency::analyze(&rec)?;
+    let info = hubtrack_record::inspect(&rec)?;
+    println!("\npipeline: {camera} {w}x{h} at {fps} fps for {} s, capture+detect+track+recorder, pinned to cpus {}", args.seconds, args.cpus);
+    hubtrack_record::latency::print(&report);
+    println!("{:<22}{:>10}{:>16}", "process", "CPU %", "peak RSS MB");
+    let mut flight = 0.0;
+    for (name, (cpu, rss)) in &per_name {
+        println!("  {:<20}{:>10.1}{:>16.1}", name, cpu, *rss as f64 / 1024.0);
+        if name != "hubtrack-captur" && name != "taskset" {
+            flight += cpu;
+        }
+    }
+    println!("  flight stages (all but the synthetic camera): {flight:.1} % of one core");
+    let mut l = uds.latency_us.clone();
+    let (u50, u99, _) = percentiles(&mut l);
+    if let Some(hop) = report.hops.iter().find(|h| h.name == "capture->detect") {
+        println!(
+            "frames hop capture->detect: iceoryx2 p50 {:.0} us, p99 {:.0} us | Unix-socket copy (concurrent): p50 {:.0} us, p99 {:.0} us | ratio p50 {:.1}x",
+            hop.p50_us, hop.p99_us, u50, u99, u50 / hop.p50_us
+        );
+    }
+    println!(
+        "recorded: {} frames, {} detections, {} track states; file {:.0} MB",
+        info.topic_counts.get("/frames").copied().unwrap_or(0),
+        info.topic_counts.get("/detections").copied().unwrap_or(0),
+        info.topic_counts.get("/track").copied().unwrap_or(0),
+        info.size_bytes as f64 / 1e6
+    );
+    let _ = std::fs::remove_file(&rec);
+    let _ = std::fs::remove_dir(&dir);
+    Ok(())
 }

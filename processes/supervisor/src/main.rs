@@ -90,6 +90,8 @@ enum Command {
 enum BenchCommand {
     /// The frames hop over iceoryx2 across real processes vs a Unix-socket copy; renderer cost.
     Frames(bench::FramesBenchArgs),
+    /// The whole pipeline pinned to 2 cores with the recorder on: latency, CPU and memory per process.
+    Pipeline(bench::PipelineBenchArgs),
 }
 
 #[derive(clap::Args)]
@@ -146,6 +148,7 @@ fn main() {
         Command::Tap(a) => tap(a),
         Command::Render(a) => render(a),
         Command::Bench(BenchCommand::Frames(a)) => bench::frames(a),
+        Command::Bench(BenchCommand::Pipeline(a)) => bench::pipeline(a),
         Command::Detect(a) => detect_cmd::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Track(a) => track_cmd::run(a),
