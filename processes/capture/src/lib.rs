@@ -126,8 +126,9 @@ pub struct FrameInfo {
     pub height: u32,
     /// Pixel layout (sources always produce [`PixelFormat::Bgr8`] today).
     pub format: PixelFormat,
-    /// Monotonic ns when the frame was exposed or dequeued (rendered, decoded).
-    pub capture_ns: u64,
+    /// Monotonic ns when the frame was exposed or dequeued; `None`: when its pixels are ready
+    /// (rendered frames: the renderer stands in for the sensor, so rendering is not latency).
+    pub capture_ns: Option<u64>,
     /// Exact truth for rendered frames.
     pub truth: FrameTruth,
 }

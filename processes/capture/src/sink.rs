@@ -2,7 +2,7 @@
 
 use crate::{CaptureError, Fill, FrameInfo, FrameSink};
 use hubtrack_runtime::ipc::FramePublisher;
-use hubtrack_types::time::realtime_ns;
+use hubtrack_types::time::{monotonic_ns, realtime_ns};
 use hubtrack_types::{FrameHeader, FrameSourceKind};
 
 /// Publishes frames on the frames service, numbering them `seq = 0, 1, 2, ...`.
@@ -26,7 +26,7 @@ impl ShmSink {
 pub fn header_for(info: &FrameInfo, seq: u64, source: FrameSourceKind) -> FrameHeader {
     FrameHeader {
         seq,
-        capture_ns: info.capture_ns,
+        capture_ns: info.capture_ns.unwrap_or(0),
         capture_realtime_ns: realtime_ns(),
         publish_ns: 0,
         width: info.width,
@@ -41,9 +41,14 @@ pub fn header_for(info: &FrameInfo, seq: u64, source: FrameSourceKind) -> FrameH
 impl FrameSink for ShmSink {
     fn publish(&mut self, info: FrameInfo, fill: &mut Fill<'_>) -> Result<(), CaptureError> {
         let header = header_for(&info, self.next_seq, self.source);
+        let stamp_when_ready = info.capture_ns.is_none();
         let sent = self.publisher.publish_with(header, |buf, header| {
             if let Some(truth) = fill(buf)? {
                 header.truth = truth;
+            }
+            if stamp_when_ready {
+                header.capture_ns = monotonic_ns();
+                header.capture_realtime_ns = realtime_ns();
             }
             Ok::<(), CaptureError>(())
         })?;
@@ -72,6 +77,9 @@ impl FrameSink for VecSink {
         self.header = header_for(&info, self.count, self.source);
         if let Some(truth) = fill(&mut self.pixels)? {
             self.header.truth = truth;
+        }
+        if info.capture_ns.is_none() {
+            self.header.capture_ns = monotonic_ns();
         }
         self.count += 1;
         Ok(())

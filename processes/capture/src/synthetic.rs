@@ -6,7 +6,6 @@
 use crate::{CaptureError, FrameInfo, FrameSink, FrameSource, Step};
 use hubtrack_render::{Camera, CameraPose, Renderer, Scene, Truth};
 use hubtrack_runtime::config::{SyntheticCamera, SyntheticConfig};
-use hubtrack_types::time::monotonic_ns;
 use hubtrack_types::{FrameSourceKind, FrameTruth, PixelFormat};
 use std::f64::consts::TAU;
 
@@ -116,9 +115,9 @@ impl FrameSource for SyntheticSource {
         let (width, height) = self.size();
         let index = self.index;
         self.index += 1;
-        let capture_ns = monotonic_ns();
-        // The truth is known only after rendering: the fill returns it for the header.
-        let info = FrameInfo { width, height, format: PixelFormat::Bgr8, capture_ns, truth: FrameTruth::default() };
+        // The truth is known only after rendering: the fill returns it for the header. The frame
+        // is stamped when rendered (capture_ns: None), as a camera frame is when dequeued.
+        let info = FrameInfo { width, height, format: PixelFormat::Bgr8, capture_ns: None, truth: FrameTruth::default() };
         sink.publish(info, &mut |out| Ok(Some(frame_truth(&self.render_index(index, out)?))))?;
         Ok(Step::Frame)
     }

@@ -205,7 +205,7 @@ impl FrameSource for V4lSource {
         let (w, h, stride) = (self.granted.width, self.granted.height, self.granted.stride as usize);
         match self.pixel {
             Pixel::Yuyv => {
-                let info = FrameInfo { width: w, height: h, format: PixelFormat::Bgr8, capture_ns, truth: FrameTruth::default() };
+                let info = FrameInfo { width: w, height: h, format: PixelFormat::Bgr8, capture_ns: Some(capture_ns), truth: FrameTruth::default() };
                 sink.publish(info, &mut |out| yuyv_to_bgr(data, w as usize, h as usize, stride, out).map(|_| None))?;
             }
             Pixel::Mjpg => {
@@ -219,7 +219,7 @@ impl FrameSource for V4lSource {
                     width: opencv::core::MatTraitConst::cols(m) as u32,
                     height: opencv::core::MatTraitConst::rows(m) as u32,
                     format: PixelFormat::Bgr8,
-                    capture_ns,
+                    capture_ns: Some(capture_ns),
                     truth: FrameTruth::default(),
                 };
                 sink.publish(info, &mut |out| crate::convert::mat_to_bgr(m, out).map(|_| None))?;

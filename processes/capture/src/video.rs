@@ -87,7 +87,7 @@ impl FrameSource for VideoSource {
             width: m.cols() as u32,
             height: m.rows() as u32,
             format: PixelFormat::Bgr8,
-            capture_ns: monotonic_ns(),
+            capture_ns: Some(monotonic_ns()),
             truth: FrameTruth::default(),
         };
         sink.publish(info, &mut |out| mat_to_bgr(m, out).map(|_| None))?;

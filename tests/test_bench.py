@@ -1,0 +1,23 @@
+"""The benchmark commands run and print their tables (timings are not asserted: benchmarks, not
+timed tests; their numbers go into the README and the issue notes)."""
+
+
+def test_bench_frames_prints_both_hops(runner):
+    res = runner.run("hubtrack", "bench", "frames", "--seconds", "2", "--camera", "usb", timeout=120)
+    assert res.returncode == 0, res.stderr[-3000:]
+    out = res.stdout
+    for row in ("iceoryx2 (zero-copy)", "Unix socket (copy)", "frames published", "frames recorded (MCAP)",
+                "publish -> receive p50 [us]", "publish -> receive p99 [us]", "renderer per 640x480 frame"):
+        assert row in out, out
+    published = int(out.split("frames published")[1].split()[0])
+    received = int(out.split("frames received by a reader")[1].split()[0])
+    assert published >= 30 and received == published
+
+
+def test_bench_pipeline_prints_latency_cpu_and_memory(runner):
+    res = runner.run("hubtrack", "bench", "pipeline", "--seconds", "4", "--only-hd", timeout=180)
+    assert res.returncode == 0, res.stderr[-3000:]
+    out = res.stdout
+    for row in ("capture->detect", "detect->track", "capture->track", "CPU %", "peak RSS MB",
+                "hubtrack-detect", "hubtrack-record", "flight stages", "Unix-socket copy"):
+        assert row in out, out
