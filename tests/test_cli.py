@@ -7,11 +7,13 @@ import pytest
 from conftest import SHARED_DATA
 
 REQUIRED_DETECT_KEYS = {"path": str, "width": int, "height": int, "detected": bool, "confidence": float, "ms": float}
-# Real photos the default detector found within 3 % of height when this test was written:
-# a regression guard (it protects what works; the full evaluation is `hubtrack eval`).
-REGRESSION_SET = ["wta_envA_06t.jpg", "wta_envA_25.jpg", "wta_envA_39.jpg", "wta_envA_41.jpg",
-                  "wta_envB_05.jpg", "wta_envB_07.jpg", "wta_envB_30.jpg"]
-REGRESSION_MIN_HITS = 5
+# Real photos the default detector found within 1 % of height (a margin below the 3 % hit limit)
+# when it was last accepted: a regression guard that protects what works (the full evaluation is
+# `hubtrack eval`). Re-baselined when the pair/spinner detector was accepted: it traded real-photo
+# hits (36 -> 23 %) for half the false positives and twice the synthetic hit rate; see the notes.
+REGRESSION_SET = ["wta_envA_25.jpg", "wta_envB_30.jpg", "wta_envA_21.jpg", "wta_envA_49.jpg",
+                  "wta_envA_41.jpg", "wta_envA_17.jpg", "wta_envA_29.jpg", "wta_envA_39.jpg"]
+REGRESSION_MIN_HITS = 7
 
 
 def needs_shared():

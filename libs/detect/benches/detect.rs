@@ -4,13 +4,11 @@
 //! Prints, per mode and OpenCV thread count, median and p99 of the whole `detect` call and the
 //! median of each step.
 
-#[path = "../examples/common/synth.rs"]
-mod synth;
-
 use std::time::Instant;
 
 use hubtrack_detect::params::{DetectConfig, Mode};
 use hubtrack_detect::{Detector, Hints, ImageView};
+use hubtrack_render::dataset::{synth_case, CLASSES};
 use hubtrack_render::{Camera, Renderer};
 use hubtrack_types::PixelFormat;
 
@@ -26,9 +24,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cam = Camera::gopro_hero3();
     let mut r = Renderer::new(cam);
     let mut frames = Vec::new();
-    let classes = [synth::Class::Far, synth::Class::Medium, synth::Class::Close, synth::Class::Negative];
+    // The project's evaluation set (`hubtrack eval`): every distance class, every 8th a negative.
     for k in 0..FRAMES {
-        let (scene, pose) = synth::sample(classes[k % classes.len()], 5000 + k as u64);
+        let case = synth_case(5000, k % CLASSES.len(), k as u64, k % 8 == 7);
+        let (scene, pose) = (case.scene, case.pose);
         let mut buf = vec![0u8; cam.frame_bytes()];
         r.render(&scene, &pose, &mut buf)?;
         frames.push((buf, pose.roll_deg.to_radians()));

@@ -310,6 +310,88 @@ pub fn point_segment_distance(p: P2, a: P2, b: P2) -> f64 {
     Segment::new(a, b).segment_distance(p)
 }
 
+/// Two edges further apart in direction than this (degrees) bound no band in [`band_axis`].
+pub const BAND_MAX_ANGLE_DEG: f64 = 45.0;
+
+/// Unit normal `n` and offset `c` of the infinite line through a segment (points `q` on it satisfy
+/// `n·q = c`); `None` for a degenerate segment.
+pub fn line_normal(s: &Segment) -> Option<(P2, f64)> {
+    let len = s.length();
+    if len < 1e-9 {
+        return None;
+    }
+    let n = [-(s.b[1] - s.a[1]) / len, (s.b[0] - s.a[0]) / len];
+    Some((n, n[0] * s.a[0] + n[1] * s.a[1]))
+}
+
+/// Axis of the band between two edges `s`, `t` (the two edges of a blade or of the tower): the
+/// internal angle bisector, i.e. the points between the two lines at equal distance from both.
+/// With the normals oriented alike (`n_s·n_t > 0`) it is `(n_s + n_t)·q = c_s + c_t`. Returned as
+/// the segment spanning the projections of all four end points onto it, ordered like `s`.
+/// `None` for degenerate edges or edges more than [`BAND_MAX_ANGLE_DEG`] apart.
+pub fn band_axis(s: &Segment, t: &Segment) -> Option<Segment> {
+    let (ns, cs) = line_normal(s)?;
+    let (mut nt, mut ct) = line_normal(t)?;
+    if ns[0] * nt[0] + ns[1] * nt[1] < 0.0 {
+        nt = [-nt[0], -nt[1]];
+        ct = -ct;
+    }
+    let m = [ns[0] + nt[0], ns[1] + nt[1]];
+    let ml = m[0].hypot(m[1]);
+    // |n_s + n_t| = 2 cos(θ/2) for edges θ apart: beyond BAND_MAX_ANGLE_DEG there is no band.
+    if ml < 2.0 * (0.5 * BAND_MAX_ANGLE_DEG).to_radians().cos() {
+        return None;
+    }
+    let (n, c) = ([m[0] / ml, m[1] / ml], (cs + ct) / ml);
+    // Direction along the axis, oriented like s (a -> b).
+    let mut d = [n[1], -n[0]];
+    if d[0] * (s.b[0] - s.a[0]) + d[1] * (s.b[1] - s.a[1]) < 0.0 {
+        d = [-d[0], -d[1]];
+    }
+    let foot = [n[0] * c, n[1] * c];
+    let along = |q: P2| (q[0] - foot[0]) * d[0] + (q[1] - foot[1]) * d[1];
+    let ts = [along(s.a), along(s.b), along(t.a), along(t.b)];
+    let lo = ts.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = ts.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let at = |u: f64| [foot[0] + u * d[0], foot[1] + u * d[1]];
+    Some(Segment::new(at(lo), at(hi)))
+}
+
+/// Width of the band between the lines through `s` and `t`, measured across at point `q` (sum
+/// of the distances from `q` to both lines; `q` between them, e.g. on their [`band_axis`]).
+pub fn band_width_at(s: &Segment, t: &Segment, q: P2) -> f64 {
+    s.line_distance(q) + t.line_distance(q)
+}
+
+/// Length of the overlap of `t`'s projection onto `s`'s line with `s` itself, px.
+pub fn projected_overlap(s: &Segment, t: &Segment) -> f64 {
+    let len = s.length();
+    let (ta, tb) = (s.project_t(t.a), s.project_t(t.b));
+    let (lo, hi) = (ta.min(tb).max(0.0), ta.max(tb).min(1.0));
+    (hi - lo).max(0.0) * len
+}
+
+/// Weighted least-squares point nearest to all the infinite lines through `lines`; `None` when
+/// the lines are (nearly) all parallel or fewer than two.
+pub fn lines_nearest_point(lines: &[(Segment, f64)]) -> Option<P2> {
+    let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (s, w) in lines {
+        let Some((n, c)) = line_normal(s) else { continue };
+        a11 += w * n[0] * n[0];
+        a12 += w * n[0] * n[1];
+        a22 += w * n[1] * n[1];
+        b1 += w * n[0] * c;
+        b2 += w * n[1] * c;
+    }
+    let det = a11 * a22 - a12 * a12;
+    // Relative to the total weight squared: below this the lines are almost parallel.
+    let wsum = a11 + a22;
+    if wsum <= 0.0 || det / (wsum * wsum) < 1e-4 {
+        return None;
+    }
+    Some([(a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -405,5 +487,38 @@ mod tests {
         assert!(close(s.angle_away_from([0.0, -5.0]), 180.0, 1e-9));
         assert!(close(point_segment_distance([0.0, 0.0], [3.0, 4.0], [3.0, 10.0]), 5.0, 1e-12));
         assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
+    }
+
+    #[test]
+    fn band_axis_is_the_bisector_of_converging_edges() {
+        // A blade pointing right from x = 100, root width 20 (y 90..110), tip width 4 at x = 300.
+        let upper = Segment::new([100.0, 90.0], [300.0, 98.0]);
+        let lower = Segment::new([300.0, 102.0], [100.0, 110.0]);
+        let ax = band_axis(&upper, &lower).unwrap();
+        // Axis along y = 100, spanning x 100..300, ordered like `upper`.
+        assert!(close(ax.a[1], 100.0, 1e-6) && close(ax.b[1], 100.0, 1e-6), "{ax:?}");
+        assert!(close(ax.a[0], 100.0, 0.5) && close(ax.b[0], 300.0, 0.5), "{ax:?}");
+        assert!(close(band_width_at(&upper, &lower, [100.0, 100.0]), 20.0, 0.1));
+        assert!(close(band_width_at(&upper, &lower, [300.0, 100.0]), 4.0, 0.1));
+        // Perpendicular edges form no band.
+        assert!(band_axis(&Segment::new([0.0, 0.0], [10.0, 0.0]), &Segment::new([0.0, 0.0], [0.0, 10.0])).is_none());
+    }
+
+    #[test]
+    fn overlap_and_nearest_point_of_lines() {
+        let s = Segment::new([0.0, 0.0], [100.0, 0.0]);
+        assert!(close(projected_overlap(&s, &Segment::new([50.0, 5.0], [150.0, 5.0])), 50.0, 1e-9));
+        assert!(close(projected_overlap(&s, &Segment::new([150.0, 5.0], [250.0, 5.0])), 0.0, 1e-9));
+        let hub = [200.0, 120.0];
+        let lines: Vec<(Segment, f64)> = [10.0, 130.0, 250.0]
+            .iter()
+            .map(|&a| {
+                let d = dir_from_up_cw(a);
+                (Segment::new([hub[0] + 30.0 * d[0], hub[1] + 30.0 * d[1]], [hub[0] + 90.0 * d[0], hub[1] + 90.0 * d[1]]), 1.0)
+            })
+            .collect();
+        let p = lines_nearest_point(&lines).unwrap();
+        assert!(dist(p, hub) < 1e-6, "{p:?}");
+        assert!(lines_nearest_point(&lines[..1]).is_none());
     }
 }

@@ -17,6 +17,7 @@ pub mod params;
 
 mod image;
 mod robust;
+mod spinner;
 mod thesis;
 
 use std::time::Instant;
@@ -130,6 +131,7 @@ pub(crate) struct Scratch {
     pub lines: Vector<Vec4i>,
     pub segments: Vec<Segment>,
     pub hist: Vec<u32>,
+    pub edge_points: Vec<spinner::EdgePoint>,
 }
 
 /// What a pipeline found, in working-image px.
@@ -227,7 +229,11 @@ impl Detector {
     /// Focal length in full-resolution px.
     fn focal_px(&self, width: u32) -> f64 {
         let c = &self.config.camera;
-        c.focal_px.unwrap_or_else(|| (width as f64 / 2.0) / (c.hfov_deg.to_radians() / 2.0).tan())
+        if c.focal_length_per_width > 0.0 {
+            c.focal_length_per_width * width as f64
+        } else {
+            (width as f64 / 2.0) / (c.hfov_deg.to_radians() / 2.0).tan()
+        }
     }
 
     /// Scale a pipeline result to full resolution and derive distance and yaw.
@@ -311,7 +317,8 @@ mod tests {
         assert_eq!(d.tower_width_px, 40.0);
         assert_eq!(d.tower_width_row, 474.0);
         assert_eq!(d.hub_tower_gap_px, -20.0);
-        let focal = 960.0 / 59f64.to_radians().tan();
+        // The default lens: the GoPro's centre focal length, 0.4343 of the width.
+        let focal = 0.4343 * 1920.0;
         let dist = out.distance_m.unwrap();
         assert!((dist - focal * 2.2 / 40.0).abs() < 1e-9);
         let yaw = out.yaw_deg.unwrap();

@@ -53,10 +53,13 @@ pub struct CameraParams {
     /// Horizontal field of view, degrees. 118 = GoPro HERO3+ Black 1080p wide (the thesis camera).
     /// The pinhole focal length is `f = (width / 2) / tan(hfov / 2)` at full resolution.
     pub hfov_deg: f64,
-    /// Focal length in full-resolution pixels; overrides `hfov_deg` when set. Useful for lenses
-    /// with strong barrel distortion, whose centre focal length is much longer than the
-    /// pinhole value from the edge FOV (GoPro: 834 px vs 577 px at 1920 wide).
-    pub focal_px: Option<f64>,
+    /// Centre focal length divided by the image width, overriding `hfov_deg` when > 0. A lens
+    /// with strong barrel distortion has a much longer centre focal length than the pinhole value
+    /// from its edge FOV: the GoPro HERO3+ wide (the thesis camera, as the renderer models it)
+    /// has 833.9 px at 1920 wide (0.4343) vs 577 px (0.3004) from 118°, which would make every
+    /// distance ~31 % short. Default 0.4343; 0 = use `hfov_deg`. Must equal
+    /// `track.camera.focal_length_per_width` (checked at load).
+    pub focal_length_per_width: f64,
     /// Tower diameter at the top, metres (2.2 m on the thesis's ~1.5 MW turbines); the distance
     /// estimate divides it by the measured tower width.
     pub tower_top_diameter_m: f64,
@@ -67,7 +70,7 @@ pub struct CameraParams {
 
 impl Default for CameraParams {
     fn default() -> Self {
-        CameraParams { hfov_deg: 118.0, focal_px: None, tower_top_diameter_m: 2.2, hub_tower_gap_m: 4.2 }
+        CameraParams { hfov_deg: 118.0, focal_length_per_width: 0.4343, tower_top_diameter_m: 2.2, hub_tower_gap_m: 4.2 }
     }
 }
 
@@ -255,6 +258,74 @@ pub struct DefaultParams {
     pub min_confidence: f64,
     /// The tower width is measured this far below the tower top, fraction of image height.
     pub tower_width_below_top_frac: f64,
+    /// Edge pairing: both edges of a blade (or the tower) must be at least this long, fraction
+    /// of image height.
+    pub pair_min_length_frac: f64,
+    /// Edge pairing: the two edges differ in direction by at most this, degrees (blades taper,
+    /// so their edges converge slightly toward the tip).
+    pub pair_max_angle_deg: f64,
+    /// Edge pairing: the edges must overlap along their direction by at least this fraction of
+    /// the shorter one.
+    pub pair_min_overlap_frac: f64,
+    /// Edge pairing: the band must be at least this wide at both ends, working px (closer
+    /// edges are one edge seen twice).
+    pub pair_min_width_px: f64,
+    /// Edge pairing: the band may be at most this wide at either end, fraction of image height
+    /// (a blade root seen from a few metres).
+    pub pair_max_width_frac: f64,
+    /// Edge pairing: mean band width over axis length at most this (blades are slender).
+    pub pair_max_width_to_length: f64,
+    /// A blade axis may end at most this many band widths (at its nearer end) short of the hub:
+    /// blades start at the spinner rim, whose radius grows with the root chord as the camera
+    /// approaches.
+    pub axis_reach_widths: f64,
+    /// A supporting blade axis passes within this of the hub, fraction of image height, ...
+    pub axis_line_dist_frac: f64,
+    /// ... plus this angle (degrees) times the distance from its nearer end.
+    pub axis_angle_tol_deg: f64,
+    /// Vote weight of an axis–axis intersection relative to an edge–edge one.
+    pub axis_proposal_weight: f64,
+    /// Spinner step: the best this many candidates (with at least two blades) are searched for a
+    /// spinner circle; 0 disables the step.
+    pub spinner_candidates: usize,
+    /// Spinner step: half side of the square searched around a candidate, fraction of image height.
+    pub spinner_search_frac: f64,
+    /// Spinner step: a circle's centre may be at most this far from the candidate, fraction of
+    /// image height (blade-edge convergence is biased toward the spinner rim).
+    pub spinner_max_offset_frac: f64,
+    /// Spinner step: smallest circle radius searched, working px (below this the spinner is a
+    /// few pixels and edge convergence is accurate enough).
+    pub spinner_min_radius_px: f64,
+    /// Spinner step: largest circle radius searched, fraction of image height.
+    pub spinner_max_radius_frac: f64,
+    /// Spinner step: centre accumulator cell and radius step of the gradient circle vote, working px.
+    pub spinner_cell_px: f64,
+    /// Spinner step: an edge pixel is on a rim when its gradient is within this of the radial
+    /// direction, degrees.
+    pub spinner_radial_tol_deg: f64,
+    /// Spinner step: smallest fraction of the rim covered by edge pixels (blade roots, the
+    /// nacelle and shading hide parts of it).
+    pub spinner_min_coverage: f64,
+    /// Spinner step: with a circle of radius r, blade lines and axes may end up to this many r
+    /// from its centre (blades start at the spinner rim).
+    pub spinner_reach_radii: f64,
+    /// Confidence added when a spinner circle is found with at least two blades starting at its rim.
+    pub conf_spinner: f64,
+    /// A long line passing within this of a candidate, fraction of image height, and extending
+    /// at least `through_margin_frac` beyond it on both sides, puts the candidate on a tower,
+    /// mast or wire rather than at a hub (blades and the tower end at the hub).
+    pub through_dist_frac: f64,
+    /// See `through_dist_frac`, fraction of image height (more than `tower_top_max_above_frac`:
+    /// the tower edge may show a little above the hub).
+    pub through_margin_frac: f64,
+    /// Confidence removed from a candidate that a long line passes through.
+    pub conf_through_penalty: f64,
+    /// A supporting line with a nearly collinear continuation on the far side of the candidate
+    /// (within this angle, degrees, ...) is a horizon, field border or wire that the turbine
+    /// hides, not a blade.
+    pub occluded_angle_deg: f64,
+    /// ... and within this offset from its line, fraction of image height.
+    pub occluded_offset_frac: f64,
 }
 
 impl Default for DefaultParams {
@@ -301,8 +372,33 @@ impl Default for DefaultParams {
             conf_geometry: 0.15,
             conf_paired: 0.1,
             conf_extra_blade_penalty: 0.1,
-            min_confidence: 0.6,
+            min_confidence: 0.75,
             tower_width_below_top_frac: 0.05,
+            pair_min_length_frac: 0.06,
+            pair_max_angle_deg: 10.0,
+            pair_min_overlap_frac: 0.5,
+            pair_min_width_px: 2.5,
+            pair_max_width_frac: 0.15,
+            pair_max_width_to_length: 0.5,
+            axis_reach_widths: 3.0,
+            axis_line_dist_frac: 0.015,
+            axis_angle_tol_deg: 3.0,
+            axis_proposal_weight: 2.0,
+            spinner_candidates: 3,
+            spinner_search_frac: 0.25,
+            spinner_max_offset_frac: 0.15,
+            spinner_min_radius_px: 4.0,
+            spinner_max_radius_frac: 0.2,
+            spinner_cell_px: 2.0,
+            spinner_radial_tol_deg: 25.0,
+            spinner_min_coverage: 0.4,
+            spinner_reach_radii: 2.0,
+            conf_spinner: 0.2,
+            through_dist_frac: 0.01,
+            through_margin_frac: 0.05,
+            conf_through_penalty: 0.3,
+            occluded_angle_deg: 3.0,
+            occluded_offset_frac: 0.008,
         }
     }
 }
@@ -346,8 +442,8 @@ impl CameraParams {
     fn validate(&self) -> Result<(), ParamError> {
         let c = Check { prefix: "detect.camera" };
         c.range("hfov_deg", self.hfov_deg, 1.0, 179.0)?;
-        if let Some(f) = self.focal_px {
-            c.range("focal_px", f, 1.0, 1e6)?;
+        if self.focal_length_per_width != 0.0 {
+            c.range("focal_length_per_width", self.focal_length_per_width, 0.05, 10.0)?;
         }
         c.range("tower_top_diameter_m", self.tower_top_diameter_m, 0.1, 30.0)?;
         c.range("hub_tower_gap_m", self.hub_tower_gap_m, 0.1, 50.0)
@@ -430,7 +526,32 @@ impl DefaultParams {
         c.range("conf_paired", self.conf_paired, 0.0, 1.0)?;
         c.range("conf_extra_blade_penalty", self.conf_extra_blade_penalty, 0.0, 1.0)?;
         c.range("min_confidence", self.min_confidence, 0.0, 1.0)?;
-        c.range("tower_width_below_top_frac", self.tower_width_below_top_frac, 0.0, 1.0)
+        c.range("tower_width_below_top_frac", self.tower_width_below_top_frac, 0.0, 1.0)?;
+        c.range("pair_min_length_frac", self.pair_min_length_frac, 0.0, 2.0)?;
+        c.range("pair_max_angle_deg", self.pair_max_angle_deg, 0.0, 45.0)?;
+        c.range("pair_min_overlap_frac", self.pair_min_overlap_frac, 0.0, 1.0)?;
+        c.range("pair_min_width_px", self.pair_min_width_px, 0.0, 100.0)?;
+        c.range("pair_max_width_frac", self.pair_max_width_frac, 0.0, 1.0)?;
+        c.range("pair_max_width_to_length", self.pair_max_width_to_length, 0.0, 10.0)?;
+        c.range("axis_reach_widths", self.axis_reach_widths, 0.0, 20.0)?;
+        c.range("axis_line_dist_frac", self.axis_line_dist_frac, 0.0, 1.0)?;
+        c.range("axis_angle_tol_deg", self.axis_angle_tol_deg, 0.0, 45.0)?;
+        c.range("axis_proposal_weight", self.axis_proposal_weight, 0.0, 100.0)?;
+        c.range("spinner_candidates", self.spinner_candidates as f64, 0.0, 10.0)?;
+        c.range("spinner_search_frac", self.spinner_search_frac, 0.01, 1.0)?;
+        c.range("spinner_max_offset_frac", self.spinner_max_offset_frac, 0.0, 1.0)?;
+        c.range("spinner_min_radius_px", self.spinner_min_radius_px, 1.0, 1000.0)?;
+        c.range("spinner_max_radius_frac", self.spinner_max_radius_frac, 0.01, 1.0)?;
+        c.range("spinner_cell_px", self.spinner_cell_px, 0.5, 20.0)?;
+        c.range("spinner_radial_tol_deg", self.spinner_radial_tol_deg, 0.0, 90.0)?;
+        c.range("spinner_min_coverage", self.spinner_min_coverage, 0.0, 1.0)?;
+        c.range("spinner_reach_radii", self.spinner_reach_radii, 0.0, 10.0)?;
+        c.range("conf_spinner", self.conf_spinner, 0.0, 1.0)?;
+        c.range("through_dist_frac", self.through_dist_frac, 0.0, 1.0)?;
+        c.range("through_margin_frac", self.through_margin_frac, 0.0, 2.0)?;
+        c.range("conf_through_penalty", self.conf_through_penalty, 0.0, 1.0)?;
+        c.range("occluded_angle_deg", self.occluded_angle_deg, 0.0, 45.0)?;
+        c.range("occluded_offset_frac", self.occluded_offset_frac, 0.0, 1.0)
     }
 }
 

@@ -17,7 +17,17 @@
 //! 6. Each peak: supporting lines (near end close, line pointing at it) grouped into blades;
 //!    a downward "blade" that is the tower is dropped; tower lines below are looked up;
 //!    confidence from blade count, tower, and blade separations vs a (skewed) 120° rotor.
-//! 7. Best peak; hub refined by least squares over its blade lines, each blade weighted equally.
+//! 7. Hub refined by least squares over its blade lines, each blade weighted equally; with two
+//!    or more paired blades, over their axes instead.
+//! 8. Edge pairing (`pair_edges`): the two edges of a blade (nearly parallel, overlapping, a
+//!    slender band) give its axis, the internal bisector; axis–axis crossings are extra
+//!    proposals and axes may end further from the hub (blades start at the spinner rim).
+//! 9. Spinner step: around the best few candidates, circles in the Canny edges (gradient vote,
+//!    rim coverage, circle fit; `spinner.rs`); a circle with two blades starting at its rim
+//!    becomes a candidate centred on it, with a confidence bonus.
+//! 10. Penalties: a long line passing through a candidate (tower, mast) lowers its confidence;
+//!    a supporting line that continues collinearly beyond the candidate (horizon or field border
+//!    hidden by the turbine) is no blade. Best candidate by confidence, then support.
 
 use std::time::Instant;
 
@@ -27,6 +37,7 @@ use opencv::prelude::*;
 
 use crate::geometry::{self, Segment, P2};
 use crate::params::DefaultParams;
+use crate::spinner::{find_circles, CircleSearch, EdgePoint};
 use crate::{hough_segments, us_since, DetectError, Found, Hints, LineKind, Scratch};
 
 /// Number of bins of the gradient-magnitude histogram: the Sobel 3×3 L1 magnitude of 8-bit
@@ -36,6 +47,11 @@ const GRAD_BINS: usize = 2048;
 const ROLL_STEP_DEG: f64 = 1.0;
 /// Lines within this of vertical (degrees, after a trial roll) count for the roll search.
 const ROLL_VERTICAL_TOL_DEG: f64 = 1.5;
+/// A candidate within this fraction of `spinner_max_offset_frac` of a searched one reuses its
+/// spinner circles.
+const SPINNER_REUSE_OF_OFFSET: f64 = 0.5;
+/// Centre peaks examined per spinner search.
+const SPINNER_PEAKS: usize = 3;
 /// Number of vote peaks examined in detail.
 const MAX_PEAKS: usize = 6;
 /// A supporting line may point past the candidate by this angle (degrees) on top of the fixed
@@ -70,13 +86,64 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
     let line_count = s.segments.len() as u32;
     let segs = merge_collinear(p, &s.segments, h);
     log::trace!("hough {} merged {} high {high} longest {:?}", s.segments.len(), segs.len(), segs.iter().take(5).collect::<Vec<_>>());
-    let mut found = recognise(p, &segs, w, h, hints);
+    let (edges, dx, dy, pts) = (&s.edges, &s.dx, &s.dy, &mut s.edge_points);
+    let mut search_us = 0.0;
+    let mut search = |c: P2| {
+        let t = Instant::now();
+        let r = search_circles(p, edges, dx, dy, c, h, pts);
+        search_us += us_since(t);
+        r
+    };
+    let mut found = recognise(p, &segs, w, h, hints, &mut search)?;
+    log::trace!("spinner search {search_us:.0} us of geometry {:.0} us", us_since(t));
     found.line_count = line_count;
     found.edge_count = edge_count;
     found.edges_us = edges_us;
     found.hough_us = hough_us;
     found.geometry_us = us_since(t);
     Ok(found)
+}
+
+/// Spinner candidates around `c`: circles `[x, y, r]` (working px, best first) among the Canny
+/// edge pixels in a square of half side `spinner_search_frac · h`, see [`crate::spinner`].
+#[allow(clippy::too_many_arguments)]
+fn search_circles(p: &DefaultParams, edges: &Mat, dx: &Mat, dy: &Mat, c: P2, h: f64, pts: &mut Vec<EdgePoint>) -> Result<Vec<[f64; 3]>, DetectError> {
+    let half = p.spinner_search_frac * h;
+    let (cols, rows) = (edges.cols(), edges.rows());
+    let x0 = ((c[0] - half).floor() as i32).clamp(0, cols);
+    let y0 = ((c[1] - half).floor() as i32).clamp(0, rows);
+    let x1 = ((c[0] + half).ceil() as i32).clamp(0, cols);
+    let y1 = ((c[1] + half).ceil() as i32).clamp(0, rows);
+    let max_r = p.spinner_max_radius_frac * h;
+    if max_r <= p.spinner_min_radius_px || x1 - x0 < 2 || y1 - y0 < 2 {
+        return Ok(Vec::new());
+    }
+    pts.clear();
+    for y in y0..y1 {
+        let (e, gx, gy) = (edges.at_row::<u8>(y)?, dx.at_row::<i16>(y)?, dy.at_row::<i16>(y)?);
+        for x in x0..x1 {
+            let xi = x as usize;
+            if e[xi] == 0 {
+                continue;
+            }
+            let (vx, vy) = (gx[xi] as f64, gy[xi] as f64);
+            let m = vx.hypot(vy);
+            if m > 0.0 {
+                pts.push(EdgePoint { p: [x as f64, y as f64], u: [vx / m, vy / m] });
+            }
+        }
+    }
+    let off = p.spinner_max_offset_frac * h;
+    let cs = CircleSearch {
+        roi: [(c[0] - off).max(0.0), (c[1] - off).max(0.0), (c[0] + off).min(cols as f64), (c[1] + off).min(rows as f64)],
+        min_r: p.spinner_min_radius_px,
+        max_r,
+        cell: p.spinner_cell_px,
+        radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
+        min_coverage: p.spinner_min_coverage,
+        max_peaks: SPINNER_PEAKS,
+    };
+    Ok(find_circles(pts, &cs).into_iter().map(|k| [k[0], k[1], k[2]]).collect())
 }
 
 /// High Canny threshold: the `canny_high_percentile` of the L1 gradient magnitude, clamped.
@@ -199,6 +266,114 @@ pub(crate) fn proposals(p: &DefaultParams, segs: &[Segment], usable: &[bool], w:
     out
 }
 
+/// A band found from two paired edges: a blade (or the tower) with its axis.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct BandAxis {
+    /// The axis (internal bisector of the edges), spanning both edges.
+    pub axis: Segment,
+    /// Indices of the two edges.
+    pub edges: [usize; 2],
+    /// Band width at `axis.a` and at `axis.b`, px.
+    pub width: [f64; 2],
+}
+
+impl BandAxis {
+    /// Band width at the axis end nearer to `c`, and that end's distance to `c`.
+    fn near_end(&self, c: P2) -> (f64, f64) {
+        let (da, db) = (geometry::dist(self.axis.a, c), geometry::dist(self.axis.b, c));
+        if da <= db {
+            (self.width[0], da)
+        } else {
+            (self.width[1], db)
+        }
+    }
+
+    /// How far short of `c` the axis may end: the blade starts at the spinner rim (radius
+    /// `spinner_r` when a spinner was found, else judged from the band width).
+    fn reach(&self, p: &DefaultParams, c: P2, h: f64, spinner_r: f64) -> f64 {
+        let (w, _) = self.near_end(c);
+        (p.support_end_dist_frac * h).max(p.axis_reach_widths * w).max(p.spinner_reach_radii * spinner_r)
+    }
+}
+
+/// Pair the two edges of each blade (and of the tower): nearly parallel, overlapping along their
+/// direction, a slender band between them. Greedy by overlap, each edge in at most one pair.
+pub(crate) fn pair_edges(p: &DefaultParams, segs: &[Segment], usable: &[bool], h: f64) -> Vec<BandAxis> {
+    let min_len = p.pair_min_length_frac * h;
+    let max_w = p.pair_max_width_frac * h;
+    let idx: Vec<usize> = (0..segs.len()).filter(|&i| usable[i] && segs[i].length() >= min_len).collect();
+    let mut cands: Vec<(f64, BandAxis)> = Vec::new();
+    for (k, &i) in idx.iter().enumerate() {
+        for &j in &idx[k + 1..] {
+            let (s, t) = (&segs[i], &segs[j]);
+            let d = (s.orientation_deg() - t.orientation_deg()).abs();
+            if d.min(180.0 - d) > p.pair_max_angle_deg {
+                continue;
+            }
+            let overlap = geometry::projected_overlap(s, t).min(geometry::projected_overlap(t, s));
+            if overlap < p.pair_min_overlap_frac * s.length().min(t.length()) {
+                continue;
+            }
+            let Some(axis) = geometry::band_axis(s, t) else { continue };
+            let width = [geometry::band_width_at(s, t, axis.a), geometry::band_width_at(s, t, axis.b)];
+            if width.iter().any(|&w| w < p.pair_min_width_px || w > max_w) {
+                continue;
+            }
+            if 0.5 * (width[0] + width[1]) > p.pair_max_width_to_length * axis.length() {
+                continue;
+            }
+            cands.push((overlap, BandAxis { axis, edges: [i, j], width }));
+        }
+    }
+    cands.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut used = vec![false; segs.len()];
+    let mut out = Vec::new();
+    for (_, b) in cands {
+        if used[b.edges[0]] || used[b.edges[1]] {
+            continue;
+        }
+        used[b.edges[0]] = true;
+        used[b.edges[1]] = true;
+        out.push(b);
+    }
+    out
+}
+
+/// Intersections of pairs of band axes that lie beyond the nearer end of both within their
+/// reach, weighted `axis_proposal_weight · min(axis length)`.
+pub(crate) fn axis_proposals(p: &DefaultParams, axes: &[BandAxis], w: f64, h: f64) -> Vec<(P2, f64)> {
+    let mut out = Vec::new();
+    for (k, a) in axes.iter().enumerate() {
+        for b in &axes[k + 1..] {
+            let d = (a.axis.orientation_deg() - b.axis.orientation_deg()).abs();
+            if d.min(180.0 - d) < p.candidate_min_angle_deg {
+                continue;
+            }
+            let Some(x) = geometry::line_intersection(&a.axis, &b.axis) else { continue };
+            if x[0] < 0.0 || x[1] < 0.0 || x[0] > w - 1.0 || x[1] > h - 1.0 {
+                continue;
+            }
+            if axis_points_at(p, a, x, h, 0.0) && axis_points_at(p, b, x, h, 0.0) {
+                out.push((x, p.axis_proposal_weight * a.axis.length().min(b.axis.length())));
+            }
+        }
+    }
+    out
+}
+
+/// The axis ends short of `c` (not passing through it), within reach, and its line passes near `c`.
+fn axis_points_at(p: &DefaultParams, a: &BandAxis, c: P2, h: f64, spinner_r: f64) -> bool {
+    let t = a.axis.project_t(c);
+    if t > p.candidate_inside_frac && t < 1.0 - p.candidate_inside_frac {
+        return false;
+    }
+    let (_, d_end) = a.near_end(c);
+    if d_end > a.reach(p, c, h, spinner_r) {
+        return false;
+    }
+    a.axis.line_distance(c) <= p.axis_line_dist_frac * h + p.axis_angle_tol_deg.to_radians().tan() * d_end
+}
+
 /// Peaks of the proposal density: grid vote with `cell` size, 3×3 sum, then the weighted mean
 /// of the proposals around each local maximum.
 pub(crate) fn peaks(props: &[(P2, f64)], w: f64, h: f64, cell: f64, max_peaks: usize) -> Vec<(P2, f64)> {
@@ -258,6 +433,8 @@ pub(crate) struct Blade {
     pub lines: Vec<usize>,
     pub angle_deg: f64,
     pub weight: f64,
+    /// The longest band axis among the blade's paired edges.
+    pub axis: Option<Segment>,
 }
 
 /// Everything evaluated for one hub candidate.
@@ -269,11 +446,13 @@ struct Candidate {
     tower: Vec<usize>,
     confidence: f64,
     support: f64,
+    spinner: Option<[f64; 3]>,
 }
 
 /// Lines supporting a hub at `c`: near end within reach, line pointing at `c`.
-fn support_lines(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64) -> Vec<usize> {
-    let reach = p.support_end_dist_frac * h;
+fn support_lines(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64, spinner_r: f64) -> Vec<usize> {
+    // With a spinner of radius r at c, blade edges end at its rim and pass within r of c.
+    let reach = (p.support_end_dist_frac * h).max(p.spinner_reach_radii * spinner_r);
     let tol0 = p.support_line_dist_frac * h;
     let tan = SUPPORT_ANGLE_DEG.to_radians().tan();
     (0..segs.len())
@@ -291,9 +470,29 @@ fn support_lines(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h:
             if t > p.candidate_inside_frac && t < 1.0 - p.candidate_inside_frac {
                 return false;
             }
-            s.line_distance(c) <= tol0 + tan * d_end
+            s.line_distance(c) <= (tol0 + tan * d_end).max(spinner_r) && !continues_beyond(p, segs, usable, i, c, h)
         })
         .collect()
+}
+
+/// Line `i` continues, nearly collinear, on the far side of `c`: it passes behind the hub.
+fn continues_beyond(p: &DefaultParams, segs: &[Segment], usable: &[bool], i: usize, c: P2, h: f64) -> bool {
+    let s = &segs[i];
+    let off = p.occluded_offset_frac * h;
+    let d = [s.b[0] - s.a[0], s.b[1] - s.a[1]];
+    let side = |q: P2| (q[0] - c[0]) * d[0] + (q[1] - c[1]) * d[1];
+    let own = side(s.midpoint());
+    segs.iter().enumerate().any(|(j, t)| {
+        if j == i || !usable[j] {
+            return false;
+        }
+        // Cheap tests first: this runs for every supporting line against every segment.
+        if side(t.a) * own >= 0.0 || side(t.b) * own >= 0.0 || s.line_distance(t.a) > off || s.line_distance(t.b) > off {
+            return false;
+        }
+        let da = (s.orientation_deg() - t.orientation_deg()).abs();
+        da.min(180.0 - da) <= p.occluded_angle_deg
+    })
 }
 
 /// Group support lines by direction away from `c` into blades, merging groups closer than
@@ -309,6 +508,7 @@ fn group_blades(p: &DefaultParams, segs: &[Segment], lines: &[usize], c: P2) -> 
                 lines: g.iter().map(|&k| lines[k]).collect(),
                 angle_deg: geometry::circular_mean_deg(&a, Some(&wts)),
                 weight: wts.iter().sum(),
+                axis: None,
             }
         })
         .collect();
@@ -318,6 +518,9 @@ fn group_blades(p: &DefaultParams, segs: &[Segment], lines: &[usize], c: P2) -> 
         if let Some(m) = merged.iter_mut().find(|m| geometry::ang_dist(m.angle_deg, b.angle_deg) < p.blade_min_separation_deg) {
             m.lines.extend(b.lines);
             m.weight += b.weight;
+            if m.axis.is_none() {
+                m.axis = b.axis;
+            }
         } else {
             merged.push(b);
         }
@@ -379,9 +582,37 @@ fn rotor_geometry_ok(p: &DefaultParams, blades: &[Blade]) -> bool {
     true
 }
 
-fn evaluate(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64, roll_deg: f64, hints: &Hints) -> Candidate {
-    let lines = support_lines(p, segs, usable, c, h);
+/// Evaluate a hub candidate at `c`; `spinner`: a spinner circle `[x, y, r]` centred at `c`.
+#[allow(clippy::too_many_arguments)]
+fn evaluate(
+    p: &DefaultParams,
+    segs: &[Segment],
+    usable: &[bool],
+    axes: &[BandAxis],
+    c: P2,
+    h: f64,
+    roll_deg: f64,
+    hints: &Hints,
+    spinner: Option<[f64; 3]>,
+) -> Candidate {
+    let spinner_r = spinner.map_or(0.0, |k| k[2]);
+    let mut lines = support_lines(p, segs, usable, c, h, spinner_r);
+    let supporting: Vec<&BandAxis> = axes.iter().filter(|a| axis_points_at(p, a, c, h, spinner_r)).collect();
+    for a in &supporting {
+        for e in a.edges {
+            if !lines.contains(&e) {
+                lines.push(e);
+            }
+        }
+    }
     let mut blades = group_blades(p, segs, &lines, c);
+    for a in &supporting {
+        if let Some(b) = blades.iter_mut().find(|b| b.lines.contains(&a.edges[0]) && b.lines.contains(&a.edges[1])) {
+            if b.axis.is_none_or(|x| x.length() < a.axis.length()) {
+                b.axis = Some(a.axis);
+            }
+        }
+    }
     let tower = tower_lines(p, segs, c, h, roll_deg);
     // A "blade" pointing straight down along the tower is the tower itself.
     let down = 180.0 - roll_deg;
@@ -415,10 +646,16 @@ fn evaluate(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64,
         if rotor_geometry_ok(p, &blades) {
             conf += p.conf_geometry;
         }
-        if blades.iter().filter(|b| is_paired(segs, b, c)).count() >= 2 {
+        if blades.iter().filter(|b| b.axis.is_some() || is_paired(segs, b, c)).count() >= 2 {
             conf += p.conf_paired;
         }
         conf -= p.conf_extra_blade_penalty * nb.saturating_sub(3) as f64;
+        if spinner.is_some() {
+            conf += p.conf_spinner;
+        }
+        if passes_through(p, segs, usable, c, h) {
+            conf -= p.conf_through_penalty;
+        }
         if let Some(pred) = hints.predicted_hub_px {
             if geometry::dist(pred, c) <= p.prediction_radius_frac * h {
                 conf += p.prediction_bonus;
@@ -426,11 +663,32 @@ fn evaluate(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64,
         }
     }
     let support = blades.iter().take(3).map(|b| b.weight).sum();
-    Candidate { centre: c, blades, rejected, tower, confidence: conf.min(1.0), support }
+    Candidate { centre: c, blades, rejected, tower, confidence: conf.min(1.0), support, spinner }
 }
 
-/// Least-squares point closest to all lines, each blade's lines together weighing 1.
+/// A long usable line passes through `c` (not ending near it): `c` lies on a tower, mast or wire.
+fn passes_through(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64) -> bool {
+    let min_len = p.candidate_min_length_frac * h;
+    let margin = p.through_margin_frac * h;
+    segs.iter().zip(usable).any(|(s, &u)| {
+        if !u || s.length() < min_len || s.line_distance(c) > p.through_dist_frac * h {
+            return false;
+        }
+        let t = s.project_t(c) * s.length();
+        t >= margin && s.length() - t >= margin
+    })
+}
+
+/// Least-squares point closest to all lines, each blade's lines together weighing 1. With at
+/// least two paired blades, their axes alone (the edges meet at the spinner rim, the axes at
+/// its centre).
 fn refine(segs: &[Segment], blades: &[Blade], centre: P2) -> Option<P2> {
+    let axes: Vec<(Segment, f64)> = blades.iter().take(3).filter_map(|b| b.axis.map(|a| (a, 1.0))).collect();
+    if axes.len() >= 2 {
+        if let Some(x) = geometry::lines_nearest_point(&axes) {
+            return Some(x);
+        }
+    }
     let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for bl in blades.iter().take(3) {
         // Each side of the blade (each edge) weighs half, so a blade seen with both edges pulls
@@ -464,7 +722,38 @@ fn refine(segs: &[Segment], blades: &[Blade], centre: P2) -> Option<P2> {
 }
 
 /// Steps after the Hough transform, on plain data (working px).
-pub(crate) fn recognise(p: &DefaultParams, segs: &[Segment], w: f64, h: f64, hints: &Hints) -> Found {
+/// Ordering of candidates: higher confidence, then more blade support.
+fn better(a: &Candidate, b: &Candidate) -> bool {
+    a.confidence > b.confidence + 1e-9 || (a.confidence >= b.confidence - 1e-9 && a.support > b.support)
+}
+
+/// A spinner circle search: circles `[x, y, r]` (working px, best first) around a point.
+pub(crate) type CircleFinder<'a> = dyn FnMut(P2) -> Result<Vec<[f64; 3]>, DetectError> + 'a;
+
+/// The first circle near `cand` (within `spinner_max_offset_frac · h`) that at least two blades
+/// start from, evaluated as a spinner-centred candidate.
+#[allow(clippy::too_many_arguments)]
+fn spinner_candidate(
+    p: &DefaultParams,
+    segs: &[Segment],
+    usable: &[bool],
+    axes: &[BandAxis],
+    cand: &Candidate,
+    circles: &[[f64; 3]],
+    h: f64,
+    roll_deg: f64,
+    hints: &Hints,
+) -> Option<Candidate> {
+    circles
+        .iter()
+        .filter(|k| geometry::dist([k[0], k[1]], cand.centre) <= p.spinner_max_offset_frac * h)
+        .map(|k| evaluate(p, segs, usable, axes, [k[0], k[1]], h, roll_deg, hints, Some(*k)))
+        .find(|c| c.blades.len() >= 2)
+}
+
+/// Steps after the Hough transform, on plain data (working px) except for `search`, which
+/// looks for spinner circles in the image.
+pub(crate) fn recognise(p: &DefaultParams, segs: &[Segment], w: f64, h: f64, hints: &Hints, search: &mut CircleFinder<'_>) -> Result<Found, DetectError> {
     let roll_deg = match hints.roll_rad {
         Some(r) => r.to_degrees(),
         None => search_roll(p, segs),
@@ -477,19 +766,23 @@ pub(crate) fn recognise(p: &DefaultParams, segs: &[Segment], w: f64, h: f64, hin
             kinds[i] = LineKind::Rejected;
         }
     }
-    let props = proposals(p, segs, &usable, w, h);
-    let mut best: Option<Candidate> = None;
+    let axes = pair_edges(p, segs, &usable, h);
+    let mut props = proposals(p, segs, &usable, w, h);
+    let axis_props = axis_proposals(p, &axes, w, h);
+    log::trace!("axes {:?} axis proposals {:?}", axes.iter().map(|a| (a.axis, a.width)).collect::<Vec<_>>(), axis_props);
+    props.extend(axis_props);
+    let mut cands: Vec<Candidate> = Vec::new();
     let mut centres: Vec<P2> = peaks(&props, w, h, p.cluster_radius_frac * h, MAX_PEAKS).into_iter().map(|(c, _)| c).collect();
     if let Some(pred) = hints.predicted_hub_px {
         centres.push(pred);
     }
     for c in centres {
-        let mut cand = evaluate(p, segs, &usable, c, h, roll_deg, hints);
+        let mut cand = evaluate(p, segs, &usable, &axes, c, h, roll_deg, hints, None);
         if cand.blades.len() >= 2 {
             if let Some(r) = refine(segs, &cand.blades, c) {
                 if geometry::dist(r, c) <= p.cluster_radius_frac * h * 2.0 {
                     // Re-evaluate at the refined point so blades and tower match the output.
-                    let again = evaluate(p, segs, &usable, r, h, roll_deg, hints);
+                    let again = evaluate(p, segs, &usable, &axes, r, h, roll_deg, hints, None);
                     if again.confidence >= cand.confidence {
                         cand = again;
                     }
@@ -506,15 +799,41 @@ pub(crate) fn recognise(p: &DefaultParams, segs: &[Segment], w: f64, h: f64, hin
                 cand.tower.len()
             );
         }
-        let better = match &best {
-            None => true,
-            Some(b) => cand.confidence > b.confidence + 1e-9 || (cand.confidence >= b.confidence - 1e-9 && cand.support > b.support),
+        cands.push(cand);
+    }
+    cands.sort_by(|a, b| if better(a, b) { std::cmp::Ordering::Less } else if better(b, a) { std::cmp::Ordering::Greater } else { std::cmp::Ordering::Equal });
+    // Spinner step on the best few distinct candidates with at least two blades.
+    // A candidate near an already searched one reuses its circles (the search box of the
+    // first covers most of the second's).
+    let mut searched: Vec<(P2, Vec<[f64; 3]>)> = Vec::new();
+    let mut extra: Vec<Candidate> = Vec::new();
+    let reuse = SPINNER_REUSE_OF_OFFSET * p.spinner_max_offset_frac * h;
+    for (k, cand) in cands.iter().filter(|c| c.blades.len() >= 2).enumerate() {
+        if k >= p.spinner_candidates {
+            break;
+        }
+        let circles = match searched.iter().find(|(q, _)| geometry::dist(*q, cand.centre) <= reuse) {
+            Some((_, c)) => c.clone(),
+            None => {
+                let c = search(cand.centre)?;
+                searched.push((cand.centre, c.clone()));
+                c
+            }
         };
-        if better {
+        log::trace!("spinner search at {:?}: {:?}", cand.centre, circles);
+        if let Some(sc) = spinner_candidate(p, segs, &usable, &axes, cand, &circles, h, roll_deg, hints) {
+            log::trace!("spinner candidate {:?} conf {:.2} blades {}", sc.spinner, sc.confidence, sc.blades.len());
+            extra.push(sc);
+        }
+    }
+    let mut best: Option<Candidate> = None;
+    for cand in cands.into_iter().chain(extra) {
+        if best.as_ref().is_none_or(|b| better(&cand, b)) {
             best = Some(cand);
         }
     }
     if let Some(b) = best {
+        found.circle = b.spinner;
         for &i in &b.rejected {
             kinds[i] = LineKind::Rejected;
         }
@@ -546,13 +865,17 @@ pub(crate) fn recognise(p: &DefaultParams, segs: &[Segment], w: f64, h: f64, hin
         }
     }
     found.lines = segs.iter().copied().zip(kinds).collect();
-    found
+    Ok(found)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geometry::dir_from_up_cw;
+
+    fn no_circles(_: P2) -> Result<Vec<[f64; 3]>, DetectError> {
+        Ok(Vec::new())
+    }
 
     fn ray(from: P2, angle: f64, start: f64, len: f64) -> Segment {
         let d = dir_from_up_cw(angle);
@@ -579,7 +902,7 @@ mod tests {
         // Horizon split by the tower: two long pieces ending at the tower.
         segs.push(Segment::new([0.0, 125.0], [196.0, 125.0]));
         segs.push(Segment::new([204.0, 125.0], [479.0, 125.0]));
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), predicted_hub_px: None });
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), predicted_hub_px: None }, &mut no_circles).unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 3.0, "{:?}", f.hub);
         assert_eq!(f.blade_angles.len(), 3);
@@ -611,7 +934,87 @@ mod tests {
         let p = DefaultParams::default();
         // Power-line like: several long near-parallel sagging wires.
         let segs: Vec<Segment> = (0..5).map(|k| Segment::new([0.0, 50.0 + 10.0 * k as f64], [479.0, 60.0 + 12.0 * k as f64])).collect();
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints::default());
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints::default(), &mut no_circles).unwrap();
         assert!(!f.detected);
+    }
+
+    /// A wide blade as its two edges: root half-width `w0` at `start` from the hub, tip
+    /// half-width `w1` at `start + len`.
+    fn blade_edges(hub: P2, angle: f64, start: f64, len: f64, w0: f64, w1: f64) -> [Segment; 2] {
+        let d = dir_from_up_cw(angle);
+        let n = [-d[1], d[0]];
+        let at = |t: f64, off: f64| [hub[0] + d[0] * t + n[0] * off, hub[1] + d[1] * t + n[1] * off];
+        [Segment::new(at(start, w0), at(start + len, w1)), Segment::new(at(start, -w0), at(start + len, -w1))]
+    }
+
+    #[test]
+    fn blade_edges_pair_into_axes_through_the_hub() {
+        let p = DefaultParams::default();
+        let hub = [240.0, 130.0];
+        let mut segs: Vec<Segment> = Vec::new();
+        for a in [15.0, 135.0, 255.0] {
+            segs.extend(blade_edges(hub, a, 30.0, 100.0, 8.0, 3.0));
+        }
+        // A lone field border and a power line pair (too far apart to be a blade).
+        segs.push(Segment::new([10.0, 250.0], [200.0, 230.0]));
+        segs.push(Segment::new([300.0, 20.0], [470.0, 20.0]));
+        segs.push(Segment::new([300.0, 90.0], [470.0, 90.0]));
+        let usable = vec![true; segs.len()];
+        let axes = pair_edges(&p, &segs, &usable, 270.0);
+        assert_eq!(axes.len(), 3, "{axes:?}");
+        for a in &axes {
+            assert_eq!(a.edges[0] / 2, a.edges[1] / 2, "edges of different blades paired: {a:?}");
+            assert!(a.axis.line_distance(hub) < 1e-6, "{a:?}");
+            assert!((a.width[0] - 16.0).abs() < 0.5 || (a.width[1] - 16.0).abs() < 0.5, "{a:?}");
+        }
+        let props = axis_proposals(&p, &axes, 480.0, 270.0);
+        assert!(!props.is_empty() && props.iter().all(|(x, _)| geometry::dist(*x, hub) < 1e-6), "{props:?}");
+    }
+
+    #[test]
+    fn close_range_hub_from_blade_axes_not_edge_crossings() {
+        let p = DefaultParams::default();
+        let hub = [240.0, 120.0];
+        // Close range: blades start 55 px from the hub (beyond support_end_dist_frac * h = 40
+        // px), root chord 36 px; their edges cross each other well off the hub.
+        let mut segs: Vec<Segment> = Vec::new();
+        for a in [40.0, 160.0, 280.0] {
+            segs.extend(blade_edges(hub, a, 55.0, 120.0, 18.0, 9.0));
+        }
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), predicted_hub_px: None }, &mut no_circles).unwrap();
+        assert!(f.detected, "{f:?}");
+        assert!(geometry::dist(f.hub, hub) < 2.0, "{:?}", f.hub);
+    }
+
+    #[test]
+    fn spinner_circle_accepted_only_near_the_candidate_with_blades_at_its_rim() {
+        let p = DefaultParams::default();
+        let hub = [240.0, 120.0];
+        // Single-edge blades that stop at a spinner rim of radius 30 (one edge each, so the
+        // edge lines pass 6 px off the centre).
+        let mut segs: Vec<Segment> = Vec::new();
+        for a in [20.0, 140.0, 260.0] {
+            segs.push(blade_edges(hub, a, 30.0, 100.0, 6.0, 2.0)[0]);
+        }
+        let hints = Hints { roll_rad: Some(0.0), predicted_hub_px: None };
+        let mut at_hub = |_: P2| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0]]) };
+        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub).unwrap();
+        assert!(f.detected && f.circle.is_some(), "{f:?}");
+        assert!(geometry::dist(f.hub, [hub[0] + 0.5, hub[1] - 0.5]) < 1e-9, "{:?}", f.hub);
+        // A circle far from every candidate is ignored.
+        let mut far_away = |_: P2| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[400.0, 240.0, 30.0]]) };
+        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut far_away).unwrap();
+        assert!(g.circle.is_none(), "{g:?}");
+    }
+
+    #[test]
+    fn line_continuing_behind_the_candidate_is_no_blade() {
+        let p = DefaultParams::default();
+        let c = [200.0, 120.0];
+        // A field border interrupted by the turbine: two collinear pieces either side of c.
+        let segs = vec![Segment::new([60.0, 100.0], [190.0, 118.6]), Segment::new([212.0, 121.7], [400.0, 148.6])];
+        let usable = vec![true; segs.len()];
+        assert!(continues_beyond(&p, &segs, &usable, 0, c, 270.0));
+        assert!(support_lines(&p, &segs, &usable, c, 270.0, 0.0).is_empty());
     }
 }

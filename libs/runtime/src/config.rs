@@ -504,6 +504,22 @@ impl Config {
         range("recorder.flush_interval_ms", rec.flush_interval_ms, 10, 60_000)?;
         self.detect.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
         self.track.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
+        // Detect and track each estimate distance and yaw: their lens and turbine must agree.
+        let (dc, tc) = (&self.detect.camera, &self.track);
+        for (dk, dv, tk, tv) in [
+            ("detect.camera.hfov_deg", dc.hfov_deg, "track.camera.hfov_deg", tc.camera.hfov_deg),
+            ("detect.camera.focal_length_per_width", dc.focal_length_per_width, "track.camera.focal_length_per_width", tc.camera.focal_length_per_width),
+            ("detect.camera.tower_top_diameter_m", dc.tower_top_diameter_m, "track.distance.tower_diameter_m", tc.distance.tower_diameter_m),
+            ("detect.camera.hub_tower_gap_m", dc.hub_tower_gap_m, "track.yaw.hub_tower_offset_m", tc.yaw.hub_tower_offset_m),
+        ] {
+            if dv != tv {
+                return Err(ConfigError::OutOfRange {
+                    key: dk.into(),
+                    value: dv.to_string(),
+                    allowed: format!("the same value as `{tk}` ({tv})"),
+                });
+            }
+        }
         Ok(())
     }
 }
@@ -569,6 +585,12 @@ mod tests {
     fn wrong_type_names_key() {
         let err = Config::parse("[recorder]\nqueue_frames = \"many\"\n", "t.toml").unwrap_err();
         assert!(err.to_string().contains("recorder.queue_frames"), "{err}");
+    }
+
+    #[test]
+    fn detect_and_track_must_share_the_lens() {
+        let err = Config::parse("[track.camera]\nfocal_length_per_width = 0.5\n", "t").unwrap_err().to_string();
+        assert!(err.contains("detect.camera.focal_length_per_width") && err.contains("track.camera.focal_length_per_width"), "{err}");
     }
 
     #[test]

@@ -51,6 +51,9 @@ pub struct TrackConfig {
     pub yaw: YawConfig,
 }
 
+/// Centre focal length of the GoPro HERO3+ wide lens divided by the image width (833.9 / 1920).
+pub const GOPRO_FOCAL_PER_WIDTH: f64 = 0.4343;
+
 /// `[track.camera]`: the pinhole camera model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -61,8 +64,10 @@ pub struct CameraConfig {
     pub hfov_deg: f64,
     /// Focal length divided by the image width (dimensionless), overriding `hfov_deg` when > 0.
     /// For a lens with barrel distortion the pinhole focal length at the image centre differs
-    /// from the one implied by the edge FOV: the GoPro model of the renderer has f = 833.9 px at
-    /// 1920 px wide (0.4343), while 118° gives 576.8 px (0.3004). Default 0 (use `hfov_deg`).
+    /// from the one implied by the edge FOV: the GoPro HERO3+ wide lens (the thesis camera, as
+    /// modelled by the renderer) has f = 833.9 px at 1920 px wide (0.4343), while 118° as a
+    /// pinhole gives 576.8 px (0.3004) and would make every distance ~31 % short. Default 0.4343
+    /// (the GoPro); 0 = use `hfov_deg`. Must equal `detect.camera.focal_length_per_width`.
     pub focal_length_per_width: f64,
     /// Camera mount pitch relative to the body x axis, degrees, positive up. Default 0 (camera
     /// looks along the body's nose).
@@ -71,7 +76,7 @@ pub struct CameraConfig {
 
 impl Default for CameraConfig {
     fn default() -> Self {
-        CameraConfig { hfov_deg: 118.0, focal_length_per_width: 0.0, mount_pitch_deg: 0.0 }
+        CameraConfig { hfov_deg: 118.0, focal_length_per_width: GOPRO_FOCAL_PER_WIDTH, mount_pitch_deg: 0.0 }
     }
 }
 

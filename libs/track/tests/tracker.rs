@@ -33,6 +33,15 @@ impl Rng {
     }
 }
 
+
+/// These tests build their scenes with a plain pinhole camera of 118° horizontal FOV; state it
+/// rather than rely on the default lens (the GoPro's centre focal length).
+fn pinhole_config() -> TrackConfig {
+    let mut c = TrackConfig::default();
+    c.camera.focal_length_per_width = 0.0;
+    c
+}
+
 fn ns(t: f64) -> u64 {
     (t * NS).round() as u64
 }
@@ -88,8 +97,8 @@ fn converges_on_a_constant_velocity_target_with_noise() {
     let fps = 30.0;
     let v = [60.0, -25.0];
     let p0 = [400.0, 700.0];
-    for (damping, pos_tol, vel_tol) in [(1.0, 2.0, 8.0), (TrackConfig::default().filter.damping, 6.0, 0.4 * 65.0)] {
-        let mut cfg = TrackConfig::default();
+    for (damping, pos_tol, vel_tol) in [(1.0, 2.0, 8.0), (pinhole_config().filter.damping, 6.0, 0.4 * 65.0)] {
+        let mut cfg = pinhole_config();
         cfg.filter.damping = damping;
         let mut tr = Tracker::new(cfg.clone()).unwrap();
         let mut base = BaselineTracker::new(cfg).unwrap();
@@ -128,7 +137,7 @@ fn converges_on_a_constant_velocity_target_with_noise() {
 
 #[test]
 fn damping_through_a_long_dropout() {
-    let cfg = TrackConfig::default();
+    let cfg = pinhole_config();
     let gamma = cfg.filter.damping;
     let t_ref = 1.0 / cfg.filter.reference_rate_hz;
     let mut tr = Tracker::new(cfg).unwrap();
@@ -171,8 +180,8 @@ fn damping_through_a_long_dropout() {
 fn gating_rejects_an_injected_outlier_the_baseline_jumps() {
     let fps = 30.0;
     let p = [900.0, 500.0];
-    let mut tr = Tracker::new(TrackConfig::default()).unwrap();
-    let mut base = BaselineTracker::new(TrackConfig::default()).unwrap();
+    let mut tr = Tracker::new(pinhole_config()).unwrap();
+    let mut base = BaselineTracker::new(pinhole_config()).unwrap();
     let mut rng = Rng::new(11);
     let mut k = 0;
     let (mut s, mut b) = (TrackState::default(), TrackState::default());
@@ -201,7 +210,7 @@ fn gating_rejects_an_injected_outlier_the_baseline_jumps() {
 #[test]
 fn a_persistent_jump_is_accepted_after_the_configured_count() {
     for count in [3u32, 5] {
-        let mut cfg = TrackConfig::default();
+        let mut cfg = pinhole_config();
         cfg.gating.jump_accept_count = count;
         let mut tr = Tracker::new(cfg).unwrap();
         let mut rng = Rng::new(3);
@@ -224,7 +233,7 @@ fn a_persistent_jump_is_accepted_after_the_configured_count() {
         }
     }
     // Scattered outliers never add up to a jump.
-    let mut tr = Tracker::new(TrackConfig::default()).unwrap();
+    let mut tr = Tracker::new(pinhole_config()).unwrap();
     let mut rng = Rng::new(5);
     let old = [800.0, 450.0];
     let (_, mut k) = settle(&mut tr, old, 2.0, 30.0, 1.0, &mut rng);
@@ -238,7 +247,7 @@ fn a_persistent_jump_is_accepted_after_the_configured_count() {
 
 #[test]
 fn mode_transitions_with_their_time_limits() {
-    let cfg = TrackConfig::default();
+    let cfg = pinhole_config();
     let (confirm, lost_after, search_after) =
         (cfg.modes.confirm_count as u64, cfg.modes.lost_after_s, cfg.modes.search_after_s);
     let mut tr = Tracker::new(cfg).unwrap();
@@ -299,7 +308,7 @@ fn mode_transitions_with_their_time_limits() {
 
 #[test]
 fn a_tentative_track_that_stops_is_dropped() {
-    let mut tr = Tracker::new(TrackConfig::default()).unwrap();
+    let mut tr = Tracker::new(pinhole_config()).unwrap();
     let s = tr.update(&det(0, 1.0, Some([500.0, 500.0])), None);
     assert_eq!(s.mode, TrackMode::Acquiring);
     let s = tr.update(&det(1, 2.5, None), None);
@@ -311,7 +320,7 @@ fn a_tentative_track_that_stops_is_dropped() {
 
 /// Runs a noise-free constant-velocity target observed for 4 s, then 1 s of missed frames.
 fn run_at(fps: f64, damping: f64) -> TrackState {
-    let mut cfg = TrackConfig::default();
+    let mut cfg = pinhole_config();
     cfg.filter.damping = damping;
     let mut tr = Tracker::new(cfg).unwrap();
     let mut s = TrackState::default();
@@ -343,12 +352,12 @@ fn dt_comes_from_the_stamps_not_the_frame_count() {
     // Default damping: the damped model's velocity bias depends a little on the measurement rate,
     // but both coast by the same damped law in time. (Stepping once per frame, as the thesis did,
     // the 15 fps run would coast ≈ 10 px further than the 30 fps one.)
-    let a = run_at(30.0, TrackConfig::default().filter.damping);
-    let b = run_at(15.0, TrackConfig::default().filter.damping);
+    let a = run_at(30.0, pinhole_config().filter.damping);
+    let b = run_at(15.0, pinhole_config().filter.damping);
     assert!(dist(a.hub_px, b.hub_px) < 3.0, "30 fps {:?} vs 15 fps {:?}", a.hub_px, b.hub_px);
 
     // Pure prediction composes exactly: one 1 s step equals 30 small ones.
-    let mut tr = Tracker::new(TrackConfig::default()).unwrap();
+    let mut tr = Tracker::new(pinhole_config()).unwrap();
     for k in 0..60 {
         let t = k as f64 / 30.0;
         tr.update(&det(k, 1.0 + t, Some([600.0 + 50.0 * t, 400.0])), None);
@@ -370,7 +379,7 @@ fn dt_comes_from_the_stamps_not_the_frame_count() {
 #[test]
 fn attitude_aided_prediction_through_a_yaw_turn() {
     let fps = 30.0;
-    let cfg = TrackConfig::default();
+    let cfg = pinhole_config();
     let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
     let mut tr = Tracker::new(cfg.clone()).unwrap();
     let mut base = BaselineTracker::new(cfg).unwrap();
@@ -416,7 +425,7 @@ fn attitude_aided_prediction_through_a_yaw_turn() {
 #[test]
 fn attitude_aided_prediction_of_a_pitch() {
     let fps = 30.0;
-    let cfg = TrackConfig::default();
+    let cfg = pinhole_config();
     let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
     let mut tr = Tracker::new(cfg).unwrap();
     let p = [CX + 100.0, CY - 50.0];
@@ -437,7 +446,7 @@ fn tracking_through_a_turn_keeps_detections_inside_the_gate() {
     // The hub sweeps across the image at 0.8 rad/s yaw; with the attitude the prediction
     // follows it, so no detection is gated out.
     let fps = 30.0;
-    let cfg = TrackConfig::default();
+    let cfg = pinhole_config();
     let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
     let mut tr = Tracker::new(cfg.clone()).unwrap();
     let mut rng = Rng::new(21);
@@ -481,7 +490,7 @@ fn full_det(seq: u64, t: f64, d_hub: f64, psi_deg: f64, cfg: &TrackConfig, rng: 
 
 #[test]
 fn distance_and_yaw_are_fused_and_filtered() {
-    let cfg = TrackConfig::default();
+    let cfg = pinhole_config();
     let fps = 30.0;
     for psi_deg in [25.0, -25.0] {
         let mut tr = Tracker::new(cfg.clone()).unwrap();
@@ -527,7 +536,7 @@ fn distance_and_yaw_are_fused_and_filtered() {
 #[test]
 fn blades_give_yaw_when_the_gap_is_weak() {
     // At a large yaw the blade skew is well observable and adds to the gap: lower yaw std.
-    let cfg = TrackConfig::default();
+    let cfg = pinhole_config();
     let run = |blades: bool| {
         let mut tr = Tracker::new(cfg.clone()).unwrap();
         let mut rng = Rng::new(4);
@@ -550,7 +559,7 @@ fn blades_give_yaw_when_the_gap_is_weak() {
 #[test]
 fn a_distance_spike_is_gated() {
     // The thesis saw spikes to near zero when another turbine's tower was measured.
-    let cfg = TrackConfig::default();
+    let cfg = pinhole_config();
     let mut tr = Tracker::new(cfg.clone()).unwrap();
     let mut rng = Rng::new(8);
     let mut k = 0;
@@ -569,7 +578,7 @@ fn a_distance_spike_is_gated() {
 fn behaviour_does_not_depend_on_the_resolution() {
     let run = |w: u32, h: u32| {
         let sx = w as f64 / 1920.0;
-        let mut tr = Tracker::new(TrackConfig::default()).unwrap();
+        let mut tr = Tracker::new(pinhole_config()).unwrap();
         let mut rng = Rng::new(12);
         let mut out = Vec::new();
         for k in 0..90u64 {
@@ -601,7 +610,7 @@ fn behaviour_does_not_depend_on_the_resolution() {
 
 #[test]
 fn output_fields_and_predict_at_do_not_change_the_state() {
-    let mut tr = Tracker::new(TrackConfig::default()).unwrap();
+    let mut tr = Tracker::new(pinhole_config()).unwrap();
     let mut d = det(42, 3.0, Some([500.0, 400.0]));
     d.stamps.recv_ns = 123;
     d.stamps.publish_ns = 456;
@@ -626,14 +635,14 @@ fn output_fields_and_predict_at_do_not_change_the_state() {
 
 #[test]
 fn low_confidence_and_bad_config() {
-    let mut cfg = TrackConfig::default();
+    let mut cfg = pinhole_config();
     cfg.filter.min_confidence = 0.5;
     let mut tr = Tracker::new(cfg).unwrap();
     let mut d = det(0, 1.0, Some([500.0, 400.0]));
     d.confidence = 0.3;
     let s = tr.update(&d, None);
     assert_eq!(s.hub_px, [CX, CY], "a low-confidence detection is a missed frame");
-    let mut bad = TrackConfig::default();
+    let mut bad = pinhole_config();
     bad.modes.lost_after_s = -1.0;
     assert_eq!(Tracker::new(bad.clone()).unwrap_err().key, "track.modes.lost_after_s");
     assert!(BaselineTracker::new(bad).is_err());

@@ -1,0 +1,232 @@
+//! Spinner (nose cone) circles from edge points with gradient directions: a gradient Hough vote
+//! for the centre, then the radius with the best rim coverage, then an algebraic circle fit.
+//! Plain data, no OpenCV, so it is unit-testable on constructed rims.
+
+use crate::geometry::P2;
+
+/// One edge pixel: position and unit gradient direction (working px).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct EdgePoint {
+    pub p: P2,
+    pub u: P2,
+}
+
+/// Settings of [`find_circles`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct CircleSearch {
+    /// Region `[x0, y0, x1, y1]` searched for centres (the points may lie outside it).
+    pub roi: [f64; 4],
+    pub min_r: f64,
+    pub max_r: f64,
+    /// Accumulator cell and radius step, px.
+    pub cell: f64,
+    /// An edge point belongs to a rim when its gradient is within this of the radial direction (cos).
+    pub radial_cos: f64,
+    /// Smallest accepted fraction of the rim covered by edge points.
+    pub min_coverage: f64,
+    /// Centre peaks examined.
+    pub max_peaks: usize,
+}
+
+/// Circles `[x, y, r, coverage]` among `points`, best coverage first.
+pub(crate) fn find_circles(points: &[EdgePoint], cs: &CircleSearch) -> Vec<[f64; 4]> {
+    let [x0, y0, x1, y1] = cs.roi;
+    let gw = ((x1 - x0) / cs.cell).ceil().max(1.0) as usize;
+    let gh = ((y1 - y0) / cs.cell).ceil().max(1.0) as usize;
+    let mut acc = vec![0u32; gw * gh];
+    let (bw, bh) = (gw as f64 * cs.cell, gh as f64 * cs.cell);
+    for e in points {
+        for sign in [-1.0, 1.0] {
+            let v = [sign * e.u[0], sign * e.u[1]];
+            // Clip the ray p + r v to the centre box (slab method) and to [min_r, max_r].
+            let (mut lo, mut hi) = (cs.min_r, cs.max_r);
+            for (q, d, size) in [(e.p[0] - x0, v[0], bw), (e.p[1] - y0, v[1], bh)] {
+                if d.abs() < 1e-12 {
+                    if q < 0.0 || q >= size {
+                        hi = -1.0;
+                    }
+                    continue;
+                }
+                let (t0, t1) = ((0.0 - q) / d, (size - q) / d);
+                lo = lo.max(t0.min(t1));
+                hi = hi.min(t0.max(t1));
+            }
+            if hi < lo {
+                continue;
+            }
+            // Radii on the grid min_r + k·cell inside [lo, hi].
+            let k0 = ((lo - cs.min_r) / cs.cell).ceil().max(0.0) as usize;
+            let k1 = ((hi - cs.min_r) / cs.cell).floor() as usize;
+            // Walk the ray in cell units: one cell of radius per step.
+            let r0 = cs.min_r + k0 as f64 * cs.cell;
+            let (mut cx, mut cy) = ((e.p[0] + r0 * v[0] - x0) / cs.cell, (e.p[1] + r0 * v[1] - y0) / cs.cell);
+            for _ in k0..=k1 {
+                if cx >= 0.0 && cy >= 0.0 {
+                    let (gx, gy) = (cx as usize, cy as usize);
+                    if gx < gw && gy < gh {
+                        acc[gy * gw + gx] += 1;
+                    }
+                }
+                cx += v[0];
+                cy += v[1];
+            }
+        }
+    }
+    // 3x3 sums, then the strongest peaks at least min_r apart (repeated arg-max, no sort).
+    let mut sums = vec![0u32; gw * gh];
+    for gy in 0..gh {
+        for gx in 0..gw {
+            let mut s = 0;
+            for yy in gy.saturating_sub(1)..(gy + 2).min(gh) {
+                for xx in gx.saturating_sub(1)..(gx + 2).min(gw) {
+                    s += acc[yy * gw + xx];
+                }
+            }
+            sums[gy * gw + gx] = s;
+        }
+    }
+    let mut centres: Vec<P2> = Vec::new();
+    while centres.len() < cs.max_peaks {
+        let Some((i, &v)) = sums.iter().enumerate().max_by_key(|(_, v)| **v) else { break };
+        if v == 0 {
+            break;
+        }
+        let c = [x0 + ((i % gw) as f64 + 0.5) * cs.cell, y0 + ((i / gw) as f64 + 0.5) * cs.cell];
+        centres.push(c);
+        // Suppress the neighbourhood of this peak.
+        let rad = (cs.min_r / cs.cell).ceil() as usize;
+        let (px, py) = (i % gw, i / gw);
+        for yy in py.saturating_sub(rad)..(py + rad + 1).min(gh) {
+            for xx in px.saturating_sub(rad)..(px + rad + 1).min(gw) {
+                sums[yy * gw + xx] = 0;
+            }
+        }
+    }
+    let mut out: Vec<[f64; 4]> = centres.into_iter().filter_map(|c| rim(points, c, cs)).collect();
+    out.sort_by(|a, b| b[3].total_cmp(&a[3]));
+    out
+}
+
+/// The best-covered radius around `c`, refined by a circle fit; `None` below `min_coverage`.
+fn rim(points: &[EdgePoint], c: P2, cs: &CircleSearch) -> Option<[f64; 4]> {
+    let nb = cs.max_r.ceil() as usize + 2;
+    let mut hist = vec![0u32; nb];
+    let radial = |e: &EdgePoint, c: P2| -> Option<f64> {
+        let (vx, vy) = (e.p[0] - c[0], e.p[1] - c[1]);
+        let d = vx.hypot(vy);
+        if d < cs.min_r - 1.0 || d > cs.max_r + 1.0 {
+            return None;
+        }
+        ((vx * e.u[0] + vy * e.u[1]).abs() / d >= cs.radial_cos).then_some(d)
+    };
+    for e in points {
+        if let Some(d) = radial(e, c) {
+            hist[(d.round() as usize).min(nb - 1)] += 1;
+        }
+    }
+    let (mut best_r, mut best_cov) = (0.0, 0.0);
+    for r in (cs.min_r.ceil() as usize)..=(cs.max_r.floor() as usize).min(nb - 2) {
+        let n = hist[r - 1] + hist[r] + hist[r + 1];
+        let cov = n as f64 / (2.0 * std::f64::consts::PI * r as f64);
+        if cov > best_cov {
+            (best_r, best_cov) = (r as f64, cov);
+        }
+    }
+    if best_cov < cs.min_coverage {
+        return None;
+    }
+    // Kåsa fit on the rim points: x² + y² + D x + E y + F = 0, least squares.
+    let tol = (0.1 * best_r).max(1.5);
+    let rim_pts: Vec<P2> = points.iter().filter(|e| radial(e, c).is_some_and(|d| (d - best_r).abs() <= tol)).map(|e| e.p).collect();
+    let fit = fit_circle(&rim_pts).filter(|f| crate::geometry::dist([f[0], f[1]], c) <= tol + cs.cell && (f[2] - best_r).abs() <= tol);
+    let [x, y, r] = fit.unwrap_or([c[0], c[1], best_r]);
+    Some([x, y, r, best_cov.min(1.0)])
+}
+
+/// Algebraic (Kåsa) least-squares circle through `pts`: `[x, y, r]`; `None` if degenerate.
+pub(crate) fn fit_circle(pts: &[P2]) -> Option<[f64; 3]> {
+    if pts.len() < 3 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let (mx, my) = (pts.iter().map(|p| p[0]).sum::<f64>() / n, pts.iter().map(|p| p[1]).sum::<f64>() / n);
+    let (mut suu, mut suv, mut svv, mut suuu, mut svvv, mut suvv, mut svuu) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for p in pts {
+        let (u, v) = (p[0] - mx, p[1] - my);
+        suu += u * u;
+        suv += u * v;
+        svv += v * v;
+        suuu += u * u * u;
+        svvv += v * v * v;
+        suvv += u * v * v;
+        svuu += v * u * u;
+    }
+    let det = suu * svv - suv * suv;
+    if det.abs() < 1e-9 {
+        return None;
+    }
+    let (b1, b2) = (0.5 * (suuu + suvv), 0.5 * (svvv + svuu));
+    let uc = (b1 * svv - b2 * suv) / det;
+    let vc = (suu * b2 - suv * b1) / det;
+    let r = (uc * uc + vc * vc + (suu + svv) / n).sqrt();
+    Some([uc + mx, vc + my, r])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rim points of a circle, with outward gradients, over the given arcs (degrees).
+    fn rim_points(c: P2, r: f64, arcs: &[(f64, f64)]) -> Vec<EdgePoint> {
+        let mut v = Vec::new();
+        for &(a0, a1) in arcs {
+            let mut a = a0;
+            while a < a1 {
+                let t = a.to_radians();
+                let u = [t.cos(), t.sin()];
+                v.push(EdgePoint { p: [(c[0] + r * u[0]).round(), (c[1] + r * u[1]).round()], u });
+                a += 360.0 / (2.0 * std::f64::consts::PI * r);
+            }
+        }
+        v
+    }
+
+    fn search() -> CircleSearch {
+        CircleSearch { roi: [0.0, 0.0, 120.0, 120.0], min_r: 4.0, max_r: 40.0, cell: 2.0, radial_cos: 0.9, min_coverage: 0.4, max_peaks: 3 }
+    }
+
+    #[test]
+    fn circle_broken_by_blades_is_found_and_fitted() {
+        let c = [61.3, 57.8];
+        // Three blade roots hide three 50° stretches of the rim.
+        let mut pts = rim_points(c, 20.0, &[(0.0, 70.0), (120.0, 190.0), (240.0, 310.0)]);
+        // A straight blade edge nearby must not make a circle.
+        pts.extend((0..40).map(|k| EdgePoint { p: [90.0 + k as f64, 20.0], u: [0.0, 1.0] }));
+        let found = find_circles(&pts, &search());
+        assert!(!found.is_empty());
+        let f = found[0];
+        assert!(crate::geometry::dist([f[0], f[1]], c) < 1.0, "{f:?}");
+        assert!((f[2] - 20.0).abs() < 1.0 && f[3] > 0.5, "{f:?}");
+    }
+
+    #[test]
+    fn lines_and_sparse_arcs_are_rejected() {
+        // Two crossing straight edges: no rim.
+        let mut pts: Vec<EdgePoint> = (0..100).map(|k| EdgePoint { p: [10.0 + k as f64, 60.0], u: [0.0, 1.0] }).collect();
+        pts.extend((0..100).map(|k| EdgePoint { p: [60.0, 10.0 + k as f64], u: [1.0, 0.0] }));
+        assert!(find_circles(&pts, &search()).is_empty());
+        // A 60° arc covers a sixth of its rim: below min_coverage.
+        let arc = rim_points([60.0, 60.0], 25.0, &[(0.0, 60.0)]);
+        assert!(find_circles(&arc, &search()).is_empty());
+    }
+
+    #[test]
+    fn kasa_fit_is_exact_on_a_circle() {
+        let pts: Vec<P2> = (0..12).map(|k| {
+            let t = (k as f64 * 30.0).to_radians();
+            [5.0 + 7.0 * t.cos(), -3.0 + 7.0 * t.sin()]
+        }).collect();
+        let f = fit_circle(&pts).unwrap();
+        assert!((f[0] - 5.0).abs() < 1e-9 && (f[1] + 3.0).abs() < 1e-9 && (f[2] - 7.0).abs() < 1e-9, "{f:?}");
+    }
+}
