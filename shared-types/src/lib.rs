@@ -16,6 +16,7 @@
 //! [`FrameHeader::capture_realtime_ns`].
 
 pub mod messages;
+pub mod params;
 pub mod services;
 pub mod time;
 

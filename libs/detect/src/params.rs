@@ -20,17 +20,8 @@ pub enum Mode {
     Default,
 }
 
-/// A parameter outside its allowed range.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{key} = {value} is invalid: allowed {allowed}")]
-pub struct ParamError {
-    /// Full dotted path, e.g. `detect.thesis.canny_high`.
-    pub key: String,
-    /// The offending value as text.
-    pub value: String,
-    /// What would be accepted.
-    pub allowed: String,
-}
+pub use hubtrack_types::params::ParamError;
+use hubtrack_types::params::Check;
 
 /// Whole detector configuration (`detect` section).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
@@ -403,31 +394,6 @@ impl Default for DefaultParams {
     }
 }
 
-/// Collects range checks with their dotted keys.
-struct Check {
-    prefix: &'static str,
-}
-
-impl Check {
-    fn range(&self, name: &str, v: f64, lo: f64, hi: f64) -> Result<(), ParamError> {
-        if v.is_finite() && v >= lo && v <= hi {
-            Ok(())
-        } else {
-            Err(ParamError { key: format!("{}.{}", self.prefix, name), value: v.to_string(), allowed: format!("{lo} ..= {hi}") })
-        }
-    }
-    fn less(&self, name_lo: &str, lo: f64, name_hi: &str, hi: f64) -> Result<(), ParamError> {
-        if lo < hi {
-            Ok(())
-        } else {
-            Err(ParamError {
-                key: format!("{}.{}", self.prefix, name_lo),
-                value: lo.to_string(),
-                allowed: format!("less than {}.{} = {hi}", self.prefix, name_hi),
-            })
-        }
-    }
-}
 
 impl DetectConfig {
     /// Check every parameter's range; the error names the first offending key.
@@ -440,118 +406,118 @@ impl DetectConfig {
 
 impl CameraParams {
     fn validate(&self) -> Result<(), ParamError> {
-        let c = Check { prefix: "detect.camera" };
-        c.range("hfov_deg", self.hfov_deg, 1.0, 179.0)?;
+        let c = Check::new("detect.camera");
+        c.closed("hfov_deg", self.hfov_deg, 1.0, 179.0)?;
         if self.focal_length_per_width != 0.0 {
-            c.range("focal_length_per_width", self.focal_length_per_width, 0.05, 10.0)?;
+            c.closed("focal_length_per_width", self.focal_length_per_width, 0.05, 10.0)?;
         }
-        c.range("tower_top_diameter_m", self.tower_top_diameter_m, 0.1, 30.0)?;
-        c.range("hub_tower_gap_m", self.hub_tower_gap_m, 0.1, 50.0)
+        c.closed("tower_top_diameter_m", self.tower_top_diameter_m, 0.1, 30.0)?;
+        c.closed("hub_tower_gap_m", self.hub_tower_gap_m, 0.1, 50.0)
     }
 }
 
 impl ThesisParams {
     fn validate(&self) -> Result<(), ParamError> {
-        let c = Check { prefix: "detect.thesis" };
-        c.range("pyramid_min_side_px", self.pyramid_min_side_px as f64, 16.0, 4096.0)?;
-        c.range("pyramid_max_side_px", self.pyramid_max_side_px as f64, 16.0, 4096.0)?;
+        let c = Check::new("detect.thesis");
+        c.closed("pyramid_min_side_px", self.pyramid_min_side_px as f64, 16.0, 4096.0)?;
+        c.closed("pyramid_max_side_px", self.pyramid_max_side_px as f64, 16.0, 4096.0)?;
         c.less("pyramid_min_side_px", self.pyramid_min_side_px as f64, "pyramid_max_side_px", self.pyramid_max_side_px as f64)?;
-        c.range("canny_low", self.canny_low, 0.0, 4096.0)?;
-        c.range("canny_high", self.canny_high, 0.0, 4096.0)?;
+        c.closed("canny_low", self.canny_low, 0.0, 4096.0)?;
+        c.closed("canny_high", self.canny_high, 0.0, 4096.0)?;
         c.less("canny_low", self.canny_low, "canny_high", self.canny_high + f64::EPSILON)?;
-        c.range("hough_rho_px", self.hough_rho_px, 0.1, 10.0)?;
-        c.range("hough_theta_deg", self.hough_theta_deg, 0.05, 10.0)?;
-        c.range("hough_threshold", self.hough_threshold as f64, 1.0, 10_000.0)?;
-        c.range("hough_min_length_px", self.hough_min_length_px, 1.0, 4096.0)?;
-        c.range("hough_max_gap_px", self.hough_max_gap_px, 0.0, 4096.0)?;
-        c.range("tower_max_tilt_deg", self.tower_max_tilt_deg, 0.0, 45.0)?;
-        c.range("tower_bottom_frac", self.tower_bottom_frac, 0.0, 1.0)?;
-        c.range("search_radius_frac", self.search_radius_frac, 0.01, 2.0)?;
-        c.range("blade_group_tol_deg", self.blade_group_tol_deg, 0.0, 60.0)?;
-        c.range("blade_over_tower_tol_deg", self.blade_over_tower_tol_deg, 0.0, 90.0)?;
-        c.range("vote_target_deg", self.vote_target_deg, 0.0, 180.0)?;
-        c.range("vote_tol_deg", self.vote_tol_deg, 0.0, 180.0)?;
-        c.range("vote_limit", self.vote_limit as f64, 1.0, 100.0)?;
-        c.range("hub_max_dx_frac", self.hub_max_dx_frac, 0.0, 10.0)?;
-        c.range("hub_max_dy_frac", self.hub_max_dy_frac, 0.0, 10.0)?;
-        c.range("min_blades", self.min_blades as f64, 2.0, crate::MAX_BLADES_F)?;
-        c.range("tower_width_below_top_frac", self.tower_width_below_top_frac, 0.0, 1.0)
+        c.closed("hough_rho_px", self.hough_rho_px, 0.1, 10.0)?;
+        c.closed("hough_theta_deg", self.hough_theta_deg, 0.05, 10.0)?;
+        c.closed("hough_threshold", self.hough_threshold as f64, 1.0, 10_000.0)?;
+        c.closed("hough_min_length_px", self.hough_min_length_px, 1.0, 4096.0)?;
+        c.closed("hough_max_gap_px", self.hough_max_gap_px, 0.0, 4096.0)?;
+        c.closed("tower_max_tilt_deg", self.tower_max_tilt_deg, 0.0, 45.0)?;
+        c.closed("tower_bottom_frac", self.tower_bottom_frac, 0.0, 1.0)?;
+        c.closed("search_radius_frac", self.search_radius_frac, 0.01, 2.0)?;
+        c.closed("blade_group_tol_deg", self.blade_group_tol_deg, 0.0, 60.0)?;
+        c.closed("blade_over_tower_tol_deg", self.blade_over_tower_tol_deg, 0.0, 90.0)?;
+        c.closed("vote_target_deg", self.vote_target_deg, 0.0, 180.0)?;
+        c.closed("vote_tol_deg", self.vote_tol_deg, 0.0, 180.0)?;
+        c.closed("vote_limit", self.vote_limit as f64, 1.0, 100.0)?;
+        c.closed("hub_max_dx_frac", self.hub_max_dx_frac, 0.0, 10.0)?;
+        c.closed("hub_max_dy_frac", self.hub_max_dy_frac, 0.0, 10.0)?;
+        c.closed("min_blades", self.min_blades as f64, 2.0, crate::MAX_BLADES_F)?;
+        c.closed("tower_width_below_top_frac", self.tower_width_below_top_frac, 0.0, 1.0)
     }
 }
 
 impl DefaultParams {
     fn validate(&self) -> Result<(), ParamError> {
-        let c = Check { prefix: "detect.default" };
-        c.range("pyramid_min_side_px", self.pyramid_min_side_px as f64, 16.0, 4096.0)?;
-        c.range("pyramid_max_side_px", self.pyramid_max_side_px as f64, 16.0, 4096.0)?;
+        let c = Check::new("detect.default");
+        c.closed("pyramid_min_side_px", self.pyramid_min_side_px as f64, 16.0, 4096.0)?;
+        c.closed("pyramid_max_side_px", self.pyramid_max_side_px as f64, 16.0, 4096.0)?;
         c.less("pyramid_min_side_px", self.pyramid_min_side_px as f64, "pyramid_max_side_px", self.pyramid_max_side_px as f64)?;
-        c.range("canny_high_percentile", self.canny_high_percentile, 0.0, 1.0)?;
-        c.range("canny_high_min", self.canny_high_min, 1.0, 4096.0)?;
-        c.range("canny_high_max", self.canny_high_max, 1.0, 4096.0)?;
+        c.closed("canny_high_percentile", self.canny_high_percentile, 0.0, 1.0)?;
+        c.closed("canny_high_min", self.canny_high_min, 1.0, 4096.0)?;
+        c.closed("canny_high_max", self.canny_high_max, 1.0, 4096.0)?;
         c.less("canny_high_min", self.canny_high_min, "canny_high_max", self.canny_high_max + f64::EPSILON)?;
-        c.range("canny_low_ratio", self.canny_low_ratio, 0.05, 1.0)?;
-        c.range("hough_rho_px", self.hough_rho_px, 0.1, 10.0)?;
-        c.range("hough_theta_deg", self.hough_theta_deg, 0.05, 10.0)?;
-        c.range("hough_threshold_frac", self.hough_threshold_frac, 0.001, 1.0)?;
-        c.range("hough_min_length_frac", self.hough_min_length_frac, 0.001, 1.0)?;
-        c.range("hough_max_gap_frac", self.hough_max_gap_frac, 0.0, 1.0)?;
-        c.range("max_segments", self.max_segments as f64, 2.0, 10_000.0)?;
-        c.range("merge_angle_deg", self.merge_angle_deg, 0.0, 30.0)?;
-        c.range("merge_offset_px", self.merge_offset_px, 0.0, 50.0)?;
-        c.range("merge_gap_frac", self.merge_gap_frac, 0.0, 1.0)?;
-        c.range("horizon_min_length_frac", self.horizon_min_length_frac, 0.0, 2.0)?;
-        c.range("horizon_max_tilt_deg", self.horizon_max_tilt_deg, 0.0, 45.0)?;
-        c.range("candidate_min_length_frac", self.candidate_min_length_frac, 0.0, 2.0)?;
-        c.range("candidate_min_angle_deg", self.candidate_min_angle_deg, 0.0, 90.0)?;
-        c.range("candidate_end_reach_frac", self.candidate_end_reach_frac, 0.0, 10.0)?;
-        c.range("candidate_inside_frac", self.candidate_inside_frac, 0.0, 0.5)?;
-        c.range("cluster_radius_frac", self.cluster_radius_frac, 0.001, 1.0)?;
-        c.range("support_line_dist_frac", self.support_line_dist_frac, 0.0, 1.0)?;
-        c.range("support_end_dist_frac", self.support_end_dist_frac, 0.0, 2.0)?;
-        c.range("blade_group_tol_deg", self.blade_group_tol_deg, 0.0, 60.0)?;
-        c.range("blade_min_separation_deg", self.blade_min_separation_deg, 0.0, 120.0)?;
-        c.range("blade_target_deg", self.blade_target_deg, 0.0, 180.0)?;
-        c.range("blade_sep_tol_deg", self.blade_sep_tol_deg, 0.0, 180.0)?;
-        c.range("tower_max_tilt_deg", self.tower_max_tilt_deg, 0.0, 45.0)?;
-        c.range("tower_top_max_below_frac", self.tower_top_max_below_frac, 0.0, 2.0)?;
-        c.range("tower_top_max_above_frac", self.tower_top_max_above_frac, 0.0, 2.0)?;
-        c.range("tower_max_dx_frac", self.tower_max_dx_frac, 0.0, 2.0)?;
-        c.range("roll_search_deg", self.roll_search_deg, 0.0, 45.0)?;
-        c.range("prediction_radius_frac", self.prediction_radius_frac, 0.0, 2.0)?;
-        c.range("prediction_bonus", self.prediction_bonus, 0.0, 1.0)?;
-        c.range("conf_two_blades", self.conf_two_blades, 0.0, 1.0)?;
-        c.range("conf_three_blades", self.conf_three_blades, 0.0, 1.0)?;
-        c.range("conf_tower", self.conf_tower, 0.0, 1.0)?;
-        c.range("conf_geometry", self.conf_geometry, 0.0, 1.0)?;
-        c.range("conf_paired", self.conf_paired, 0.0, 1.0)?;
-        c.range("conf_extra_blade_penalty", self.conf_extra_blade_penalty, 0.0, 1.0)?;
-        c.range("min_confidence", self.min_confidence, 0.0, 1.0)?;
-        c.range("tower_width_below_top_frac", self.tower_width_below_top_frac, 0.0, 1.0)?;
-        c.range("pair_min_length_frac", self.pair_min_length_frac, 0.0, 2.0)?;
-        c.range("pair_max_angle_deg", self.pair_max_angle_deg, 0.0, 45.0)?;
-        c.range("pair_min_overlap_frac", self.pair_min_overlap_frac, 0.0, 1.0)?;
-        c.range("pair_min_width_px", self.pair_min_width_px, 0.0, 100.0)?;
-        c.range("pair_max_width_frac", self.pair_max_width_frac, 0.0, 1.0)?;
-        c.range("pair_max_width_to_length", self.pair_max_width_to_length, 0.0, 10.0)?;
-        c.range("axis_reach_widths", self.axis_reach_widths, 0.0, 20.0)?;
-        c.range("axis_line_dist_frac", self.axis_line_dist_frac, 0.0, 1.0)?;
-        c.range("axis_angle_tol_deg", self.axis_angle_tol_deg, 0.0, 45.0)?;
-        c.range("axis_proposal_weight", self.axis_proposal_weight, 0.0, 100.0)?;
-        c.range("spinner_candidates", self.spinner_candidates as f64, 0.0, 10.0)?;
-        c.range("spinner_search_frac", self.spinner_search_frac, 0.01, 1.0)?;
-        c.range("spinner_max_offset_frac", self.spinner_max_offset_frac, 0.0, 1.0)?;
-        c.range("spinner_min_radius_px", self.spinner_min_radius_px, 1.0, 1000.0)?;
-        c.range("spinner_max_radius_frac", self.spinner_max_radius_frac, 0.01, 1.0)?;
-        c.range("spinner_cell_px", self.spinner_cell_px, 0.5, 20.0)?;
-        c.range("spinner_radial_tol_deg", self.spinner_radial_tol_deg, 0.0, 90.0)?;
-        c.range("spinner_min_coverage", self.spinner_min_coverage, 0.0, 1.0)?;
-        c.range("spinner_reach_radii", self.spinner_reach_radii, 0.0, 10.0)?;
-        c.range("conf_spinner", self.conf_spinner, 0.0, 1.0)?;
-        c.range("through_dist_frac", self.through_dist_frac, 0.0, 1.0)?;
-        c.range("through_margin_frac", self.through_margin_frac, 0.0, 2.0)?;
-        c.range("conf_through_penalty", self.conf_through_penalty, 0.0, 1.0)?;
-        c.range("occluded_angle_deg", self.occluded_angle_deg, 0.0, 45.0)?;
-        c.range("occluded_offset_frac", self.occluded_offset_frac, 0.0, 1.0)
+        c.closed("canny_low_ratio", self.canny_low_ratio, 0.05, 1.0)?;
+        c.closed("hough_rho_px", self.hough_rho_px, 0.1, 10.0)?;
+        c.closed("hough_theta_deg", self.hough_theta_deg, 0.05, 10.0)?;
+        c.closed("hough_threshold_frac", self.hough_threshold_frac, 0.001, 1.0)?;
+        c.closed("hough_min_length_frac", self.hough_min_length_frac, 0.001, 1.0)?;
+        c.closed("hough_max_gap_frac", self.hough_max_gap_frac, 0.0, 1.0)?;
+        c.closed("max_segments", self.max_segments as f64, 2.0, 10_000.0)?;
+        c.closed("merge_angle_deg", self.merge_angle_deg, 0.0, 30.0)?;
+        c.closed("merge_offset_px", self.merge_offset_px, 0.0, 50.0)?;
+        c.closed("merge_gap_frac", self.merge_gap_frac, 0.0, 1.0)?;
+        c.closed("horizon_min_length_frac", self.horizon_min_length_frac, 0.0, 2.0)?;
+        c.closed("horizon_max_tilt_deg", self.horizon_max_tilt_deg, 0.0, 45.0)?;
+        c.closed("candidate_min_length_frac", self.candidate_min_length_frac, 0.0, 2.0)?;
+        c.closed("candidate_min_angle_deg", self.candidate_min_angle_deg, 0.0, 90.0)?;
+        c.closed("candidate_end_reach_frac", self.candidate_end_reach_frac, 0.0, 10.0)?;
+        c.closed("candidate_inside_frac", self.candidate_inside_frac, 0.0, 0.5)?;
+        c.closed("cluster_radius_frac", self.cluster_radius_frac, 0.001, 1.0)?;
+        c.closed("support_line_dist_frac", self.support_line_dist_frac, 0.0, 1.0)?;
+        c.closed("support_end_dist_frac", self.support_end_dist_frac, 0.0, 2.0)?;
+        c.closed("blade_group_tol_deg", self.blade_group_tol_deg, 0.0, 60.0)?;
+        c.closed("blade_min_separation_deg", self.blade_min_separation_deg, 0.0, 120.0)?;
+        c.closed("blade_target_deg", self.blade_target_deg, 0.0, 180.0)?;
+        c.closed("blade_sep_tol_deg", self.blade_sep_tol_deg, 0.0, 180.0)?;
+        c.closed("tower_max_tilt_deg", self.tower_max_tilt_deg, 0.0, 45.0)?;
+        c.closed("tower_top_max_below_frac", self.tower_top_max_below_frac, 0.0, 2.0)?;
+        c.closed("tower_top_max_above_frac", self.tower_top_max_above_frac, 0.0, 2.0)?;
+        c.closed("tower_max_dx_frac", self.tower_max_dx_frac, 0.0, 2.0)?;
+        c.closed("roll_search_deg", self.roll_search_deg, 0.0, 45.0)?;
+        c.closed("prediction_radius_frac", self.prediction_radius_frac, 0.0, 2.0)?;
+        c.closed("prediction_bonus", self.prediction_bonus, 0.0, 1.0)?;
+        c.closed("conf_two_blades", self.conf_two_blades, 0.0, 1.0)?;
+        c.closed("conf_three_blades", self.conf_three_blades, 0.0, 1.0)?;
+        c.closed("conf_tower", self.conf_tower, 0.0, 1.0)?;
+        c.closed("conf_geometry", self.conf_geometry, 0.0, 1.0)?;
+        c.closed("conf_paired", self.conf_paired, 0.0, 1.0)?;
+        c.closed("conf_extra_blade_penalty", self.conf_extra_blade_penalty, 0.0, 1.0)?;
+        c.closed("min_confidence", self.min_confidence, 0.0, 1.0)?;
+        c.closed("tower_width_below_top_frac", self.tower_width_below_top_frac, 0.0, 1.0)?;
+        c.closed("pair_min_length_frac", self.pair_min_length_frac, 0.0, 2.0)?;
+        c.closed("pair_max_angle_deg", self.pair_max_angle_deg, 0.0, 45.0)?;
+        c.closed("pair_min_overlap_frac", self.pair_min_overlap_frac, 0.0, 1.0)?;
+        c.closed("pair_min_width_px", self.pair_min_width_px, 0.0, 100.0)?;
+        c.closed("pair_max_width_frac", self.pair_max_width_frac, 0.0, 1.0)?;
+        c.closed("pair_max_width_to_length", self.pair_max_width_to_length, 0.0, 10.0)?;
+        c.closed("axis_reach_widths", self.axis_reach_widths, 0.0, 20.0)?;
+        c.closed("axis_line_dist_frac", self.axis_line_dist_frac, 0.0, 1.0)?;
+        c.closed("axis_angle_tol_deg", self.axis_angle_tol_deg, 0.0, 45.0)?;
+        c.closed("axis_proposal_weight", self.axis_proposal_weight, 0.0, 100.0)?;
+        c.closed("spinner_candidates", self.spinner_candidates as f64, 0.0, 10.0)?;
+        c.closed("spinner_search_frac", self.spinner_search_frac, 0.01, 1.0)?;
+        c.closed("spinner_max_offset_frac", self.spinner_max_offset_frac, 0.0, 1.0)?;
+        c.closed("spinner_min_radius_px", self.spinner_min_radius_px, 1.0, 1000.0)?;
+        c.closed("spinner_max_radius_frac", self.spinner_max_radius_frac, 0.01, 1.0)?;
+        c.closed("spinner_cell_px", self.spinner_cell_px, 0.5, 20.0)?;
+        c.closed("spinner_radial_tol_deg", self.spinner_radial_tol_deg, 0.0, 90.0)?;
+        c.closed("spinner_min_coverage", self.spinner_min_coverage, 0.0, 1.0)?;
+        c.closed("spinner_reach_radii", self.spinner_reach_radii, 0.0, 10.0)?;
+        c.closed("conf_spinner", self.conf_spinner, 0.0, 1.0)?;
+        c.closed("through_dist_frac", self.through_dist_frac, 0.0, 1.0)?;
+        c.closed("through_margin_frac", self.through_margin_frac, 0.0, 2.0)?;
+        c.closed("conf_through_penalty", self.conf_through_penalty, 0.0, 1.0)?;
+        c.closed("occluded_angle_deg", self.occluded_angle_deg, 0.0, 45.0)?;
+        c.closed("occluded_offset_frac", self.occluded_offset_frac, 0.0, 1.0)
     }
 }
 

@@ -19,17 +19,8 @@
 
 use serde::{Deserialize, Serialize};
 
-/// A configuration value outside its allowed range.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("config key `{key}` = {value} is out of range: allowed {allowed}")]
-pub struct ParamError {
-    /// Full dotted key path, e.g. `track.filter.damping`.
-    pub key: String,
-    /// The value given.
-    pub value: String,
-    /// The allowed range or set.
-    pub allowed: String,
-}
+pub use hubtrack_types::params::ParamError;
+use hubtrack_types::params::Check;
 
 /// `[track]`: everything the tracker needs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
@@ -300,52 +291,6 @@ impl Default for YawConfig {
     }
 }
 
-/// Range checks that name the key.
-struct Check<'a> {
-    prefix: &'a str,
-}
-
-impl Check<'_> {
-    fn err(&self, key: &str, value: String, allowed: String) -> ParamError {
-        ParamError { key: format!("{}.{}", self.prefix, key), value, allowed }
-    }
-
-    /// `lo <= v <= hi` (closed interval), finite.
-    fn closed(&self, key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ParamError> {
-        if v.is_finite() && v >= lo && v <= hi {
-            Ok(())
-        } else {
-            Err(self.err(key, v.to_string(), format!("[{lo}, {hi}]")))
-        }
-    }
-
-    /// `lo < v <= hi`, finite.
-    fn open_closed(&self, key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ParamError> {
-        if v.is_finite() && v > lo && v <= hi {
-            Ok(())
-        } else {
-            Err(self.err(key, v.to_string(), format!("({lo}, {hi}]")))
-        }
-    }
-
-    /// `lo < v < hi`, finite.
-    fn open(&self, key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ParamError> {
-        if v.is_finite() && v > lo && v < hi {
-            Ok(())
-        } else {
-            Err(self.err(key, v.to_string(), format!("({lo}, {hi})")))
-        }
-    }
-
-    /// Integer in `[lo, hi]`.
-    fn count(&self, key: &str, v: u32, lo: u32, hi: u32) -> Result<(), ParamError> {
-        if v >= lo && v <= hi {
-            Ok(())
-        } else {
-            Err(self.err(key, v.to_string(), format!("[{lo}, {hi}]")))
-        }
-    }
-}
 
 /// Upper bound for pixel-valued parameters (px at the reference width).
 const MAX_PX: f64 = 1e4;
@@ -363,12 +308,12 @@ const MAX_SIZE_M: f64 = 100.0;
 impl TrackConfig {
     /// Checks every value against its allowed range; the error names the first bad key.
     pub fn validate(&self) -> Result<(), ParamError> {
-        let c = Check { prefix: "track.camera" };
+        let c = Check::new("track.camera");
         c.open("hfov_deg", self.camera.hfov_deg, 0.0, 180.0)?;
         c.closed("focal_length_per_width", self.camera.focal_length_per_width, 0.0, MAX_PX)?;
         c.closed("mount_pitch_deg", self.camera.mount_pitch_deg, -90.0, 90.0)?;
 
-        let c = Check { prefix: "track.filter" };
+        let c = Check::new("track.filter");
         let f = &self.filter;
         // Strictly positive for the continuous-time conversion (ln γ); 1 = no damping.
         c.open_closed("damping", f.damping, 0.0, 1.0)?;
@@ -379,26 +324,26 @@ impl TrackConfig {
         c.open_closed("initial_velocity_std_px_s", f.initial_velocity_std_px_s, 0.0, MAX_PX)?;
         c.closed("min_confidence", f.min_confidence, 0.0, 1.0)?;
 
-        let c = Check { prefix: "track.gating" };
+        let c = Check::new("track.gating");
         let g = &self.gating;
         c.open_closed("chi2_threshold", g.chi2_threshold, 0.0, MAX_CHI2)?;
         c.closed("min_gate_px", g.min_gate_px, 0.0, MAX_PX)?;
         c.count("jump_accept_count", g.jump_accept_count, 1, MAX_COUNT)?;
         c.open_closed("jump_consistency_px", g.jump_consistency_px, 0.0, MAX_PX)?;
 
-        let c = Check { prefix: "track.modes" };
+        let c = Check::new("track.modes");
         let m = &self.modes;
         c.count("confirm_count", m.confirm_count, 1, MAX_COUNT)?;
         c.count("coast_after_missed", m.coast_after_missed, 1, MAX_COUNT)?;
         c.open_closed("lost_after_s", m.lost_after_s, 0.0, MAX_TIME_S)?;
         c.closed("search_after_s", m.search_after_s, m.lost_after_s, MAX_TIME_S)?;
 
-        let c = Check { prefix: "track.ego_motion" };
+        let c = Check::new("track.ego_motion");
         let e = &self.ego_motion;
         c.open_closed("max_state_age_s", e.max_state_age_s, 0.0, MAX_TIME_S)?;
         c.closed("shift_std_fraction", e.shift_std_fraction, 0.0, 10.0)?;
 
-        let c = Check { prefix: "track.distance" };
+        let c = Check::new("track.distance");
         let d = &self.distance;
         c.open_closed("tower_diameter_m", d.tower_diameter_m, 0.0, MAX_SIZE_M)?;
         c.open_closed("tower_width_std_px", d.tower_width_std_px, 0.0, MAX_PX)?;
@@ -411,7 +356,7 @@ impl TrackConfig {
         c.open_closed("max_std_m", d.max_std_m, 0.0, 1e4)?;
         c.open_closed("stale_after_s", d.stale_after_s, 0.0, MAX_TIME_S)?;
 
-        let c = Check { prefix: "track.yaw" };
+        let c = Check::new("track.yaw");
         let y = &self.yaw;
         c.open_closed("hub_tower_offset_m", y.hub_tower_offset_m, 0.0, MAX_SIZE_M)?;
         c.open_closed("gap_std_px", y.gap_std_px, 0.0, MAX_PX)?;
