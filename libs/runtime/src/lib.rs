@@ -9,6 +9,7 @@ pub mod config;
 pub mod ipc;
 pub mod logging;
 pub mod shutdown;
+pub mod stage;
 pub mod status;
 
 pub use config::{Config, ConfigError};

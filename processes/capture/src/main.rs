@@ -7,9 +7,8 @@ use hubtrack_capture::pacing::Pacer;
 use hubtrack_capture::sink::ShmSink;
 use hubtrack_capture::{open_source, Step};
 use hubtrack_runtime::config::{ConfigArgs, Pace};
-use hubtrack_runtime::ipc::{cleanup_dead_nodes, open_node, FramePublisher};
-use hubtrack_runtime::shutdown::Shutdown;
-use hubtrack_runtime::status::StatusReporter;
+use hubtrack_runtime::ipc::{cleanup_dead_nodes, FramePublisher};
+use hubtrack_runtime::stage::Stage;
 use std::time::{Duration, Instant};
 
 /// How often capture removes resources of dead subscribers, so a restarted stage finds its port.
@@ -27,18 +26,13 @@ fn main() {
 }
 
 fn run() -> anyhow::Result<()> {
-    hubtrack_runtime::logging::init("capture");
     let args = Args::parse();
-    let config = args.config.load()?;
+    let Stage { config, shutdown, node, mut status } = Stage::start("capture", &args.config)?;
     let cfg = &config.capture;
-    let shutdown = Shutdown::install()?;
-
     let mut source = open_source(cfg)?;
     log::info!("source: {}", source.describe());
-    let node = open_node("capture")?;
     let publisher = FramePublisher::new(&node, source.max_frame_len())?;
     let mut sink = ShmSink::new(publisher, source.kind());
-    let mut status = StatusReporter::new(&node, "capture", config.run.status_interval_ms)?;
 
     let fps = match (source.self_paced(), cfg.pace) {
         (true, _) | (false, Pace::Fast) => None,

@@ -6,9 +6,8 @@
 use clap::Parser;
 use hubtrack_detect::{Detector, Hints, ImageView};
 use hubtrack_runtime::config::ConfigArgs;
-use hubtrack_runtime::ipc::{open_node, FrameSubscriber, MsgPublisher, MsgSubscriber};
-use hubtrack_runtime::shutdown::Shutdown;
-use hubtrack_runtime::status::StatusReporter;
+use hubtrack_runtime::ipc::{FrameSubscriber, MsgPublisher, MsgSubscriber};
+use hubtrack_runtime::stage::Stage;
 use hubtrack_types::services::{DETECTIONS, OVERLAY, VEHICLE};
 use hubtrack_types::time::monotonic_ns;
 use hubtrack_types::{
@@ -33,19 +32,15 @@ fn main() {
 }
 
 fn run() -> anyhow::Result<()> {
-    hubtrack_runtime::logging::init("detect");
     let args = Args::parse();
-    let config = args.config.load()?;
-    let shutdown = Shutdown::install()?;
+    let Stage { config, shutdown, node, mut status } = Stage::start("detect", &args.config)?;
     let mut detector = Detector::new(config.detect.clone())?;
     log::info!("mode {:?}", config.detect.mode);
 
-    let node = open_node("detect")?;
     let mut frames = FrameSubscriber::new(&node, 1)?;
     let vehicle = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, 4)?;
     let detections = MsgPublisher::<Detection>::new(&node, &DETECTIONS)?;
     let overlays = MsgPublisher::<DetectOverlay>::new(&node, &OVERLAY)?;
-    let mut status = StatusReporter::new(&node, "detect", config.run.status_interval_ms)?;
     let mut last_vehicle: Option<VehicleState> = None;
 
     while !shutdown.requested() {

@@ -12,8 +12,8 @@ use clap::Parser;
 use hubtrack_record::writer::{ChannelKind, RecorderStats};
 use hubtrack_record::{Recording, RecordingOptions};
 use hubtrack_runtime::config::{Compression, ConfigArgs, RecorderConfig};
-use hubtrack_runtime::ipc::{open_node, FrameSubscriber, MsgSubscriber};
-use hubtrack_runtime::shutdown::Shutdown;
+use hubtrack_runtime::ipc::{FrameSubscriber, MsgSubscriber};
+use hubtrack_runtime::stage::Stage;
 use hubtrack_runtime::status::StatusReporter;
 use hubtrack_types::services::{DETECTIONS, OVERLAY, SETPOINTS, STATUS, TRACK, VEHICLE};
 use hubtrack_types::time::{monotonic_ns, realtime_ns};
@@ -65,16 +65,13 @@ fn main() {
 }
 
 fn run() -> anyhow::Result<()> {
-    hubtrack_runtime::logging::init("recorder");
     let args = Args::parse();
-    let config = args.config.load()?;
+    let Stage { config, shutdown, node, mut status } = Stage::start("recorder", &args.config)?;
     let cfg = config.recorder.clone();
-    let shutdown = Shutdown::install()?;
 
     let recording = Recording::create(&args.output, &options(&cfg))?;
     log::info!("recording to {}", args.output.display());
 
-    let node = open_node("recorder")?;
     let mut frames = FrameSubscriber::new(&node, usize::MAX)?;
     let detections = MsgSubscriber::<Detection>::new(&node, &DETECTIONS, RESULT_BUFFER)?;
     let track = MsgSubscriber::<TrackState>::new(&node, &TRACK, RESULT_BUFFER)?;
@@ -82,7 +79,6 @@ fn run() -> anyhow::Result<()> {
     let vehicle = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, RESULT_BUFFER)?;
     let status_in = MsgSubscriber::<StageStatus>::new(&node, &STATUS, RESULT_BUFFER)?;
     let overlays = MsgSubscriber::<DetectOverlay>::new(&node, &OVERLAY, OVERLAY.qos.subscriber_max_buffer_size)?;
-    let mut status = StatusReporter::new(&node, "recorder", config.run.status_interval_ms)?;
 
     // Fixed pool of frame buffers: `free` holds empty ones, `queue` carries filled ones.
     let (free_tx, free_rx) = mpsc::sync_channel::<Vec<u8>>(cfg.queue_frames);

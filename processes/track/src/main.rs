@@ -3,9 +3,8 @@
 
 use clap::Parser;
 use hubtrack_runtime::config::ConfigArgs;
-use hubtrack_runtime::ipc::{open_node, MsgPublisher, MsgSubscriber};
-use hubtrack_runtime::shutdown::Shutdown;
-use hubtrack_runtime::status::StatusReporter;
+use hubtrack_runtime::ipc::{MsgPublisher, MsgSubscriber};
+use hubtrack_runtime::stage::Stage;
 use hubtrack_track::Tracker;
 use hubtrack_types::services::{DETECTIONS, TRACK, VEHICLE};
 use hubtrack_types::time::monotonic_ns;
@@ -29,17 +28,13 @@ fn main() {
 }
 
 fn run() -> anyhow::Result<()> {
-    hubtrack_runtime::logging::init("track");
     let args = Args::parse();
-    let config = args.config.load()?;
-    let shutdown = Shutdown::install()?;
+    let Stage { config, shutdown, node, mut status } = Stage::start("track", &args.config)?;
     let mut tracker = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
 
-    let node = open_node("track")?;
     let detections = MsgSubscriber::<Detection>::new(&node, &DETECTIONS, DETECTION_BUFFER)?;
     let vehicle = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, 4)?;
     let track = MsgPublisher::<TrackState>::new(&node, &TRACK)?;
-    let mut status = StatusReporter::new(&node, "track", config.run.status_interval_ms)?;
     let mut last_vehicle: Option<VehicleState> = None;
     let mut last_seq: Option<u64> = None;
 
