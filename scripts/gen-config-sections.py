@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the [detect] and [track] sections of config/hubtrack.toml from the code.
+"""Writes the [detect], [track], [control] and [sim] sections of config/hubtrack.toml from the code.
 
 Values come from `hubtrack config --print` (the built-in defaults); the comment above each key is
 the doc comment of its field in libs/<crate>/src/params.rs. Run after changing a parameter:
@@ -14,7 +14,13 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 MARKER = "# ---- generated below by scripts/gen-config-sections.py from the parameter docs; edit the code, not this ----"
-SECTIONS = {"detect": ("libs/detect/src/params.rs", "DetectConfig"), "track": ("libs/track/src/params.rs", "TrackConfig")}
+# section -> (source files holding its structs, top-level struct)
+SECTIONS = {
+    "detect": (["libs/detect/src/params.rs"], "DetectConfig"),
+    "track": (["libs/track/src/params.rs"], "TrackConfig"),
+    "control": (["libs/runtime/src/config.rs", "libs/approach/src/params.rs"], "ControlConfig"),
+    "sim": (["libs/sim/src/config.rs"], "SimConfig"),
+}
 
 
 def parse_structs(text):
@@ -79,8 +85,11 @@ def main():
     cfg = ROOT / "config" / "hubtrack.toml"
     head = cfg.read_text().split(MARKER)[0].rstrip("\n")
     out = [head, "", MARKER]
-    for section, (src, struct) in SECTIONS.items():
-        emit(out, section, struct, parse_structs((ROOT / src).read_text()), defaults[section])
+    for section, (sources, struct) in SECTIONS.items():
+        structs = {}
+        for src in sources:
+            structs.update(parse_structs((ROOT / src).read_text()))
+        emit(out, section, struct, structs, defaults[section])
     cfg.write_text("\n".join(out) + "\n")
     print(f"wrote {cfg}")
 

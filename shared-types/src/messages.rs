@@ -592,3 +592,22 @@ pub struct SupervisorStatus {
     /// The stages in start order.
     pub stages: [SupervisedStage; MAX_STAGES],
 }
+
+/// The simulator's clock (published by the `sim` stage only).
+///
+/// In a simulated flight the pipeline clock — the clock of every `capture_ns` — is simulated
+/// time, which in lockstep runs faster or slower than the wall clock. Stages that stamp inputs
+/// arriving from outside iceoryx2 (control stamps MAVLink messages) read this clock instead of
+/// `CLOCK_MONOTONIC` when `control.clock = "sim"`, so that every time stamp in a simulated run
+/// is on one clock (as ROS's `use_sim_time`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[type_name("hubtrack::SimClock")]
+pub struct SimClock {
+    /// Simulated time on the pipeline clock (sim start's `CLOCK_MONOTONIC` + simulated ns).
+    pub now_ns: u64,
+    /// Physics steps since the simulation started.
+    pub step: u64,
+    /// Wall-clock `CLOCK_MONOTONIC` when this was published.
+    pub publish_ns: u64,
+}

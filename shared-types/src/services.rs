@@ -146,5 +146,14 @@ pub const SUPERVISOR: ServiceSpec = ServiceSpec {
     },
 };
 
+/// [`crate::SimClock`]: simulated time, published by the `sim` stage before everything it sends
+/// for that instant (history 1: a late subscriber gets the current time at once).
+pub const CLOCK: ServiceSpec = ServiceSpec {
+    channel: "clock",
+    name: "hubtrack/clock",
+    event_name: "hubtrack/clock/event",
+    qos: RESULT_QOS,
+};
+
 /// All fixed-size result services, in pipeline order (frames excluded).
 pub const RESULT_SERVICES: [ServiceSpec; 5] = [DETECTIONS, TRACK, SETPOINTS, VEHICLE, STATUS];

@@ -56,6 +56,71 @@ pub struct Config {
     pub detect: hubtrack_detect::params::DetectConfig,
     /// The track stage (and `hubtrack track`).
     pub track: hubtrack_track::params::TrackConfig,
+    /// The control stage: the approach and the MAVLink link to the autopilot.
+    pub control: ControlConfig,
+    /// The simulator stage (simulated ArduCopter and camera, for the demo and `hubtrack fly`).
+    pub sim: hubtrack_sim::SimConfig,
+}
+
+/// Which clock control stamps MAVLink input with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ClockSource {
+    /// `CLOCK_MONOTONIC`, the clock of real cameras (flight).
+    Monotonic,
+    /// The simulator's clock (service `clock`), so a lockstep simulation has one time base.
+    Sim,
+}
+
+/// `[control]`: the approach controller and the MAVLink link to the autopilot.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ControlConfig {
+    /// MAVLink link to the autopilot: "udpin:HOST:PORT" (listen; replies go to the sender),
+    /// "udpout:HOST:PORT" (send there), or "serial:DEVICE:BAUD" (e.g. "serial:/dev/ttyAMA0:921600").
+    /// Default "udpin:127.0.0.1:14550"; the simulator sends there.
+    pub link: String,
+    /// Our MAVLink system id, [1, 255]: the vehicle's own (ArduPilot SYSID_THISMAV, default 1).
+    pub system_id: u8,
+    /// Our MAVLink component id, [1, 255]: 191 = MAV_COMP_ID_ONBOARD_COMPUTER.
+    pub component_id: u8,
+    /// Frame of the velocity setpoints: "body_offset_ned" (MAV_FRAME_BODY_OFFSET_NED = 9, velocities
+    /// along the vehicle's heading, what ArduCopter documents for body velocities) or "body_ned" (8).
+    pub setpoint_frame: hubtrack_mavlink::SetpointFrame,
+    /// Setpoints are sent on every new track state and at least this often while inputs are fresh, [10, 50] Hz.
+    pub setpoint_rate_hz: f64,
+    /// Our HEARTBEAT to the autopilot, [0.2, 10] Hz (ArduPilot expects 1 Hz).
+    pub heartbeat_hz: f64,
+    /// No autopilot HEARTBEAT for this long means the link is lost: stop commanding, [500, 30000] ms.
+    pub link_timeout_ms: u64,
+    /// Attitude and position older than this are not used, [50, 5000] ms.
+    pub vehicle_timeout_ms: u64,
+    /// No track state for this long (wall clock) means our inputs are stale: send nothing at all,
+    /// so ArduPilot's guided-mode timeout stops the vehicle, [50, 5000] ms.
+    pub input_timeout_ms: u64,
+    /// Clock used to stamp autopilot messages: "monotonic" (flight) or "sim" (simulated flights,
+    /// where the simulator's clock drives the pipeline).
+    pub clock: ClockSource,
+    /// The T1/T2/T3 approach.
+    pub approach: hubtrack_approach::ApproachConfig,
+}
+
+impl Default for ControlConfig {
+    fn default() -> Self {
+        ControlConfig {
+            link: "udpin:127.0.0.1:14550".into(),
+            system_id: 1,
+            component_id: 191,
+            setpoint_frame: hubtrack_mavlink::SetpointFrame::BodyOffsetNed,
+            setpoint_rate_hz: 15.0,
+            heartbeat_hz: 1.0,
+            link_timeout_ms: 3000,
+            vehicle_timeout_ms: 500,
+            input_timeout_ms: 500,
+            clock: ClockSource::Monotonic,
+            approach: Default::default(),
+        }
+    }
 }
 
 /// `[run]`: which stages `hubtrack run` starts and how it stops them.
@@ -144,7 +209,7 @@ impl Default for RunConfig {
 }
 
 /// The stage names `[run].stages` may contain.
-pub const KNOWN_STAGES: &[&str] = &["capture", "recorder", "detect", "track"];
+pub const KNOWN_STAGES: &[&str] = &["capture", "sim", "recorder", "detect", "track", "control"];
 
 /// Which frame source the capture stage uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -504,6 +569,21 @@ impl Config {
         range("recorder.flush_interval_ms", rec.flush_interval_ms, 10, 60_000)?;
         self.detect.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
         self.track.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
+        let ctl = &self.control;
+        ctl.link.parse::<hubtrack_mavlink::Endpoint>().map_err(|e| out_of_range("control.link", format!("{:?}", ctl.link), e))?;
+        range("control.system_id", ctl.system_id, 1, 255)?;
+        range("control.component_id", ctl.component_id, 1, 255)?;
+        range("control.setpoint_rate_hz", ctl.setpoint_rate_hz, 10.0, 50.0)?;
+        range("control.heartbeat_hz", ctl.heartbeat_hz, 0.2, 10.0)?;
+        range("control.link_timeout_ms", ctl.link_timeout_ms, 500, 30_000)?;
+        range("control.vehicle_timeout_ms", ctl.vehicle_timeout_ms, 50, 5000)?;
+        range("control.input_timeout_ms", ctl.input_timeout_ms, 50, 5000)?;
+        ctl.approach.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
+        self.sim.link.parse::<hubtrack_mavlink::Endpoint>().map_err(|e| out_of_range("sim.link", format!("{:?}", self.sim.link), e))?;
+        self.sim.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
+        if self.run.stages.iter().any(|s| s == "sim") && self.run.stages.iter().any(|s| s == "capture") {
+            return Err(out_of_range("run.stages", format!("{:?}", self.run.stages), "either \"capture\" or \"sim\" (both publish frames)"));
+        }
         // Detect and track each estimate distance and yaw: their lens and turbine must agree.
         let (dc, tc) = (&self.detect.camera, &self.track);
         for (dk, dv, tk, tv) in [

@@ -17,7 +17,8 @@ use std::time::Duration;
 
 /// Longest sleep between checks for shutdown when no frame comes.
 const FRAME_WAIT: Duration = Duration::from_millis(50);
-/// A vehicle attitude older than this is not used for roll compensation.
+/// A vehicle attitude further than this from the frame's capture time is not used for roll
+/// compensation (both on the pipeline clock, which is the simulator's clock in a simulation).
 const MAX_ATTITUDE_AGE_NS: u64 = 200_000_000;
 
 #[derive(Parser)]
@@ -61,7 +62,7 @@ fn run() -> anyhow::Result<()> {
             data: sample.payload(),
         };
         let roll_rad = last_vehicle
-            .filter(|v| v.attitude_valid && recv_ns.saturating_sub(v.recv_ns) < MAX_ATTITUDE_AGE_NS)
+            .filter(|v| v.attitude_valid && header.capture_ns.abs_diff(v.recv_ns) < MAX_ATTITUDE_AGE_NS)
             .map(|v| v.roll_rad);
         let output = match detector.detect(&image, &Hints { roll_rad, predicted_hub_px: None }) {
             Ok(o) => o,

@@ -47,8 +47,9 @@ pub struct Stage {
 }
 
 impl Stage {
-    /// Starts `binary args...`, forwarding its stdout and stderr line by line to ours.
-    pub fn spawn(name: &str, binary: &Path, args: &[String]) -> anyhow::Result<Stage> {
+    /// Starts `binary args...`, forwarding its stdout and stderr line by line to ours (its stdout
+    /// to our stderr when `stdout_to_stderr`, to keep our stdout machine-readable).
+    pub fn spawn(name: &str, binary: &Path, args: &[String], stdout_to_stderr: bool) -> anyhow::Result<Stage> {
         let mut child = Command::new(binary)
             .args(args)
             .stdin(Stdio::null())
@@ -56,7 +57,7 @@ impl Stage {
             .stderr(Stdio::piped())
             .spawn()
             .with_context(|| format!("starting stage {name} ({})", binary.display()))?;
-        forward(name, child.stdout.take().expect("piped"), false);
+        forward(name, child.stdout.take().expect("piped"), stdout_to_stderr);
         forward(name, child.stderr.take().expect("piped"), true);
         Ok(Stage {
             name: name.into(),

@@ -4,6 +4,7 @@ mod bench;
 mod detect_cmd;
 mod eval;
 mod eval_seq;
+mod fly;
 mod launch;
 mod replay;
 mod score;
@@ -46,6 +47,9 @@ enum Command {
     },
     /// Subscribe to the frames service and print one JSON line per frame received.
     Tap(TapArgs),
+    /// Print the messages of one result service as JSON lines, like `ros2 topic echo`
+    /// (detections, track, setpoints, vehicle, status, clock).
+    Echo(EchoArgs),
     /// Render one synthetic frame exactly as the capture stage would publish it.
     Render(RenderArgs),
     /// Detect the hub in photos: one JSON object per image on stdout.
@@ -62,6 +66,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Fly seeded simulated approaches through the real processes; a table (or JSON lines) of outcomes.
+    Fly(fly::FlyArgs),
     /// Replay a recording's inputs through chosen stages and record their new outputs.
     Replay(replay::ReplayArgs),
     /// Show each stage of the running pipeline: pid, state, uptime, restarts, rates, drops, last error.
@@ -120,6 +126,18 @@ struct TapArgs {
 }
 
 #[derive(clap::Args)]
+struct EchoArgs {
+    /// The service: detections, track, setpoints, vehicle, status or clock.
+    channel: String,
+    /// Stop after this many messages.
+    #[arg(long)]
+    count: Option<u64>,
+    /// Stop after this many seconds.
+    #[arg(long)]
+    duration: Option<f64>,
+}
+
+#[derive(clap::Args)]
 struct RenderArgs {
     #[command(flatten)]
     config: ConfigArgs,
@@ -146,6 +164,7 @@ fn main() {
         Command::Run(a) => supervise::run(a),
         Command::Recover { input, output } => recover(&input, output),
         Command::Tap(a) => tap(a),
+        Command::Echo(a) => echo(a),
         Command::Render(a) => render(a),
         Command::Bench(BenchCommand::Frames(a)) => bench::frames(a),
         Command::Bench(BenchCommand::Pipeline(a)) => bench::pipeline(a),
@@ -155,6 +174,7 @@ fn main() {
         Command::Config { config, print } => check_config(&config, print),
         Command::Status { json, listen } => status(json, listen),
         Command::Replay(a) => replay::run(a),
+        Command::Fly(a) => fly::run(a),
         Command::Latency { file, json } => latency(&file, json),
     };
     if let Err(e) = result {
@@ -190,7 +210,10 @@ pub(crate) fn print_summary(elapsed: Duration, statuses: &BTreeMap<String, Stage
             if c.errors > 0 { format!(" (last: {})", c.last_error.as_str()) } else { String::new() }
         );
     }
-    for stage in ["detect", "track"] {
+    if let Some(s) = statuses.get("sim") {
+        println!("  sim       {} frames rendered, {} setpoints seen, {} errors", s.outputs, s.inputs, s.errors);
+    }
+    for stage in ["detect", "track", "control"] {
         if let Some(s) = statuses.get(stage) {
             println!("  {stage:<9} {} in, {} out, {} skipped, {} errors", s.inputs, s.outputs, s.skipped, s.errors);
         }
@@ -388,6 +411,44 @@ fn tap(args: TapArgs) -> anyhow::Result<()> {
                 break;
             }
         }
+    }
+    Ok(())
+}
+
+fn echo(args: EchoArgs) -> anyhow::Result<()> {
+    use hubtrack_types::services::{CLOCK, DETECTIONS, SETPOINTS, TRACK, VEHICLE};
+    match args.channel.as_str() {
+        "detections" => echo_service::<hubtrack_types::Detection>(&DETECTIONS, &args),
+        "track" => echo_service::<hubtrack_types::TrackState>(&TRACK, &args),
+        "setpoints" => echo_service::<hubtrack_types::Setpoint>(&SETPOINTS, &args),
+        "vehicle" => echo_service::<hubtrack_types::VehicleState>(&VEHICLE, &args),
+        "status" => echo_service::<StageStatus>(&STATUS, &args),
+        "clock" => echo_service::<hubtrack_types::SimClock>(&CLOCK, &args),
+        other => bail!("unknown channel {other:?}: one of detections, track, setpoints, vehicle, status, clock"),
+    }
+}
+
+fn echo_service<T>(spec: &hubtrack_types::services::ServiceSpec, args: &EchoArgs) -> anyhow::Result<()>
+where
+    T: std::fmt::Debug + Copy + serde::Serialize + iceoryx2::prelude::ZeroCopySend + 'static,
+{
+    use std::io::Write;
+    let shutdown = Shutdown::install()?;
+    let node = open_node("echo")?;
+    let sub = MsgSubscriber::<T>::new(&node, spec, 64)?;
+    let t0 = Instant::now();
+    let mut n = 0u64;
+    let mut out = std::io::stdout().lock();
+    while !shutdown.requested() && !args.duration.is_some_and(|d| t0.elapsed().as_secs_f64() >= d) {
+        sub.wait(Duration::from_millis(20));
+        while let Some(msg) = sub.receive()? {
+            writeln!(out, "{}", serde_json::to_string(&msg)?)?;
+            n += 1;
+            if args.count.is_some_and(|c| n >= c) {
+                return Ok(());
+            }
+        }
+        out.flush()?;
     }
     Ok(())
 }

@@ -174,7 +174,7 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     let mut rec_args = cfg_args.clone();
     rec_args.extend(["--output".to_string(), output.display().to_string()]);
     for (name, a) in std::iter::once(("recorder", rec_args)).chain(stages.iter().map(|s| (*s, cfg_args.clone()))) {
-        let stage = Stage::spawn(name, &stage_binary(name)?, &a)?;
+        let stage = Stage::spawn(name, &stage_binary(name)?, &a, false)?;
         let pid = stage.pid();
         processes.push(stage);
         let t0 = Instant::now();

@@ -23,7 +23,9 @@ use std::time::{Duration, Instant};
 
 /// Canonical start order; stages stop in reverse (control first, so the vehicle is told to hold
 /// first; recorder last, so the recording sees everything).
-pub const PIPELINE_ORDER: &[&str] = &["recorder", "capture", "detect", "track"];
+/// The simulator starts last: its first frame finds the whole pipeline ready (in lockstep it
+/// would otherwise wait for stages still starting), and it stops first.
+pub const PIPELINE_ORDER: &[&str] = &["recorder", "capture", "detect", "track", "control", "sim"];
 /// Supervisor loop period (bounds restart and liveness reaction time).
 const TICK: Duration = Duration::from_millis(20);
 /// How often the supervisor publishes its status.
@@ -64,7 +66,36 @@ struct Supervisor {
     config: Config,
     config_args: ConfigArgs,
     record: PathBuf,
+    outcome: Option<PathBuf>,
+    stage_stdout_to_stderr: bool,
     stages: Vec<Supervised>,
+}
+
+/// How to run the pipeline once.
+pub struct RunOptions {
+    /// The validated configuration (file + overrides).
+    pub config: Config,
+    /// The same, as forwarded to the stages.
+    pub config_args: ConfigArgs,
+    /// Recording file (used when the recorder is among the stages).
+    pub record: PathBuf,
+    /// Stop after this long.
+    pub duration: Option<Duration>,
+    /// The simulator writes its flight outcome here.
+    pub outcome: Option<PathBuf>,
+    /// Print the start banner and the summary, and forward stage stdout to stdout. Off for
+    /// tools whose stdout is machine-readable (`hubtrack fly --json`): stage output goes to stderr.
+    pub interactive: bool,
+}
+
+/// What a run left behind.
+pub struct RunReport {
+    /// Recording segments written (first is the main file).
+    pub segments: Vec<PathBuf>,
+    /// Wall-clock duration.
+    pub elapsed: Duration,
+    /// Why the run ended early with an error, if it did.
+    pub failure: Option<String>,
 }
 
 impl Supervisor {
@@ -74,13 +105,17 @@ impl Supervisor {
             args.push("--output".into());
             args.push(segment_path(&self.record, s.segment).display().to_string());
         }
+        if let (true, Some(outcome)) = (s.name == "sim", &self.outcome) {
+            args.push("--outcome".into());
+            args.push(outcome.display().to_string());
+        }
         args
     }
 
     fn start(&mut self, i: usize) -> anyhow::Result<()> {
         let args = self.args_for(&self.stages[i]);
         let s = &mut self.stages[i];
-        let stage = Stage::spawn(s.name, &s.binary, &args)?;
+        let stage = Stage::spawn(s.name, &s.binary, &args, self.stage_stdout_to_stderr)?;
         log::info!("started {} (pid {})", s.name, stage.pid());
         s.process = Some(stage);
         s.state = StageState::Starting;
@@ -150,10 +185,28 @@ impl Supervisor {
     }
 }
 
-/// Runs the pipeline until the duration ends, a signal arrives, or the source ends.
+/// `hubtrack run`: runs the pipeline until the duration ends, a signal arrives, or the source
+/// (camera or simulated flight) ends.
 pub fn run(args: crate::RunArgs) -> anyhow::Result<()> {
     let config = args.config.load()?;
     let record = args.record.clone().unwrap_or_else(|| config.run.record_dir.join(crate::timestamped_name()));
+    let report = supervise(RunOptions {
+        config,
+        config_args: args.config.clone(),
+        record,
+        duration: args.duration.map(Duration::from_secs_f64),
+        outcome: None,
+        interactive: true,
+    })?;
+    match report.failure {
+        Some(f) => bail!(f),
+        None => Ok(()),
+    }
+}
+
+/// Runs the stages of `opts.config` once; see the module docs.
+pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
+    let RunOptions { config, config_args, record, duration, outcome, interactive } = opts;
     let shutdown = Shutdown::install()?;
     let node = open_node("supervisor")?;
     let heartbeats = MsgSubscriber::<StageStatus>::new(&node, &STATUS, 64)?;
@@ -179,8 +232,22 @@ pub fn run(args: crate::RunArgs) -> anyhow::Result<()> {
             segment: 0,
         });
     }
-    println!("hubtrack run: stages {}; recording to {}", names.join(", "), record.display());
-    let mut sup = Supervisor { config: config.clone(), config_args: args.config.clone(), record: record.clone(), stages };
+    let recording = names.contains(&"recorder");
+    if interactive {
+        println!(
+            "hubtrack run: stages {}; {}",
+            names.join(", "),
+            if recording { format!("recording to {}", record.display()) } else { "not recording".into() }
+        );
+    }
+    let mut sup = Supervisor {
+        config: config.clone(),
+        config_args,
+        record: record.clone(),
+        outcome,
+        stage_stdout_to_stderr: !interactive,
+        stages,
+    };
     let startup = Duration::from_millis(config.run.startup_timeout_ms);
     let liveness = Duration::from_millis(config.run.restart.liveness_timeout_ms);
 
@@ -216,7 +283,7 @@ pub fn run(args: crate::RunArgs) -> anyhow::Result<()> {
     }
 
     let started = Instant::now();
-    let deadline = args.duration.map(Duration::from_secs_f64);
+    let deadline = duration;
     let mut status_at = Instant::now() - STATUS_PERIOD;
     while failure.is_none() && !shutdown.requested() && !deadline.is_some_and(|d| started.elapsed() >= d) {
         std::thread::sleep(TICK);
@@ -228,9 +295,9 @@ pub fn run(args: crate::RunArgs) -> anyhow::Result<()> {
                 if let Some(st) = p.poll() {
                     let code = exit_code(st);
                     let clean = st.success();
-                    if clean && s.name == "capture" {
-                        // The source ended (end of file, max_frames): the run is complete.
-                        log::info!("capture finished: ending the run");
+                    if clean && (s.name == "capture" || s.name == "sim") {
+                        // The source ended (end of file, max_frames, flight over): the run is complete.
+                        log::info!("{} finished: ending the run", s.name);
                         s.process = None;
                         s.state = StageState::Stopped;
                         failure = Some(String::new());
@@ -286,19 +353,21 @@ pub fn run(args: crate::RunArgs) -> anyhow::Result<()> {
         Some(r) => (0..=r.segment).map(|n| segment_path(&record, n)).filter(|p| p.exists()).collect(),
         None => Vec::new(),
     };
-    crate::print_summary(elapsed, &last_status, &segments);
-    for s in &sup.stages {
-        if s.restarts > 0 || s.state == StageState::Failed {
-            println!("  {:<9} {} restarts{}", s.name, s.restarts, if s.state == StageState::Failed { ", given up" } else { "" });
+    if interactive {
+        crate::print_summary(elapsed, &last_status, &segments);
+        for s in &sup.stages {
+            if s.restarts > 0 || s.state == StageState::Failed {
+                println!("  {:<9} {} restarts{}", s.name, s.restarts, if s.state == StageState::Failed { ", given up" } else { "" });
+            }
         }
     }
-    if let Some(f) = failure {
-        bail!(f);
-    }
-    if let Some(s) = sup.stages.iter().find(|s| s.state == StageState::Failed) {
-        bail!("stage {} was given up on ({})", s.name, s.last_reason);
-    }
-    Ok(())
+    let failure = failure.or_else(|| {
+        sup.stages
+            .iter()
+            .find(|s| s.state == StageState::Failed)
+            .map(|s| format!("stage {} was given up on ({})", s.name, s.last_reason))
+    });
+    Ok(RunReport { segments, elapsed, failure })
 }
 
 fn drain(

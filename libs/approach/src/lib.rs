@@ -1,0 +1,651 @@
+//! The approach controller: turns the hub track into body-frame velocity and yaw-rate setpoints
+//! that bring a multicopter to a point in front of a wind-turbine hub.
+//!
+//! It implements the navigation method of the thesis (Stokkeland 2014, section 7.1,
+//! algorithm 2), made safe and smooth for a real vehicle:
+//!
+//! - **T1 [`ApproachTask::CentreHub`]**: the hub is outside the target box. Yaw towards it
+//!   (horizontal error) and climb/descend (vertical error). Its corrections stay on during T2 and
+//!   T3 so the hub stays centred while the vehicle moves.
+//! - **T2 [`ApproachTask::ReduceYaw`]**: the relative yaw is too large. Move sideways in
+//!   proportion to the lateral offset from the rotor axis (distance × sin(yaw)). With T1 yawing
+//!   to keep the hub centred (plus a feed-forward of the arc's yaw rate) the vehicle flies an arc
+//!   round the hub. Its correction stays on during T3.
+//! - **T3 [`ApproachTask::Approach`]**: move forward (or back) to the target distance, slower as
+//!   the vehicle closes in.
+//!
+//! The reported task is the highest-priority task whose condition is unmet, with hysteresis
+//! (enter at an outer threshold, satisfied at an inner one). When a higher task takes over,
+//! the lower tasks' velocity components ramp to zero through the rate limits. When all three are
+//! within their inner tolerances for `done_hold_s` the controller reports
+//! [`ApproachTask::Done`] and hovers; it leaves Done only when an error exceeds an outer
+//! threshold.
+//!
+//! Safety: without a usable track (none, acquiring, lost, or older than `max_track_age_s`) it
+//! commands [`ApproachTask::Hold`] (all zero at once), then after `search_after_s` (or when the
+//! tracker asks) a bounded [`ApproachTask::Search`] rotation towards the side where the hub was
+//! last seen. Forward motion needs a valid distance estimate. Bad data (lost autopilot link,
+//! non-finite numbers, a zero image size, time running backwards) gives a sticky
+//! [`ApproachTask::Abort`] with all zero, cleared by [`Approach::reset`] or after
+//! `abort_recover_s` of good inputs.
+//!
+//! Conventions: image px origin top-left, x right, y down. Body frame x forward, y right, z down
+//! (climbing is `vz < 0`); yaw rate positive clockwise seen from above (turning right). Relative
+//! yaw positive when the camera stands on the turbine's own left; reducing it means moving to
+//! the vehicle's left (`vy < 0`).
+
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+mod params;
+
+pub use hubtrack_types::params::ParamError;
+pub use params::ApproachConfig;
+
+use hubtrack_types::{ApproachTask, TrackMode, TrackState, VehicleState};
+
+/// Longest reason text, bytes (it travels as a [`hubtrack_types::Text64`]).
+pub const MAX_REASON_BYTES: usize = 64;
+
+/// The inputs of one controller step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ApproachInput<'a> {
+    /// Time of this step on the pipeline clock (monotonic ns); normally the newest track's
+    /// `stamps.capture_ns`. It must not run backwards (that is bad data and aborts).
+    pub now_ns: u64,
+    /// The newest track state, `None` if there has been none yet.
+    pub track: Option<&'a TrackState>,
+    /// The newest vehicle state, `None` if there has been none. Its absence is not an abort:
+    /// the calling process decides whether to send setpoints at all.
+    pub vehicle: Option<&'a VehicleState>,
+}
+
+/// A change of the active task.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Transition {
+    /// The task before this step.
+    pub from: ApproachTask,
+    /// The task from this step on.
+    pub to: ApproachTask,
+    /// Why (the new task's reason).
+    pub reason: String,
+}
+
+/// The setpoint of one controller step (body frame).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ApproachOutput {
+    /// The active task.
+    pub task: ApproachTask,
+    /// Forward velocity, m/s.
+    pub vx_m_s: f64,
+    /// Right velocity, m/s.
+    pub vy_m_s: f64,
+    /// Down velocity, m/s (climbing is negative).
+    pub vz_m_s: f64,
+    /// Yaw rate, rad/s, positive clockwise seen from above (turning right).
+    pub yaw_rate_rad_s: f64,
+    /// Why this task is active, with numbers; at most 64 bytes.
+    pub reason: String,
+    /// `Some` when the task changed in this step.
+    pub transition: Option<Transition>,
+}
+
+/// The velocity command carried from one step to the next (for the rate limits).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct Command {
+    vx: f64,
+    vy: f64,
+    vz: f64,
+    /// rad/s
+    yaw_rate: f64,
+}
+
+/// Sticky abort state.
+#[derive(Debug, Clone, PartialEq)]
+struct AbortState {
+    /// What went wrong first.
+    why: String,
+    /// Start of the current run of good inputs.
+    good_since_ns: Option<u64>,
+}
+
+/// The T1/T2/T3 approach controller. Pure: no I/O, no clock; time comes in with each input.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Approach {
+    config: ApproachConfig,
+    /// The task reported by the last step.
+    task: ApproachTask,
+    /// The last command (rate-limit state).
+    cmd: Command,
+    /// `now_ns` of the last step.
+    prev_now_ns: Option<u64>,
+    /// `capture_ns` of the newest track seen (to detect time running backwards).
+    last_capture_ns: Option<u64>,
+    abort: Option<AbortState>,
+    /// Filtered relative yaw, degrees (None: no valid yaw since the last reset).
+    yaw_f: Option<f64>,
+    /// Filtered distance, m.
+    dist_f: Option<f64>,
+    /// `capture_ns` of the track last fed to the filters (a repeated track is not re-filtered).
+    filter_capture_ns: Option<u64>,
+    /// Hysteresis state: the task's condition is unmet.
+    t1_active: bool,
+    t2_active: bool,
+    t3_active: bool,
+    /// Done latched.
+    done: bool,
+    /// Since when all inner tolerances have held (for `done_hold_s`).
+    at_target_since_ns: Option<u64>,
+    /// Since when there has been no usable track (None while tracking).
+    unusable_since_ns: Option<u64>,
+    /// Search rotation so far, degrees.
+    search_turned_deg: f64,
+    /// The search has used up `search_max_turn_deg`.
+    search_exhausted: bool,
+    /// The hub was last seen right of centre (search direction); `None` if never seen.
+    last_seen_right: Option<bool>,
+}
+
+/// Cuts a reason to [`MAX_REASON_BYTES`] at a char boundary.
+fn truncate_reason(mut s: String) -> String {
+    if s.len() > MAX_REASON_BYTES {
+        let mut end = MAX_REASON_BYTES;
+        while !s.is_char_boundary(end) {
+            end -= 1;
+        }
+        s.truncate(end);
+    }
+    s
+}
+
+/// `v` limited to `[lo, hi]`; never panics (unlike `f64::clamp` with odd bounds) and maps NaN to
+/// `lo`.
+fn limit(v: f64, lo: f64, hi: f64) -> f64 {
+    let v = if v.is_nan() { lo } else { v };
+    v.max(lo).min(hi)
+}
+
+/// Symmetric limit `[-m, m]`.
+fn limit_abs(v: f64, m: f64) -> f64 {
+    limit(v, -m, m)
+}
+
+/// Error beyond the deadband, continuous at its edge (no step when the hub crosses it).
+fn deadband(e: f64, db: f64) -> f64 {
+    if e > db {
+        e - db
+    } else if e < -db {
+        e + db
+    } else {
+        0.0
+    }
+}
+
+/// Moves `cur` towards `target` by at most `rate * dt`.
+fn slew(cur: f64, target: f64, rate: f64, dt: f64) -> f64 {
+    let step = rate * dt;
+    cur + limit(target - cur, -step, step)
+}
+
+/// First-order low-pass update with time constant `tau` over `dt`.
+fn low_pass(prev: Option<f64>, x: f64, tau: f64, dt: f64) -> f64 {
+    match prev {
+        None => x,
+        Some(_) if tau <= 0.0 => x,
+        Some(p) => p + (1.0 - (-dt / tau).exp()) * (x - p),
+    }
+}
+
+/// Seconds between two monotonic stamps (`b` after `a`, else 0).
+fn secs(a: u64, b: u64) -> f64 {
+    b.saturating_sub(a) as f64 * 1e-9
+}
+
+/// What an unusable track looks like, for the Hold/Search reasons.
+fn unusable_reason(track: Option<&TrackState>, age_s: f64, max_age_s: f64) -> Option<String> {
+    let Some(t) = track else { return Some("no track yet".into()) };
+    match t.mode {
+        TrackMode::Acquiring => Some("track acquiring".into()),
+        TrackMode::Lost => Some("track lost".into()),
+        TrackMode::Tracking | TrackMode::Coasting if age_s > max_age_s => {
+            Some(format!("track stale {age_s:.2} s > {max_age_s:.2}"))
+        }
+        TrackMode::Tracking | TrackMode::Coasting => None,
+    }
+}
+
+impl Approach {
+    /// A controller with a validated config, in [`ApproachTask::Hold`].
+    pub fn new(config: ApproachConfig) -> Result<Approach, ParamError> {
+        config.validate()?;
+        Ok(Approach {
+            config,
+            task: ApproachTask::Hold,
+            cmd: Command::default(),
+            prev_now_ns: None,
+            last_capture_ns: None,
+            abort: None,
+            yaw_f: None,
+            dist_f: None,
+            filter_capture_ns: None,
+            t1_active: true,
+            t2_active: true,
+            t3_active: true,
+            done: false,
+            at_target_since_ns: None,
+            unusable_since_ns: None,
+            search_turned_deg: 0.0,
+            search_exhausted: false,
+            last_seen_right: None,
+        })
+    }
+
+    /// The task reported by the last step ([`ApproachTask::Hold`] before the first).
+    pub fn task(&self) -> ApproachTask {
+        self.task
+    }
+
+    /// The config in use.
+    pub fn config(&self) -> &ApproachConfig {
+        &self.config
+    }
+
+    /// Back to the state of [`Approach::new`]: clears an abort, the filters, the timers and the
+    /// rate-limit state (the next step starts from zero velocity).
+    pub fn reset(&mut self) {
+        let config = self.config.clone();
+        // The config was validated by `new`, so this cannot fail; keep the old state if it did.
+        if let Ok(fresh) = Approach::new(config) {
+            *self = fresh;
+        }
+    }
+
+    /// Forgets everything learnt from the current track (filters, hysteresis, Done), so the
+    /// next usable track starts the tasks afresh from T1.
+    fn reset_tasks(&mut self) {
+        self.yaw_f = None;
+        self.dist_f = None;
+        self.filter_capture_ns = None;
+        // Unmet until shown otherwise: a fresh track must bring each error inside its inner
+        // tolerance before the controller moves on (as at start-up).
+        self.t1_active = true;
+        self.t2_active = true;
+        self.t3_active = true;
+        self.done = false;
+        self.at_target_since_ns = None;
+    }
+
+    /// One controller step. Never panics; every output is finite and within the configured
+    /// limits.
+    pub fn step(&mut self, input: &ApproachInput) -> ApproachOutput {
+        let now = input.now_ns;
+        let (dt, clock_backwards) = match self.prev_now_ns {
+            None => (0.0, false),
+            Some(p) if now < p => (0.0, true),
+            Some(p) => (secs(p, now).min(self.config.max_dt_s), false),
+        };
+        self.prev_now_ns = Some(now);
+
+        let bad = self.check_inputs(input, clock_backwards);
+        let (task, cmd, reason) = match bad {
+            Some(why) => {
+                // Start (or restart) the good-input timer from scratch: only an unbroken run
+                // of good inputs clears an abort.
+                let why = match self.abort.take() {
+                    Some(a) => a.why,
+                    None => why,
+                };
+                self.abort = Some(AbortState { why: why.clone(), good_since_ns: None });
+                self.abort_output(format!("abort: {why}"))
+            }
+            None => match self.abort.as_mut() {
+                None => self.control(now, dt, input),
+                Some(a) => {
+                    let since = *a.good_since_ns.get_or_insert(now);
+                    let good_s = secs(since, now);
+                    let why = a.why.clone();
+                    if good_s >= self.config.abort_recover_s {
+                        // Recovered: start over as after `reset` (from zero velocity), but keep
+                        // the clocks so time running backwards is still detected, and the task
+                        // so the way out of Abort is reported as a transition.
+                        let keep = (self.task, self.prev_now_ns, self.last_capture_ns);
+                        self.reset();
+                        (self.task, self.prev_now_ns, self.last_capture_ns) = keep;
+                        self.control(now, 0.0, input)
+                    } else {
+                        let recover = self.config.abort_recover_s;
+                        self.abort_output(format!("abort: {why} (ok {good_s:.1}/{recover:.1} s)"))
+                    }
+                }
+            },
+        };
+
+        let cmd = self.sanitise(cmd);
+        self.cmd = cmd;
+        let reason = truncate_reason(reason);
+        let transition = (task != self.task).then(|| Transition { from: self.task, to: task, reason: reason.clone() });
+        if let Some(t) = &transition {
+            log::debug!("approach: {:?} -> {:?}: {}", t.from, t.to, t.reason);
+        }
+        self.task = task;
+        ApproachOutput {
+            task,
+            vx_m_s: cmd.vx,
+            vy_m_s: cmd.vy,
+            vz_m_s: cmd.vz,
+            yaw_rate_rad_s: cmd.yaw_rate,
+            reason,
+            transition,
+        }
+    }
+
+    /// Why the inputs are bad data (abort), or `None`. Also records the newest capture time.
+    fn check_inputs(&mut self, input: &ApproachInput, clock_backwards: bool) -> Option<String> {
+        let mut why = None;
+        if let Some(v) = input.vehicle {
+            if !v.link_ok {
+                why = Some("vehicle link lost".to_string());
+            }
+        }
+        if clock_backwards && why.is_none() {
+            why = Some("step time went backwards".into());
+        }
+        if let Some(t) = input.track {
+            let capture = t.stamps.capture_ns;
+            if why.is_none() && self.last_capture_ns.is_some_and(|last| capture < last) {
+                why = Some("track time went backwards".into());
+            }
+            // Remember it even when bad, so a restarted clock is judged from its new origin.
+            self.last_capture_ns = Some(capture);
+            if why.is_none() {
+                why = track_data_error(t);
+            }
+        }
+        why
+    }
+
+    /// Everything zero, at once: aborting is not the moment for a gentle ramp.
+    fn abort_output(&self, reason: String) -> (ApproachTask, Command, String) {
+        (ApproachTask::Abort, Command::default(), reason)
+    }
+
+    /// Last line of defence: a non-finite or out-of-limit command becomes a limited one.
+    fn sanitise(&self, cmd: Command) -> Command {
+        let c = &self.config;
+        let fin = |v: f64| if v.is_finite() { v } else { 0.0 };
+        Command {
+            vx: limit(fin(cmd.vx), -c.max_backward_m_s, c.max_forward_m_s),
+            vy: limit_abs(fin(cmd.vy), c.max_lateral_m_s),
+            vz: limit_abs(fin(cmd.vz), c.max_vertical_m_s),
+            yaw_rate: limit_abs(fin(cmd.yaw_rate), c.max_yaw_rate_deg_s.to_radians()),
+        }
+    }
+
+    /// Normal operation (no abort): Hold/Search without a usable track, else the tasks.
+    fn control(&mut self, now: u64, dt: f64, input: &ApproachInput) -> (ApproachTask, Command, String) {
+        // Age of the track = time since its last detection + how old the state itself is.
+        let age_s = input.track.map_or(0.0, |t| t.time_since_detection_s + secs(t.stamps.capture_ns, now));
+        match (unusable_reason(input.track, age_s, self.config.max_track_age_s), input.track) {
+            (None, Some(t)) => self.tasks(now, dt, t),
+            (why, _) => self.no_track(now, dt, input.track, why.unwrap_or_default()),
+        }
+    }
+
+    /// Hold, or a bounded search rotation, while there is no usable track.
+    fn no_track(&mut self, now: u64, dt: f64, track: Option<&TrackState>, why: String) -> (ApproachTask, Command, String) {
+        if self.unusable_since_ns.is_none() {
+            self.unusable_since_ns = Some(now);
+            // The filtered yaw and distance describe a scene we no longer see: start afresh.
+            self.reset_tasks();
+        }
+        let c = &self.config;
+        let lost_s = self.unusable_since_ns.map_or(0.0, |s| secs(s, now));
+        let requested = track.is_some_and(|t| t.search_requested);
+        let want_search = (requested || lost_s >= c.search_after_s) && c.search_max_turn_deg > 0.0;
+        if want_search && !self.search_exhausted {
+            let right = self.last_seen_right.unwrap_or(true);
+            let sign = if right { 1.0 } else { -1.0 };
+            let target = sign * c.search_yaw_rate_deg_s.to_radians();
+            let rate = slew(self.cmd.yaw_rate, target, c.yaw_accel_deg_s2.to_radians(), dt);
+            self.search_turned_deg += rate.abs().to_degrees() * dt;
+            if self.search_turned_deg < c.search_max_turn_deg {
+                let side = if right { "right" } else { "left" };
+                let reason = format!(
+                    "search {side} {:.0} deg/s, {:.0}/{:.0} deg, {why}",
+                    c.search_yaw_rate_deg_s, self.search_turned_deg, c.search_max_turn_deg
+                );
+                // Translation stops at once; only the rotation ramps.
+                return (ApproachTask::Search, Command { yaw_rate: rate, ..Command::default() }, reason);
+            }
+            self.search_exhausted = true;
+        }
+        let reason = if self.search_exhausted {
+            format!("hold: searched {:.0} deg, {why}", self.search_turned_deg)
+        } else {
+            format!("hold: {why} ({lost_s:.1} s)")
+        };
+        // Without a track every motion stops at once: the vehicle must not keep flying
+        // blind towards the turbine while a ramp runs down.
+        (ApproachTask::Hold, Command::default(), reason)
+    }
+
+    /// T1/T2/T3 and Done with a usable track.
+    fn tasks(&mut self, now: u64, dt: f64, t: &TrackState) -> (ApproachTask, Command, String) {
+        let c = self.config.clone();
+        if self.unusable_since_ns.take().is_some() {
+            // Re-acquired: a fresh track, a fresh search budget.
+            self.reset_tasks();
+            self.search_turned_deg = 0.0;
+            self.search_exhausted = false;
+        }
+
+        // Normalised image errors (checked non-zero size and finite position in check_inputs).
+        let (hw, hh) = (f64::from(t.image_width) / 2.0, f64::from(t.image_height) / 2.0);
+        let ex = (t.hub_px[0] - hw) / hw;
+        let ey = (t.hub_px[1] - hh) / hh;
+        self.last_seen_right = Some(ex >= 0.0);
+
+        self.update_filters(t);
+        let yaw = self.yaw_f;
+        let dist = self.dist_f;
+
+        // Hysteresis: unmet above the outer threshold, met below the inner one, else unchanged.
+        if ex.abs() > c.box_x || ey.abs() > c.box_y {
+            self.t1_active = true;
+        } else if ex.abs() <= c.box_inner_x && ey.abs() <= c.box_inner_y {
+            self.t1_active = false;
+        }
+        match yaw {
+            Some(y) if y.abs() > c.yaw_tolerance_outer_deg => self.t2_active = true,
+            Some(y) if y.abs() <= c.yaw_tolerance_deg => self.t2_active = false,
+            Some(_) => {}
+            // Unknown yaw cannot count as met.
+            None => self.t2_active = true,
+        }
+        let derr = dist.map(|d| d - c.target_distance_m);
+        match derr {
+            Some(e) if e.abs() > c.distance_tolerance_outer_m => self.t3_active = true,
+            Some(e) if e.abs() <= c.distance_tolerance_m => self.t3_active = false,
+            Some(_) => {}
+            None => self.t3_active = true,
+        }
+        let any_active = self.t1_active || self.t2_active || self.t3_active;
+
+        // Done: entered after all inner tolerances held for done_hold_s, left only when a
+        // hysteresis flag trips at its outer threshold.
+        let at_target = ex.abs() <= c.box_inner_x
+            && ey.abs() <= c.box_inner_y
+            && yaw.is_some_and(|y| y.abs() <= c.yaw_tolerance_deg)
+            && derr.is_some_and(|e| e.abs() <= c.distance_tolerance_m);
+        if self.done && any_active {
+            self.done = false;
+            self.at_target_since_ns = None;
+        }
+        if !self.done {
+            if at_target && !any_active {
+                let since = *self.at_target_since_ns.get_or_insert(now);
+                if secs(since, now) >= c.done_hold_s {
+                    self.done = true;
+                }
+            } else {
+                self.at_target_since_ns = None;
+            }
+        }
+        if self.done {
+            let reason = format!(
+                "done: {:.2} m, yaw {:.1} deg, hub {:+.2} {:+.2}",
+                dist.unwrap_or(f64::NAN),
+                yaw.unwrap_or(f64::NAN),
+                ex,
+                ey
+            );
+            // Hover: at target nothing needs correcting until an outer threshold trips.
+            return (ApproachTask::Done, Command::default(), reason);
+        }
+
+        // --- targets of each axis ---
+        // T1 vertical: always on.
+        let vz_t = limit_abs(c.climb_gain_m_s * deadband(ey, c.deadband_y), c.max_vertical_m_s);
+
+        // T2 lateral: on in T2 and T3 (keeps the yaw small during the approach), off in T1.
+        let vy_t = match (self.t1_active, yaw) {
+            (false, Some(y)) => {
+                let d = dist.unwrap_or(c.nominal_distance_m);
+                let lateral_m = d * y.to_radians().sin();
+                // Positive yaw = on the turbine's left = the vehicle must go to its left.
+                limit_abs(-c.lateral_gain_per_s * lateral_m, c.max_lateral_m_s)
+            }
+            _ => 0.0,
+        };
+
+        // T3 forward/back, proportional, capped by the margin to min_distance.
+        let t3_law = |d: f64| {
+            let v = c.forward_gain_per_s * (d - c.target_distance_m);
+            let cap = c.slowdown_gain_per_s * (d - c.min_distance_m);
+            limit(v.min(cap), -c.max_backward_m_s, c.max_forward_m_s)
+        };
+        let vx_t = match dist {
+            Some(d) if !self.t1_active && !self.t2_active => t3_law(d),
+            // Backing away from a hub that is too close is allowed in every task.
+            Some(d) if d < c.target_distance_m - c.distance_tolerance_outer_m => t3_law(d).min(0.0),
+            _ => 0.0,
+        };
+        // Never forward without a valid distance in this very track state.
+        let forward_ok = t.distance_valid && dist.is_some();
+        let vx_t = if forward_ok { vx_t } else { vx_t.min(0.0) };
+
+        // --- rate limits ---
+        let a_xy = c.accel_xy_m_s2;
+        let vx = slew(self.cmd.vx, vx_t, a_xy, dt);
+        let vx = if forward_ok { vx } else { vx.min(0.0) };
+        let vy = slew(self.cmd.vy, vy_t, a_xy, dt);
+        let vz = slew(self.cmd.vz, vz_t, c.accel_z_m_s2, dt);
+
+        // T1 yaw: proportional to the image error plus the yaw rate that the commanded sideways
+        // motion needs to keep the hub centred (moving left, the hub drifts right: turn right).
+        let ff = match dist {
+            Some(d) => -c.arc_feedforward * vy / d.max(c.min_distance_m),
+            None => 0.0,
+        };
+        let max_r = c.max_yaw_rate_deg_s.to_radians();
+        let r_t = limit_abs(c.yaw_gain_deg_s.to_radians() * deadband(ex, c.deadband_x) + ff, max_r);
+        let yaw_rate = slew(self.cmd.yaw_rate, r_t, c.yaw_accel_deg_s2.to_radians(), dt);
+
+        let cmd = Command { vx, vy, vz, yaw_rate };
+        let (task, reason) = if self.t1_active {
+            (ApproachTask::CentreHub, t1_reason(ex, ey, &c))
+        } else if self.t2_active {
+            let reason = match yaw {
+                Some(y) => {
+                    let d = dist.unwrap_or(c.nominal_distance_m);
+                    format!(
+                        "T2: yaw {y:.1} deg, {:.1} m off axis (tol {:.1})",
+                        d * y.to_radians().sin(),
+                        c.yaw_tolerance_deg
+                    )
+                }
+                None => "T2: no valid yaw, holding position".into(),
+            };
+            (ApproachTask::ReduceYaw, reason)
+        } else {
+            let reason = match (dist, t.distance_valid) {
+                (Some(d), true) if !self.t3_active && at_target => format!(
+                    "T3: at {d:.2} m, settling {:.1}/{:.1} s",
+                    self.at_target_since_ns.map_or(0.0, |s| secs(s, now)),
+                    c.done_hold_s
+                ),
+                (Some(d), true) => format!("T3: {d:.1} m to hub, target {:.1} m", c.target_distance_m),
+                _ => "T3: no valid distance, not moving forward".into(),
+            };
+            (ApproachTask::Approach, reason)
+        };
+        (task, cmd, reason)
+    }
+
+    /// Feeds a new track state to the low-pass filters; invalid estimates empty their filter so
+    /// the next valid one starts it afresh rather than blending with stale values.
+    fn update_filters(&mut self, t: &TrackState) {
+        let c = &self.config;
+        let capture = t.stamps.capture_ns;
+        if self.filter_capture_ns == Some(capture) {
+            // The same track state again: nothing new to filter (validity still applies).
+            if !yaw_usable(t) {
+                self.yaw_f = None;
+            }
+            if !distance_usable(t) {
+                self.dist_f = None;
+            }
+            return;
+        }
+        let dt = self.filter_capture_ns.map_or(0.0, |p| secs(p, capture).min(c.max_dt_s));
+        self.filter_capture_ns = Some(capture);
+        self.yaw_f = yaw_usable(t).then(|| low_pass(self.yaw_f, t.yaw_deg, c.yaw_filter_s, dt));
+        self.dist_f = distance_usable(t).then(|| low_pass(self.dist_f, t.distance_m, c.distance_filter_s, dt));
+    }
+}
+
+/// The yaw can be used: flagged valid and in front of the rotor plane.
+fn yaw_usable(t: &TrackState) -> bool {
+    t.yaw_valid && t.yaw_deg.is_finite() && t.yaw_deg.abs() < 90.0
+}
+
+/// The distance can be used: flagged valid, finite and positive.
+fn distance_usable(t: &TrackState) -> bool {
+    t.distance_valid && t.distance_m.is_finite() && t.distance_m > 0.0
+}
+
+/// Bad data in a track state (abort), or `None`. Only fields the controller uses are checked;
+/// an estimate flagged invalid may hold anything.
+fn track_data_error(t: &TrackState) -> Option<String> {
+    if t.image_width == 0 || t.image_height == 0 {
+        return Some(format!("image size {}x{}", t.image_width, t.image_height));
+    }
+    if !t.time_since_detection_s.is_finite() || t.time_since_detection_s < 0.0 {
+        return Some(format!("bad time since detection {}", t.time_since_detection_s));
+    }
+    let positioned = matches!(t.mode, TrackMode::Tracking | TrackMode::Coasting);
+    if positioned && !(t.hub_px[0].is_finite() && t.hub_px[1].is_finite()) {
+        return Some(format!("non-finite hub position {:?}", t.hub_px));
+    }
+    if t.distance_valid && !t.distance_m.is_finite() {
+        return Some(format!("non-finite distance {}", t.distance_m));
+    }
+    if t.yaw_valid && !t.yaw_deg.is_finite() {
+        return Some(format!("non-finite yaw {}", t.yaw_deg));
+    }
+    None
+}
+
+/// "T1: hub 0.31 right of centre (box 0.10)" for the axis furthest outside its box.
+fn t1_reason(ex: f64, ey: f64, c: &ApproachConfig) -> String {
+    if ex.abs() / c.box_x >= ey.abs() / c.box_y {
+        let side = if ex >= 0.0 { "right of" } else { "left of" };
+        format!("T1: hub {:.2} {side} centre (box {:.2})", ex.abs(), c.box_x)
+    } else {
+        let side = if ey >= 0.0 { "below" } else { "above" };
+        format!("T1: hub {:.2} {side} centre (box {:.2})", ey.abs(), c.box_y)
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,251 @@
+//! Configuration of the approach controller (`[control.approach]` in `config/hubtrack.toml`).
+//!
+//! Plain serde data: the struct is `#[serde(deny_unknown_fields, default)]`, so keys left out take
+//! the defaults below and a misspelt key is an error. [`ApproachConfig::validate`] checks every
+//! number against its allowed range and names the offending key by its full dotted path
+//! (`control.approach.max_forward_m_s`).
+//!
+//! Image errors are in *normalised* image coordinates: `ex = (hub_x - w/2) / (w/2)`,
+//! `ey = (hub_y - h/2) / (h/2)`, so -1..1 spans the image from edge to edge on each axis and no
+//! focal length is needed. The section is flat (one table) so every key is
+//! `control.approach.<key>`.
+//!
+//! The defaults suit a ~2 kg quadrotor that starts 25-40 m from the hub and should stop 5 m in
+//! front of it within about two minutes.
+
+use serde::{Deserialize, Serialize};
+
+pub use hubtrack_types::params::ParamError;
+use hubtrack_types::params::Check;
+
+/// `[control.approach]`: the T1/T2/T3 approach controller (thesis section 7.1, algorithm 2).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ApproachConfig {
+    // ---- targets and tolerances ----
+    /// Distance from the camera to the hub at which the approach stops, m. Range [1, 100];
+    /// default 5 (thesis section 7.1).
+    pub target_distance_m: f64,
+    /// Distance tolerance counted as "at target", m: T3 is satisfied and Done may begin once the
+    /// filtered distance is within this of the target. Range (0, 10]; default 0.3.
+    pub distance_tolerance_m: f64,
+    /// Distance error that restarts T3 (and leaves Done), m; larger than `distance_tolerance_m`
+    /// so the task does not chatter. Range (0, 20]; default 0.5.
+    pub distance_tolerance_outer_m: f64,
+    /// Closest allowed distance to the hub, m: the forward speed cap falls to zero here, and
+    /// closer than `target_distance_m - distance_tolerance_outer_m` the vehicle backs away in
+    /// every task. Range (0, target_distance_m); default 3.
+    pub min_distance_m: f64,
+    /// Relative yaw counted as "in front of the rotor", degrees: T2 is satisfied and Done may
+    /// begin below it. Range (0, 45]; default 3.
+    pub yaw_tolerance_deg: f64,
+    /// Relative yaw that restarts T2 (and leaves Done), degrees; larger than `yaw_tolerance_deg`.
+    /// Range (0, 90); default 5.
+    pub yaw_tolerance_outer_deg: f64,
+    /// Horizontal half-size of the target box, normalised image units (1 = image edge): T1
+    /// starts when the hub is further than this from the centre. Range (0, 1]; default 0.10.
+    pub box_x: f64,
+    /// Vertical half-size of the target box, normalised image units (1 = image edge): T1 starts
+    /// when the hub is further than this above or below the centre. Range (0, 1]; default 0.10.
+    pub box_y: f64,
+    /// Horizontal half-size of the inner box, normalised image units: T1 is satisfied (and Done
+    /// may begin) once the hub is back inside it. Range (0, box_x); default 0.05.
+    pub box_inner_x: f64,
+    /// Vertical half-size of the inner box, normalised image units: T1 is satisfied (and Done
+    /// may begin) once the hub is back inside it. Range (0, box_y); default 0.05.
+    pub box_inner_y: f64,
+    /// Horizontal deadband of the yaw correction, normalised image units: no yaw rate is
+    /// commanded for smaller errors (detector jitter). Range [0, box_inner_x); default 0.02.
+    pub deadband_x: f64,
+    /// Vertical deadband of the climb correction, normalised image units: no vertical speed is
+    /// commanded for smaller errors. Range [0, box_inner_y); default 0.03.
+    pub deadband_y: f64,
+    /// Time all three tasks must be within their inner tolerances before Done, s. Range
+    /// [0, 60]; default 1.5.
+    pub done_hold_s: f64,
+
+    // ---- gains ----
+    /// T1 yaw-rate gain, deg/s per normalised unit of horizontal error (beyond the deadband).
+    /// Range (0, 1000]; default 40 (hub at the image edge: 40 deg/s before the rate limit).
+    pub yaw_gain_deg_s: f64,
+    /// T1 vertical-speed gain, m/s per normalised unit of vertical error (beyond the deadband).
+    /// It must outpace the apparent vertical drift of an off-centre hub while closing in, which
+    /// grows as the distance shrinks. Range (0, 100]; default 2.
+    pub climb_gain_m_s: f64,
+    /// T2 lateral-speed gain, m/s per metre of lateral offset from the rotor axis
+    /// (distance x sin(relative yaw)), i.e. 1/s. Range (0, 10]; default 0.15.
+    pub lateral_gain_per_s: f64,
+    /// T3 forward-speed gain, m/s per metre of distance error, i.e. 1/s. Range (0, 10];
+    /// default 0.3.
+    pub forward_gain_per_s: f64,
+    /// Forward speed cap per metre of margin to `min_distance_m`, 1/s: the forward speed never
+    /// exceeds this x (distance - min_distance_m), so the vehicle slows down as it closes in.
+    /// Range (0, 10]; default 0.5.
+    pub slowdown_gain_per_s: f64,
+    /// Fraction of the yaw rate that keeps the hub centred while T2 moves sideways
+    /// (-vy / distance) added ahead of the image error, dimensionless: 1 flies a clean arc round
+    /// the hub, 0 leaves it to the T1 feedback. Range [0, 1]; default 1.
+    pub arc_feedforward: f64,
+    /// Distance used for the T2 lateral offset while no valid distance estimate exists, m.
+    /// Range (0, 1000]; default 20.
+    pub nominal_distance_m: f64,
+
+    // ---- limits ----
+    /// Largest forward speed, m/s. Range (0, 10]; default 1.5.
+    pub max_forward_m_s: f64,
+    /// Largest backward speed (backing away from the hub), m/s. Range [0, 10]; default 1.
+    pub max_backward_m_s: f64,
+    /// Largest sideways speed, m/s. Range (0, 10]; default 1.5.
+    pub max_lateral_m_s: f64,
+    /// Largest climb or descent speed, m/s. Range (0, 5]; default 1.
+    pub max_vertical_m_s: f64,
+    /// Largest yaw rate, deg/s. Range (0, 180]; default 20.
+    pub max_yaw_rate_deg_s: f64,
+    /// Largest change of the forward and sideways speed commands, m/s per second (m/s²), per
+    /// axis. A multicopter tilts about atan(a / g) to accelerate, and the fixed camera tilts
+    /// with it: 1 m/s² pitches ~6° and moves the hub ~0.16 of the half-height in the image,
+    /// out of the default box, so the default keeps the pitch near 3°. Range (0, 20];
+    /// default 0.5.
+    pub accel_xy_m_s2: f64,
+    /// Largest change of the vertical speed command, m/s per second (m/s²). Range (0, 20];
+    /// default 1.
+    pub accel_z_m_s2: f64,
+    /// Largest change of the yaw-rate command, deg/s per second (deg/s²). Range (0, 1000];
+    /// default 40.
+    pub yaw_accel_deg_s2: f64,
+    /// Longest time step the rate limits and filters accept between two calls, s: a longer gap
+    /// (a stall) counts as this long, so commands never jump. Range (0, 5]; default 0.5.
+    pub max_dt_s: f64,
+
+    // ---- filters ----
+    /// Time constant of the first-order low-pass filter on the relative yaw used by T2, s
+    /// (0 = unfiltered). Range [0, 60]; default 0.5.
+    pub yaw_filter_s: f64,
+    /// Time constant of the first-order low-pass filter on the distance used by T3, s
+    /// (0 = unfiltered). Range [0, 60]; default 0.5.
+    pub distance_filter_s: f64,
+
+    // ---- track loss, search and abort ----
+    /// Oldest usable track, s: with more time since the last accepted detection (plus the age
+    /// of the track state itself) the controller holds instead of moving. Range (0, 60];
+    /// default 0.5.
+    pub max_track_age_s: f64,
+    /// Time without a usable track after which the vehicle searches by rotating, s (the
+    /// tracker's `search_requested` starts the search at once). Range [0, 3600]; default 5.
+    pub search_after_s: f64,
+    /// Yaw rate of the search rotation, deg/s, towards the side where the hub was last seen.
+    /// Range (0, max_yaw_rate_deg_s]; default 10.
+    pub search_yaw_rate_deg_s: f64,
+    /// Total rotation of one search, degrees; afterwards the vehicle holds until a track
+    /// returns (0 = never search). Range [0, 3600]; default 360.
+    pub search_max_turn_deg: f64,
+    /// Time the inputs must be good (link up, finite numbers, time running forward) before an
+    /// abort clears by itself, s. Range [0, 3600]; default 2.
+    pub abort_recover_s: f64,
+}
+
+impl Default for ApproachConfig {
+    fn default() -> Self {
+        ApproachConfig {
+            target_distance_m: 5.0,
+            distance_tolerance_m: 0.3,
+            distance_tolerance_outer_m: 0.5,
+            min_distance_m: 3.0,
+            yaw_tolerance_deg: 3.0,
+            yaw_tolerance_outer_deg: 5.0,
+            box_x: 0.10,
+            box_y: 0.10,
+            box_inner_x: 0.05,
+            box_inner_y: 0.05,
+            deadband_x: 0.02,
+            deadband_y: 0.03,
+            done_hold_s: 1.5,
+            yaw_gain_deg_s: 40.0,
+            climb_gain_m_s: 2.0,
+            lateral_gain_per_s: 0.15,
+            forward_gain_per_s: 0.3,
+            slowdown_gain_per_s: 0.5,
+            arc_feedforward: 1.0,
+            nominal_distance_m: 20.0,
+            max_forward_m_s: 1.5,
+            max_backward_m_s: 1.0,
+            max_lateral_m_s: 1.5,
+            max_vertical_m_s: 1.0,
+            max_yaw_rate_deg_s: 20.0,
+            accel_xy_m_s2: 0.5,
+            accel_z_m_s2: 1.0,
+            yaw_accel_deg_s2: 40.0,
+            max_dt_s: 0.5,
+            yaw_filter_s: 0.5,
+            distance_filter_s: 0.5,
+            max_track_age_s: 0.5,
+            search_after_s: 5.0,
+            search_yaw_rate_deg_s: 10.0,
+            search_max_turn_deg: 360.0,
+            abort_recover_s: 2.0,
+        }
+    }
+}
+
+/// Upper bound for times, s.
+const MAX_TIME_S: f64 = 3600.0;
+
+impl ApproachConfig {
+    /// Checks every value against its allowed range (and the inner/outer pairs against each
+    /// other); the error names the first bad key as `control.approach.<key>`.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let c = Check::new("control.approach");
+        c.closed("target_distance_m", self.target_distance_m, 1.0, 100.0)?;
+        c.open_closed("distance_tolerance_m", self.distance_tolerance_m, 0.0, 10.0)?;
+        c.open_closed("distance_tolerance_outer_m", self.distance_tolerance_outer_m, 0.0, 20.0)?;
+        // The outer threshold must lie outside the inner one, or the hysteresis would chatter.
+        c.less(
+            "distance_tolerance_m",
+            self.distance_tolerance_m,
+            "distance_tolerance_outer_m",
+            self.distance_tolerance_outer_m,
+        )?;
+        c.open("min_distance_m", self.min_distance_m, 0.0, self.target_distance_m)?;
+        c.open_closed("yaw_tolerance_deg", self.yaw_tolerance_deg, 0.0, 45.0)?;
+        c.open("yaw_tolerance_outer_deg", self.yaw_tolerance_outer_deg, 0.0, 90.0)?;
+        c.less("yaw_tolerance_deg", self.yaw_tolerance_deg, "yaw_tolerance_outer_deg", self.yaw_tolerance_outer_deg)?;
+        c.open_closed("box_x", self.box_x, 0.0, 1.0)?;
+        c.open_closed("box_y", self.box_y, 0.0, 1.0)?;
+        c.open("box_inner_x", self.box_inner_x, 0.0, self.box_x)?;
+        c.open("box_inner_y", self.box_inner_y, 0.0, self.box_y)?;
+        // A deadband as wide as the inner box would let the hub rest outside it forever.
+        c.closed("deadband_x", self.deadband_x, 0.0, 1.0)?;
+        c.less("deadband_x", self.deadband_x, "box_inner_x", self.box_inner_x)?;
+        c.closed("deadband_y", self.deadband_y, 0.0, 1.0)?;
+        c.less("deadband_y", self.deadband_y, "box_inner_y", self.box_inner_y)?;
+        c.closed("done_hold_s", self.done_hold_s, 0.0, 60.0)?;
+
+        c.open_closed("yaw_gain_deg_s", self.yaw_gain_deg_s, 0.0, 1000.0)?;
+        c.open_closed("climb_gain_m_s", self.climb_gain_m_s, 0.0, 100.0)?;
+        c.open_closed("lateral_gain_per_s", self.lateral_gain_per_s, 0.0, 10.0)?;
+        c.open_closed("forward_gain_per_s", self.forward_gain_per_s, 0.0, 10.0)?;
+        c.open_closed("slowdown_gain_per_s", self.slowdown_gain_per_s, 0.0, 10.0)?;
+        c.closed("arc_feedforward", self.arc_feedforward, 0.0, 1.0)?;
+        c.open_closed("nominal_distance_m", self.nominal_distance_m, 0.0, 1000.0)?;
+
+        c.open_closed("max_forward_m_s", self.max_forward_m_s, 0.0, 10.0)?;
+        c.closed("max_backward_m_s", self.max_backward_m_s, 0.0, 10.0)?;
+        c.open_closed("max_lateral_m_s", self.max_lateral_m_s, 0.0, 10.0)?;
+        c.open_closed("max_vertical_m_s", self.max_vertical_m_s, 0.0, 5.0)?;
+        c.open_closed("max_yaw_rate_deg_s", self.max_yaw_rate_deg_s, 0.0, 180.0)?;
+        c.open_closed("accel_xy_m_s2", self.accel_xy_m_s2, 0.0, 20.0)?;
+        c.open_closed("accel_z_m_s2", self.accel_z_m_s2, 0.0, 20.0)?;
+        c.open_closed("yaw_accel_deg_s2", self.yaw_accel_deg_s2, 0.0, 1000.0)?;
+        c.open_closed("max_dt_s", self.max_dt_s, 0.0, 5.0)?;
+
+        c.closed("yaw_filter_s", self.yaw_filter_s, 0.0, 60.0)?;
+        c.closed("distance_filter_s", self.distance_filter_s, 0.0, 60.0)?;
+
+        c.open_closed("max_track_age_s", self.max_track_age_s, 0.0, 60.0)?;
+        c.closed("search_after_s", self.search_after_s, 0.0, MAX_TIME_S)?;
+        c.open_closed("search_yaw_rate_deg_s", self.search_yaw_rate_deg_s, 0.0, self.max_yaw_rate_deg_s)?;
+        c.closed("search_max_turn_deg", self.search_max_turn_deg, 0.0, 3600.0)?;
+        c.closed("abort_recover_s", self.abort_recover_s, 0.0, MAX_TIME_S)?;
+        Ok(())
+    }
+}

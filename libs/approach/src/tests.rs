@@ -1,0 +1,915 @@
+//! Tests: scripted track sequences for every rule, config checks, a fuzz for panics and limits,
+//! and a closed-loop flight against a kinematic point-mass vehicle.
+
+use super::*;
+use hubtrack_types::Stamps;
+
+const W: u32 = 1920;
+const H: u32 = 1080;
+/// 15 Hz frames.
+const FRAME_NS: u64 = 66_666_667;
+const EPS: f64 = 1e-9;
+
+/// A tracking state with the hub at normalised `(ex, ey)`, optional distance and yaw.
+fn track(ex: f64, ey: f64, dist: Option<f64>, yaw: Option<f64>) -> TrackState {
+    TrackState {
+        stamps: Stamps::default(),
+        mode: TrackMode::Tracking,
+        image_width: W,
+        image_height: H,
+        hub_px: [f64::from(W) / 2.0 * (1.0 + ex), f64::from(H) / 2.0 * (1.0 + ey)],
+        distance_valid: dist.is_some(),
+        distance_m: dist.unwrap_or(0.0),
+        yaw_valid: yaw.is_some(),
+        yaw_deg: yaw.unwrap_or(0.0),
+        ..TrackState::default()
+    }
+}
+
+/// A track in `mode` with the hub at the centre and no estimates.
+fn track_mode(mode: TrackMode, since_s: f64) -> TrackState {
+    TrackState { mode, time_since_detection_s: since_s, ..track(0.0, 0.0, None, None) }
+}
+
+fn vehicle(link_ok: bool) -> VehicleState {
+    VehicleState { link_ok, armed: true, custom_mode: 4, ..VehicleState::default() }
+}
+
+/// Checks that hold for every output of every test.
+fn check_output(out: &ApproachOutput, c: &ApproachConfig) {
+    assert!(out.reason.len() <= MAX_REASON_BYTES, "reason too long: {:?}", out.reason);
+    assert!(!out.reason.is_empty());
+    for v in [out.vx_m_s, out.vy_m_s, out.vz_m_s, out.yaw_rate_rad_s] {
+        assert!(v.is_finite(), "{out:?}");
+    }
+    assert!(out.vx_m_s <= c.max_forward_m_s + EPS && out.vx_m_s >= -c.max_backward_m_s - EPS, "{out:?}");
+    assert!(out.vy_m_s.abs() <= c.max_lateral_m_s + EPS, "{out:?}");
+    assert!(out.vz_m_s.abs() <= c.max_vertical_m_s + EPS, "{out:?}");
+    assert!(out.yaw_rate_rad_s.abs() <= c.max_yaw_rate_deg_s.to_radians() + EPS, "{out:?}");
+    if matches!(out.task, ApproachTask::Hold | ApproachTask::Abort | ApproachTask::Done) {
+        assert_eq!((out.vx_m_s, out.vy_m_s, out.vz_m_s, out.yaw_rate_rad_s), (0.0, 0.0, 0.0, 0.0), "{out:?}");
+    }
+    if let Some(t) = &out.transition {
+        assert_eq!(t.to, out.task);
+        assert_ne!(t.from, t.to);
+        assert_eq!(t.reason, out.reason);
+    }
+}
+
+/// Drives the controller at 15 Hz; the track's capture time is the step time.
+struct Rig {
+    ap: Approach,
+    now: u64,
+    vehicle: Option<VehicleState>,
+    /// Every output, in order.
+    log: Vec<ApproachOutput>,
+}
+
+impl Rig {
+    fn new() -> Rig {
+        Rig::with(ApproachConfig::default())
+    }
+
+    fn with(c: ApproachConfig) -> Rig {
+        Rig { ap: Approach::new(c).unwrap(), now: 1_000_000_000, vehicle: None, log: Vec::new() }
+    }
+
+    /// One step with `t` captured now (or no track), then time advances one frame.
+    fn step(&mut self, t: Option<TrackState>) -> ApproachOutput {
+        let t = t.map(|mut t| {
+            t.stamps.capture_ns = self.now;
+            t
+        });
+        let out = self.ap.step(&ApproachInput { now_ns: self.now, track: t.as_ref(), vehicle: self.vehicle.as_ref() });
+        check_output(&out, self.ap.config());
+        assert_eq!(self.ap.task(), out.task);
+        self.now += FRAME_NS;
+        self.log.push(out.clone());
+        out
+    }
+
+    /// Steps for `secs` seconds with the same (re-stamped) track; returns the last output.
+    fn run(&mut self, t: Option<TrackState>, secs: f64) -> ApproachOutput {
+        let n = ((secs * 1e9 / FRAME_NS as f64).round() as usize).max(1);
+        let mut out = None;
+        for _ in 0..n {
+            out = Some(self.step(t));
+        }
+        out.unwrap()
+    }
+
+    fn tasks_since(&self, from: usize) -> Vec<ApproachTask> {
+        let mut v: Vec<ApproachTask> = Vec::new();
+        for o in &self.log[from..] {
+            if v.last() != Some(&o.task) {
+                v.push(o.task);
+            }
+        }
+        v
+    }
+}
+
+// ---------------------------------------------------------------- config
+
+#[test]
+fn defaults_validate_and_new_accepts_them() {
+    ApproachConfig::default().validate().unwrap();
+    let ap = Approach::new(ApproachConfig::default()).unwrap();
+    assert_eq!(ap.task(), ApproachTask::Hold);
+    assert_eq!(ap.config(), &ApproachConfig::default());
+}
+
+#[test]
+fn bad_values_name_their_key() {
+    let c = ApproachConfig { max_forward_m_s: -1.0, ..ApproachConfig::default() };
+    let e = c.validate().unwrap_err();
+    assert_eq!(e.key, "control.approach.max_forward_m_s");
+    assert!(e.to_string().contains("control.approach.max_forward_m_s"), "{e}");
+    assert_eq!(Approach::new(c).unwrap_err().key, "control.approach.max_forward_m_s");
+
+    let cases: Vec<(&str, ApproachConfig)> = vec![
+        ("target_distance_m", ApproachConfig { target_distance_m: f64::NAN, ..Default::default() }),
+        ("yaw_filter_s", ApproachConfig { yaw_filter_s: f64::INFINITY, ..Default::default() }),
+        ("box_inner_x", ApproachConfig { box_inner_x: 0.2, ..Default::default() }),
+        ("distance_tolerance_m", ApproachConfig { distance_tolerance_m: 0.6, ..Default::default() }),
+        ("yaw_tolerance_deg", ApproachConfig { yaw_tolerance_deg: 6.0, ..Default::default() }),
+        ("deadband_y", ApproachConfig { deadband_y: 0.05, ..Default::default() }),
+        ("min_distance_m", ApproachConfig { min_distance_m: 6.0, ..Default::default() }),
+        ("search_yaw_rate_deg_s", ApproachConfig { search_yaw_rate_deg_s: 30.0, ..Default::default() }),
+        ("max_dt_s", ApproachConfig { max_dt_s: 0.0, ..Default::default() }),
+    ];
+    for (key, c) in cases {
+        assert_eq!(c.validate().unwrap_err().key, format!("control.approach.{key}"));
+    }
+}
+
+#[test]
+fn default_config_round_trips_through_toml() {
+    let c = ApproachConfig::default();
+    let text = toml::to_string(&c).unwrap();
+    let back: ApproachConfig = toml::from_str(&text).unwrap();
+    assert_eq!(back, c);
+    // Keys left out take their defaults; unknown keys are rejected.
+    let partial: ApproachConfig = toml::from_str("target_distance_m = 8.0").unwrap();
+    assert_eq!(partial, ApproachConfig { target_distance_m: 8.0, ..ApproachConfig::default() });
+    assert!(toml::from_str::<ApproachConfig>("target_distanse_m = 8.0").is_err());
+}
+
+// ---------------------------------------------------------------- task signs
+
+#[test]
+fn t1_signs() {
+    let cases: [(f64, f64, f64, f64); 4] = [
+        // (ex, ey, yaw rate sign, vz sign)
+        (0.3, 0.0, 1.0, 0.0),
+        (-0.3, 0.0, -1.0, 0.0),
+        (0.0, -0.3, 0.0, -1.0), // hub above: climb (vz < 0)
+        (0.0, 0.3, 0.0, 1.0),   // hub below: descend
+    ];
+    for (ex, ey, r_sign, vz_sign) in cases {
+        let mut rig = Rig::new();
+        let out = rig.run(Some(track(ex, ey, Some(30.0), Some(10.0))), 1.0);
+        assert_eq!(out.task, ApproachTask::CentreHub, "{ex} {ey}: {out:?}");
+        assert_eq!(out.yaw_rate_rad_s.signum() * r_sign.abs(), r_sign, "{out:?}");
+        assert_eq!(out.vz_m_s.signum() * vz_sign.abs(), vz_sign, "{out:?}");
+        if r_sign == 0.0 {
+            assert_eq!(out.yaw_rate_rad_s, 0.0);
+        }
+        if vz_sign == 0.0 {
+            assert_eq!(out.vz_m_s, 0.0);
+        }
+        // T1 alone moves neither forward nor sideways.
+        assert_eq!((out.vx_m_s, out.vy_m_s), (0.0, 0.0));
+        assert!(out.reason.starts_with("T1: hub 0.30"), "{}", out.reason);
+    }
+    let mut rig = Rig::new();
+    let out = rig.run(Some(track(0.31, 0.0, Some(30.0), None)), 0.1);
+    assert_eq!(out.reason, "T1: hub 0.31 right of centre (box 0.10)");
+}
+
+#[test]
+fn t2_positive_yaw_moves_left_and_turns_right() {
+    let mut rig = Rig::new();
+    let out = rig.run(Some(track(0.0, 0.0, Some(30.0), Some(10.0))), 2.0);
+    assert_eq!(out.task, ApproachTask::ReduceYaw);
+    assert!(out.vy_m_s < -0.3, "{out:?}");
+    // Moving left with the hub ahead: the feed-forward turns right to keep it centred.
+    assert!(out.yaw_rate_rad_s > 0.0, "{out:?}");
+    assert_eq!(out.vx_m_s, 0.0, "no approach during T2");
+
+    let mut rig = Rig::new();
+    let out = rig.run(Some(track(0.0, 0.0, Some(30.0), Some(-10.0))), 2.0);
+    assert_eq!(out.task, ApproachTask::ReduceYaw);
+    assert!(out.vy_m_s > 0.3 && out.yaw_rate_rad_s < 0.0, "{out:?}");
+
+    // Without a distance the nominal one scales the lateral offset: same sign, still no vx.
+    let mut rig = Rig::new();
+    let out = rig.run(Some(track(0.0, 0.0, None, Some(10.0))), 2.0);
+    assert_eq!(out.task, ApproachTask::ReduceYaw);
+    assert!(out.vy_m_s < 0.0 && out.vx_m_s == 0.0, "{out:?}");
+}
+
+#[test]
+fn t1_preempts_t2_preempts_t3() {
+    let mut rig = Rig::new();
+    // Everything wrong: T1.
+    let out = rig.run(Some(track(0.3, 0.2, Some(30.0), Some(10.0))), 1.0);
+    assert_eq!(out.task, ApproachTask::CentreHub);
+    assert_eq!((out.vx_m_s, out.vy_m_s), (0.0, 0.0));
+    // Hub centred, yaw still large: T2.
+    let out = rig.step(Some(track(0.0, 0.0, Some(30.0), Some(10.0))));
+    assert_eq!(out.task, ApproachTask::ReduceYaw);
+    assert_eq!(
+        out.transition,
+        Some(Transition { from: ApproachTask::CentreHub, to: ApproachTask::ReduceYaw, reason: out.reason.clone() })
+    );
+    let out = rig.run(Some(track(0.0, 0.0, Some(30.0), Some(10.0))), 1.0);
+    assert_eq!(out.vx_m_s, 0.0);
+    // Yaw small: T3, moving forward up to the limit.
+    let out = rig.run(Some(track(0.0, 0.0, Some(30.0), Some(1.0))), 4.0);
+    assert_eq!(out.task, ApproachTask::Approach);
+    assert!((out.vx_m_s - 1.5).abs() < EPS, "{out:?}");
+    assert!(out.reason.starts_with("T3: 30.0 m"), "{}", out.reason);
+    assert_eq!(rig.tasks_since(0), vec![ApproachTask::CentreHub, ApproachTask::ReduceYaw, ApproachTask::Approach]);
+    let transitions: Vec<_> = rig.log.iter().filter_map(|o| o.transition.as_ref().map(|t| (t.from, t.to))).collect();
+    assert_eq!(
+        transitions,
+        vec![
+            (ApproachTask::Hold, ApproachTask::CentreHub),
+            (ApproachTask::CentreHub, ApproachTask::ReduceYaw),
+            (ApproachTask::ReduceYaw, ApproachTask::Approach)
+        ]
+    );
+}
+
+#[test]
+fn hub_leaving_the_box_during_t3_reverts_to_t1_then_back() {
+    let c = ApproachConfig::default();
+    let mut rig = Rig::new();
+    rig.run(Some(track(0.0, 0.0, Some(30.0), Some(0.0))), 4.0);
+    assert_eq!(rig.ap.task(), ApproachTask::Approach);
+    assert!((rig.log.last().unwrap().vx_m_s - 1.5).abs() < EPS);
+
+    // The hub jumps 0.2 right: T1 at once, the forward speed ramps down at the accel limit.
+    let mark = rig.log.len();
+    let first = rig.step(Some(track(0.2, 0.0, Some(30.0), Some(0.0))));
+    assert_eq!(first.task, ApproachTask::CentreHub);
+    assert_eq!(first.transition.as_ref().map(|t| t.from), Some(ApproachTask::Approach));
+    let out = rig.run(Some(track(0.2, 0.0, Some(30.0), Some(0.0))), 1.5 / c.accel_xy_m_s2 + 0.2);
+    assert_eq!(out.task, ApproachTask::CentreHub);
+    assert!(out.yaw_rate_rad_s > 0.0);
+    assert_eq!(out.vx_m_s, 0.0, "T3 stopped");
+    let vx: Vec<f64> = rig.log[mark - 1..].iter().map(|o| o.vx_m_s).collect();
+    let dv = c.accel_xy_m_s2 * FRAME_NS as f64 * 1e-9;
+    for w in vx.windows(2) {
+        assert!(w[1] <= w[0] + EPS && w[0] - w[1] <= dv + EPS, "ramp, not a jump: {w:?}");
+    }
+    assert!(vx[1] > 1.0, "still moving just after the switch: ramp down");
+
+    // Between the boxes: still T1 (hysteresis).
+    let out = rig.run(Some(track(0.07, 0.0, Some(30.0), Some(0.0))), 1.0);
+    assert_eq!(out.task, ApproachTask::CentreHub);
+    // Inside the inner box: back to T3 and forward again.
+    let out = rig.step(Some(track(0.03, 0.0, Some(30.0), Some(0.0))));
+    assert_eq!(out.task, ApproachTask::Approach);
+    assert_eq!(out.transition.as_ref().map(|t| t.from), Some(ApproachTask::CentreHub));
+    let out = rig.run(Some(track(0.03, 0.0, Some(30.0), Some(0.0))), 3.0);
+    assert!(out.vx_m_s > 1.0);
+    // And the hub between the boxes during T3 does not interrupt it.
+    let out = rig.run(Some(track(-0.09, 0.09, Some(30.0), Some(0.0))), 1.0);
+    assert_eq!(out.task, ApproachTask::Approach);
+    assert!(rig.log[mark..].iter().filter(|o| o.transition.is_some()).count() == 2, "no chatter");
+}
+
+#[test]
+fn yaw_hysteresis_between_t2_and_t3() {
+    let mut rig = Rig::with(ApproachConfig { yaw_filter_s: 0.0, ..Default::default() });
+    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(30.0), Some(4.0))), 1.0).task, ApproachTask::ReduceYaw);
+    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(30.0), Some(2.5))), 1.0).task, ApproachTask::Approach);
+    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(30.0), Some(4.5))), 1.0).task, ApproachTask::Approach);
+    let out = rig.step(Some(track(0.0, 0.0, Some(30.0), Some(-5.5))));
+    assert_eq!(out.task, ApproachTask::ReduceYaw);
+    let out = rig.run(Some(track(0.0, 0.0, Some(30.0), Some(-5.5))), 1.0);
+    assert_eq!(out.task, ApproachTask::ReduceYaw);
+    assert!(out.vy_m_s > 0.0 && out.vx_m_s < 1.0, "sideways, the approach ramping down: {out:?}");
+}
+
+// ---------------------------------------------------------------- safety: forward motion
+
+#[test]
+fn no_forward_motion_without_a_valid_distance() {
+    let mut rig = Rig::new();
+    for _ in 0..60 {
+        let out = rig.step(Some(track(0.0, 0.0, None, Some(0.0))));
+        assert_eq!(out.task, ApproachTask::Approach);
+        assert!(out.vx_m_s <= 0.0);
+        assert!(out.reason.contains("no valid distance"), "{}", out.reason);
+    }
+    // Moving forward, then the distance goes invalid: forward speed is cut at once.
+    rig.run(Some(track(0.0, 0.0, Some(20.0), Some(0.0))), 3.0);
+    assert!(rig.log.last().unwrap().vx_m_s > 1.0);
+    let out = rig.step(Some(track(0.0, 0.0, None, Some(0.0))));
+    assert_eq!(out.vx_m_s, 0.0);
+    // A "valid" distance that is zero, negative or flagged invalid with a value is not used.
+    let mut t = track(0.0, 0.0, Some(20.0), Some(0.0));
+    t.distance_valid = false;
+    assert_eq!(rig.run(Some(t), 1.0).vx_m_s, 0.0);
+    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(0.0), Some(0.0))), 1.0).vx_m_s, 0.0);
+    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(-3.0), Some(0.0))), 1.0).vx_m_s, 0.0);
+}
+
+#[test]
+fn no_forward_motion_with_a_stale_track() {
+    let good = track(0.0, 0.0, Some(20.0), Some(0.0));
+    let mut rig = Rig::new();
+    rig.run(Some(good), 3.0);
+    assert!(rig.log.last().unwrap().vx_m_s > 1.0);
+
+    // Tracking, but the last detection is older than max_track_age_s: Hold.
+    let out = rig.step(Some(TrackState { time_since_detection_s: 0.6, ..good }));
+    assert_eq!(out.task, ApproachTask::Hold);
+    assert!(out.reason.contains("stale"), "{}", out.reason);
+
+    // Coasting within the age limit keeps going; beyond it holds.
+    let mut rig = Rig::new();
+    rig.run(Some(good), 3.0);
+    let coast = |s: f64| TrackState { mode: TrackMode::Coasting, time_since_detection_s: s, ..good };
+    let out = rig.step(Some(coast(0.3)));
+    assert_eq!(out.task, ApproachTask::Approach);
+    assert!(out.vx_m_s > 1.0);
+    let out = rig.step(Some(coast(0.55)));
+    assert_eq!((out.task, out.vx_m_s), (ApproachTask::Hold, 0.0));
+
+    // No new track state for 0.6 s (the same one again): stale by its own age.
+    let mut rig = Rig::new();
+    rig.run(Some(good), 3.0);
+    let mut old = good;
+    old.stamps.capture_ns = rig.now - FRAME_NS;
+    for i in 0..10 {
+        let out = rig.ap.step(&ApproachInput { now_ns: rig.now, track: Some(&old), vehicle: None });
+        check_output(&out, rig.ap.config());
+        if i >= 8 {
+            assert_eq!((out.task, out.vx_m_s), (ApproachTask::Hold, 0.0), "{i}");
+        }
+        rig.now += FRAME_NS;
+    }
+}
+
+#[test]
+fn too_close_backs_away_in_any_task() {
+    let mut rig = Rig::new();
+    // Hub off-centre (T1) but only 3.5 m away: back off while centring.
+    let out = rig.run(Some(track(0.3, 0.0, Some(3.5), Some(10.0))), 2.0);
+    assert_eq!(out.task, ApproachTask::CentreHub);
+    assert!(out.vx_m_s < -0.3, "{out:?}");
+    // Without a valid distance nothing is known: no motion along x at all.
+    let out = rig.run(Some(track(0.3, 0.0, None, Some(10.0))), 2.0);
+    assert!(out.vx_m_s <= 0.0);
+}
+
+#[test]
+fn forward_speed_slows_down_near_the_target() {
+    let c = ApproachConfig::default();
+    let mut last = f64::INFINITY;
+    for d in [30.0, 10.0, 8.0, 6.0, 5.5, 5.0, 4.0] {
+        let mut rig = Rig::with(ApproachConfig { distance_filter_s: 0.0, ..c.clone() });
+        let out = rig.run(Some(track(0.0, 0.0, Some(d), Some(0.0))), 4.0);
+        assert!(out.vx_m_s <= c.slowdown_gain_per_s * (d - c.min_distance_m) + EPS);
+        assert!(out.vx_m_s <= last, "{d}: {out:?}");
+        last = out.vx_m_s;
+    }
+    assert!(last < 0.0, "inside the target: backing away");
+}
+
+// ---------------------------------------------------------------- loss, search, recovery
+
+#[test]
+fn lost_holds_then_searches_bounded_then_holds() {
+    let c = ApproachConfig::default();
+    let mut rig = Rig::new();
+    // Hub last seen slightly left of centre.
+    rig.run(Some(track(-0.04, 0.0, Some(20.0), Some(0.0))), 3.0);
+    assert!(rig.log.last().unwrap().vx_m_s > 1.0);
+    let lost = track_mode(TrackMode::Lost, 1.0);
+    let out = rig.step(Some(lost));
+    assert_eq!(out.task, ApproachTask::Hold);
+    assert!(out.reason.starts_with("hold: track lost"), "{}", out.reason);
+    let out = rig.run(Some(lost), c.search_after_s - 0.2);
+    assert_eq!(out.task, ApproachTask::Hold);
+    let mark = rig.log.len();
+    let out = rig.run(Some(lost), 0.5);
+    assert_eq!(out.task, ApproachTask::Search);
+    assert!(out.yaw_rate_rad_s < 0.0, "towards the last seen side (left)");
+    assert!(out.reason.starts_with("search left 10 deg/s"), "{}", out.reason);
+    // Search for a long time: it turns 360 degrees and then holds.
+    rig.run(Some(lost), 60.0);
+    let dt = FRAME_NS as f64 * 1e-9;
+    let turned: f64 = rig.log[mark..].iter().map(|o| o.yaw_rate_rad_s.abs().to_degrees() * dt).sum();
+    assert!((turned - c.search_max_turn_deg).abs() < 1.0, "turned {turned}");
+    for o in &rig.log[mark..] {
+        assert!(o.yaw_rate_rad_s.abs() <= c.search_yaw_rate_deg_s.to_radians() + EPS);
+        assert_eq!((o.vx_m_s, o.vy_m_s, o.vz_m_s), (0.0, 0.0, 0.0));
+    }
+    let out = rig.log.last().unwrap();
+    assert_eq!(out.task, ApproachTask::Hold);
+    assert!(out.reason.contains("searched 360"), "{}", out.reason);
+    assert_eq!(rig.tasks_since(mark), vec![ApproachTask::Hold, ApproachTask::Search, ApproachTask::Hold]);
+
+    // No track at all and never seen: hold, then search to the right.
+    let mut rig = Rig::new();
+    let out = rig.step(None);
+    assert_eq!(out.task, ApproachTask::Hold);
+    assert!(out.reason.contains("no track yet"), "{}", out.reason);
+    let out = rig.run(None, c.search_after_s + 1.0);
+    assert_eq!(out.task, ApproachTask::Search);
+    assert!(out.yaw_rate_rad_s > 0.0);
+}
+
+#[test]
+fn search_requested_searches_at_once() {
+    let mut rig = Rig::new();
+    rig.run(Some(track(0.02, 0.0, Some(20.0), Some(0.0))), 1.0);
+    let t = TrackState { search_requested: true, ..track_mode(TrackMode::Lost, 6.0) };
+    let out = rig.run(Some(t), 0.5);
+    assert_eq!(out.task, ApproachTask::Search);
+    assert!(out.yaw_rate_rad_s > 0.0);
+    // A zero search budget never searches.
+    let mut rig = Rig::with(ApproachConfig { search_max_turn_deg: 0.0, ..Default::default() });
+    assert_eq!(rig.run(Some(t), 10.0).task, ApproachTask::Hold);
+}
+
+#[test]
+fn returning_track_resumes_through_rate_limits_with_fresh_filters() {
+    let c = ApproachConfig::default();
+    let mut rig = Rig::new();
+    rig.run(Some(track(0.0, 0.0, Some(30.0), Some(0.0))), 3.0);
+    rig.run(Some(track_mode(TrackMode::Lost, 2.0)), 8.0);
+    assert_eq!(rig.ap.task(), ApproachTask::Search);
+    assert!(rig.ap.dist_f.is_none(), "filters reset on loss");
+    let mark = rig.log.len();
+    // The turbine is found again, closer than before.
+    let out = rig.step(Some(track(0.0, 0.0, Some(20.0), Some(0.0))));
+    assert_ne!(out.task, ApproachTask::Search);
+    assert_eq!(rig.ap.dist_f, Some(20.0), "distance filter restarts at the new value");
+    let out = rig.run(Some(track(0.0, 0.0, Some(20.0), Some(0.0))), 3.0);
+    assert_eq!(out.task, ApproachTask::Approach);
+    assert!(out.reason.starts_with("T3: 20.0 m"), "{}", out.reason);
+    let dt = FRAME_NS as f64 * 1e-9;
+    for w in rig.log[mark - 1..].windows(2) {
+        assert!((w[1].vx_m_s - w[0].vx_m_s).abs() <= c.accel_xy_m_s2 * dt + EPS);
+        assert!(
+            (w[1].yaw_rate_rad_s - w[0].yaw_rate_rad_s).abs() <= c.yaw_accel_deg_s2.to_radians() * dt + EPS
+        );
+    }
+    // The search budget is renewed by the re-acquisition.
+    rig.run(Some(track_mode(TrackMode::Lost, 2.0)), 6.0);
+    assert_eq!(rig.ap.task(), ApproachTask::Search);
+}
+
+#[test]
+fn filters_smooth_yaw_and_distance() {
+    let mut rig = Rig::new();
+    rig.run(Some(track(0.0, 0.0, Some(30.0), Some(0.0))), 2.0);
+    rig.step(Some(track(0.0, 0.0, Some(20.0), Some(10.0))));
+    let (d, y) = (rig.ap.dist_f.unwrap(), rig.ap.yaw_f.unwrap());
+    let a = 1.0 - (-(FRAME_NS as f64 * 1e-9) / 0.5f64).exp();
+    assert!((d - (30.0 - 10.0 * a)).abs() < 1e-9, "{d}");
+    assert!((y - 10.0 * a).abs() < 1e-9, "{y}");
+    // The same state again is not filtered twice.
+    let mut t = track(0.0, 0.0, Some(20.0), Some(10.0));
+    t.stamps.capture_ns = rig.now - FRAME_NS;
+    rig.ap.step(&ApproachInput { now_ns: rig.now, track: Some(&t), vehicle: None });
+    assert_eq!(rig.ap.dist_f.unwrap(), d);
+    // Converges.
+    rig.run(Some(track(0.0, 0.0, Some(20.0), Some(10.0))), 5.0);
+    assert!((rig.ap.dist_f.unwrap() - 20.0).abs() < 0.01);
+}
+
+// ---------------------------------------------------------------- abort
+
+#[test]
+fn link_loss_aborts_sticky_until_good_for_a_while_or_reset() {
+    let c = ApproachConfig::default();
+    let good = track(0.0, 0.0, Some(20.0), Some(0.0));
+    let mut rig = Rig::new();
+    rig.vehicle = Some(vehicle(true));
+    rig.run(Some(good), 3.0);
+    assert!(rig.log.last().unwrap().vx_m_s > 1.0);
+    rig.vehicle = Some(vehicle(false));
+    let out = rig.step(Some(good));
+    assert_eq!(out.task, ApproachTask::Abort);
+    assert_eq!(out.reason, "abort: vehicle link lost");
+    assert_eq!(out.transition.as_ref().map(|t| t.from), Some(ApproachTask::Approach));
+    // Link back: still aborted for abort_recover_s, then the tasks resume from zero speed.
+    rig.vehicle = Some(vehicle(true));
+    let out = rig.run(Some(good), c.abort_recover_s - 0.2);
+    assert_eq!(out.task, ApproachTask::Abort);
+    assert!(out.reason.contains("vehicle link lost (ok"), "{}", out.reason);
+    let out = rig.run(Some(good), 0.4);
+    assert_eq!(out.task, ApproachTask::Approach);
+    assert!(out.vx_m_s > 0.0 && out.vx_m_s < 0.5, "ramping up from zero: {out:?}");
+    let back = rig.log.iter().rev().find(|o| o.transition.is_some()).unwrap();
+    assert_eq!(back.transition.as_ref().unwrap().from, ApproachTask::Abort);
+
+    // A link flicker during recovery restarts the good-input timer.
+    rig.vehicle = Some(vehicle(false));
+    rig.step(Some(good));
+    rig.vehicle = Some(vehicle(true));
+    rig.run(Some(good), 1.5);
+    rig.vehicle = Some(vehicle(false));
+    rig.step(Some(good));
+    rig.vehicle = Some(vehicle(true));
+    assert_eq!(rig.run(Some(good), 1.5).task, ApproachTask::Abort);
+
+    // reset() clears it at once.
+    rig.ap.reset();
+    assert_eq!(rig.ap.task(), ApproachTask::Hold);
+    assert_eq!(rig.step(Some(good)).task, ApproachTask::Approach);
+
+    // No vehicle at all is not an abort.
+    let mut rig = Rig::new();
+    assert_eq!(rig.run(Some(good), 1.0).task, ApproachTask::Approach);
+}
+
+#[test]
+fn bad_data_aborts() {
+    let good = track(0.0, 0.0, Some(20.0), Some(0.0));
+    let bad: Vec<(&str, TrackState)> = vec![
+        ("hub position", TrackState { hub_px: [f64::NAN, 500.0], ..good }),
+        ("hub position", TrackState { hub_px: [900.0, f64::INFINITY], ..good }),
+        ("distance", TrackState { distance_m: f64::INFINITY, ..good }),
+        ("yaw", TrackState { yaw_deg: f64::NAN, ..good }),
+        ("image size", TrackState { image_width: 0, ..good }),
+        ("image size", TrackState { image_height: 0, ..good }),
+        ("time since detection", TrackState { time_since_detection_s: f64::NAN, ..good }),
+        ("time since detection", TrackState { time_since_detection_s: -1.0, ..good }),
+    ];
+    for (what, t) in bad {
+        let mut rig = Rig::new();
+        rig.run(Some(good), 2.0);
+        let out = rig.step(Some(t));
+        assert_eq!(out.task, ApproachTask::Abort, "{what}");
+        assert!(out.reason.contains(what), "{what}: {}", out.reason);
+        // Sticky even though the next input is good.
+        assert_eq!(rig.step(Some(good)).task, ApproachTask::Abort);
+    }
+
+    // NaN in an estimate flagged invalid, or in a lost track's position, is not used: no abort.
+    let mut rig = Rig::new();
+    let t = TrackState { distance_valid: false, distance_m: f64::NAN, yaw_valid: false, yaw_deg: f64::NAN, ..good };
+    assert_ne!(rig.run(Some(t), 0.5).task, ApproachTask::Abort);
+    let t = TrackState { hub_px: [f64::NAN; 2], ..track_mode(TrackMode::Lost, 2.0) };
+    assert_eq!(rig.run(Some(t), 0.5).task, ApproachTask::Hold);
+
+    // Track time going backwards.
+    let mut rig = Rig::new();
+    rig.run(Some(good), 1.0);
+    let mut t = good;
+    t.stamps.capture_ns = rig.now - 10 * FRAME_NS;
+    let out = rig.ap.step(&ApproachInput { now_ns: rig.now, track: Some(&t), vehicle: None });
+    assert_eq!(out.task, ApproachTask::Abort);
+    assert!(out.reason.contains("track time went backwards"), "{}", out.reason);
+
+    // Step time going backwards.
+    let mut rig = Rig::new();
+    rig.run(Some(good), 1.0);
+    rig.now -= 20 * FRAME_NS;
+    let mut t = good;
+    t.stamps.capture_ns = rig.now + 30 * FRAME_NS; // the track itself is not older
+    let out = rig.ap.step(&ApproachInput { now_ns: rig.now, track: Some(&t), vehicle: None });
+    assert_eq!(out.task, ApproachTask::Abort);
+    assert!(out.reason.contains("time went backwards"), "{}", out.reason);
+}
+
+// ---------------------------------------------------------------- done
+
+#[test]
+fn done_after_hold_time_and_left_on_a_disturbance() {
+    let c = ApproachConfig { distance_filter_s: 0.0, yaw_filter_s: 0.0, ..Default::default() };
+    let mut rig = Rig::with(c.clone());
+    let at = track(0.01, -0.01, Some(5.1), Some(1.0));
+    let mark = rig.log.len();
+    rig.run(Some(at), c.done_hold_s - 0.2);
+    assert_eq!(rig.ap.task(), ApproachTask::Approach);
+    assert!(rig.log.last().unwrap().reason.starts_with("T3: at 5.10 m, settling"), "{}", rig.log.last().unwrap().reason);
+    let out = rig.run(Some(at), 0.4);
+    assert_eq!(out.task, ApproachTask::Done);
+    assert!(out.reason.starts_with("done: 5.10 m, yaw 1.0 deg"), "{}", out.reason);
+    let done_at = rig.log.iter().position(|o| o.task == ApproachTask::Done).unwrap();
+    let held = (done_at - mark) as f64 * FRAME_NS as f64 * 1e-9;
+    assert!(held >= c.done_hold_s && held < c.done_hold_s + 0.1, "{held}");
+
+    // Small disturbances inside the outer thresholds: still Done, still hovering.
+    for t in [
+        track(0.08, 0.0, Some(5.1), Some(1.0)),
+        track(0.0, -0.09, Some(5.1), Some(1.0)),
+        track(0.0, 0.0, Some(5.45), Some(1.0)),
+        track(0.0, 0.0, Some(5.1), Some(-4.5)),
+    ] {
+        assert_eq!(rig.run(Some(t), 0.5).task, ApproachTask::Done);
+    }
+    // Each outer threshold leaves Done for its task; coming back needs the hold again.
+    for (t, task) in [
+        (track(0.0, 0.0, Some(5.6), Some(1.0)), ApproachTask::Approach),
+        (track(0.0, 0.0, Some(5.1), Some(-5.5)), ApproachTask::ReduceYaw),
+        (track(0.15, 0.0, Some(5.1), Some(1.0)), ApproachTask::CentreHub),
+    ] {
+        rig.run(Some(at), c.done_hold_s + 0.2);
+        assert_eq!(rig.ap.task(), ApproachTask::Done);
+        let out = rig.step(Some(t));
+        assert_eq!(out.task, task, "{t:?}");
+        assert_eq!(out.transition.as_ref().map(|t| t.from), Some(ApproachTask::Done));
+        let out = rig.step(Some(at));
+        assert_ne!(out.task, ApproachTask::Done, "the hold time starts again");
+    }
+    // Losing the track in Done holds, and Done needs the hold time again after it returns.
+    rig.run(Some(at), c.done_hold_s + 0.2);
+    assert_eq!(rig.step(Some(track_mode(TrackMode::Lost, 1.0))).task, ApproachTask::Hold);
+    assert_ne!(rig.step(Some(at)).task, ApproachTask::Done);
+}
+
+// ---------------------------------------------------------------- rate limits and robustness
+
+/// xorshift64: deterministic pseudo-random numbers.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    /// True with probability 1/n.
+    fn one_in(&mut self, n: u64) -> bool {
+        self.next().is_multiple_of(n)
+    }
+    /// Uniform in [lo, hi).
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+#[test]
+fn rate_limits_hold_between_steps() {
+    let c = ApproachConfig::default();
+    let mut ap = Approach::new(c.clone()).unwrap();
+    let mut rng = Rng(0x1234_5678_9abc_def1);
+    let mut now = 1_000_000_000u64;
+    let mut prev: Option<(u64, ApproachOutput)> = None;
+    let mut t = track(0.0, 0.0, Some(20.0), Some(0.0));
+    let mut seen = std::collections::BTreeSet::new();
+    for i in 0..5000 {
+        if i % 10 == 0 {
+            let far = rng.uniform(0.0, 1.0) < 0.3;
+            t = track(
+                if far { rng.uniform(-0.8, 0.8) } else { rng.uniform(-0.06, 0.06) },
+                if far { rng.uniform(-0.8, 0.8) } else { rng.uniform(-0.06, 0.06) },
+                Some(rng.uniform(4.0, 40.0)),
+                Some(rng.uniform(-25.0, 25.0)),
+            );
+        }
+        // Irregular steps, including stalls longer than max_dt_s.
+        let gap = if rng.uniform(0.0, 1.0) < 0.02 { 3_000_000_000 } else { (rng.uniform(0.02, 0.12) * 1e9) as u64 };
+        now += gap;
+        t.stamps.capture_ns = now;
+        let out = ap.step(&ApproachInput { now_ns: now, track: Some(&t), vehicle: None });
+        check_output(&out, &c);
+        seen.insert(out.task as u32);
+        if let Some((pnow, p)) = &prev {
+            let dt = ((now - pnow) as f64 * 1e-9).min(c.max_dt_s);
+            let moving = |k: ApproachTask| {
+                matches!(k, ApproachTask::CentreHub | ApproachTask::ReduceYaw | ApproachTask::Approach)
+            };
+            if moving(p.task) && moving(out.task) {
+                assert!((out.vx_m_s - p.vx_m_s).abs() <= c.accel_xy_m_s2 * dt + EPS, "{i}: vx {p:?} {out:?}");
+                assert!((out.vy_m_s - p.vy_m_s).abs() <= c.accel_xy_m_s2 * dt + EPS, "{i}: vy");
+                assert!((out.vz_m_s - p.vz_m_s).abs() <= c.accel_z_m_s2 * dt + EPS, "{i}: vz");
+                assert!(
+                    (out.yaw_rate_rad_s - p.yaw_rate_rad_s).abs() <= c.yaw_accel_deg_s2.to_radians() * dt + EPS,
+                    "{i}: yaw rate"
+                );
+            }
+        }
+        prev = Some((now, out));
+    }
+    for k in [ApproachTask::CentreHub, ApproachTask::ReduceYaw, ApproachTask::Approach] {
+        assert!(seen.contains(&(k as u32)), "{k:?} not exercised");
+    }
+}
+
+#[test]
+fn garbage_never_panics_and_outputs_stay_limited() {
+    let c = ApproachConfig::default();
+    let mut ap = Approach::new(c.clone()).unwrap();
+    let mut rng = Rng(0xdead_beef_cafe_f00d);
+    let specials = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 0.0, -0.0, 1e308, -1e308, f64::MIN_POSITIVE, 5.0];
+    let pick = |rng: &mut Rng, lo: f64, hi: f64| {
+        if rng.one_in(4) {
+            specials[(rng.next() % specials.len() as u64) as usize]
+        } else {
+            rng.uniform(lo, hi)
+        }
+    };
+    let mut now = 0u64;
+    for _ in 0..20_000 {
+        let jump = rng.next() % 20;
+        now = match jump {
+            0 => now.saturating_sub(rng.next() % 5_000_000_000),
+            1 => now.saturating_add(rng.next() % 100_000_000_000),
+            2 => u64::MAX - rng.next() % 1000,
+            _ => now.saturating_add(rng.next() % 200_000_000),
+        };
+        let mode = [TrackMode::Acquiring, TrackMode::Tracking, TrackMode::Coasting, TrackMode::Lost][(rng.next() % 4) as usize];
+        let t = TrackState {
+            stamps: Stamps { capture_ns: if rng.one_in(3) { rng.next() } else { now }, ..Stamps::default() },
+            mode,
+            search_requested: rng.one_in(5),
+            image_width: [0, 1, 640, 1920, u32::MAX][(rng.next() % 5) as usize],
+            image_height: [0, 1, 480, 1080, u32::MAX][(rng.next() % 5) as usize],
+            hub_px: [pick(&mut rng, -5000.0, 5000.0), pick(&mut rng, -5000.0, 5000.0)],
+            distance_valid: rng.one_in(2),
+            distance_m: pick(&mut rng, -10.0, 100.0),
+            yaw_valid: rng.one_in(2),
+            yaw_deg: pick(&mut rng, -200.0, 200.0),
+            time_since_detection_s: pick(&mut rng, 0.0, 2.0),
+            ..TrackState::default()
+        };
+        let v = vehicle(!rng.one_in(10));
+        let input = ApproachInput {
+            now_ns: now,
+            track: (!rng.one_in(8)).then_some(&t),
+            vehicle: (!rng.one_in(3)).then_some(&v),
+        };
+        let out = ap.step(&input);
+        check_output(&out, &c);
+        if rng.one_in(500) {
+            ap.reset();
+        }
+    }
+}
+
+#[test]
+fn reasons_are_cut_at_a_char_boundary() {
+    let s = "T1: ".to_string() + &"é".repeat(40);
+    let t = truncate_reason(s.clone());
+    assert!(t.len() <= MAX_REASON_BYTES && s.starts_with(&t) && t.len() >= MAX_REASON_BYTES - 1);
+    assert_eq!(truncate_reason("short".into()), "short");
+}
+
+// ---------------------------------------------------------------- closed loop
+
+/// A kinematic point-mass multicopter in a world frame with the hub at the origin, the rotor
+/// axis along +X (the turbine faces +X), Y to the turbine's left, Z up. Heading `h` is
+/// counter-clockwise from +X. Body velocities follow the commands with first-order lags.
+struct Sim {
+    pos: [f64; 3],
+    h: f64,
+    /// Actual body velocities vx (fwd), vy (right), vz (down), yaw rate (clockwise), lagging.
+    vel: [f64; 4],
+}
+
+/// Pinhole focal length / image width (the GoPro HERO3+ wide centre focal length).
+#[allow(clippy::approx_constant)] // 833.9 px / 1920 px, not log10(e)
+const F_PER_W: f64 = 0.4343;
+
+impl Sim {
+    /// The ideal track state the vision pipeline would report, exact geometry.
+    fn track(&self, now: u64) -> TrackState {
+        let [x, y, z] = self.pos;
+        let rel = [-x, -y, -z];
+        let fwd = rel[0] * self.h.cos() + rel[1] * self.h.sin();
+        let right = rel[0] * self.h.sin() - rel[1] * self.h.cos();
+        let down = -rel[2];
+        let f = F_PER_W * f64::from(W);
+        let dist = (rel[0].powi(2) + rel[1].powi(2) + rel[2].powi(2)).sqrt();
+        let u = f64::from(W) / 2.0 + f * right / fwd;
+        let v = f64::from(H) / 2.0 + f * down / fwd;
+        let visible = fwd > 0.5 && (0.0..f64::from(W)).contains(&u) && (0.0..f64::from(H)).contains(&v);
+        TrackState {
+            stamps: Stamps { capture_ns: now, ..Stamps::default() },
+            mode: if visible { TrackMode::Tracking } else { TrackMode::Lost },
+            image_width: W,
+            image_height: H,
+            hub_px: if visible { [u, v] } else { [f64::from(W) / 2.0, f64::from(H) / 2.0] },
+            distance_valid: visible,
+            distance_m: dist,
+            yaw_valid: visible,
+            yaw_deg: y.atan2(x).to_degrees(),
+            ..TrackState::default()
+        }
+    }
+
+    fn advance(&mut self, cmd: &ApproachOutput, dt: f64) {
+        let target = [cmd.vx_m_s, cmd.vy_m_s, cmd.vz_m_s, cmd.yaw_rate_rad_s];
+        let taus = [0.3, 0.3, 0.3, 0.15];
+        let n = 10;
+        let h = dt / n as f64;
+        for _ in 0..n {
+            for i in 0..4 {
+                self.vel[i] += (target[i] - self.vel[i]) * (h / taus[i]).min(1.0);
+            }
+            let [vx, vy, vz, r] = self.vel;
+            let (s, c) = self.h.sin_cos();
+            self.pos[0] += (vx * c + vy * s) * h;
+            self.pos[1] += (vx * s - vy * c) * h;
+            self.pos[2] -= vz * h;
+            self.h -= r * h;
+        }
+    }
+}
+
+/// Flies from 35 m out, `lateral` m to the side, `below` m under the hub, with the heading
+/// `heading_err_deg` off the hub. Returns (time of Done, distance and |yaw| then, closest
+/// distance, tasks in order).
+fn fly(lateral: f64, below: f64, heading_err_deg: f64) -> (Option<f64>, f64, f64, f64, Vec<ApproachTask>) {
+    fly_with(35.0, lateral, below, heading_err_deg, None)
+}
+
+/// As [`fly`] from `start` m out; with `noise` = Some(seed) the track gets measurement noise
+/// (hub ±3 px, distance ±3 %, yaw ±1 deg, uniform) and arrives one frame late.
+fn fly_with(
+    start: f64,
+    lateral: f64,
+    below: f64,
+    heading_err_deg: f64,
+    noise: Option<u64>,
+) -> (Option<f64>, f64, f64, f64, Vec<ApproachTask>) {
+    let mut rng = Rng(noise.unwrap_or(1));
+    let mut delayed: Option<TrackState> = None;
+    let c = ApproachConfig::default();
+    let mut ap = Approach::new(c.clone()).unwrap();
+    let (x, y) = (start, lateral);
+    let mut sim = Sim { pos: [x, y, -below], h: (-y).atan2(-x) + heading_err_deg.to_radians(), vel: [0.0; 4] };
+    let mut now = 5_000_000_000u64;
+    let dt = FRAME_NS as f64 * 1e-9;
+    let mut closest = f64::INFINITY;
+    let mut tasks: Vec<ApproachTask> = Vec::new();
+    let mut done_at = None;
+    let (mut d_done, mut y_done) = (f64::NAN, f64::NAN);
+    let steps = (120.0 / dt) as usize;
+    for i in 0..steps {
+        let truth = sim.track(now);
+        assert_eq!(truth.mode, TrackMode::Tracking, "hub left the image at {:.1} s: {:?}", i as f64 * dt, sim.pos);
+        closest = closest.min(truth.distance_m);
+        let t = if noise.is_some() {
+            let mut m = truth;
+            m.hub_px[0] += rng.uniform(-3.0, 3.0);
+            m.hub_px[1] += rng.uniform(-3.0, 3.0);
+            m.distance_m *= 1.0 + rng.uniform(-0.03, 0.03);
+            m.yaw_deg += rng.uniform(-1.0, 1.0);
+            // One frame of latency: the controller sees the previous frame's measurement.
+            let seen = delayed.unwrap_or(m);
+            delayed = Some(m);
+            TrackState { stamps: truth.stamps, ..seen }
+        } else {
+            truth
+        };
+        let out = ap.step(&ApproachInput { now_ns: now, track: Some(&t), vehicle: None });
+        check_output(&out, &c);
+        if tasks.last() != Some(&out.task) {
+            tasks.push(out.task);
+        }
+        if out.task == ApproachTask::Done && done_at.is_none() {
+            done_at = Some(i as f64 * dt);
+            d_done = truth.distance_m;
+            y_done = truth.yaw_deg.abs();
+        }
+        sim.advance(&out, dt);
+        now += FRAME_NS;
+    }
+    let last = ap.task();
+    assert_eq!(last, ApproachTask::Done, "ends in Done; tasks {tasks:?}");
+    (done_at, d_done, y_done, closest, tasks)
+}
+
+#[test]
+fn closed_loop_reaches_done_from_35_m_8_m_lateral_20_deg_off() {
+    for (lateral, below, heading) in [(8.0, 3.0, 20.0), (8.0, 3.0, -20.0), (-8.0, -2.0, 20.0), (-8.0, 0.0, -20.0)] {
+        let (done_at, d, yaw, closest, tasks) = fly(lateral, below, heading);
+        let done_at = done_at.unwrap_or_else(|| panic!("no Done: {tasks:?}"));
+        println!(
+            "lateral {lateral} m, below {below} m, heading {heading} deg: Done after {done_at:.1} s at \
+             {d:.2} m, |yaw| {yaw:.2} deg, closest {closest:.2} m, tasks {tasks:?}"
+        );
+        assert!(done_at <= 120.0);
+        assert!((d - 5.0).abs() <= 0.3, "distance {d}");
+        assert!(yaw < 3.0, "yaw {yaw}");
+        assert!(closest >= 3.0, "closest {closest}");
+        assert!(tasks.contains(&ApproachTask::CentreHub) && tasks.contains(&ApproachTask::ReduceYaw));
+        assert!(tasks.contains(&ApproachTask::Approach));
+    }
+}
+
+#[test]
+fn closed_loop_with_noise_and_latency_from_25_to_40_m() {
+    for (seed, start) in [(7, 25.0), (11, 35.0), (13, 40.0)] {
+        let (done_at, d, yaw, closest, tasks) = fly_with(start, 8.0, 3.0, 20.0, Some(seed));
+        let done_at = done_at.unwrap_or_else(|| panic!("no Done: {tasks:?}"));
+        println!(
+            "noisy, from {start} m: Done after {done_at:.1} s at {d:.2} m, |yaw| {yaw:.2} deg, closest \
+             {closest:.2} m, tasks {tasks:?}"
+        );
+        assert!(done_at <= 120.0);
+        assert!((d - 5.0).abs() <= 0.3 && yaw < 3.0 && closest >= 3.0, "{d} {yaw} {closest}");
+    }
+}

@@ -1,0 +1,589 @@
+//! Transports: where a link goes ([`Endpoint`]) and the open link ([`Link`]).
+
+use std::fmt;
+use std::io::{ErrorKind, Read, Write};
+use std::net::{Ipv4Addr, Ipv6Addr, SocketAddr, ToSocketAddrs, UdpSocket};
+use std::str::FromStr;
+use std::time::{Duration, Instant};
+
+use mavlink::dialects::common::MavMessage;
+use mavlink::MavHeader;
+
+use crate::parser::{encode_v2, FrameParser, LinkStats};
+
+/// Receive buffer size: the largest UDP datagram.
+const READ_BUF_LEN: usize = 65_536;
+/// After data arrived, how many more immediately available reads one [`Link::recv`] takes, so a
+/// flood cannot keep it from returning.
+const MAX_DRAIN_READS: usize = 64;
+/// How long a serial write may block (the port is not read by the other side, a USB CDC device
+/// is gone) before it fails.
+const SERIAL_WRITE_TIMEOUT: Duration = Duration::from_millis(100);
+/// The forms an endpoint string takes, for error messages.
+const ENDPOINT_FORMS: &str = "udpin:ADDR:PORT, udpout:ADDR:PORT or serial:PATH:BAUD";
+
+/// Where the link goes.
+///
+/// Parsed from (and displayed as) `udpin:0.0.0.0:14550`, `udpout:127.0.0.1:14550` or
+/// `serial:/dev/ttyACM0:921600`. Host names are resolved when parsing (first address).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Endpoint {
+    /// Bind this address and listen; replies go to the address the last datagram came from.
+    UdpIn(SocketAddr),
+    /// Send to this address; replies are received on an ephemeral local port.
+    UdpOut(SocketAddr),
+    /// A serial device at this baud rate, 8N1, no flow control.
+    Serial {
+        /// Device path, e.g. `/dev/ttyACM0`.
+        path: String,
+        /// Baud rate, e.g. 921600.
+        baud: u32,
+    },
+}
+
+impl Endpoint {
+    fn bad(input: &str, reason: impl Into<String>) -> LinkError {
+        LinkError::BadEndpoint {
+            input: input.to_string(),
+            reason: reason.into(),
+        }
+    }
+
+    fn parse_addr(input: &str, addr: &str) -> Result<SocketAddr, LinkError> {
+        if let Ok(a) = addr.parse::<SocketAddr>() {
+            return Ok(a);
+        }
+        let mut addrs = addr
+            .to_socket_addrs()
+            .map_err(|e| Self::bad(input, format!("address {addr:?}: {e}")))?;
+        addrs
+            .next()
+            .ok_or_else(|| Self::bad(input, format!("address {addr:?} resolves to nothing")))
+    }
+}
+
+impl FromStr for Endpoint {
+    type Err = LinkError;
+
+    fn from_str(s: &str) -> Result<Self, LinkError> {
+        let (kind, rest) = s
+            .split_once(':')
+            .ok_or_else(|| Self::bad(s, "no transport prefix"))?;
+        match kind {
+            "udpin" => Ok(Endpoint::UdpIn(Self::parse_addr(s, rest)?)),
+            "udpout" => Ok(Endpoint::UdpOut(Self::parse_addr(s, rest)?)),
+            "serial" => {
+                let (path, baud) = rest
+                    .rsplit_once(':')
+                    .ok_or_else(|| Self::bad(s, "no baud rate"))?;
+                if path.is_empty() {
+                    return Err(Self::bad(s, "empty device path"));
+                }
+                let baud = baud.parse::<u32>().ok().filter(|&b| b > 0).ok_or_else(|| {
+                    Self::bad(s, format!("baud rate {baud:?} is not a positive integer"))
+                })?;
+                Ok(Endpoint::Serial {
+                    path: path.to_string(),
+                    baud,
+                })
+            }
+            other => Err(Self::bad(s, format!("unknown transport {other:?}"))),
+        }
+    }
+}
+
+impl fmt::Display for Endpoint {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Endpoint::UdpIn(a) => write!(f, "udpin:{a}"),
+            Endpoint::UdpOut(a) => write!(f, "udpout:{a}"),
+            Endpoint::Serial { path, baud } => write!(f, "serial:{path}:{baud}"),
+        }
+    }
+}
+
+impl serde::Serialize for Endpoint {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for Endpoint {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+/// Why a link could not be set up or used.
+#[derive(Debug, thiserror::Error)]
+pub enum LinkError {
+    /// The endpoint string is malformed.
+    #[error("endpoint {input:?}: {reason} (expected {ENDPOINT_FORMS})", ENDPOINT_FORMS = ENDPOINT_FORMS)]
+    BadEndpoint {
+        /// The string as given.
+        input: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The UDP socket could not be bound.
+    #[error("udp bind {addr}: {source}")]
+    Bind {
+        /// The address we tried to bind.
+        addr: SocketAddr,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The serial port could not be opened or configured.
+    #[error("serial port {path}: {source}")]
+    Serial {
+        /// Device path.
+        path: String,
+        /// The error from the serial port library.
+        source: serialport::Error,
+    },
+    /// Sending or receiving failed on an open link.
+    #[error("{endpoint}: {op}: {source}")]
+    Io {
+        /// The link's endpoint.
+        endpoint: Endpoint,
+        /// What we were doing (`send`, `receive`, ...).
+        op: &'static str,
+        /// The OS error.
+        source: std::io::Error,
+    },
+}
+
+enum Transport {
+    Udp {
+        socket: UdpSocket,
+        /// Where frames are sent: the fixed target (udpout) or the last datagram's source (udpin).
+        peer: Option<SocketAddr>,
+        /// udpin: follow the source of received datagrams.
+        follow_peer: bool,
+    },
+    Serial(Box<dyn serialport::SerialPort>),
+}
+
+/// An open link (UDP or serial) with a frame parser and counters.
+///
+/// Received bytes go through one [`FrameParser`] in arrival order; on UDP that joins datagrams
+/// into one stream, which is harmless because MAVLink senders put whole frames in each datagram.
+/// Outgoing headers are sent as given (the caller numbers the sequence).
+pub struct Link {
+    endpoint: Endpoint,
+    transport: Transport,
+    parser: FrameParser,
+    read_buf: Vec<u8>,
+    bytes_out: u64,
+    frames_out: u64,
+    unsent_frames: u64,
+}
+
+impl fmt::Debug for Link {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Link")
+            .field("endpoint", &self.endpoint)
+            .field("peer", &self.peer())
+            .field("stats", &self.stats())
+            .finish()
+    }
+}
+
+impl Link {
+    /// Opens the link: binds the UDP socket or opens the serial port.
+    pub fn open(endpoint: &Endpoint) -> Result<Link, LinkError> {
+        let transport = match endpoint {
+            Endpoint::UdpIn(addr) => Transport::Udp {
+                socket: UdpSocket::bind(addr).map_err(|source| LinkError::Bind {
+                    addr: *addr,
+                    source,
+                })?,
+                peer: None,
+                follow_peer: true,
+            },
+            Endpoint::UdpOut(target) => {
+                // Unconnected, so that ICMP "port unreachable" while the other side is not up
+                // yet does not turn into errors on later calls.
+                let any: SocketAddr = if target.is_ipv4() {
+                    (Ipv4Addr::UNSPECIFIED, 0).into()
+                } else {
+                    (Ipv6Addr::UNSPECIFIED, 0).into()
+                };
+                Transport::Udp {
+                    socket: UdpSocket::bind(any)
+                        .map_err(|source| LinkError::Bind { addr: any, source })?,
+                    peer: Some(*target),
+                    follow_peer: false,
+                }
+            }
+            Endpoint::Serial { path, baud } => {
+                let port = serialport::new(path, *baud)
+                    .data_bits(serialport::DataBits::Eight)
+                    .parity(serialport::Parity::None)
+                    .stop_bits(serialport::StopBits::One)
+                    .flow_control(serialport::FlowControl::None)
+                    .open()
+                    .map_err(|source| LinkError::Serial {
+                        path: path.clone(),
+                        source,
+                    })?;
+                Transport::Serial(port)
+            }
+        };
+        Ok(Link {
+            endpoint: endpoint.clone(),
+            transport,
+            parser: FrameParser::new(),
+            read_buf: vec![0; READ_BUF_LEN],
+            bytes_out: 0,
+            frames_out: 0,
+            unsent_frames: 0,
+        })
+    }
+
+    fn io_error(&self, op: &'static str, source: std::io::Error) -> LinkError {
+        LinkError::Io {
+            endpoint: self.endpoint.clone(),
+            op,
+            source,
+        }
+    }
+
+    /// Encodes `msg` as one MAVLink 2 frame (see [`encode_v2`]) and sends it.
+    ///
+    /// On a `udpin` link that has not received a datagram yet there is nowhere to send: the frame
+    /// is dropped, `Ok` is returned, and it counts in [`Link::unsent_frames`], not in
+    /// `frames_out`/`bytes_out`.
+    pub fn send(&mut self, header: MavHeader, msg: &MavMessage) -> Result<(), LinkError> {
+        let frame = encode_v2(header, msg);
+        let result = match &mut self.transport {
+            Transport::Udp { socket, peer, .. } => match peer {
+                Some(peer) => socket.send_to(&frame, *peer).map(|_| ()),
+                None => {
+                    self.unsent_frames += 1;
+                    return Ok(());
+                }
+            },
+            Transport::Serial(port) => port
+                .set_timeout(SERIAL_WRITE_TIMEOUT)
+                .map_err(std::io::Error::from)
+                .and_then(|()| port.write_all(&frame)),
+        };
+        result.map_err(|e| self.io_error("send", e))?;
+        self.bytes_out += frame.len() as u64;
+        self.frames_out += 1;
+        Ok(())
+    }
+
+    /// One read waiting at most `timeout`; returns the number of bytes (0: nothing arrived).
+    fn read_some(&mut self, timeout: Duration) -> Result<usize, LinkError> {
+        let result = match &mut self.transport {
+            Transport::Udp {
+                socket,
+                peer,
+                follow_peer,
+            } => {
+                // A zero read timeout means "block forever" to the OS; the smallest non-zero one
+                // (1 µs) is as good as non-blocking.
+                let t = timeout.max(Duration::from_micros(1));
+                match socket.set_read_timeout(Some(t)) {
+                    Err(e) => Err(e),
+                    Ok(()) => socket.recv_from(&mut self.read_buf).map(|(n, from)| {
+                        if *follow_peer {
+                            *peer = Some(from);
+                        }
+                        n
+                    }),
+                }
+            }
+            Transport::Serial(port) => match port.set_timeout(timeout) {
+                Err(e) => Err(std::io::Error::from(e)),
+                Ok(()) => port.read(&mut self.read_buf),
+            },
+        };
+        match result {
+            Ok(n) => Ok(n),
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::WouldBlock | ErrorKind::TimedOut | ErrorKind::Interrupted
+                ) =>
+            {
+                Ok(0)
+            }
+            Err(e) => Err(self.io_error("receive", e)),
+        }
+    }
+
+    /// Waits at most `timeout` for data and returns the frames it completes (may be empty).
+    ///
+    /// Returns as soon as at least one frame is complete (after also taking whatever else is
+    /// already waiting), or when `timeout` has passed. A zero timeout only takes what is waiting.
+    pub fn recv(&mut self, timeout: Duration) -> Result<Vec<(MavHeader, MavMessage)>, LinkError> {
+        let deadline = Instant::now() + timeout;
+        let mut frames = Vec::new();
+        loop {
+            let remaining = deadline.saturating_duration_since(Instant::now());
+            let n = self.read_some(remaining)?;
+            if n > 0 {
+                frames.extend(self.parser.push(&self.read_buf[..n]));
+                for _ in 0..MAX_DRAIN_READS {
+                    let n = self.read_some(Duration::ZERO)?;
+                    if n == 0 {
+                        break;
+                    }
+                    frames.extend(self.parser.push(&self.read_buf[..n]));
+                }
+            }
+            if !frames.is_empty() || remaining.is_zero() || Instant::now() >= deadline {
+                return Ok(frames);
+            }
+        }
+    }
+
+    /// Counters of the parser plus what was sent.
+    pub fn stats(&self) -> LinkStats {
+        LinkStats {
+            bytes_out: self.bytes_out,
+            frames_out: self.frames_out,
+            ..self.parser.stats()
+        }
+    }
+
+    /// Frames [`Link::send`] dropped because a `udpin` link had no peer yet.
+    pub fn unsent_frames(&self) -> u64 {
+        self.unsent_frames
+    }
+
+    /// The local socket address (UDP only).
+    pub fn local_addr(&self) -> Option<SocketAddr> {
+        match &self.transport {
+            Transport::Udp { socket, .. } => socket.local_addr().ok(),
+            Transport::Serial(_) => None,
+        }
+    }
+
+    /// Where frames go (UDP only): the udpout target, or the source of the last datagram on udpin.
+    pub fn peer(&self) -> Option<SocketAddr> {
+        match &self.transport {
+            Transport::Udp { peer, .. } => *peer,
+            Transport::Serial(_) => None,
+        }
+    }
+
+    /// The endpoint this link was opened with.
+    pub fn endpoint(&self) -> &Endpoint {
+        &self.endpoint
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::*;
+    use crate::{companion_heartbeat, Identity};
+
+    const WAIT: Duration = Duration::from_secs(2);
+
+    #[test]
+    fn endpoint_strings() {
+        for s in [
+            "udpin:0.0.0.0:14550",
+            "udpout:127.0.0.1:14551",
+            "udpin:[::1]:14550",
+            "serial:/dev/ttyACM0:921600",
+            "serial:/dev/serial/by-id/usb-ArduPilot:with:colons:57600",
+        ] {
+            let e: Endpoint = s.parse().unwrap();
+            assert_eq!(e.to_string(), s);
+        }
+        assert_eq!(
+            "serial:/dev/ttyUSB0:57600".parse::<Endpoint>().unwrap(),
+            Endpoint::Serial {
+                path: "/dev/ttyUSB0".into(),
+                baud: 57600
+            }
+        );
+        assert_eq!(
+            "udpout:localhost:14550"
+                .parse::<Endpoint>()
+                .unwrap()
+                .to_string()
+                .rsplit(':')
+                .next(),
+            Some("14550")
+        );
+        for bad in [
+            "",
+            "udp:1.2.3.4:5",
+            "udpin:1.2.3.4",
+            "tcp:1.2.3.4:5",
+            "serial:/dev/ttyACM0",
+            "serial:/dev/ttyACM0:fast",
+            "serial:/dev/ttyACM0:0",
+            "serial::9600",
+        ] {
+            let err = bad.parse::<Endpoint>().unwrap_err().to_string();
+            assert!(
+                err.contains(&format!("{bad:?}")) && err.contains("udpin:ADDR:PORT"),
+                "{err}"
+            );
+        }
+        let json =
+            serde_json::to_string(&Endpoint::UdpIn("0.0.0.0:14550".parse().unwrap())).unwrap();
+        assert_eq!(json, "\"udpin:0.0.0.0:14550\"");
+        assert!(serde_json::from_str::<Endpoint>("\"serial:x\"").is_err());
+    }
+
+    #[test]
+    fn udp_exchange_both_ways() {
+        let mut server = Link::open(&"udpin:127.0.0.1:0".parse().unwrap()).unwrap();
+        let port = server.local_addr().unwrap().port();
+        assert_ne!(port, 0);
+        let mut client = Link::open(&format!("udpout:127.0.0.1:{port}").parse().unwrap()).unwrap();
+        assert_eq!(server.peer(), None);
+
+        let me = Identity {
+            system_id: 1,
+            component_id: 191,
+        };
+        client.send(me.header(0), &companion_heartbeat()).unwrap();
+        client.send(me.header(1), &companion_heartbeat()).unwrap();
+        let mut got = Vec::new();
+        let t = Instant::now();
+        while got.len() < 2 && t.elapsed() < WAIT {
+            got.extend(server.recv(WAIT).unwrap());
+        }
+        assert_eq!(
+            got,
+            vec![
+                (me.header(0), companion_heartbeat()),
+                (me.header(1), companion_heartbeat())
+            ]
+        );
+        assert_eq!(
+            server.peer(),
+            client
+                .local_addr()
+                .map(|a| SocketAddr::from(([127, 0, 0, 1], a.port())))
+        );
+
+        let (h, m) = sample_messages()[1].clone();
+        server.send(h, &m).unwrap();
+        assert_eq!(client.recv(WAIT).unwrap(), vec![(h, m)]);
+
+        let (c, s) = (client.stats(), server.stats());
+        assert_eq!(
+            (c.frames_out, c.frames_in, s.frames_in, s.frames_out),
+            (2, 1, 2, 1)
+        );
+        assert_eq!((c.bytes_out, c.bytes_in), (s.bytes_in, s.bytes_out));
+        assert_eq!(
+            server.endpoint(),
+            &Endpoint::UdpIn(([127, 0, 0, 1], 0).into())
+        );
+    }
+
+    #[test]
+    fn udpin_without_peer_drops_silently() {
+        let mut server = Link::open(&"udpin:127.0.0.1:0".parse().unwrap()).unwrap();
+        server
+            .send(header(1, 1, 0), &companion_heartbeat())
+            .unwrap();
+        assert_eq!(server.unsent_frames(), 1);
+        assert_eq!(
+            (server.stats().frames_out, server.stats().bytes_out),
+            (0, 0)
+        );
+    }
+
+    #[test]
+    fn recv_waits_at_most_the_timeout() {
+        let mut server = Link::open(&"udpin:127.0.0.1:0".parse().unwrap()).unwrap();
+        let t = Instant::now();
+        assert!(server.recv(Duration::ZERO).unwrap().is_empty());
+        assert!(t.elapsed() < Duration::from_millis(50));
+        let t = Instant::now();
+        assert!(server.recv(Duration::from_millis(100)).unwrap().is_empty());
+        let waited = t.elapsed();
+        assert!(
+            waited >= Duration::from_millis(95) && waited < Duration::from_secs(1),
+            "{waited:?}"
+        );
+    }
+
+    #[test]
+    fn garbage_datagrams_are_counted() {
+        let mut server = Link::open(&"udpin:127.0.0.1:0".parse().unwrap()).unwrap();
+        let raw = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let to = server.local_addr().unwrap();
+        raw.send_to(b"hello", to).unwrap();
+        let (h, m) = sample_messages()[0].clone();
+        raw.send_to(&crate::encode_v2(h, &m), to).unwrap();
+        let mut got = Vec::new();
+        let t = Instant::now();
+        while got.is_empty() && t.elapsed() < WAIT {
+            got.extend(server.recv(WAIT).unwrap());
+        }
+        assert_eq!(got, vec![(h, m)]);
+        assert_eq!(server.stats().garbage_bytes, 5);
+    }
+
+    #[test]
+    fn bind_conflict_names_the_address() {
+        let first = Link::open(&"udpin:127.0.0.1:0".parse().unwrap()).unwrap();
+        let addr = first.local_addr().unwrap();
+        let err = Link::open(&Endpoint::UdpIn(addr)).unwrap_err().to_string();
+        assert!(err.contains(&addr.to_string()), "{err}");
+    }
+
+    #[test]
+    fn missing_serial_port_names_the_path() {
+        let err = Link::open(&"serial:/dev/hubtrack-no-such-tty:921600".parse().unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("serial port /dev/hubtrack-no-such-tty: "),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn serial_over_a_pty_pair() {
+        let (mut master, slave) = serialport::TTYPort::pair().expect("pty pair");
+        let path = serialport::SerialPort::name(&slave).expect("pty name");
+        let mut link = Link::open(&Endpoint::Serial {
+            path,
+            baud: 921_600,
+        })
+        .unwrap();
+        assert_eq!(link.local_addr(), None);
+
+        let (h, m) = sample_messages()[1].clone();
+        let frame = crate::encode_v2(h, &m);
+        // Split in two writes, with noise before it.
+        master.write_all(b"\x00noise").unwrap();
+        master.write_all(&frame[..7]).unwrap();
+        master.flush().unwrap();
+        assert!(link.recv(Duration::from_millis(50)).unwrap().is_empty());
+        master.write_all(&frame[7..]).unwrap();
+        let mut got = Vec::new();
+        let t = Instant::now();
+        while got.is_empty() && t.elapsed() < WAIT {
+            got.extend(link.recv(WAIT).unwrap());
+        }
+        assert_eq!(got, vec![(h, m)]);
+        assert_eq!(link.stats().garbage_bytes, 6);
+
+        let (h, m) = sample_messages()[0].clone();
+        link.send(h, &m).unwrap();
+        let sent = crate::encode_v2(h, &m);
+        let mut echo = vec![0; sent.len()];
+        serialport::SerialPort::set_timeout(&mut master, WAIT).unwrap();
+        master.read_exact(&mut echo).unwrap();
+        assert_eq!(echo, sent);
+        assert_eq!(link.stats().frames_out, 1);
+        drop(slave);
+    }
+}

@@ -1,0 +1,186 @@
+//! `hubtrack fly`: seeded simulated approaches through the real processes.
+//!
+//! Each seed is one run of the pipeline `sim → detect → track → control → (MAVLink) → sim`
+//! under the supervisor, with fresh processes (no state carried between flights), the MAVLink
+//! link on a free local UDP port, and by default the simulator in lockstep with the stages, so
+//! that a seed flies the same flight every time and twenty flights take minutes. The outcome of
+//! each flight comes from the simulator's ground truth.
+
+use crate::supervise::{supervise, RunOptions};
+use anyhow::{bail, Context};
+use hubtrack_runtime::config::ConfigArgs;
+use hubtrack_runtime::shutdown::Shutdown;
+use hubtrack_sim::Outcome;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// Wall-clock allowance per flight beyond its simulated duration (start-up, slow machines).
+const WALL_MARGIN_S: f64 = 60.0;
+
+/// `hubtrack fly` arguments.
+#[derive(clap::Args)]
+pub struct FlyArgs {
+    #[command(flatten)]
+    config: ConfigArgs,
+    /// Number of flights (seeds `first_seed .. first_seed + seeds`).
+    #[arg(long, default_value_t = 1)]
+    seeds: u64,
+    /// First seed.
+    #[arg(long, default_value_t = 1)]
+    first_seed: u64,
+    /// One JSON object per flight per line on stdout (stage logs go to stderr).
+    #[arg(long)]
+    json: bool,
+    /// Fly in real time (the simulator follows the wall clock) instead of lockstep.
+    #[arg(long)]
+    realtime: bool,
+    /// Record each flight: `PATH.mcap` for one flight, `PATH-seedN.mcap` for several.
+    #[arg(long, value_name = "PATH.mcap")]
+    record: Option<PathBuf>,
+}
+
+/// One flight's result line.
+#[derive(serde::Serialize)]
+struct FlightLine<'a> {
+    #[serde(flatten)]
+    outcome: &'a Outcome,
+    wall_s: f64,
+    recording: Option<String>,
+}
+
+/// Runs the flights and prints the table (or JSON lines).
+pub fn run(args: FlyArgs) -> anyhow::Result<()> {
+    // Fail on a bad config before starting anything.
+    args.config.load()?;
+    let shutdown = Shutdown::install()?;
+    let dir = tempdir()?;
+    let mut outcomes = Vec::new();
+    if !args.json {
+        println!(
+            "hubtrack fly: {} flight(s) from seed {}, {}{}",
+            args.seeds,
+            args.first_seed,
+            if args.realtime { "real time" } else { "lockstep" },
+            args.record.as_ref().map(|r| format!(", recording to {}", r.display())).unwrap_or_default()
+        );
+        println!("{}", header());
+    }
+    for seed in args.first_seed..args.first_seed + args.seeds {
+        if shutdown.requested() {
+            break;
+        }
+        let port = free_udp_port()?;
+        let record = args.record.as_ref().map(|r| recording_path(r, seed, args.seeds));
+        let mut stages = vec!["detect", "track", "control", "sim"];
+        if record.is_some() {
+            stages.insert(0, "recorder");
+        }
+        let mut overrides = args.config.overrides.clone();
+        overrides.extend([
+            format!("run.stages={stages:?}"),
+            format!("sim.seed={seed}"),
+            format!("sim.pace=\"{}\"", if args.realtime { "realtime" } else { "lockstep" }),
+            "control.clock=\"sim\"".to_string(),
+            format!("control.link=\"udpin:127.0.0.1:{port}\""),
+            format!("sim.link=\"udpout:127.0.0.1:{port}\""),
+        ]);
+        let config_args = ConfigArgs { config: args.config.config.clone(), overrides };
+        let config = config_args.load()?;
+        let outcome_path = dir.join(format!("outcome-{seed}.json"));
+        let wall_limit = Duration::from_secs_f64(config.sim.max_time_s * if args.realtime { 1.2 } else { 4.0 } + WALL_MARGIN_S);
+        let report = supervise(RunOptions {
+            config,
+            config_args,
+            record: record.clone().unwrap_or_else(|| dir.join("unused.mcap")),
+            duration: Some(wall_limit),
+            outcome: Some(outcome_path.clone()),
+            interactive: false,
+        })?;
+        let outcome: Outcome = match std::fs::read_to_string(&outcome_path) {
+            Ok(text) => serde_json::from_str(&text).with_context(|| format!("outcome of seed {seed}"))?,
+            Err(_) => {
+                let why = report.failure.unwrap_or_else(|| format!("no outcome within {:.0} s wall clock", wall_limit.as_secs_f64()));
+                bail!("flight seed {seed} did not finish: {why}");
+            }
+        };
+        let line = FlightLine {
+            outcome: &outcome,
+            wall_s: report.elapsed.as_secs_f64(),
+            recording: record.as_ref().map(|r| r.display().to_string()),
+        };
+        if args.json {
+            println!("{}", serde_json::to_string(&line)?);
+        } else {
+            println!("{}", row(&line));
+        }
+        outcomes.push(outcome);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    if !args.json && !outcomes.is_empty() {
+        summary(&outcomes, args.record.as_deref(), args.seeds);
+    }
+    Ok(())
+}
+
+fn header() -> String {
+    format!(
+        "{:>5} {:>7} {:>8} {:>8} {:>8} {:>7} {:>7} {:>8} {:>6}  {}",
+        "seed", "result", "dist m", "yaw °", "lat m", "time s", "path m", "rotor m", "wall s", "end"
+    )
+}
+
+fn row(l: &FlightLine) -> String {
+    let o = l.outcome;
+    format!(
+        "{:>5} {:>7} {:>8.2} {:>+8.1} {:>+8.2} {:>7.1} {:>7.1} {:>8.2} {:>6.1}  {}{}",
+        o.seed,
+        if o.success { "ok" } else { "FAIL" },
+        o.final_distance_m,
+        o.final_yaw_deg,
+        o.final_lateral_m,
+        o.time_s,
+        o.path_length_m,
+        o.min_rotor_plane_m,
+        l.wall_s,
+        o.end_reason,
+        o.failure.as_deref().map(|f| format!(": {f}")).unwrap_or_default()
+    )
+}
+
+fn summary(outcomes: &[Outcome], record: Option<&Path>, seeds: u64) {
+    let ok = outcomes.iter().filter(|o| o.success).count();
+    let closest = outcomes.iter().map(|o| o.min_rotor_plane_m).fold(f64::INFINITY, f64::min);
+    let mut times: Vec<f64> = outcomes.iter().filter(|o| o.success).map(|o| o.time_s).collect();
+    times.sort_by(f64::total_cmp);
+    println!(
+        "\n{ok}/{} flights ended in hover at the target; closest approach to the rotor plane {closest:.2} m{}",
+        outcomes.len(),
+        times.get(times.len() / 2).map(|t| format!("; median time {t:.1} s")).unwrap_or_default()
+    );
+    if let Some(r) = record {
+        let first = recording_path(r, outcomes[0].seed, seeds);
+        println!("recordings: {} (open in Foxglove, or `hubtrack latency {}`)", if seeds == 1 { r.display().to_string() } else { format!("{}-seed*.mcap", r.with_extension("").display()) }, first.display());
+    }
+}
+
+/// `PATH` for one flight, `PATH-seedN.mcap` for several.
+fn recording_path(record: &Path, seed: u64, seeds: u64) -> PathBuf {
+    if seeds == 1 {
+        return record.to_path_buf();
+    }
+    let stem = record.file_stem().map_or("flight".into(), |s| s.to_string_lossy().into_owned());
+    record.with_file_name(format!("{stem}-seed{seed}.mcap"))
+}
+
+/// A UDP port free right now on the loopback interface (the OS picks it).
+fn free_udp_port() -> anyhow::Result<u16> {
+    let sock = std::net::UdpSocket::bind("127.0.0.1:0").context("finding a free UDP port")?;
+    Ok(sock.local_addr()?.port())
+}
+
+/// A private folder for the outcome files.
+fn tempdir() -> anyhow::Result<PathBuf> {
+    let dir = std::env::temp_dir().join(format!("hubtrack-fly-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    Ok(dir)
+}
