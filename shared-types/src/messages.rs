@@ -233,6 +233,9 @@ pub struct TrackState {
     pub hub_velocity_px_s: [f64; 2],
     /// Position covariance `[xx, xy, yx, yy]`, px².
     pub hub_covariance: [f64; 4],
+    /// Direction of the filtered hub from the camera's optical axis through the tracker's
+    /// camera model, degrees: `[azimuth (right positive), elevation (up positive)]`.
+    pub hub_bearing_deg: [f64; 2],
     /// Distance estimate is usable.
     pub distance_valid: bool,
     /// Distance to the hub, metres.

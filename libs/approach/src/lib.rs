@@ -124,6 +124,8 @@ pub struct Approach {
     abort: Option<AbortState>,
     /// Filtered relative yaw, degrees (None: no valid yaw since the last reset).
     yaw_f: Option<f64>,
+    /// Estimate of the heading that faces the rotor (world frame), kept across track losses.
+    turbine_heading: Option<TurbineHeading>,
     /// Filtered distance, m.
     dist_f: Option<f64>,
     /// `capture_ns` of the track last fed to the filters (a repeated track is not re-filtered).
@@ -226,6 +228,7 @@ impl Approach {
             last_capture_ns: None,
             abort: None,
             yaw_f: None,
+            turbine_heading: None,
             dist_f: None,
             filter_capture_ns: None,
             t1_active: true,
@@ -386,7 +389,7 @@ impl Approach {
         // Age of the track = time since its last detection + how old the state itself is.
         let age_s = input.track.map_or(0.0, |t| t.time_since_detection_s + secs(t.stamps.capture_ns, now));
         match (unusable_reason(input.track, age_s, self.config.max_track_age_s), input.track) {
-            (None, Some(t)) => self.tasks(now, dt, t),
+            (None, Some(t)) => self.tasks(now, dt, t, input.vehicle),
             (why, _) => self.no_track(now, dt, input.track, why.unwrap_or_default()),
         }
     }
@@ -430,7 +433,7 @@ impl Approach {
     }
 
     /// T1/T2/T3 and Done with a usable track.
-    fn tasks(&mut self, now: u64, dt: f64, t: &TrackState) -> (ApproachTask, Command, String) {
+    fn tasks(&mut self, now: u64, dt: f64, t: &TrackState, vehicle: Option<&VehicleState>) -> (ApproachTask, Command, String) {
         let c = self.config.clone();
         if self.unusable_since_ns.take().is_some() {
             // Re-acquired: a fresh track, a fresh search budget.
@@ -445,8 +448,9 @@ impl Approach {
         let ey = (t.hub_px[1] - hh) / hh;
         self.last_seen_right = Some(ex >= 0.0);
 
+        let new_track_state = self.filter_capture_ns != Some(t.stamps.capture_ns);
         self.update_filters(t);
-        let yaw = self.yaw_f;
+        let yaw = self.heading_yaw(t, vehicle, new_track_state).or(self.yaw_f);
         let dist = self.dist_f;
 
         // Hysteresis: unmet above the outer threshold, met below the inner one, else unchanged.
@@ -599,8 +603,67 @@ impl Approach {
         }
         let dt = self.filter_capture_ns.map_or(0.0, |p| secs(p, capture).min(c.max_dt_s));
         self.filter_capture_ns = Some(capture);
-        self.yaw_f = yaw_usable(t).then(|| low_pass(self.yaw_f, t.yaw_deg, c.yaw_filter_s, dt));
+        // Act only on the significant part of the yaw: shrink it toward 0 by k standard deviations.
+        let margin = c.yaw_significance_sigmas * if t.yaw_std_deg.is_finite() { t.yaw_std_deg.max(0.0) } else { 0.0 };
+        let yaw = t.yaw_deg.signum() * (t.yaw_deg.abs() - margin).max(0.0);
+        self.yaw_f = yaw_usable(t).then(|| low_pass(self.yaw_f, yaw, c.yaw_filter_s, dt));
         self.dist_f = distance_usable(t).then(|| low_pass(self.dist_f, t.distance_m, c.distance_filter_s, dt));
+    }
+}
+
+/// Running estimate of the heading that faces the rotor, radians.
+#[derive(Debug, Clone, PartialEq)]
+struct TurbineHeading {
+    heading_rad: f64,
+    samples: u32,
+    last_ns: u64,
+}
+
+impl Approach {
+    /// The relative yaw from the turbine-heading estimate and the current heading toward the
+    /// hub (autopilot heading + hub azimuth), degrees; feeds the estimate with a new track
+    /// state's yaw. `None` while disabled, without attitude, or before enough samples.
+    fn heading_yaw(&mut self, t: &TrackState, vehicle: Option<&VehicleState>, new: bool) -> Option<f64> {
+        let c = &self.config;
+        if c.turbine_heading_filter_s <= 0.0 {
+            return None;
+        }
+        let v = vehicle.filter(|v| v.attitude_valid && v.yaw_rad.is_finite())?;
+        let az = t.hub_bearing_deg[0];
+        if !az.is_finite() || !matches!(t.mode, TrackMode::Tracking | TrackMode::Coasting) {
+            return None;
+        }
+        let to_hub = v.yaw_rad + az.to_radians();
+        if new && yaw_usable(t) {
+            // Facing heading = heading toward the hub + relative yaw (a camera on the viewer's
+            // right must turn left to see the hub).
+            let meas = wrap_pi(to_hub + t.yaw_deg.to_radians());
+            let now = t.stamps.capture_ns;
+            match self.turbine_heading.as_mut() {
+                None => self.turbine_heading = Some(TurbineHeading { heading_rad: meas, samples: 1, last_ns: now }),
+                Some(h) => {
+                    h.samples = h.samples.saturating_add(1);
+                    let dt = secs(h.last_ns.min(now), now).min(c.max_dt_s);
+                    h.last_ns = now;
+                    let gain = (dt / c.turbine_heading_filter_s).max(1.0 / f64::from(h.samples)).min(1.0);
+                    let clip = c.turbine_heading_clip_deg.to_radians();
+                    let innovation = wrap_pi(meas - h.heading_rad).clamp(-clip, clip);
+                    h.heading_rad = wrap_pi(h.heading_rad + gain * innovation);
+                }
+            }
+        }
+        let h = self.turbine_heading.as_ref().filter(|h| h.samples >= c.turbine_heading_min_samples)?;
+        Some(wrap_pi(h.heading_rad - to_hub).to_degrees())
+    }
+}
+
+/// Wraps an angle to (−π, π].
+fn wrap_pi(a: f64) -> f64 {
+    let r = a.rem_euclid(std::f64::consts::TAU);
+    if r > std::f64::consts::PI {
+        r - std::f64::consts::TAU
+    } else {
+        r
     }
 }
 

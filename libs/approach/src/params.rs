@@ -124,6 +124,24 @@ pub struct ApproachConfig {
     /// Time constant of the first-order low-pass filter on the distance used by T3, s
     /// (0 = unfiltered). Range [0, 60]; default 0.5.
     pub distance_filter_s: f64,
+    /// Only the part of the relative yaw beyond this many of the tracker's standard deviations
+    /// is acted on (the yaw is shrunk toward 0 by `k·yaw_std_deg` before filtering), so T2 does
+    /// not chase noise at long range, where the hub–tower gap is a few pixels. Range [0, 5];
+    /// default 1.
+    pub yaw_significance_sigmas: f64,
+    /// Time constant of the estimate of the turbine's facing heading, s; 0 disables it. The
+    /// rotor does not turn during an approach, so every yaw measurement plus the autopilot's
+    /// heading toward the hub is a measurement of one constant, the heading that faces the
+    /// rotor; averaging it over this long (a running mean at first) and subtracting the current
+    /// heading toward the hub gives a relative yaw far less noisy than one frame's hub–tower
+    /// gap, and it follows the vehicle's own motion at once. Range [0, 600]; default 10.
+    pub turbine_heading_filter_s: f64,
+    /// Each yaw measurement moves the turbine-heading estimate by at most this much error,
+    /// degrees (outliers have bounded influence). Range (0, 90]; default 10.
+    pub turbine_heading_clip_deg: f64,
+    /// Yaw measurements needed before the turbine-heading estimate replaces the filtered
+    /// tracker yaw. Range [1, 10000]; default 15.
+    pub turbine_heading_min_samples: u32,
 
     // ---- track loss, search and abort ----
     /// Oldest usable track, s: with more time since the last accepted detection (plus the age
@@ -177,8 +195,12 @@ impl Default for ApproachConfig {
             yaw_accel_deg_s2: 40.0,
             max_dt_s: 0.5,
             yaw_filter_s: 0.5,
+            yaw_significance_sigmas: 1.0,
+            turbine_heading_filter_s: 10.0,
+            turbine_heading_clip_deg: 10.0,
+            turbine_heading_min_samples: 15,
             distance_filter_s: 0.5,
-            max_track_age_s: 0.5,
+            max_track_age_s: 1.0,
             search_after_s: 5.0,
             search_yaw_rate_deg_s: 10.0,
             search_max_turn_deg: 360.0,
@@ -239,6 +261,10 @@ impl ApproachConfig {
         c.open_closed("max_dt_s", self.max_dt_s, 0.0, 5.0)?;
 
         c.closed("yaw_filter_s", self.yaw_filter_s, 0.0, 60.0)?;
+        c.closed("yaw_significance_sigmas", self.yaw_significance_sigmas, 0.0, 5.0)?;
+        c.closed("turbine_heading_filter_s", self.turbine_heading_filter_s, 0.0, 600.0)?;
+        c.open_closed("turbine_heading_clip_deg", self.turbine_heading_clip_deg, 0.0, 90.0)?;
+        c.count("turbine_heading_min_samples", self.turbine_heading_min_samples, 1, 10_000)?;
         c.closed("distance_filter_s", self.distance_filter_s, 0.0, 60.0)?;
 
         c.open_closed("max_track_age_s", self.max_track_age_s, 0.0, 60.0)?;

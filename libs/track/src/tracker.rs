@@ -399,7 +399,7 @@ impl Core {
             None
         };
         let n = (det.blade_count as usize).min(det.blade_angles_deg.len());
-        let blade = if n >= yc.min_blades as usize {
+        let blade = if yc.use_blade_skew && n >= yc.min_blades as usize {
             blade_skew_yaw(&det.blade_angles_deg[..n], yc.rotor_blades, yc.blade_angle_std_deg.to_radians(), max_yaw, yc.blade_fit_chi2)
         } else {
             None
@@ -487,6 +487,8 @@ impl Core {
         // Report the last values (flagged invalid) rather than zeros when they went stale.
         let distance_any = distance.or(if self.opts.raw_estimates { None } else { self.distance.estimate() });
         let yaw_any = yaw.or(if self.opts.raw_estimates { None } else { self.yaw.estimate() });
+        let ray = self.camera().ray(hub_px);
+        let hub_bearing_deg = [ray.x.atan2(ray.z).to_degrees(), (-ray.y).atan2(ray.x.hypot(ray.z)).to_degrees()];
         TrackState {
             stamps: hubtrack_types::Stamps { seq, capture_ns, recv_ns: 0, publish_ns: 0 },
             mode,
@@ -497,6 +499,7 @@ impl Core {
             hub_px,
             hub_velocity_px_s: vel,
             hub_covariance: cov,
+            hub_bearing_deg,
             distance_valid: distance.is_some(),
             distance_m: distance_any.map_or(0.0, |e| e.value),
             distance_std_m: distance_any.map_or(0.0, |e| e.std),
