@@ -144,6 +144,10 @@ pub struct Approach {
     search_turned_deg: f64,
     /// The search has used up `search_max_turn_deg`.
     search_exhausted: bool,
+    /// Distance backed off in the current close-range search, m.
+    backoff_m: f64,
+    /// The newest filtered distance, kept through track losses (where the loss happened).
+    last_distance_m: Option<f64>,
     /// The hub was last seen right of centre (search direction); `None` if never seen.
     last_seen_right: Option<bool>,
 }
@@ -239,6 +243,8 @@ impl Approach {
             unusable_since_ns: None,
             search_turned_deg: 0.0,
             search_exhausted: false,
+            backoff_m: 0.0,
+            last_distance_m: None,
             last_seen_right: None,
         })
     }
@@ -405,6 +411,18 @@ impl Approach {
         let lost_s = self.unusable_since_ns.map_or(0.0, |s| secs(s, now));
         let requested = track.is_some_and(|t| t.search_requested);
         let want_search = (requested || lost_s >= c.search_after_s) && c.search_max_turn_deg > 0.0;
+        // Lost close to the rotor: turning away would lose it for good (and swing the camera
+        // away from the blades we are next to); back away slowly instead, until the whole
+        // rotor is back in view.
+        if let (true, false, Some(d)) = (want_search, self.search_exhausted, self.last_distance_m.filter(|d| *d < c.close_range_m)) {
+            let speed = slew(self.cmd.vx, -c.search_backoff_m_s, c.accel_xy_m_s2, dt);
+            self.backoff_m += speed.abs() * dt;
+            if self.backoff_m < c.close_range_m - d {
+                let reason = format!("search: back off, {:.1}/{:.1} m, lost at {d:.1} m", self.backoff_m, c.close_range_m - d);
+                return (ApproachTask::Search, Command { vx: speed, ..Command::default() }, reason);
+            }
+            self.search_exhausted = true;
+        }
         if want_search && !self.search_exhausted {
             let right = self.last_seen_right.unwrap_or(true);
             let sign = if right { 1.0 } else { -1.0 };
@@ -440,6 +458,7 @@ impl Approach {
             self.reset_tasks();
             self.search_turned_deg = 0.0;
             self.search_exhausted = false;
+            self.backoff_m = 0.0;
         }
 
         // Normalised image errors (checked non-zero size and finite position in check_inputs).
@@ -608,6 +627,9 @@ impl Approach {
         let yaw = t.yaw_deg.signum() * (t.yaw_deg.abs() - margin).max(0.0);
         self.yaw_f = yaw_usable(t).then(|| low_pass(self.yaw_f, yaw, c.yaw_filter_s, dt));
         self.dist_f = distance_usable(t).then(|| low_pass(self.dist_f, t.distance_m, c.distance_filter_s, dt));
+        if self.dist_f.is_some() {
+            self.last_distance_m = self.dist_f;
+        }
     }
 }
 
@@ -615,6 +637,8 @@ impl Approach {
 #[derive(Debug, Clone, PartialEq)]
 struct TurbineHeading {
     heading_rad: f64,
+    /// Sum of the (forgotten) measurement weights.
+    weight: f64,
     samples: u32,
     last_ns: u64,
 }
@@ -639,17 +663,25 @@ impl Approach {
             // right must turn left to see the hub).
             let meas = wrap_pi(to_hub + t.yaw_deg.to_radians());
             let now = t.stamps.capture_ns;
+            // Weight ∝ 1/distance²: the hub–tower gap grows as 1/distance, so one metre of
+            // gap error is worth far more yaw far away than close in.
+            let w = if t.distance_valid && t.distance_m.is_finite() && t.distance_m > 0.0 { 1.0 / (t.distance_m * t.distance_m) } else { 0.0 };
             match self.turbine_heading.as_mut() {
-                None => self.turbine_heading = Some(TurbineHeading { heading_rad: meas, samples: 1, last_ns: now }),
-                Some(h) => {
+                None if w > 0.0 => {
+                    self.turbine_heading = Some(TurbineHeading { heading_rad: meas, weight: w, samples: 1, last_ns: now })
+                }
+                None => {}
+                Some(h) if w > 0.0 => {
                     h.samples = h.samples.saturating_add(1);
                     let dt = secs(h.last_ns.min(now), now).min(c.max_dt_s);
                     h.last_ns = now;
-                    let gain = (dt / c.turbine_heading_filter_s).max(1.0 / f64::from(h.samples)).min(1.0);
+                    // Exponential forgetting of old weight, then a weighted mean step.
+                    h.weight = h.weight * (-dt / c.turbine_heading_filter_s).exp() + w;
                     let clip = c.turbine_heading_clip_deg.to_radians();
                     let innovation = wrap_pi(meas - h.heading_rad).clamp(-clip, clip);
-                    h.heading_rad = wrap_pi(h.heading_rad + gain * innovation);
+                    h.heading_rad = wrap_pi(h.heading_rad + (w / h.weight) * innovation);
                 }
+                Some(_) => {}
             }
         }
         let h = self.turbine_heading.as_ref().filter(|h| h.samples >= c.turbine_heading_min_samples)?;

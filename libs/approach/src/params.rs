@@ -43,16 +43,17 @@ pub struct ApproachConfig {
     /// Range (0, 90); default 5.
     pub yaw_tolerance_outer_deg: f64,
     /// Horizontal half-size of the target box, normalised image units (1 = image edge): T1
-    /// starts when the hub is further than this from the centre. Range (0, 1]; default 0.10.
+    /// starts when the hub is further than this from the centre. Range (0, 1]; default 0.15 (wide
+    /// enough that the pitch of a vehicle accelerating forward does not trip it).
     pub box_x: f64,
     /// Vertical half-size of the target box, normalised image units (1 = image edge): T1 starts
-    /// when the hub is further than this above or below the centre. Range (0, 1]; default 0.10.
+    /// when the hub is further than this above or below the centre. Range (0, 1]; default 0.18.
     pub box_y: f64,
     /// Horizontal half-size of the inner box, normalised image units: T1 is satisfied (and Done
-    /// may begin) once the hub is back inside it. Range (0, box_x); default 0.05.
+    /// may begin) once the hub is back inside it. Range (0, box_x); default 0.07.
     pub box_inner_x: f64,
     /// Vertical half-size of the inner box, normalised image units: T1 is satisfied (and Done
-    /// may begin) once the hub is back inside it. Range (0, box_y); default 0.05.
+    /// may begin) once the hub is back inside it. Range (0, box_y); default 0.08.
     pub box_inner_y: f64,
     /// Horizontal deadband of the yaw correction, normalised image units: no yaw rate is
     /// commanded for smaller errors (detector jitter). Range [0, box_inner_x); default 0.02.
@@ -136,6 +137,12 @@ pub struct ApproachConfig {
     /// heading toward the hub gives a relative yaw far less noisy than one frame's hub–tower
     /// gap, and it follows the vehicle's own motion at once. Range [0, 600]; default 10.
     pub turbine_heading_filter_s: f64,
+    /// A track lost closer than this to the hub is searched for by backing away (at
+    /// `search_backoff_m_s`, until this distance) instead of by rotating, m. Range [0, 100];
+    /// default 10 (0 = always rotate).
+    pub close_range_m: f64,
+    /// Backing-away speed of the close-range search, m/s. Range (0, 2]; default 0.3.
+    pub search_backoff_m_s: f64,
     /// Each yaw measurement moves the turbine-heading estimate by at most this much error,
     /// degrees (outliers have bounded influence). Range (0, 90]; default 10.
     pub turbine_heading_clip_deg: f64,
@@ -171,10 +178,10 @@ impl Default for ApproachConfig {
             min_distance_m: 3.0,
             yaw_tolerance_deg: 3.0,
             yaw_tolerance_outer_deg: 5.0,
-            box_x: 0.10,
-            box_y: 0.10,
-            box_inner_x: 0.05,
-            box_inner_y: 0.05,
+            box_x: 0.15,
+            box_y: 0.18,
+            box_inner_x: 0.07,
+            box_inner_y: 0.08,
             deadband_x: 0.02,
             deadband_y: 0.03,
             done_hold_s: 1.5,
@@ -197,6 +204,8 @@ impl Default for ApproachConfig {
             yaw_filter_s: 0.5,
             yaw_significance_sigmas: 1.0,
             turbine_heading_filter_s: 10.0,
+            close_range_m: 10.0,
+            search_backoff_m_s: 0.3,
             turbine_heading_clip_deg: 10.0,
             turbine_heading_min_samples: 15,
             distance_filter_s: 0.5,
@@ -263,6 +272,8 @@ impl ApproachConfig {
         c.closed("yaw_filter_s", self.yaw_filter_s, 0.0, 60.0)?;
         c.closed("yaw_significance_sigmas", self.yaw_significance_sigmas, 0.0, 5.0)?;
         c.closed("turbine_heading_filter_s", self.turbine_heading_filter_s, 0.0, 600.0)?;
+        c.closed("close_range_m", self.close_range_m, 0.0, 100.0)?;
+        c.open_closed("search_backoff_m_s", self.search_backoff_m_s, 0.0, 2.0)?;
         c.open_closed("turbine_heading_clip_deg", self.turbine_heading_clip_deg, 0.0, 90.0)?;
         c.count("turbine_heading_min_samples", self.turbine_heading_min_samples, 1, 10_000)?;
         c.closed("distance_filter_s", self.distance_filter_s, 0.0, 60.0)?;

@@ -302,6 +302,13 @@ pub struct DefaultParams {
     pub spinner_reach_radii: f64,
     /// Confidence added when a spinner circle is found with at least two blades starting at its rim.
     pub conf_spinner: f64,
+    /// Close range (thesis future work: Hough circles on the hub): a spinner circle at least
+    /// this large, fraction of image height, with two blades starting at its rim, is a hub by
+    /// itself — at 5–8 m the blades run out of the frame and their edge pairs are too far apart
+    /// to be grouped, so blade counting alone fails exactly where the approach ends.
+    pub close_spinner_radius_frac: f64,
+    /// Lowest confidence of a close-range spinner (see `close_spinner_radius_frac`).
+    pub conf_close_spinner: f64,
     /// A long line passing within this of a candidate, fraction of image height, and extending
     /// at least `through_margin_frac` beyond it on both sides, puts the candidate on a tower,
     /// mast or wire rather than at a hub (blades and the tower end at the hub).
@@ -376,15 +383,17 @@ impl Default for DefaultParams {
             axis_angle_tol_deg: 3.0,
             axis_proposal_weight: 2.0,
             spinner_candidates: 3,
-            spinner_search_frac: 0.25,
+            spinner_search_frac: 0.4,
             spinner_max_offset_frac: 0.15,
             spinner_min_radius_px: 4.0,
-            spinner_max_radius_frac: 0.2,
+            spinner_max_radius_frac: 0.32,
             spinner_cell_px: 2.0,
             spinner_radial_tol_deg: 25.0,
             spinner_min_coverage: 0.4,
             spinner_reach_radii: 2.0,
             conf_spinner: 0.2,
+            close_spinner_radius_frac: 0.12,
+            conf_close_spinner: 0.8,
             through_dist_frac: 0.01,
             through_margin_frac: 0.05,
             conf_through_penalty: 0.3,
@@ -513,6 +522,8 @@ impl DefaultParams {
         c.closed("spinner_min_coverage", self.spinner_min_coverage, 0.0, 1.0)?;
         c.closed("spinner_reach_radii", self.spinner_reach_radii, 0.0, 10.0)?;
         c.closed("conf_spinner", self.conf_spinner, 0.0, 1.0)?;
+        c.closed("close_spinner_radius_frac", self.close_spinner_radius_frac, 0.0, 1.0)?;
+        c.closed("conf_close_spinner", self.conf_close_spinner, 0.0, 1.0)?;
         c.closed("through_dist_frac", self.through_dist_frac, 0.0, 1.0)?;
         c.closed("through_margin_frac", self.through_margin_frac, 0.0, 2.0)?;
         c.closed("conf_through_penalty", self.conf_through_penalty, 0.0, 1.0)?;

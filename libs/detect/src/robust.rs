@@ -662,6 +662,9 @@ fn evaluate(
             }
         }
     }
+    if spinner_r > 0.0 && spinner_r >= p.close_spinner_radius_frac * h {
+        conf = conf.max(p.conf_close_spinner);
+    }
     let support = blades.iter().take(3).map(|b| b.weight).sum();
     Candidate { centre: c, blades, rejected, tower, confidence: conf.min(1.0), support, spinner }
 }
@@ -808,9 +811,12 @@ pub(crate) fn recognise(p: &DefaultParams, segs: &[Segment], w: f64, h: f64, hin
     let mut searched: Vec<(P2, Vec<[f64; 3]>)> = Vec::new();
     let mut extra: Vec<Candidate> = Vec::new();
     let reuse = SPINNER_REUSE_OF_OFFSET * p.spinner_max_offset_frac * h;
-    for (k, cand) in cands.iter().filter(|c| c.blades.len() >= 2).enumerate() {
-        if k >= p.spinner_candidates {
-            break;
+    // The tracker's predicted hub is searched too, with or without blades: at close range the
+    // blades leave the frame and only the spinner is left to see.
+    let predicted = |c: &Candidate| hints.predicted_hub_px.is_some_and(|q| geometry::dist(q, c.centre) < 1e-9);
+    for (k, cand) in cands.iter().filter(|c| c.blades.len() >= 2 || predicted(c)).enumerate() {
+        if k >= p.spinner_candidates && !predicted(cand) {
+            continue;
         }
         let circles = match searched.iter().find(|(q, _)| geometry::dist(*q, cand.centre) <= reuse) {
             Some((_, c)) => c.clone(),
