@@ -19,7 +19,7 @@ SECTIONS = {
     "detect": (["libs/detect/src/params.rs"], "DetectConfig"),
     "track": (["libs/track/src/params.rs"], "TrackConfig"),
     "control": (["libs/runtime/src/config.rs", "libs/approach/src/params.rs"], "ControlConfig"),
-    "sim": (["libs/sim/src/config.rs"], "SimConfig"),
+    "sim": (["libs/sim/src/params.rs"], "SimConfig"),
 }
 
 

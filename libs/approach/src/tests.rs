@@ -133,7 +133,7 @@ fn bad_values_name_their_key() {
         ("box_inner_x", ApproachConfig { box_inner_x: 0.2, ..Default::default() }),
         ("distance_tolerance_m", ApproachConfig { distance_tolerance_m: 0.6, ..Default::default() }),
         ("yaw_tolerance_deg", ApproachConfig { yaw_tolerance_deg: 6.0, ..Default::default() }),
-        ("deadband_y", ApproachConfig { deadband_y: 0.05, ..Default::default() }),
+        ("deadband_y", ApproachConfig { deadband_y: 0.09, ..Default::default() }),
         ("min_distance_m", ApproachConfig { min_distance_m: 6.0, ..Default::default() }),
         ("search_yaw_rate_deg_s", ApproachConfig { search_yaw_rate_deg_s: 30.0, ..Default::default() }),
         ("max_dt_s", ApproachConfig { max_dt_s: 0.0, ..Default::default() }),
@@ -184,7 +184,7 @@ fn t1_signs() {
     }
     let mut rig = Rig::new();
     let out = rig.run(Some(track(0.31, 0.0, Some(30.0), None)), 0.1);
-    assert_eq!(out.reason, "T1: hub 0.31 right of centre (box 0.10)");
+    assert_eq!(out.reason, "T1: hub 0.31 right of centre (box 0.15)");
 }
 
 #[test]
@@ -326,7 +326,7 @@ fn no_forward_motion_with_a_stale_track() {
     assert!(rig.log.last().unwrap().vx_m_s > 1.0);
 
     // Tracking, but the last detection is older than max_track_age_s: Hold.
-    let out = rig.step(Some(TrackState { time_since_detection_s: 0.6, ..good }));
+    let out = rig.step(Some(TrackState { time_since_detection_s: 1.1, ..good }));
     assert_eq!(out.task, ApproachTask::Hold);
     assert!(out.reason.contains("stale"), "{}", out.reason);
 
@@ -337,18 +337,18 @@ fn no_forward_motion_with_a_stale_track() {
     let out = rig.step(Some(coast(0.3)));
     assert_eq!(out.task, ApproachTask::Approach);
     assert!(out.vx_m_s > 1.0);
-    let out = rig.step(Some(coast(0.55)));
+    let out = rig.step(Some(coast(1.05)));
     assert_eq!((out.task, out.vx_m_s), (ApproachTask::Hold, 0.0));
 
-    // No new track state for 0.6 s (the same one again): stale by its own age.
+    // No new track state for 1.1 s (the same one again): stale by its own age.
     let mut rig = Rig::new();
     rig.run(Some(good), 3.0);
     let mut old = good;
     old.stamps.capture_ns = rig.now - FRAME_NS;
-    for i in 0..10 {
+    for i in 0..18 {
         let out = rig.ap.step(&ApproachInput { now_ns: rig.now, track: Some(&old), vehicle: None });
         check_output(&out, rig.ap.config());
-        if i >= 8 {
+        if i >= 16 {
             assert_eq!((out.task, out.vx_m_s), (ApproachTask::Hold, 0.0), "{i}");
         }
         rig.now += FRAME_NS;
@@ -612,7 +612,7 @@ fn done_after_hold_time_and_left_on_a_disturbance() {
     for (t, task) in [
         (track(0.0, 0.0, Some(5.6), Some(1.0)), ApproachTask::Approach),
         (track(0.0, 0.0, Some(5.1), Some(-5.5)), ApproachTask::ReduceYaw),
-        (track(0.15, 0.0, Some(5.1), Some(1.0)), ApproachTask::CentreHub),
+        (track(0.2, 0.0, Some(5.1), Some(1.0)), ApproachTask::CentreHub),
     ] {
         rig.run(Some(at), c.done_hold_s + 0.2);
         assert_eq!(rig.ap.task(), ApproachTask::Done);

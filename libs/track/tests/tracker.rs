@@ -535,8 +535,10 @@ fn distance_and_yaw_are_fused_and_filtered() {
 
 #[test]
 fn blades_give_yaw_when_the_gap_is_weak() {
-    // At a large yaw the blade skew is well observable and adds to the gap: lower yaw std.
-    let cfg = pinhole_config();
+    // At a large yaw the blade skew is well observable and adds to the gap: lower yaw std
+    // (when enabled; it is off by default, see `YawConfig::use_blade_skew`).
+    let mut cfg = pinhole_config();
+    cfg.yaw.use_blade_skew = true;
     let run = |blades: bool| {
         let mut tr = Tracker::new(cfg.clone()).unwrap();
         let mut rng = Rng::new(4);

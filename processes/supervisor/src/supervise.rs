@@ -90,8 +90,6 @@ pub struct RunOptions {
 
 /// What a run left behind.
 pub struct RunReport {
-    /// Recording segments written (first is the main file).
-    pub segments: Vec<PathBuf>,
     /// Wall-clock duration.
     pub elapsed: Duration,
     /// Why the run ended early with an error, if it did.
@@ -367,7 +365,7 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
             .find(|s| s.state == StageState::Failed)
             .map(|s| format!("stage {} was given up on ({})", s.name, s.last_reason))
     });
-    Ok(RunReport { segments, elapsed, failure })
+    Ok(RunReport { elapsed, failure })
 }
 
 fn drain(
