@@ -9,6 +9,7 @@
 use crate::supervise::{supervise, RunOptions};
 use anyhow::{bail, Context};
 use hubtrack_runtime::config::ConfigArgs;
+use hubtrack_runtime::ipc::DOMAIN_ENV;
 use hubtrack_runtime::shutdown::Shutdown;
 use hubtrack_sim::Outcome;
 use std::path::{Path, PathBuf};
@@ -65,11 +66,18 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
         );
         println!("{}", header());
     }
+    let base = std::env::var(DOMAIN_ENV).ok().filter(|d| !d.is_empty());
     for seed in args.first_seed..args.first_seed + args.seeds {
         if shutdown.requested() {
             break;
         }
         let port = free_udp_port()?;
+        // A private IPC domain per flight: flights never see each other's services (nor a
+        // pipeline or another `hubtrack fly` running on the machine), and no state is left over.
+        let domain = format!("{}fly-{}-{seed}", base.as_ref().map(|b| format!("{b}-")).unwrap_or_default(), std::process::id());
+        // SAFETY (edition 2021: safe): set before any stage starts; the children inherit it.
+        std::env::set_var(DOMAIN_ENV, &domain);
+        log::info!("seed {seed}: IPC domain {domain} (HUBTRACK_DOMAIN={domain} hubtrack echo setpoints to watch)");
         let record = args.record.as_ref().map(|r| recording_path(r, seed, args.seeds));
         let mut stages = vec!["detect", "track", "control", "sim"];
         if record.is_some() {
