@@ -8,7 +8,8 @@ import time
 from conftest import BIN, read_mcap_messages, wait_until
 
 USB = ["--set", "capture.synthetic.camera=usb"]
-ALL = ["--set", 'run.stages=["capture","detect","track","recorder"]']
+ALL = ["--set", 'run.stages=["capture","detect","track","control","recorder"]',
+       "--set", 'control.link="udpin:127.0.0.1:0"']
 
 
 def status(runner):
@@ -31,14 +32,14 @@ def running(runner, name, not_pid=None):
 def test_killed_and_hung_stages_come_back_and_camera_never_stops(runner, tmp_path):
     rec = tmp_path / "run.mcap"
     run = runner.start("hubtrack", "run", "--record", rec, "--duration", "25", *ALL, *USB, label="run")
-    wait_until(lambda: all(running(runner, n) for n in ("capture", "detect", "track", "recorder")),
+    wait_until(lambda: all(running(runner, n) for n in ("capture", "detect", "track", "control", "recorder")),
                timeout=30, what="all stages running")
     witness = runner.start("hubtrack", "tap", label="witness")
     capture_pid = status(runner)["capture"]["pid"]
     assert runner.run("hubtrack", "status").returncode == 0
 
     recovered = {}
-    for name in ("detect", "track", "recorder"):
+    for name in ("detect", "track", "control", "recorder"):
         old = status(runner)[name]["pid"]
         os.kill(old, signal.SIGKILL)
         t0 = time.monotonic()
@@ -54,6 +55,7 @@ def test_killed_and_hung_stages_come_back_and_camera_never_stops(runner, tmp_pat
     final = status(runner)
     assert final["capture"]["pid"] == capture_pid and final["capture"]["restarts"] == 0, "the camera kept its process"
     assert final["detect"]["restarts"] == 2 and final["track"]["restarts"] == 1 and final["recorder"]["restarts"] == 1
+    assert final["control"]["restarts"] == 1
     run.signal(signal.SIGINT)
     assert run.wait(timeout=60) == 0, run.stderr()[-3000:]
     witness.stop()
@@ -79,6 +81,8 @@ def test_killed_and_hung_stages_come_back_and_camera_never_stops(runner, tmp_pat
     tracks = [json.loads(m.data)["stamps"]["seq"] for _, m in read_mcap_messages(seg1, topics={"/track"})]
     assert dets and dets[-1] >= s1[-1] - 30, "detections resumed after the restarts"
     assert tracks and tracks[-1] >= s1[-1] - 30, "track resumed after the restarts"
+    setpoints = [json.loads(m.data)["stamps"]["seq"] for _, m in read_mcap_messages(seg1, topics={"/setpoints"})]
+    assert setpoints and setpoints[-1] >= s1[-1] - 30, "control resumed after the restarts"
     assert "restart" in run.stderr()
 
 

@@ -19,8 +19,9 @@ use hubtrack_types::time::monotonic_ns;
 use hubtrack_types::{ApproachTask, SimClock, Setpoint, Stamps, Text64, TrackState};
 use std::time::Duration;
 
-/// Longest the loop blocks on the MAVLink link before looking at the track service again. Track
-/// states also wake the loop through this bound, so it is the worst added control latency.
+/// Longest the loop sleeps waiting for a track state before polling the MAVLink link again: a
+/// track state wakes it at once (the setpoint path has no polling delay), autopilot messages are
+/// handled within this bound.
 const LINK_POLL: Duration = Duration::from_millis(2);
 /// Track states buffered between loop turns (every one is used, in order).
 const TRACK_BUFFER: usize = 16;
@@ -82,8 +83,8 @@ fn run() -> anyhow::Result<()> {
             next_heartbeat_ns = wall_ns + heartbeat_period_ns;
         }
 
-        // Autopilot → vehicle state.
-        let received = match link.recv(LINK_POLL) {
+        // Autopilot → vehicle state (without blocking: the wait is on the track service below).
+        let received = match link.recv(Duration::ZERO) {
             Ok(msgs) => msgs,
             Err(e) => {
                 log::error!("link {endpoint}: {e}");
@@ -118,6 +119,7 @@ fn run() -> anyhow::Result<()> {
         }
 
         // Track → approach → setpoint.
+        tracks.wait(LINK_POLL);
         while let Some(track) = tracks.receive()? {
             let recv_ns = monotonic_ns();
             status.status.inputs += 1;
