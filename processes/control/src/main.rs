@@ -148,7 +148,7 @@ fn run() -> anyhow::Result<()> {
             if now_wall.saturating_sub(track_wall_ns) > input_timeout_ns {
                 if !stale_reported {
                     log::warn!(
-                        "no track state for {} ms: sending nothing, the autopilot's guided timeout will stop the vehicle",
+                        "inputs stale: no track state for {} ms; sending nothing, the autopilot's guided timeout will stop the vehicle",
                         (now_wall - track_wall_ns) / 1_000_000
                     );
                     let quiet = Setpoint {
