@@ -81,7 +81,7 @@ fn run() -> anyhow::Result<()> {
     let dt = 1.0 / cfg.physics_hz;
     let frame_period = 1.0 / cfg.fps;
     let lockstep_timeout = Duration::from_millis(cfg.lockstep_timeout_ms);
-    let mut flight = FlightRecorder::new(cfg.seed, &cfg.success);
+    let mut flight = FlightRecorder::from_config(cfg.seed, cfg);
     let (mut t, mut step, mut seq) = (0.0f64, 0u64, 0u64);
     let mut next_frame_t = 0.0f64;
     let mut outgoing: Vec<MavMessage> = autopilot.outgoing(0.0, &vehicle);
