@@ -9,4 +9,5 @@ cargo build --release --workspace --all-targets
 echo "[test] Rust unit tests"
 cargo test --release --workspace
 echo "[test] integration tests (real processes, iceoryx2, MCAP read back by the Python mcap package)"
-.venv/bin/python -m pytest -q tests/
+# Recordings are large: keep the temporary files of failed tests only.
+.venv/bin/python -m pytest -q -o tmp_path_retention_policy=failed tests/

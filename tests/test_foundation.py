@@ -107,6 +107,25 @@ def test_recorder_killed_mid_run_leaves_readable_file(runner, tmp_path):
     assert counts["/frames"] == len(seqs)
 
 
+def test_recorder_keeps_disk_reserve_and_finishes_the_file(runner, tmp_path):
+    """With less free space than recorder.min_free_mib, pixels stop but the file stays complete."""
+    import json
+    from mcap.reader import make_reader
+
+    rec = tmp_path / "full.mcap"
+    res = runner.run("hubtrack", "run", "--duration", "60", "--record", rec, *USB,
+                     "--set", "capture.max_frames=20", "--set", "recorder.min_free_mib=16777216")
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert "disk nearly full" in res.stderr and "recorder.min_free_mib" in res.stderr
+    with open(rec, "rb") as f:
+        summary = make_reader(f).get_summary()  # the file has its summary: it was finished
+    counts = {summary.channels[c].topic: n for c, n in summary.statistics.channel_message_counts.items()}
+    assert counts.get("/frames", 0) == 0, "no pixels below the reserve"
+    assert counts["/frames/header"] == 20, "every frame's header is still recorded"
+    last = json.loads(read_mcap_messages(rec, topics={"/recorder"})[-1][1].data)
+    assert last["frames_dropped_disk"] == 20 and last["frames_recorded"] == 20
+
+
 def test_video_file_source(runner, tmp_path):
     clip = tmp_path / "clip.avi"
     res = runner.run("hubtrack", "render", "--frames", 20, "-o", clip, *USB)

@@ -113,6 +113,9 @@ pub struct RecorderStats {
     pub frames_dropped_queue: u64,
     /// Frames never received (seq gaps: overwritten in shared memory before the recorder read them).
     pub frames_lost: u64,
+    /// Frames whose pixels were not written because the disk was nearly full (`min_free_mib`);
+    /// their headers were.
+    pub frames_dropped_disk: u64,
     /// Result messages written.
     pub messages_recorded: u64,
     /// Bytes written so far (approximate until the file is finished).

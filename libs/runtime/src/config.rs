@@ -423,6 +423,10 @@ pub struct RecorderConfig {
     pub flush_interval_ms: u64,
     /// Record the pixels of every frame (false: only the frame headers).
     pub record_frames: bool,
+    /// Free space the recorder leaves on the recording's file system, MiB (0: no limit). Below
+    /// it, frame pixels are no longer written (headers and results still are) so that the file
+    /// can always be finished; above twice the limit, pixels are written again.
+    pub min_free_mib: u64,
 }
 
 impl Default for RecorderConfig {
@@ -433,6 +437,7 @@ impl Default for RecorderConfig {
             queue_frames: 16,
             flush_interval_ms: 200,
             record_frames: true,
+            min_free_mib: 512,
         }
     }
 }
@@ -567,6 +572,7 @@ impl Config {
         range("recorder.chunk_size_kib", rec.chunk_size_kib, 16, 1 << 20)?;
         range("recorder.queue_frames", rec.queue_frames, 1, 1024)?;
         range("recorder.flush_interval_ms", rec.flush_interval_ms, 10, 60_000)?;
+        range("recorder.min_free_mib", rec.min_free_mib, 0, 1 << 24)?;
         self.detect.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
         self.track.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
         let ctl = &self.control;

@@ -18,7 +18,7 @@ use hubtrack_runtime::status::StatusReporter;
 use hubtrack_types::services::{DETECTIONS, OVERLAY, SETPOINTS, STATUS, TRACK, VEHICLE};
 use hubtrack_types::time::{monotonic_ns, realtime_ns};
 use hubtrack_types::{DetectOverlay, Detection, FrameHeader, Setpoint, StageStatus, TrackState, VehicleState};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
 use std::time::{Duration, Instant};
 
@@ -89,7 +89,7 @@ fn run() -> anyhow::Result<()> {
     let (stats_tx, stats_rx) = mpsc::channel::<RecorderStats>();
     let writer = std::thread::Builder::new()
         .name("mcap-writer".into())
-        .spawn(move || write_loop(recording, queue_rx, free_tx, stats_tx, cfg.flush_interval_ms))?;
+        .spawn(move || write_loop(recording, queue_rx, free_tx, stats_tx, cfg.flush_interval_ms, cfg.min_free_mib))?;
 
     let mut stats = RecorderStats::default();
     let mut stats_at = Instant::now();
@@ -139,6 +139,7 @@ fn run() -> anyhow::Result<()> {
 
         while let Ok(s) = stats_rx.try_recv() {
             stats.frames_recorded = s.frames_recorded;
+            stats.frames_dropped_disk = s.frames_dropped_disk;
             stats.messages_recorded = s.messages_recorded;
             stats.bytes_written = s.bytes_written;
         }
@@ -170,16 +171,18 @@ fn run() -> anyhow::Result<()> {
     drop(queue_tx);
     let final_stats = writer.join().map_err(|_| anyhow::anyhow!("writer thread panicked"))??;
     stats.frames_recorded = final_stats.frames_recorded;
+    stats.frames_dropped_disk = final_stats.frames_dropped_disk;
     stats.messages_recorded = final_stats.messages_recorded;
     stats.bytes_written = final_stats.bytes_written;
     status.status.outputs = stats.frames_recorded;
     status.publish_now();
     log::info!(
-        "recorded {} frames ({} received, {} dropped: disk behind, {} lost: overwritten before read), {} messages, {} bytes",
+        "recorded {} frames ({} received, {} dropped: disk behind, {} lost: overwritten before read, {} without pixels: disk nearly full), {} messages, {} bytes",
         stats.frames_recorded,
         stats.frames_received,
         stats.frames_dropped_queue,
         stats.frames_lost,
+        stats.frames_dropped_disk,
         stats.messages_recorded,
         stats.bytes_written
     );
@@ -210,9 +213,66 @@ fn enqueue(queue: &SyncSender<Item>, item: Item, stats: &mut RecorderStats, stat
     }
 }
 
+/// Keeps `min_free_mib` free on the recording's file system: below it, frame pixels are skipped
+/// so that the file can still be finished (a full disk would leave it without its summary);
+/// above twice the limit they are written again.
+struct DiskGuard {
+    dir: std::ffi::CString,
+    shown: PathBuf,
+    min_free: u64,
+    low: bool,
+}
+
+impl DiskGuard {
+    fn new(file: &Path, min_free_mib: u64) -> DiskGuard {
+        let dir = match file.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let c = std::ffi::CString::new(dir.as_os_str().as_encoded_bytes()).unwrap_or_default();
+        let mut guard = DiskGuard { dir: c, shown: dir, min_free: min_free_mib << 20, low: false };
+        guard.check();
+        guard
+    }
+
+    /// Free bytes for an unprivileged writer, or `None` when the file system cannot be asked.
+    fn free_bytes(&self) -> Option<u64> {
+        let mut st = std::mem::MaybeUninit::<libc::statvfs>::uninit();
+        // SAFETY: statvfs(3) fills `st` on success; the path is a valid C string.
+        let rc = unsafe { libc::statvfs(self.dir.as_ptr(), st.as_mut_ptr()) };
+        if rc != 0 {
+            return None;
+        }
+        // SAFETY: rc == 0, so `st` is initialised.
+        let st = unsafe { st.assume_init() };
+        Some((st.f_bavail as u64).saturating_mul(st.f_frsize as u64))
+    }
+
+    fn check(&mut self) {
+        if self.min_free == 0 {
+            return;
+        }
+        let Some(free) = self.free_bytes() else { return };
+        if !self.low && free < self.min_free {
+            self.low = true;
+            log::error!(
+                "disk nearly full: {} MiB free on {} (recorder.min_free_mib = {}): no longer recording frame pixels, \
+                 headers and results still recorded",
+                free >> 20,
+                self.shown.display(),
+                self.min_free >> 20
+            );
+        } else if self.low && free > 2 * self.min_free {
+            self.low = false;
+            log::warn!("disk space back ({} MiB free on {}): recording frame pixels again", free >> 20, self.shown.display());
+        }
+    }
+}
+
 /// Reader-side counts (received, dropped, lost) with writer-side counts (recorded, bytes).
 fn merged(reader: &RecorderStats, writer: &RecorderStats) -> RecorderStats {
     RecorderStats {
+        frames_dropped_disk: writer.frames_dropped_disk,
         frames_recorded: writer.frames_recorded,
         messages_recorded: writer.messages_recorded,
         bytes_written: writer.bytes_written,
@@ -226,8 +286,10 @@ fn write_loop(
     free: SyncSender<Vec<u8>>,
     stats_out: mpsc::Sender<RecorderStats>,
     flush_interval_ms: u64,
+    min_free_mib: u64,
 ) -> anyhow::Result<RecorderStats> {
     let flush_interval = Duration::from_millis(flush_interval_ms);
+    let mut disk = DiskGuard::new(rec.path(), min_free_mib);
     let mut stats = RecorderStats::default();
     let mut flushed_at = Instant::now();
     let mut reported = RecorderStats::default();
@@ -242,9 +304,14 @@ fn write_loop(
         };
         match item {
             Some(Item::Frame { header, pixels, log_time }) => {
-                rec.write_frame(&header, pixels.as_deref(), log_time).context("writing a frame")?;
+                let keep_pixels = pixels.is_some() && !disk.low;
+                if pixels.is_some() && disk.low {
+                    stats.frames_dropped_disk += 1;
+                }
+                let written = if keep_pixels { pixels.as_deref() } else { None };
+                rec.write_frame(&header, written, log_time).context("writing a frame")?;
                 stats.frames_recorded += 1;
-                stats.bytes_written += pixels.as_ref().map_or(0, |p| p.len() as u64);
+                stats.bytes_written += written.map_or(0, |p| p.len() as u64);
                 last_frame = header;
                 if image_times.len() == IMAGE_TIME_MEMORY {
                     image_times.pop_front();
@@ -285,6 +352,7 @@ fn write_loop(
         if flushed_at.elapsed() >= flush_interval {
             rec.flush().context("flushing")?;
             flushed_at = Instant::now();
+            disk.check();
             if stats != reported {
                 let _ = stats_out.send(stats);
                 reported = stats;
