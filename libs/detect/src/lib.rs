@@ -19,6 +19,7 @@ mod image;
 mod robust;
 mod spinner;
 mod thesis;
+mod tower;
 
 use std::time::Instant;
 

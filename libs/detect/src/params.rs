@@ -249,6 +249,29 @@ pub struct DefaultParams {
     pub min_confidence: f64,
     /// The tower width is measured this far below the tower top, fraction of image height.
     pub tower_width_below_top_frac: f64,
+    /// Tower partner edge: the tower is at least this wide, fraction of image height (a 2.2 m
+    /// tower top at 60 m with the GoPro lens is ~3 %).
+    pub tower_min_width_frac: f64,
+    /// Tower partner edge: the tower is at most this wide, fraction of image height (~17 % at 10 m).
+    pub tower_max_width_frac: f64,
+    /// Tower partner edge: its mean gradient response (opposite sign to the found edge, over
+    /// all rows from the tower top down) must reach this fraction of the found edge's own
+    /// (a tower lit from one side has one strong and one weak edge); else the axis is unknown
+    /// and no tower is reported (one edge is half a width off the axis).
+    pub tower_partner_min_ratio: f64,
+    /// Tower partner edge: its response must also be this many times the mean response over
+    /// all offsets searched (it must stand out of the background texture).
+    pub tower_partner_min_salience: f64,
+    /// The tower band's width at the image bottom over its width at its top must be at least
+    /// this: a blade pointing down narrows toward its tip (~0.65 over the visible part), the
+    /// tower keeps its image width within ~15 %.
+    pub tower_min_width_ratio: f64,
+    /// When the strongest blade implies (at 120° steps) a blade within this of straight down,
+    /// degrees, that blade hides the tower ...
+    pub tower_blade_down_tol_deg: f64,
+    /// ... and a tower band whose axis passes within this of the hub, fraction of image
+    /// height, is that blade, not the tower.
+    pub tower_blade_axis_tol_frac: f64,
     /// Edge pairing: both edges of a blade (or the tower) must be at least this long, fraction
     /// of image height.
     pub pair_min_length_frac: f64,
@@ -372,6 +395,13 @@ impl Default for DefaultParams {
             conf_extra_blade_penalty: 0.1,
             min_confidence: 0.75,
             tower_width_below_top_frac: 0.05,
+            tower_min_width_frac: 0.02,
+            tower_max_width_frac: 0.25,
+            tower_partner_min_ratio: 0.15,
+            tower_partner_min_salience: 4.0,
+            tower_min_width_ratio: 0.85,
+            tower_blade_down_tol_deg: 12.0,
+            tower_blade_axis_tol_frac: 0.025,
             pair_min_length_frac: 0.06,
             pair_max_angle_deg: 10.0,
             pair_min_overlap_frac: 0.5,
@@ -502,6 +532,14 @@ impl DefaultParams {
         c.closed("conf_extra_blade_penalty", self.conf_extra_blade_penalty, 0.0, 1.0)?;
         c.closed("min_confidence", self.min_confidence, 0.0, 1.0)?;
         c.closed("tower_width_below_top_frac", self.tower_width_below_top_frac, 0.0, 1.0)?;
+        c.closed("tower_min_width_frac", self.tower_min_width_frac, 0.0, 1.0)?;
+        c.closed("tower_max_width_frac", self.tower_max_width_frac, 0.0, 1.0)?;
+        c.closed("tower_partner_min_ratio", self.tower_partner_min_ratio, 0.0, 1.0)?;
+        c.closed("tower_partner_min_salience", self.tower_partner_min_salience, 0.0, 1000.0)?;
+        c.closed("tower_min_width_ratio", self.tower_min_width_ratio, 0.0, 10.0)?;
+        c.closed("tower_blade_down_tol_deg", self.tower_blade_down_tol_deg, 0.0, 60.0)?;
+        c.closed("tower_blade_axis_tol_frac", self.tower_blade_axis_tol_frac, 0.0, 1.0)?;
+        c.less("tower_min_width_frac", self.tower_min_width_frac, "tower_max_width_frac", self.tower_max_width_frac)?;
         c.closed("pair_min_length_frac", self.pair_min_length_frac, 0.0, 2.0)?;
         c.closed("pair_max_angle_deg", self.pair_max_angle_deg, 0.0, 45.0)?;
         c.closed("pair_min_overlap_frac", self.pair_min_overlap_frac, 0.0, 1.0)?;

@@ -38,6 +38,7 @@ use opencv::prelude::*;
 use crate::geometry::{self, Segment, P2};
 use crate::params::DefaultParams;
 use crate::spinner::{find_circles, CircleSearch, EdgePoint};
+use crate::tower::{fit_tower, GradX};
 use crate::{hough_segments, us_since, DetectError, Found, Hints, LineKind, Scratch};
 
 /// Number of bins of the gradient-magnitude histogram: the Sobel 3×3 L1 magnitude of 8-bit
@@ -52,6 +53,8 @@ const ROLL_VERTICAL_TOL_DEG: f64 = 1.5;
 const SPINNER_REUSE_OF_OFFSET: f64 = 0.5;
 /// Centre peaks examined per spinner search.
 const SPINNER_PEAKS: usize = 3;
+/// Tower edges tried as seeds of the two-edge tower fit, longest first.
+const TOWER_SEEDS: usize = 4;
 /// Number of vote peaks examined in detail.
 const MAX_PEAKS: usize = 6;
 /// A supporting line may point past the candidate by this angle (degrees) on top of the fixed
@@ -94,7 +97,9 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
         search_us += us_since(t);
         r
     };
-    let mut found = recognise(p, &segs, w, h, hints, &mut search)?;
+    let gx = s.dx.data_typed::<i16>()?;
+    let grad = GradX { data: gx, width: w as usize, height: h as usize };
+    let mut found = recognise(p, &segs, w, h, hints, &mut search, Some(&grad))?;
     log::trace!("spinner search {search_us:.0} us of geometry {:.0} us", us_since(t));
     found.line_count = line_count;
     found.edge_count = edge_count;
@@ -756,7 +761,17 @@ fn spinner_candidate(
 
 /// Steps after the Hough transform, on plain data (working px) except for `search`, which
 /// looks for spinner circles in the image.
-pub(crate) fn recognise(p: &DefaultParams, segs: &[Segment], w: f64, h: f64, hints: &Hints, search: &mut CircleFinder<'_>) -> Result<Found, DetectError> {
+/// `grad` (the horizontal gradient) measures the tower from both edges ([`crate::tower`]);
+/// without it the tower axis is the mean of the tower lines.
+pub(crate) fn recognise(
+    p: &DefaultParams,
+    segs: &[Segment],
+    w: f64,
+    h: f64,
+    hints: &Hints,
+    search: &mut CircleFinder<'_>,
+    grad: Option<&GradX<'_>>,
+) -> Result<Found, DetectError> {
     let roll_deg = match hints.roll_rad {
         Some(r) => r.to_degrees(),
         None => search_roll(p, segs),
@@ -863,11 +878,34 @@ pub(crate) fn recognise(p: &DefaultParams, segs: &[Segment], w: f64, h: f64, hin
                 .flat_map(|&i| [segs[i].a, segs[i].b])
                 .min_by(|x, y| x[1].total_cmp(&y[1]))
                 .unwrap_or(b.centre);
-            let axis = crate::thesis::tower_axis(segs, &b.tower);
-            found.tower_top = Some(axis.and_then(|a| a.x_at_y(top[1])).map_or(top, |x| [x, top[1]]));
-            found.tower_axis = axis;
             let row = top[1] + p.tower_width_below_top_frac * h;
-            found.tower_width = crate::thesis::tower_width_at(segs, &b.tower, row, 1.0).map(|wd| (wd, row));
+            match grad {
+                Some(g) => {
+                    // From the tower edges, longest first, find the band (see `tower.rs`).
+                    let mut seeds: Vec<Segment> = b.tower.iter().map(|&i| segs[i]).collect();
+                    seeds.sort_by(|x, y| y.length().total_cmp(&x.length()));
+                    // With a blade pointing down, the tower hides behind it and the band seen
+                    // below the hub is that blade: its axis runs through the hub.
+                    let down = 180.0 - roll_deg;
+                    let blade_down = b.blades.first().is_some_and(|bl| {
+                        (0..3).any(|k| geometry::ang_dist(bl.angle_deg + 120.0 * k as f64, down) <= p.tower_blade_down_tol_deg)
+                    });
+                    let is_blade = |f: &crate::tower::TowerFit| {
+                        blade_down && f.axis.x_at_y(b.centre[1]).is_some_and(|x| (x - b.centre[0]).abs() <= p.tower_blade_axis_tol_frac * h)
+                    };
+                    if let Some(fit) = seeds.iter().take(TOWER_SEEDS).filter_map(|s| fit_tower(p, g, s)).find(|f| !is_blade(f)) {
+                        found.tower_top = fit.axis.x_at_y(top[1]).map(|x| [x, top[1]]);
+                        found.tower_axis = Some(fit.axis);
+                        found.tower_width = fit.width_at(row).map(|wd| (wd, row));
+                    }
+                }
+                None => {
+                    let axis = crate::thesis::tower_axis(segs, &b.tower);
+                    found.tower_top = Some(axis.and_then(|a| a.x_at_y(top[1])).map_or(top, |x| [x, top[1]]));
+                    found.tower_axis = axis;
+                    found.tower_width = crate::thesis::tower_width_at(segs, &b.tower, row, 1.0).map(|wd| (wd, row));
+                }
+            }
         }
     }
     found.lines = segs.iter().copied().zip(kinds).collect();
@@ -908,7 +946,7 @@ mod tests {
         // Horizon split by the tower: two long pieces ending at the tower.
         segs.push(Segment::new([0.0, 125.0], [196.0, 125.0]));
         segs.push(Segment::new([204.0, 125.0], [479.0, 125.0]));
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), predicted_hub_px: None }, &mut no_circles).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), predicted_hub_px: None }, &mut no_circles, None).unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 3.0, "{:?}", f.hub);
         assert_eq!(f.blade_angles.len(), 3);
@@ -940,7 +978,7 @@ mod tests {
         let p = DefaultParams::default();
         // Power-line like: several long near-parallel sagging wires.
         let segs: Vec<Segment> = (0..5).map(|k| Segment::new([0.0, 50.0 + 10.0 * k as f64], [479.0, 60.0 + 12.0 * k as f64])).collect();
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints::default(), &mut no_circles).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints::default(), &mut no_circles, None).unwrap();
         assert!(!f.detected);
     }
 
@@ -987,7 +1025,7 @@ mod tests {
         for a in [40.0, 160.0, 280.0] {
             segs.extend(blade_edges(hub, a, 55.0, 120.0, 18.0, 9.0));
         }
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), predicted_hub_px: None }, &mut no_circles).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), predicted_hub_px: None }, &mut no_circles, None).unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 2.0, "{:?}", f.hub);
     }
@@ -1004,12 +1042,12 @@ mod tests {
         }
         let hints = Hints { roll_rad: Some(0.0), predicted_hub_px: None };
         let mut at_hub = |_: P2| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0]]) };
-        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None).unwrap();
         assert!(f.detected && f.circle.is_some(), "{f:?}");
         assert!(geometry::dist(f.hub, [hub[0] + 0.5, hub[1] - 0.5]) < 1e-9, "{:?}", f.hub);
         // A circle far from every candidate is ignored.
         let mut far_away = |_: P2| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[400.0, 240.0, 30.0]]) };
-        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut far_away).unwrap();
+        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut far_away, None).unwrap();
         assert!(g.circle.is_none(), "{g:?}");
     }
 

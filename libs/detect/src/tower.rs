@@ -1,0 +1,294 @@
+//! The tower from both of its edges.
+//!
+//! The relative yaw comes from the hub–tower gap (hub x − tower-axis x), a few pixels per degree,
+//! so the tower axis must be right to a pixel. Hough often finds one tower edge only: the lower
+//! blade hides the other near the top, or the sea behind it has little contrast. One edge is
+//! half a tower width off the axis (10–25 px at 10–25 m with the GoPro), which alone is a
+//! 10–20° yaw error. So from the edge Hough found (the *seed*), the partner edge is looked for
+//! in the horizontal gradient: the tower is a band of uniform shade, so its other edge has the
+//! opposite gradient sign at a near-constant offset on every row from the tower top down.
+//! Accumulating that signed response over all rows (blades crossing the tower hide only some
+//! of them) gives the width; both edges are then fitted to sub-pixel edge points and the axis
+//! is their midline. Without a partner the axis is unknown and no tower is reported. A blade
+//! pointing down is also a band of two edges, but it narrows toward its tip, while the tower
+//! keeps its width in the image (its taper and the growing distance toward its base cancel
+//! roughly): bands narrowing downward are no tower.
+
+use crate::geometry::{Segment, P2};
+use crate::params::DefaultParams;
+
+/// An edge point must reach this fraction of the edge's typical (75th percentile) response.
+const EDGE_POINT_MIN_OF_TYPICAL: f64 = 0.4;
+/// Edge points are searched this far (px) on either side of the predicted edge position.
+const EDGE_SEARCH_PX: i64 = 2;
+/// Edge points farther than this (px) from the first line fit are dropped before the second.
+const EDGE_OUTLIER_PX: f64 = 1.5;
+/// An edge fit needs at least this many points.
+const EDGE_MIN_POINTS: usize = 6;
+
+/// The horizontal Sobel gradient of the working image, row-major.
+pub(crate) struct GradX<'a> {
+    /// `width · height` values.
+    pub data: &'a [i16],
+    /// Image width, px.
+    pub width: usize,
+    /// Image height, px.
+    pub height: usize,
+}
+
+impl GradX<'_> {
+    fn at(&self, x: i64, y: i64) -> f64 {
+        if x < 0 || y < 0 || x >= self.width as i64 || y >= self.height as i64 {
+            return 0.0;
+        }
+        self.data[y as usize * self.width + x as usize] as f64
+    }
+}
+
+/// The tower measured from its two edges (working px).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct TowerFit {
+    /// The two edge lines, left first (x at their common top row).
+    pub edges: [Segment; 2],
+    /// The midline, from the top row of the fit down.
+    pub axis: Segment,
+}
+
+impl TowerFit {
+    /// Distance between the edge lines at row `y`.
+    pub fn width_at(&self, y: f64) -> Option<f64> {
+        Some((self.edges[1].x_at_y(y)? - self.edges[0].x_at_y(y)?).abs())
+    }
+}
+
+/// Finds the tower's second edge from `seed` (one tower edge, from its top down) and fits both;
+/// `None` when no edge of the opposite gradient sign runs beside it at a tower-like width.
+pub(crate) fn fit_tower(p: &DefaultParams, g: &GradX<'_>, seed: &Segment) -> Option<TowerFit> {
+    let h = g.height as f64;
+    let top = seed.a[1].min(seed.b[1]).max(0.0);
+    let seed_bottom = seed.a[1].max(seed.b[1]);
+    let rows: Vec<i64> = (top.ceil() as i64..g.height as i64 - 1).collect();
+    let x0 = |y: i64| seed.x_at_y(y as f64);
+
+    // The seed's gradient sign (over its own extent) and mean strength over all rows (its line
+    // extended down), the same rows the partner is measured on.
+    let best_near = |x: f64, y: i64| {
+        let xi = x.round() as i64;
+        (-1..=1).map(|d| g.at(xi + d, y)).max_by(|a, b| a.abs().total_cmp(&b.abs())).unwrap_or(0.0)
+    };
+    let sum: f64 = rows.iter().filter(|&&y| (y as f64) <= seed_bottom).filter_map(|&y| Some(best_near(x0(y)?, y))).sum();
+    if sum == 0.0 {
+        return None;
+    }
+    let sign = sum.signum();
+    let strength = rows.iter().filter_map(|&y| Some((best_near(x0(y)?, y) * sign).max(0.0))).sum::<f64>() / rows.len().max(1) as f64;
+    if strength <= 0.0 {
+        return None;
+    }
+
+    // Partner: opposite sign, on either side, at an offset that may drift linearly from the
+    // top row to the bottom one (the two edges of a tapered tower seen in perspective are not
+    // parallel), accumulated over all rows.
+    let wmin = (p.tower_min_width_frac * h).ceil().max(1.0) as i64;
+    let wmax = (p.tower_max_width_frac * h).floor() as i64;
+    if wmax < wmin || rows.is_empty() {
+        return None;
+    }
+    let reach = wmax + wmax / 4 + 2;
+    // Per row, the partner response at every offset −reach..=reach from the seed.
+    let span = (2 * reach + 1) as usize;
+    let mut resp = vec![0.0; rows.len() * span];
+    for (k, &y) in rows.iter().enumerate() {
+        if let Some(x) = x0(y) {
+            let xi = x.round() as i64;
+            for o in -reach..=reach {
+                resp[k * span + (o + reach) as usize] = (-sign * g.at(xi + o, y)).max(0.0);
+            }
+        }
+    }
+    let (y_top, y_bot) = (rows[0] as f64, *rows.last()? as f64);
+    let frac = |y: i64| if y_bot > y_top { (y as f64 - y_top) / (y_bot - y_top) } else { 0.0 };
+    let mut best: Option<(f64, i64, i64)> = None; // (mean response, signed offsets at top and bottom)
+    for side in [-1i64, 1] {
+        for o_top in wmin..=wmax {
+            let drift = 2 + o_top / 4;
+            for o_bot in (o_top - drift).max(wmin)..=(o_top + drift).min(reach) {
+                let mut acc = 0.0;
+                for (k, &y) in rows.iter().enumerate() {
+                    let o = o_top as f64 + (o_bot - o_top) as f64 * frac(y);
+                    acc += resp[k * span + (side * o.round() as i64 + reach) as usize];
+                }
+                let mean = acc / rows.len() as f64;
+                if best.is_none_or(|(b, _, _)| mean > b) {
+                    best = Some((mean, side * o_top, side * o_bot));
+                }
+            }
+        }
+    }
+    let (response, off_top, off_bot) = best?;
+    // The background: the mean response over all offsets (texture, other edges).
+    let background = resp.iter().sum::<f64>() / resp.len() as f64;
+    log::trace!(
+        "tower partner of {seed:?} (sign {sign}): offsets {off_top}..{off_bot} px, response {response:.0}, seed {strength:.0}, background {background:.1}"
+    );
+    if response < p.tower_partner_min_ratio * strength || response < p.tower_partner_min_salience * background {
+        return None;
+    }
+    let offset = |y: i64| off_top as f64 + (off_bot - off_top) as f64 * frac(y);
+
+    let seed_fit = fit_edge(g, &rows, |y| x0(y), sign)?;
+    let partner_fit = fit_edge(g, &rows, |y| x0(y).map(|x| x + offset(y)), -sign)?;
+    let (left, right) = if off_top > 0 { (seed_fit, partner_fit) } else { (partner_fit, seed_fit) };
+    let bottom = h - 1.0;
+    let mid = |y: f64| Some((left.x_at_y(y)? + right.x_at_y(y)?) / 2.0);
+    let axis = Segment::new([mid(top)?, top], [mid(bottom)?, bottom]);
+    let fit = TowerFit { edges: [left, right], axis };
+    // A blade pointing down is a band too, but narrows toward its tip; the tower does not.
+    let taper = fit.width_at(bottom)? / fit.width_at(top)?.max(1e-9);
+    log::trace!("tower band {:?}: width ratio bottom/top {taper:.2}", fit.axis);
+    (taper >= p.tower_min_width_ratio).then_some(fit)
+}
+
+/// Sub-pixel points of an edge of gradient sign `sign` within ±`EDGE_SEARCH_PX` of `predict(y)`
+/// on each row, and the line `x = a + b·y` through them (least squares, outliers dropped once).
+/// Rows where the edge is hidden (response below `EDGE_POINT_MIN_OF_TYPICAL` of its typical
+/// response) give no point.
+fn fit_edge(g: &GradX<'_>, rows: &[i64], predict: impl Fn(i64) -> Option<f64>, sign: f64) -> Option<Segment> {
+    let mut peaks: Vec<(f64, P2)> = Vec::new();
+    for &y in rows {
+        let Some(x) = predict(y) else { continue };
+        let xi = x.round() as i64;
+        let (mut bx, mut bv) = (xi, f64::NEG_INFINITY);
+        for d in -EDGE_SEARCH_PX..=EDGE_SEARCH_PX {
+            let v = sign * g.at(xi + d, y);
+            if v > bv {
+                (bx, bv) = (xi + d, v);
+            }
+        }
+        if bv <= 0.0 {
+            continue;
+        }
+        // Parabola through the peak and its neighbours.
+        let (l, r) = (sign * g.at(bx - 1, y), sign * g.at(bx + 1, y));
+        let den = l - 2.0 * bv + r;
+        let sub = if den < 0.0 { (0.5 * (l - r) / den).clamp(-0.5, 0.5) } else { 0.0 };
+        peaks.push((bv, [bx as f64 + sub, y as f64]));
+    }
+    let mut vs: Vec<f64> = peaks.iter().map(|(v, _)| *v).collect();
+    vs.sort_by(|a, b| a.total_cmp(b));
+    let typical = *vs.get(vs.len() * 3 / 4)?;
+    let pts: Vec<P2> = peaks.iter().filter(|(v, _)| *v >= EDGE_POINT_MIN_OF_TYPICAL * typical).map(|(_, q)| *q).collect();
+    let line = fit_x_of_y(&pts)?;
+    let kept: Vec<P2> = pts.iter().copied().filter(|q| (line.0 + line.1 * q[1] - q[0]).abs() <= EDGE_OUTLIER_PX).collect();
+    let (a, b) = fit_x_of_y(&kept)?;
+    let (y0, y1) = (kept.first()?[1], kept.last()?[1]);
+    Some(Segment::new([a + b * y0, y0], [a + b * y1, y1]))
+}
+
+/// Least-squares `x = a + b·y`; `None` with fewer than `EDGE_MIN_POINTS` points or no spread in y.
+fn fit_x_of_y(pts: &[P2]) -> Option<(f64, f64)> {
+    if pts.len() < EDGE_MIN_POINTS {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let my = pts.iter().map(|q| q[1]).sum::<f64>() / n;
+    let mx = pts.iter().map(|q| q[0]).sum::<f64>() / n;
+    let syy: f64 = pts.iter().map(|q| (q[1] - my).powi(2)).sum();
+    if syy < 1e-9 {
+        return None;
+    }
+    let sxy: f64 = pts.iter().map(|q| (q[1] - my) * (q[0] - mx)).sum();
+    let b = sxy / syy;
+    Some((mx - b * my, b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A bright vertical band (the tower) on a dark background, slightly tilted, with one
+    /// blade-like bright stripe crossing its right edge on some rows.
+    fn image(w: usize, h: usize, left: f64, width: f64, tilt: f64) -> Vec<u8> {
+        let mut img = vec![40u8; w * h];
+        for y in 0..h {
+            let l = left + tilt * y as f64;
+            for x in 0..w {
+                let xf = x as f64 + 0.5;
+                let inside = xf > l && xf < l + width;
+                let blade = (y > 60 && y < 90) && xf > l + width - 4.0 && xf < l + width + 30.0;
+                if inside || blade {
+                    img[y * w + x] = 200;
+                }
+            }
+        }
+        img
+    }
+
+    fn sobel_x(img: &[u8], w: usize, h: usize) -> Vec<i16> {
+        let mut out = vec![0i16; w * h];
+        for y in 1..h - 1 {
+            for x in 1..w - 1 {
+                let p = |dx: i64, dy: i64| img[(y as i64 + dy) as usize * w + (x as i64 + dx) as usize] as i32;
+                let v = (p(1, -1) + 2 * p(1, 0) + p(1, 1)) - (p(-1, -1) + 2 * p(-1, 0) + p(-1, 1));
+                out[y * w + x] = v as i16;
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn finds_the_hidden_partner_edge_and_the_axis() {
+        let (w, h) = (200, 160);
+        let (left, width, tilt) = (80.3, 24.0, 0.02);
+        let img = image(w, h, left, width, tilt);
+        let gx = sobel_x(&img, w, h);
+        let g = GradX { data: &gx, width: w, height: h };
+        // Hough found only the left edge, from row 40 to 100.
+        let seed = Segment::new([left + tilt * 40.0, 40.0], [left + tilt * 100.0, 100.0]);
+        let fit = fit_tower(&DefaultParams::default(), &g, &seed).expect("partner found");
+        for y in [40.0, 100.0, 150.0] {
+            let axis = fit.axis.x_at_y(y).unwrap();
+            let truth = left + tilt * y + width / 2.0;
+            // Pixel-centre sampling of the rendered band quantises each edge by up to 0.5 px.
+            assert!((axis - truth).abs() < 1.0, "axis at row {y}: {axis} vs {truth}");
+            assert!((fit.width_at(y).unwrap() - width).abs() < 1.0);
+        }
+        // The same from the right edge.
+        let seed = Segment::new([left + width + tilt * 100.0, 100.0], [left + width + tilt * 150.0, 150.0]);
+        let fit2 = fit_tower(&DefaultParams::default(), &g, &seed).expect("partner found from the right");
+        assert!((fit2.axis.x_at_y(120.0).unwrap() - fit.axis.x_at_y(120.0).unwrap()).abs() < 0.6);
+    }
+
+    #[test]
+    fn a_band_narrowing_downward_is_a_blade_not_the_tower() {
+        // Left edge vertical at x = 80, right edge from x = 116 at the top to x = 96 at the bottom.
+        let (w, h) = (200, 160);
+        let img: Vec<u8> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64);
+                if x > 80.0 && x < 116.0 - 20.0 * y / h as f64 { 200 } else { 40 }
+            })
+            .collect();
+        let gx = sobel_x(&img, w, h);
+        let g = GradX { data: &gx, width: w, height: h };
+        let seed = Segment::new([80.0, 20.0], [80.0, 120.0]);
+        assert!(fit_tower(&DefaultParams::default(), &g, &seed).is_none());
+        // The same band widening downward is accepted.
+        let flipped: Vec<u8> = (0..w * h).map(|i| img[(h - 1 - i / w) * w + i % w]).collect();
+        let gx = sobel_x(&flipped, w, h);
+        let g = GradX { data: &gx, width: w, height: h };
+        let seed = Segment::new([80.0, 20.0], [80.0, 120.0]);
+        assert!(fit_tower(&DefaultParams::default(), &g, &seed).is_some());
+    }
+
+    #[test]
+    fn a_lone_edge_is_no_tower() {
+        // A step: bright right half, no opposite edge anywhere.
+        let (w, h) = (200, 160);
+        let img: Vec<u8> = (0..w * h).map(|i| if i % w >= 90 { 200 } else { 40 }).collect();
+        let gx = sobel_x(&img, w, h);
+        let g = GradX { data: &gx, width: w, height: h };
+        let seed = Segment::new([90.0, 40.0], [90.0, 120.0]);
+        assert!(fit_tower(&DefaultParams::default(), &g, &seed).is_none());
+    }
+}
