@@ -212,6 +212,10 @@ pub struct DistanceConfig {
     /// Chi-square threshold (1 degree of freedom) for gating distance measurements; default
     /// 10.83 = 99.9 %.
     pub gate_chi2: f64,
+    /// Chi-square threshold (1 degree of freedom) between the tower-width and the spinner
+    /// distance of one frame: above it the one farther from the filtered distance (both
+    /// without a filtered distance) is dropped, and a dropped tower gives no yaw either.
+    pub consistency_chi2: f64,
     /// Consecutive consistent gated-out distance measurements after which the filter restarts at
     /// the new value.
     pub jump_accept_count: u32,
@@ -232,6 +236,7 @@ impl Default for DistanceConfig {
             min_size_px: 2.0,
             process_noise_m2_s: 1.0,
             gate_chi2: 10.83,
+            consistency_chi2: 16.0,
             jump_accept_count: 3,
             max_std_m: 10.0,
             stale_after_s: 2.0,
@@ -361,6 +366,7 @@ impl TrackConfig {
         c.closed("min_size_px", d.min_size_px, 0.0, MAX_PX)?;
         c.open_closed("process_noise_m2_s", d.process_noise_m2_s, 0.0, MAX_NOISE)?;
         c.open_closed("gate_chi2", d.gate_chi2, 0.0, MAX_CHI2)?;
+        c.open_closed("consistency_chi2", d.consistency_chi2, 0.0, MAX_CHI2)?;
         c.count("jump_accept_count", d.jump_accept_count, 1, MAX_COUNT)?;
         c.open_closed("max_std_m", d.max_std_m, 0.0, 1e4)?;
         c.open_closed("stale_after_s", d.stale_after_s, 0.0, MAX_TIME_S)?;

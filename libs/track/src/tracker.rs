@@ -384,16 +384,43 @@ impl Core {
         let offset = yc.hub_tower_offset_m;
         let max_yaw = yc.max_abs_deg.to_radians();
 
+        let spinner = if det.circle_found && 2.0 * det.circle[2] >= dc.min_size_px * s {
+            distance_from_spinner(f, dc.spinner_diameter_m, det.circle[2], dc.spinner_radius_std_px * s)
+        } else {
+            None
+        };
+        // A tower whose width disagrees with the spinner's size is a wrong band (a blade beside
+        // the tower, tower and blade together): it gives neither distance nor yaw. Which of the
+        // two is wrong? The one farther from the filtered distance; without one, both.
+        let mut tower = self.tower_depth(det);
+        let mut spinner = spinner;
+        if let (Some(td), Some(sp)) = (tower, spinner) {
+            let tower_hub = td.value - offset;
+            let chi2 = (tower_hub - sp.value).powi(2) / (td.std.powi(2) + sp.std.powi(2)).max(1e-12);
+            if chi2 > dc.consistency_chi2 {
+                match self.distance.estimate() {
+                    Some(prior) if (sp.value - prior.value).abs() < (tower_hub - prior.value).abs() => tower = None,
+                    Some(_) => spinner = None,
+                    None => (tower, spinner) = (None, None),
+                }
+                log::debug!("tower {tower_hub:.1} m and spinner {:.1} m disagree (chi2 {chi2:.0}): kept {}", sp.value, match (tower, spinner) {
+                    (Some(_), _) => "tower",
+                    (_, Some(_)) => "spinner",
+                    _ => "neither",
+                });
+            }
+        }
+        let tower_rejected = det.tower_found && tower.is_none() && self.tower_depth(det).is_some();
+
         // Yaw. The gap needs the depth of the tower axis: this frame's tower width, else the
         // filtered hub distance plus the overhang.
-        let tower = self.tower_depth(det);
         let yaw_prior = self.yaw.estimate();
         let tower_depth = tower.or_else(|| {
             let d = self.distance.estimate()?;
             let psi = yaw_prior.map_or(0.0, |e| e.value);
             Some(Estimate { value: d.value + offset * psi.cos(), std: d.std })
         });
-        let gap = if det.tower_found && det.detected {
+        let gap = if det.tower_found && det.detected && !tower_rejected {
             tower_depth.and_then(|td| yaw_from_gap(det.hub_tower_gap_px, yc.gap_std_px * s, td, f, offset, max_yaw))
         } else {
             None
@@ -418,11 +445,6 @@ impl Core {
             let value = td.value - offset * psi.cos();
             (value > 0.0).then(|| Estimate { value, std: td.std.hypot(offset * psi.sin() * sig) })
         });
-        let spinner = if det.circle_found && 2.0 * det.circle[2] >= dc.min_size_px * s {
-            distance_from_spinner(f, dc.spinner_diameter_m, det.circle[2], dc.spinner_radius_std_px * s)
-        } else {
-            None
-        };
         if let Some(m) = fuse(&[tower_hub, spinner].into_iter().flatten().collect::<Vec<_>>()) {
             self.distance.update(m, dc.gate_chi2, dc.jump_accept_count, t);
         }

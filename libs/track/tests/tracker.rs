@@ -649,3 +649,26 @@ fn low_confidence_and_bad_config() {
     assert_eq!(Tracker::new(bad.clone()).unwrap_err().key, "track.modes.lost_after_s");
     assert!(BaselineTracker::new(bad).is_err());
 }
+
+/// A tower band of twice the true width (tower and blade taken together) every third frame:
+/// the spinner disagrees, so that band gives neither distance nor yaw.
+#[test]
+fn a_tower_band_inconsistent_with_the_spinner_is_dropped() {
+    let cfg = pinhole_config();
+    let fps = 30.0;
+    let (d_hub, psi_deg) = (12.0, -8.0);
+    let mut tr = Tracker::new(cfg.clone()).unwrap();
+    let mut rng = Rng::new(7);
+    let mut s = TrackState::default();
+    for k in 0..150 {
+        let mut d = full_det(k, frame_t(k, fps), d_hub, psi_deg, &cfg, &mut rng, 0.5);
+        if k % 3 == 0 {
+            d.tower_width_px *= 2.0;
+            d.hub_tower_gap_px = 0.0; // the blade's axis runs through the hub
+        }
+        s = tr.update(&d, None);
+    }
+    assert!(s.distance_valid && s.yaw_valid);
+    assert!((s.distance_m - d_hub).abs() < 0.5, "distance {} (the wide band would pull it toward {:.1})", s.distance_m, d_hub / 2.0);
+    assert!((s.yaw_deg - psi_deg).abs() < 2.0, "yaw {} (the band's zero gap would pull it toward 0)", s.yaw_deg);
+}
