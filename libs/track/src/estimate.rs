@@ -60,10 +60,20 @@ pub fn distance_from_tower_width(f_px: f64, tower_diameter_m: f64, width_px: f64
     distance_from_size(f_px, tower_diameter_m, width_px, width_std_px)
 }
 
-/// Distance of the rotor centre from the spinner circle radius: `d = f·D_spinner / (2r)`,
-/// `σ_d = d·σ_r / r`.
+/// Distance of the rotor centre from the spinner circle radius. The spinner is a dome, not a
+/// flat disc: the silhouette of a sphere of radius `R` whose centre is `d` away is the cone of
+/// half-angle `asin(R/d)`, so its image radius is `r = f·R / √(d² − R²)` and
+/// `d = R·√(1 + (f/r)²)` (the flat-disc `f·R/r` reads 4–5 % short at 5–10 m, which is the whole
+/// ±0.5 m tolerance at the 5 m target). `σ_d = |∂d/∂r|·σ_r = R·f² / (r³·√(1 + (f/r)²))·σ_r`.
 pub fn distance_from_spinner(f_px: f64, spinner_diameter_m: f64, radius_px: f64, radius_std_px: f64) -> Option<Estimate> {
-    distance_from_size(f_px, spinner_diameter_m, 2.0 * radius_px, 2.0 * radius_std_px)
+    if !(f_px > 0.0 && spinner_diameter_m > 0.0 && radius_px > 0.0 && radius_px.is_finite() && radius_std_px >= 0.0) {
+        return None;
+    }
+    let rr = spinner_diameter_m / 2.0;
+    let k = (1.0 + (f_px / radius_px).powi(2)).sqrt();
+    let value = rr * k;
+    let std = rr * f_px * f_px / (radius_px.powi(3) * k) * radius_std_px;
+    Some(Estimate { value, std })
 }
 
 /// Inverse-variance fusion of independent estimates: `x = Σ(xᵢ/σᵢ²) / Σ(1/σᵢ²)`,
@@ -251,10 +261,20 @@ mod tests {
         // The first-order std matches the finite difference of one pixel.
         let e54 = distance_from_tower_width(1000.0, 2.2, 54.0, 1.0).unwrap();
         assert!(((e54.value - e.value) - e.std).abs() < 0.02 * e.std);
-        // Spinner: D = 3.2 m, r = 40 px → 1000·3.2/80 = 40 m, σ_r = 1 px → σ = 40/40 = 1 m.
+        // Spinner: a sphere of R = 1.6 m at d: r = f·R/√(d² − R²). Far away that is the flat
+        // f·R/d (r = 40 px → 40.03 m); at 5 m it is 5 % wider than the flat disc, and the
+        // formula inverts it exactly.
         let s = distance_from_spinner(1000.0, 3.2, 40.0, 1.0).unwrap();
-        assert!((s.value - 40.0).abs() < 1e-12);
-        assert!((s.std - 1.0).abs() < 1e-12);
+        assert!((s.value - 1.6 * (1.0f64 + 625.0).sqrt()).abs() < 1e-12 && (s.value - 40.0).abs() < 0.05);
+        assert!((s.std - 1.0).abs() < 0.01);
+        for d in [4.0, 5.0, 8.0] {
+            let r = 1000.0 * 1.6 / (d * d - 1.6f64 * 1.6).sqrt();
+            let e = distance_from_spinner(1000.0, 3.2, r, 1.0).unwrap();
+            assert!((e.value - d).abs() < 1e-9, "{d}: {}", e.value);
+            let e1 = distance_from_spinner(1000.0, 3.2, r - 1.0, 1.0).unwrap();
+            assert!(((e1.value - e.value) - e.std).abs() < 0.02 * e.std, "first-order std at {d} m");
+        }
+        assert!(distance_from_spinner(1000.0, 3.2, 0.0, 1.0).is_none());
         assert!(distance_from_tower_width(1000.0, 2.2, 0.0, 1.0).is_none());
         assert!(distance_from_tower_width(1000.0, 2.2, f64::NAN, 1.0).is_none());
     }
