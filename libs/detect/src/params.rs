@@ -60,6 +60,7 @@ pub struct CameraParams {
 }
 
 impl Default for CameraParams {
+    #[allow(clippy::approx_constant)] // 0.4343 is the GoPro lens (833.9 / 1920), not log10(e)
     fn default() -> Self {
         CameraParams { hfov_deg: 118.0, focal_length_per_width: 0.4343, tower_top_diameter_m: 2.2, hub_tower_gap_m: 4.2 }
     }

@@ -136,7 +136,7 @@ pub(crate) fn fit_tower(p: &DefaultParams, g: &GradX<'_>, seed: &Segment) -> Opt
     }
     let offset = |y: i64| off_top as f64 + (off_bot - off_top) as f64 * frac(y);
 
-    let seed_fit = fit_edge(g, &rows, |y| x0(y), sign)?;
+    let seed_fit = fit_edge(g, &rows, x0, sign)?;
     let partner_fit = fit_edge(g, &rows, |y| x0(y).map(|x| x + offset(y)), -sign)?;
     let (left, right) = if off_top > 0 { (seed_fit, partner_fit) } else { (partner_fit, seed_fit) };
     let bottom = h - 1.0;

@@ -43,6 +43,7 @@ pub struct TrackConfig {
 }
 
 /// Centre focal length of the GoPro HERO3+ wide lens divided by the image width (833.9 / 1920).
+#[allow(clippy::approx_constant)] // 0.4343 is the GoPro lens, not log10(e)
 pub const GOPRO_FOCAL_PER_WIDTH: f64 = 0.4343;
 
 /// `[track.camera]`: the pinhole camera model.

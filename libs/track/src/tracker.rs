@@ -394,6 +394,7 @@ impl Core {
         // two is wrong? The one farther from the filtered distance; without one, both.
         let mut tower = self.tower_depth(det);
         let mut spinner = spinner;
+        let mut tower_rejected = false;
         if let (Some(td), Some(sp)) = (tower, spinner) {
             let tower_hub = td.value - offset;
             let chi2 = (tower_hub - sp.value).powi(2) / (td.std.powi(2) + sp.std.powi(2)).max(1e-12);
@@ -403,6 +404,7 @@ impl Core {
                     Some(_) => spinner = None,
                     None => (tower, spinner) = (None, None),
                 }
+                tower_rejected = tower.is_none();
                 log::debug!("tower {tower_hub:.1} m and spinner {:.1} m disagree (chi2 {chi2:.0}): kept {}", sp.value, match (tower, spinner) {
                     (Some(_), _) => "tower",
                     (_, Some(_)) => "spinner",
@@ -410,7 +412,6 @@ impl Core {
                 });
             }
         }
-        let tower_rejected = det.tower_found && tower.is_none() && self.tower_depth(det).is_some();
 
         // Yaw. The gap needs the depth of the tower axis: this frame's tower width, else the
         // filtered hub distance plus the overhang.
