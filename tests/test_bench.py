@@ -18,6 +18,14 @@ def test_bench_pipeline_prints_latency_cpu_and_memory(runner):
     res = runner.run("hubtrack", "bench", "pipeline", "--seconds", "4", "--only-hd", timeout=180)
     assert res.returncode == 0, res.stderr[-3000:]
     out = res.stdout
-    for row in ("capture->detect", "detect->track", "capture->track", "CPU %", "peak RSS MB",
-                "hubtrack-detect", "hubtrack-record", "flight stages", "Unix-socket copy"):
+    assert "capture+detect+track+control+recorder" in out, out
+    for row in ("capture->detect", "detect->track", "track->control", "capture->track", "CPU %", "peak RSS MB",
+                "hubtrack-detect", "hubtrack-record", "hubtrack-contro", "flight stages", "Unix-socket copy"):
         assert row in out, out
+    # Control answered the frames end to end: capture -> setpoint has samples (no autopilot, so
+    # none was sent, but every track state gets a published setpoint).
+    row = next(l for l in out.splitlines() if l.split()[:1] == ["capture->setpoint"])
+    p50, p90, p99, mx, count, dropped = row.split()[1:7]
+    assert int(count) >= 30 and 0 < float(p50) <= float(p99), row
+    setpoints = int(out.split("track states, ")[1].split()[0])
+    assert setpoints >= int(count), out

@@ -37,7 +37,9 @@ pub use messages::{
     companion_heartbeat, copter_mode_name, velocity_setpoint, Identity, SetpointFrame,
     COMPONENT_ID_ONBOARD_COMPUTER, COPTER_MODE_GUIDED, TYPE_MASK_VELOCITY_YAW_RATE,
 };
-pub use monitor::{VehicleEvent, VehicleMonitor, REBOOT_BACKSTEP_MS};
+pub use monitor::{
+    aged_state, follows_setpoints, VehicleEvent, VehicleMonitor, REBOOT_BACKSTEP_MS,
+};
 pub use parser::{encode_v2, FrameParser, LinkStats};
 
 #[cfg(test)]

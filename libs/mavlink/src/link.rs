@@ -284,18 +284,26 @@ impl Link {
                 peer,
                 follow_peer,
             } => {
-                // A zero read timeout means "block forever" to the OS; the smallest non-zero one
-                // (1 µs) is as good as non-blocking.
-                let t = timeout.max(Duration::from_micros(1));
-                match socket.set_read_timeout(Some(t)) {
-                    Err(e) => Err(e),
-                    Ok(()) => socket.recv_from(&mut self.read_buf).map(|(n, from)| {
-                        if *follow_peer {
-                            *peer = Some(from);
-                        }
-                        n
-                    }),
-                }
+                // A zero read timeout means "block forever" to the OS, and a tiny one still
+                // waits for the next scheduler tick (1 µs measured 8 ms here), which stalled
+                // control's loop. So "only what is waiting" is a non-blocking read; the socket
+                // goes back to blocking at once, for sends and timed reads.
+                let received = if timeout.is_zero() {
+                    socket.set_nonblocking(true).and_then(|()| {
+                        let r = socket.recv_from(&mut self.read_buf);
+                        socket.set_nonblocking(false).and(r)
+                    })
+                } else {
+                    socket
+                        .set_read_timeout(Some(timeout))
+                        .and_then(|()| socket.recv_from(&mut self.read_buf))
+                };
+                received.map(|(n, from)| {
+                    if *follow_peer {
+                        *peer = Some(from);
+                    }
+                    n
+                })
             }
             Transport::Serial(port) => match port.set_timeout(timeout) {
                 Err(e) => Err(std::io::Error::from(e)),
@@ -510,6 +518,42 @@ mod tests {
         assert!(
             waited >= Duration::from_millis(95) && waited < Duration::from_secs(1),
             "{waited:?}"
+        );
+    }
+
+    #[test]
+    fn a_zero_timeout_takes_what_is_waiting_without_waiting_for_a_tick() {
+        let mut server = Link::open(&"udpin:127.0.0.1:0".parse().unwrap()).unwrap();
+        let port = server.local_addr().unwrap().port();
+        let mut client = Link::open(&format!("udpout:127.0.0.1:{port}").parse().unwrap()).unwrap();
+        // Idle: each read returns at once (a 1 µs socket timeout waited for the next scheduler
+        // tick, 4-10 ms, on every call: 200 of them took seconds).
+        let t = Instant::now();
+        for _ in 0..200 {
+            assert!(server.recv(Duration::ZERO).unwrap().is_empty());
+        }
+        assert!(
+            t.elapsed() < Duration::from_millis(200),
+            "{:?}",
+            t.elapsed()
+        );
+        // What is waiting is taken.
+        let me = Identity {
+            system_id: 1,
+            component_id: 191,
+        };
+        client.send(me.header(0), &companion_heartbeat()).unwrap();
+        let t = Instant::now();
+        let mut got = Vec::new();
+        while got.is_empty() && t.elapsed() < WAIT {
+            got = server.recv(Duration::ZERO).unwrap();
+        }
+        assert_eq!(got, vec![(me.header(0), companion_heartbeat())]);
+        // The socket blocks again: replies go out, timed reads wait.
+        server.send(me.header(1), &companion_heartbeat()).unwrap();
+        assert_eq!(
+            client.recv(WAIT).unwrap(),
+            vec![(me.header(1), companion_heartbeat())]
         );
     }
 

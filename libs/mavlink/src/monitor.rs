@@ -433,9 +433,10 @@ impl VehicleMonitor {
         self.target
     }
 
-    /// Link ok, armed, and in GUIDED: setpoints will be followed.
+    /// Link ok, armed, and in GUIDED: setpoints will be followed (the rule of
+    /// [`follows_setpoints`] on [`VehicleMonitor::state`]).
     pub fn guided_and_armed(&self, now_ns: u64) -> bool {
-        self.link_ok(now_ns) && self.armed && self.custom_mode == COPTER_MODE_GUIDED
+        follows_setpoints(&self.state(now_ns))
     }
 
     /// Newest time_boot_ms seen from the autopilot (ATTITUDE, LOCAL_POSITION_NED,
@@ -449,6 +450,47 @@ impl VehicleMonitor {
     pub fn ignored_messages(&self) -> u64 {
         self.ignored
     }
+}
+
+/// Whether a vehicle in state `s` follows setpoints: autopilot link ok, armed, and in GUIDED.
+///
+/// The one rule for live control (on [`VehicleMonitor::state`]) and for replay (on a recorded
+/// state aged with [`aged_state`]).
+pub fn follows_setpoints(s: &VehicleState) -> bool {
+    s.link_ok && s.armed && s.custom_mode == COPTER_MODE_GUIDED
+}
+
+/// A published [`VehicleState`] as it stands at `now_ns` (pipeline clock), for a consumer that
+/// has only the published states and no link (replay).
+///
+/// A live monitor publishes a state on every autopilot message and on link loss, so the newest
+/// published state is current until its autopilot messages stop. When they have stopped — the
+/// newest message (`recv_ns`) is older than a timeout — this applies the monitor's rules: no
+/// link after `link_timeout_ns`, no attitude and no position after `state_timeout_ns` (zeroed,
+/// as [`VehicleMonitor::state`] leaves them). Judged on the newest message of any kind, so a
+/// stale part is declared no earlier than the monitor would.
+pub fn aged_state(
+    s: &VehicleState,
+    now_ns: u64,
+    link_timeout_ns: u64,
+    state_timeout_ns: u64,
+) -> VehicleState {
+    let silent_ns = now_ns.saturating_sub(s.recv_ns);
+    let mut aged = *s;
+    if silent_ns > link_timeout_ns {
+        aged.link_ok = false;
+    }
+    if silent_ns > state_timeout_ns {
+        aged.attitude_valid = false;
+        aged.roll_rad = 0.0;
+        aged.pitch_rad = 0.0;
+        aged.yaw_rad = 0.0;
+        aged.body_rates_rad_s = [0.0; 3];
+        aged.position_valid = false;
+        aged.position_ned_m = [0.0; 3];
+        aged.velocity_ned_m_s = [0.0; 3];
+    }
+    aged
 }
 
 #[cfg(test)]
@@ -768,5 +810,43 @@ mod tests {
         );
         let ev = m.handle(t, &ap(), &attitude(4_000, 0.0, 0.0, 0.0));
         assert!(matches!(ev[..], [VehicleEvent::Rebooted { .. }]), "{ev:?}");
+    }
+
+    #[test]
+    fn a_published_state_aged_like_the_monitor_ages_it() {
+        let mut m = monitor();
+        m.handle(0, &ap(), &autopilot_heartbeat(true, COPTER_MODE_GUIDED));
+        m.handle(100 * MS, &ap(), &attitude(5_000, 0.1, -0.2, 1.5));
+        m.handle(100 * MS, &ap(), &local_position(5_000));
+        let published = m.state(100 * MS);
+        assert!(follows_setpoints(&published));
+        // While messages are recent the published state stands as it is.
+        let t = 100 * MS + STATE_TIMEOUT;
+        assert_eq!(
+            aged_state(&published, t, LINK_TIMEOUT, STATE_TIMEOUT),
+            published
+        );
+        // Silent past the state timeout: attitude and position go, as in the monitor.
+        let t = 100 * MS + STATE_TIMEOUT + 1;
+        let (aged, live) = (
+            aged_state(&published, t, LINK_TIMEOUT, STATE_TIMEOUT),
+            m.state(t),
+        );
+        assert!(!aged.attitude_valid && !aged.position_valid && aged.link_ok);
+        assert_eq!(aged, live);
+        // Silent past the link timeout: the vehicle no longer follows setpoints.
+        let t = 100 * MS + LINK_TIMEOUT + 1;
+        let aged = aged_state(&published, t, LINK_TIMEOUT, STATE_TIMEOUT);
+        assert!(!aged.link_ok && !follows_setpoints(&aged));
+        assert!(!m.guided_and_armed(t));
+        // Disarmed or not in GUIDED: not followed.
+        assert!(!follows_setpoints(&VehicleState {
+            armed: false,
+            ..published
+        }));
+        assert!(!follows_setpoints(&VehicleState {
+            custom_mode: LOITER,
+            ..published
+        }));
     }
 }

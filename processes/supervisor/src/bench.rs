@@ -217,6 +217,11 @@ fn socket_hop(frame: &[u8], fps: f64, seconds: f64) -> anyhow::Result<HopResult>
     Ok(HopResult { published: n, received, recorded: None, dropped: n - received, latency_us })
 }
 
+/// The stages `hubtrack bench pipeline` runs, in pipeline order.
+const PIPELINE_STAGES: [&str; 5] = ["capture", "detect", "track", "control", "recorder"];
+/// Control's autopilot link in the pipeline benchmark: listen on a port the OS picks.
+const BENCH_CONTROL_LINK: &str = "udpin:127.0.0.1:0";
+
 /// Arguments of `hubtrack bench pipeline`.
 #[derive(clap::Args)]
 pub struct PipelineBenchArgs {
@@ -296,7 +301,11 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
         "--duration".into(),
         args.seconds.to_string(),
         "--set".into(),
-        r#"run.stages=["capture","detect","track","recorder"]"#.into(),
+        format!("run.stages={PIPELINE_STAGES:?}"),
+        // No autopilot: control still publishes every setpoint (not sent), and its link listens
+        // on a port the OS picks, so it cannot collide with a live pipeline's autopilot link.
+        "--set".into(),
+        format!("control.link=\"{BENCH_CONTROL_LINK}\""),
         "--set".into(),
         format!("capture.synthetic.camera={camera}"),
         "--set".into(),
@@ -364,7 +373,12 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
     }
     let report = hubtrack_record::latency::analyze(&rec)?;
     let info = hubtrack_record::inspect(&rec)?;
-    println!("\npipeline: {camera} {w}x{h} at {fps} fps for {} s, capture+detect+track+recorder, pinned to cpus {}", args.seconds, args.cpus);
+    println!(
+        "\npipeline: {camera} {w}x{h} at {fps} fps for {} s, {}, pinned to cpus {}",
+        args.seconds,
+        PIPELINE_STAGES.join("+"),
+        args.cpus
+    );
     hubtrack_record::latency::print(&report);
     println!("{:<22}{:>10}{:>16}", "process", "CPU %", "peak RSS MB");
     let mut flight = 0.0;
@@ -384,10 +398,11 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
         );
     }
     println!(
-        "recorded: {} frames, {} detections, {} track states; file {:.0} MB",
+        "recorded: {} frames, {} detections, {} track states, {} setpoints; file {:.0} MB",
         info.topic_counts.get("/frames").copied().unwrap_or(0),
         info.topic_counts.get("/detections").copied().unwrap_or(0),
         info.topic_counts.get("/track").copied().unwrap_or(0),
+        info.topic_counts.get("/setpoints").copied().unwrap_or(0),
         info.size_bytes as f64 / 1e6
     );
     let _ = std::fs::remove_file(&rec);

@@ -41,11 +41,14 @@ fn run() -> anyhow::Result<()> {
     while !shutdown.requested() {
         status.tick();
         detections.wait(INPUT_WAIT);
-        if let Some(v) = vehicle.receive_newest()? {
-            last_vehicle = Some(v);
-        }
         while let Some(det) = detections.receive()? {
             let recv_ns = monotonic_ns();
+            // The newest vehicle state for every detection, also for one already queued behind
+            // the previous: a replay publishes the next detection right after our output, with
+            // the vehicle states that preceded it live.
+            if let Some(v) = vehicle.receive_newest()? {
+                last_vehicle = Some(v);
+            }
             status.status.inputs += 1;
             if let Some(last) = last_seq {
                 status.status.skipped += det.stamps.seq.saturating_sub(last + 1);
