@@ -150,6 +150,12 @@ pub struct Approach {
     last_distance_m: Option<f64>,
     /// The hub was last seen right of centre (search direction); `None` if never seen.
     last_seen_right: Option<bool>,
+    /// Since when T2 has had no valid yaw (None: it has one).
+    yaw_unknown_since_ns: Option<u64>,
+    /// Sideways displacement commanded by the current yaw probe, m (+ = right).
+    probe_offset_m: f64,
+    /// Direction of the probe's sweep (+1 right, −1 left).
+    probe_dir: f64,
 }
 
 /// Cuts a reason to [`MAX_REASON_BYTES`] at a char boundary.
@@ -246,6 +252,9 @@ impl Approach {
             backoff_m: 0.0,
             last_distance_m: None,
             last_seen_right: None,
+            yaw_unknown_since_ns: None,
+            probe_offset_m: 0.0,
+            probe_dir: 1.0,
         })
     }
 
@@ -531,12 +540,30 @@ impl Approach {
         let vz_t = limit_abs(c.climb_gain_m_s * deadband(ey, c.deadband_y), c.max_vertical_m_s);
 
         // T2 lateral: on in T2 and T3 (keeps the yaw small during the approach), off in T1.
+        // Without any yaw for long, probe sideways: the view a few metres aside may show it.
+        let unknown_s = match yaw {
+            Some(_) => {
+                self.yaw_unknown_since_ns = None;
+                self.probe_offset_m = 0.0;
+                0.0
+            }
+            None => secs(*self.yaw_unknown_since_ns.get_or_insert(now), now),
+        };
+        let probe_span_m = dist.unwrap_or(c.nominal_distance_m) * c.yaw_probe_span_deg.to_radians().tan();
+        let probing = yaw.is_none() && !self.t1_active && probe_span_m > 0.0 && unknown_s >= c.yaw_probe_after_s;
         let vy_t = match (self.t1_active, yaw) {
             (false, Some(y)) => {
                 let d = dist.unwrap_or(c.nominal_distance_m);
                 let lateral_m = d * y.to_radians().sin();
                 // Positive yaw = on the turbine's left = the vehicle must go to its left.
                 limit_abs(-c.lateral_gain_per_s * lateral_m, c.max_lateral_m_s)
+            }
+            (false, None) if probing => {
+                // Sweep between −span and +span around where the probe started.
+                if self.probe_offset_m * self.probe_dir >= probe_span_m {
+                    self.probe_dir = -self.probe_dir;
+                }
+                limit_abs(self.probe_dir * c.yaw_probe_speed_m_s, c.max_lateral_m_s)
             }
             _ => 0.0,
         };
@@ -562,6 +589,9 @@ impl Approach {
         let vx = slew(self.cmd.vx, vx_t, a_xy, dt);
         let vx = if forward_ok { vx } else { vx.min(0.0) };
         let vy = slew(self.cmd.vy, vy_t, a_xy, dt);
+        if probing {
+            self.probe_offset_m += vy * dt;
+        }
         let vz = slew(self.cmd.vz, vz_t, c.accel_z_m_s2, dt);
 
         // T1 yaw: proportional to the image error plus the yaw rate that the commanded sideways
@@ -587,6 +617,10 @@ impl Approach {
                         c.yaw_tolerance_deg
                     )
                 }
+                None if probing => format!(
+                    "T2: no valid yaw for {unknown_s:.0} s, probing sideways {:+.1}/{:.1} m",
+                    self.probe_offset_m, probe_span_m
+                ),
                 None => "T2: no valid yaw, holding position".into(),
             };
             (ApproachTask::ReduceYaw, reason)

@@ -87,6 +87,16 @@ pub struct ApproachConfig {
     /// (-vy / distance) added ahead of the image error, dimensionless: 1 flies a clean arc round
     /// the hub, 0 leaves it to the T1 feedback. Range [0, 1]; default 1.
     pub arc_feedforward: f64,
+    /// T2 without any valid yaw for this long, s, starts a sideways probe: the yaw cue (the
+    /// hub–tower gap) can stay hidden from one spot, e.g. behind a blade pointing down, and a
+    /// few metres aside the view changes. Range [0, 600]; default 8.
+    pub yaw_probe_after_s: f64,
+    /// Sideways speed of the probe, m/s. Range (0, 10]; default 0.5.
+    pub yaw_probe_speed_m_s: f64,
+    /// The probe sweeps to either side of where it started by this angle seen from the hub,
+    /// degrees (0: no probe, hold): distance × tan(angle), 6 m at 35 m, 0.9 m at 5 m.
+    /// Range [0, 45]; default 10.
+    pub yaw_probe_span_deg: f64,
     /// Distance used for the T2 lateral offset while no valid distance estimate exists, m.
     /// Range (0, 1000]; default 20.
     pub nominal_distance_m: f64,
@@ -191,6 +201,9 @@ impl Default for ApproachConfig {
             forward_gain_per_s: 0.3,
             slowdown_gain_per_s: 0.5,
             arc_feedforward: 1.0,
+            yaw_probe_after_s: 8.0,
+            yaw_probe_speed_m_s: 0.5,
+            yaw_probe_span_deg: 10.0,
             nominal_distance_m: 20.0,
             max_forward_m_s: 1.5,
             max_backward_m_s: 1.0,
@@ -257,6 +270,9 @@ impl ApproachConfig {
         c.open_closed("forward_gain_per_s", self.forward_gain_per_s, 0.0, 10.0)?;
         c.open_closed("slowdown_gain_per_s", self.slowdown_gain_per_s, 0.0, 10.0)?;
         c.closed("arc_feedforward", self.arc_feedforward, 0.0, 1.0)?;
+        c.closed("yaw_probe_after_s", self.yaw_probe_after_s, 0.0, 600.0)?;
+        c.open_closed("yaw_probe_speed_m_s", self.yaw_probe_speed_m_s, 0.0, 10.0)?;
+        c.closed("yaw_probe_span_deg", self.yaw_probe_span_deg, 0.0, 45.0)?;
         c.open_closed("nominal_distance_m", self.nominal_distance_m, 0.0, 1000.0)?;
 
         c.open_closed("max_forward_m_s", self.max_forward_m_s, 0.0, 10.0)?;

@@ -319,6 +319,41 @@ fn no_forward_motion_without_a_valid_distance() {
 }
 
 #[test]
+fn no_yaw_for_long_probes_sideways_within_the_span_then_t2_takes_over() {
+    let c = ApproachConfig::default();
+    let mut rig = Rig::new();
+    // Centred, distance known, yaw never valid: hold at first ...
+    let out = rig.run(Some(track(0.0, 0.0, Some(30.0), None)), c.yaw_probe_after_s - 1.0);
+    assert_eq!(out.task, ApproachTask::ReduceYaw);
+    assert_eq!(out.vy_m_s, 0.0);
+    assert!(out.reason.contains("holding"), "{}", out.reason);
+    // ... then sweep sideways, never forward, never beyond the span (plus the braking distance).
+    let from = rig.log.len();
+    rig.run(Some(track(0.0, 0.0, Some(30.0), None)), 60.0);
+    let dt = FRAME_NS as f64 / 1e9;
+    let mut offset = 0.0f64;
+    let (mut min, mut max) = (0.0f64, 0.0f64);
+    for o in &rig.log[from..] {
+        assert_eq!(o.task, ApproachTask::ReduceYaw);
+        assert!(o.vx_m_s <= 0.0, "{o:?}");
+        assert!(o.vy_m_s.abs() <= c.yaw_probe_speed_m_s + EPS);
+        offset += o.vy_m_s * dt;
+        (min, max) = (min.min(offset), max.max(offset));
+    }
+    let brake = c.yaw_probe_speed_m_s.powi(2) / (2.0 * c.accel_xy_m_s2) + 0.1;
+    let span = 30.0 * c.yaw_probe_span_deg.to_radians().tan();
+    assert!(max > span - 0.5 && max < span + brake, "{min} .. {max}");
+    assert!(min < -span + 0.5 && min > -span - brake, "{min} .. {max}");
+    assert!(rig.log.last().unwrap().reason.contains("probing"), "{}", rig.log.last().unwrap().reason);
+    // A valid yaw ends the probe: T2 proper (positive yaw moves left).
+    let out = rig.run(Some(track(0.0, 0.0, Some(30.0), Some(15.0))), 3.0);
+    assert!(out.vy_m_s < 0.0 && out.reason.starts_with("T2: yaw"), "{out:?}");
+    // Disabled: holds however long.
+    let mut rig = Rig::with(ApproachConfig { yaw_probe_span_deg: 0.0, ..c });
+    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(30.0), None)), 30.0).vy_m_s, 0.0);
+}
+
+#[test]
 fn no_forward_motion_with_a_stale_track() {
     let good = track(0.0, 0.0, Some(20.0), Some(0.0));
     let mut rig = Rig::new();

@@ -44,7 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 for (buf, roll) in &frames {
                     let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: buf };
                     let t = Instant::now();
-                    let out = det.detect(&view, &Hints { roll_rad: Some(*roll), predicted_hub_px: None })?;
+                    let out = det.detect(&view, &Hints { roll_rad: Some(*roll), ..Hints::default() })?;
                     let ms = t.elapsed().as_secs_f64() * 1e3;
                     if rep == 0 {
                         continue; // warm-up pass

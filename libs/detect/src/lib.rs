@@ -27,7 +27,7 @@ use opencv::core::{Mat, Vec4i, Vector};
 use opencv::imgproc;
 
 use geometry::{Segment, P2};
-use hubtrack_types::{Detection, PixelFormat, MAX_BLADES};
+use hubtrack_types::{Detection, PixelFormat, TrackMode, TrackState, MAX_BLADES};
 use params::{DetectConfig, Mode};
 
 pub use image::pyramid_levels;
@@ -59,6 +59,39 @@ pub struct Hints {
     /// Where a tracker expects the hub, full-resolution px; the default mode prefers candidates
     /// near it.
     pub predicted_hub_px: Option<[f64; 2]>,
+    /// A tracker's filtered distance to the hub, metres. The default mode then accepts only
+    /// tower bands of about the width the tower has at that distance (a blade beside the
+    /// tower is no longer taken for part of it).
+    pub hub_distance_m: Option<f64>,
+}
+
+/// A tracker's state is used as a hint only when it is at most this much older than the frame.
+pub const MAX_HINT_AGE_NS: u64 = 500_000_000;
+
+impl Hints {
+    /// Hints from a tracker's newest state for a frame of `width × height` captured at
+    /// `capture_ns`: the hub predicted to the frame's time and the filtered distance, when the
+    /// track is live, of the same frame size, not from the future and at most
+    /// [`MAX_HINT_AGE_NS`] old. The roll is left to the caller (it comes from the IMU).
+    pub fn from_track(track: &TrackState, width: u32, height: u32, capture_ns: u64) -> Hints {
+        let live = matches!(track.mode, TrackMode::Tracking | TrackMode::Coasting);
+        let same_size = (track.image_width, track.image_height) == (width, height);
+        let Some(age_ns) = capture_ns.checked_sub(track.stamps.capture_ns) else { return Hints::default() };
+        if !live || !same_size || age_ns > MAX_HINT_AGE_NS {
+            return Hints::default();
+        }
+        let dt = age_ns as f64 / 1e9;
+        let p = [track.hub_px[0] + track.hub_velocity_px_s[0] * dt, track.hub_px[1] + track.hub_velocity_px_s[1] * dt];
+        let inside = p.iter().all(|v| v.is_finite()) && p[0] >= 0.0 && p[1] >= 0.0 && p[0] < f64::from(width) && p[1] < f64::from(height);
+        if !inside {
+            return Hints::default();
+        }
+        Hints {
+            roll_rad: None,
+            predicted_hub_px: Some(p),
+            hub_distance_m: (track.distance_valid && track.distance_m.is_finite()).then_some(track.distance_m),
+        }
+    }
 }
 
 /// Role of a Hough line in the overlay.
@@ -209,22 +242,33 @@ impl Detector {
         };
         image::check_view(image)?;
         let levels = pyramid_levels(image.width, image.height, min_side, max_side);
+        let k = (1u64 << levels) as f64;
+        let tower_width = hints.hub_distance_m.and_then(|d| self.expected_tower_width_px(d, image.width)).map(|w| w / k);
         let small = self.pyramid.build(image, levels)?;
         let pyramid_us = us_since(t0);
-        let k = (1u64 << levels) as f64;
         // Hint in working px.
         let hints_small = Hints {
             roll_rad: hints.roll_rad,
             predicted_hub_px: hints.predicted_hub_px.map(|p| [p[0] / k, p[1] / k]),
+            hub_distance_m: hints.hub_distance_m,
         };
         let found = match self.config.mode {
             Mode::Thesis => thesis::run(&self.config.thesis, small, &mut self.scratch, &hints_small)?,
-            Mode::Default => robust::run(&self.config.default, small, &mut self.scratch, &hints_small)?,
+            Mode::Default => robust::run(&self.config.default, small, &mut self.scratch, &hints_small, tower_width)?,
         };
         let mut out = self.to_output(&found, k, image.width, image.height);
         out.detection.timings.pyramid_us = pyramid_us;
         out.detection.timings.total_us = us_since(t0);
         Ok(out)
+    }
+
+    /// The tower's width just under the nacelle seen from `hub_distance_m` in front of the hub,
+    /// full-resolution px (the tower axis is `hub_tower_gap_m` farther; at the yaws of an
+    /// approach cos ψ ≈ 1). `None` for a distance that is not a positive finite number.
+    fn expected_tower_width_px(&self, hub_distance_m: f64, width: u32) -> Option<f64> {
+        let c = &self.config.camera;
+        (hub_distance_m.is_finite() && hub_distance_m > 0.0)
+            .then(|| self.focal_px(width) * c.tower_top_diameter_m / (hub_distance_m + c.hub_tower_gap_m))
     }
 
     /// Focal length in full-resolution px.

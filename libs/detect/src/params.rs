@@ -226,6 +226,47 @@ pub struct DefaultParams {
     pub tower_top_max_above_frac: f64,
     /// Tower lines may be this far horizontally from the hub candidate, fraction of image height.
     pub tower_max_dx_frac: f64,
+    /// Tower seeds (not the blade/tower classification): with a spinner circle of radius r,
+    /// tower lines may reach this many r below the hub when that is more than
+    /// `tower_top_max_below_frac`; at close range the tower top, under the nacelle, is ~1.1 r
+    /// below the hub centre. Range [0, 10].
+    pub tower_top_max_below_radii: f64,
+    /// ... and may be this many r from the hub horizontally when that is more than
+    /// `tower_max_dx_frac`: a tower edge lies (overhang·sin ψ + tower radius)·f/depth from the
+    /// hub, ≤ 2 r up to ψ = 30°. Range [0, 10]. (Not for the classification: there a grown
+    /// window takes the edges of a blade pointing down for tower lines and drops the blade.)
+    pub tower_max_dx_radii: f64,
+    /// A blade pointing down in front of the tower, shifted by the yaw, makes a band about twice
+    /// as wide. With a tracker's distance d (the detect stage has one; photos do not) a band may
+    /// be at most this factor narrower or wider than f·tower_top_diameter_m / (d +
+    /// hub_tower_gap_m). Range [1, 10].
+    pub tower_width_hint_tol: f64,
+    /// With a spinner circle of radius r, a tower band is at least this many r wide: the tower
+    /// top (2.2 m), farther than the spinner (3.2 m), is 0.67–1.25 r from 4 m to 40 m.
+    /// Range [0, 10].
+    pub tower_width_min_radii: f64,
+    /// ... and at most this many r wide. Range [0, 10].
+    pub tower_width_max_radii: f64,
+    /// With a blade pointing down and a tracker's distance, one tower edge (the other hidden
+    /// behind the blade) places the tower at the expected width on the hub's side of it, tried
+    /// after every two-edge band. Only edges within this of vertical after roll qualify,
+    /// degrees: the edges of a blade beside the tower lean more. Range [0, 45].
+    pub tower_one_edge_max_tilt_deg: f64,
+    /// ... and only within this distance from the hub (the tracker's), metres: farther out the
+    /// lone edge was as often a blade's as the tower's (rendered flights, 15–25 m: 12 of 16
+    /// one-edge towers wrong; 4–8 m: none of 7). Range [0, 1000].
+    pub tower_one_edge_max_distance_m: f64,
+    /// When the Hough lines give no tower (HoughLinesP's walk along a jagged, slightly tilted
+    /// edge drops the short piece with its votes, so an edge in plain view can go missing), the
+    /// horizontal gradient below a detected hub is scanned for near-vertical edges: from this
+    /// far below the hub, fraction of image height, range [0, 1] ...
+    pub tower_scan_start_frac: f64,
+    /// ... or this many spinner radii when that is more (the nacelle bottom is ~1.1 r down),
+    /// range [0, 10].
+    pub tower_scan_start_radii: f64,
+    /// A scanned edge's mean gradient must be this many times the mean over all positions.
+    /// Range [1, 100].
+    pub tower_scan_min_salience: f64,
     /// Without a roll hint, the roll is searched in ±this range, degrees.
     pub roll_search_deg: f64,
     /// Search radius around `hints.predicted_hub_px`, fraction of image height: candidates
@@ -267,8 +308,12 @@ pub struct DefaultParams {
     /// this: a blade pointing down narrows toward its tip (~0.65 over the visible part), the
     /// tower keeps its image width within ~15 %.
     pub tower_min_width_ratio: f64,
-    /// When the strongest blade implies (at 120° steps) a blade within this of straight down,
-    /// degrees, that blade hides the tower ...
+    /// ... and at most this: the visible part of the tower widens by less than 10 % (its taper;
+    /// its rows are at about the same depth), while a band from a tower edge to the edge of a
+    /// blade crossing it widens fast.
+    pub tower_max_width_ratio: f64,
+    /// When a detected blade, or the strongest blade at 120° steps, is within this of straight
+    /// down, degrees, that blade hides the tower ...
     pub tower_blade_down_tol_deg: f64,
     /// ... and a tower band whose axis passes within this of the hub, fraction of image
     /// height, is that blade, not the tower.
@@ -385,6 +430,16 @@ impl Default for DefaultParams {
             tower_top_max_below_frac: 0.15,
             tower_top_max_above_frac: 0.03,
             tower_max_dx_frac: 0.12,
+            tower_top_max_below_radii: 1.5,
+            tower_max_dx_radii: 2.0,
+            tower_width_hint_tol: 1.5,
+            tower_width_min_radii: 0.5,
+            tower_width_max_radii: 1.6,
+            tower_one_edge_max_tilt_deg: 4.0,
+            tower_one_edge_max_distance_m: 10.0,
+            tower_scan_start_frac: 0.06,
+            tower_scan_start_radii: 1.2,
+            tower_scan_min_salience: 3.0,
             roll_search_deg: 10.0,
             prediction_radius_frac: 0.15,
             prediction_bonus: 0.1,
@@ -401,6 +456,7 @@ impl Default for DefaultParams {
             tower_partner_min_ratio: 0.15,
             tower_partner_min_salience: 4.0,
             tower_min_width_ratio: 0.85,
+            tower_max_width_ratio: 1.25,
             tower_blade_down_tol_deg: 12.0,
             tower_blade_axis_tol_frac: 0.025,
             pair_min_length_frac: 0.06,
@@ -522,6 +578,17 @@ impl DefaultParams {
         c.closed("tower_top_max_below_frac", self.tower_top_max_below_frac, 0.0, 2.0)?;
         c.closed("tower_top_max_above_frac", self.tower_top_max_above_frac, 0.0, 2.0)?;
         c.closed("tower_max_dx_frac", self.tower_max_dx_frac, 0.0, 2.0)?;
+        c.closed("tower_top_max_below_radii", self.tower_top_max_below_radii, 0.0, 10.0)?;
+        c.closed("tower_max_dx_radii", self.tower_max_dx_radii, 0.0, 10.0)?;
+        c.closed("tower_width_hint_tol", self.tower_width_hint_tol, 1.0, 10.0)?;
+        c.closed("tower_width_min_radii", self.tower_width_min_radii, 0.0, 10.0)?;
+        c.closed("tower_width_max_radii", self.tower_width_max_radii, 0.0, 10.0)?;
+        c.closed("tower_one_edge_max_tilt_deg", self.tower_one_edge_max_tilt_deg, 0.0, 45.0)?;
+        c.closed("tower_one_edge_max_distance_m", self.tower_one_edge_max_distance_m, 0.0, 1000.0)?;
+        c.closed("tower_scan_start_frac", self.tower_scan_start_frac, 0.0, 1.0)?;
+        c.closed("tower_scan_start_radii", self.tower_scan_start_radii, 0.0, 10.0)?;
+        c.closed("tower_scan_min_salience", self.tower_scan_min_salience, 1.0, 100.0)?;
+        c.less("tower_width_min_radii", self.tower_width_min_radii, "tower_width_max_radii", self.tower_width_max_radii)?;
         c.closed("roll_search_deg", self.roll_search_deg, 0.0, 45.0)?;
         c.closed("prediction_radius_frac", self.prediction_radius_frac, 0.0, 2.0)?;
         c.closed("prediction_bonus", self.prediction_bonus, 0.0, 1.0)?;
@@ -538,6 +605,8 @@ impl DefaultParams {
         c.closed("tower_partner_min_ratio", self.tower_partner_min_ratio, 0.0, 1.0)?;
         c.closed("tower_partner_min_salience", self.tower_partner_min_salience, 0.0, 1000.0)?;
         c.closed("tower_min_width_ratio", self.tower_min_width_ratio, 0.0, 10.0)?;
+        c.closed("tower_max_width_ratio", self.tower_max_width_ratio, 0.0, 10.0)?;
+        c.less("tower_min_width_ratio", self.tower_min_width_ratio, "tower_max_width_ratio", self.tower_max_width_ratio)?;
         c.closed("tower_blade_down_tol_deg", self.tower_blade_down_tol_deg, 0.0, 60.0)?;
         c.closed("tower_blade_axis_tol_frac", self.tower_blade_axis_tol_frac, 0.0, 1.0)?;
         c.less("tower_min_width_frac", self.tower_min_width_frac, "tower_max_width_frac", self.tower_max_width_frac)?;

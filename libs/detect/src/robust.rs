@@ -38,7 +38,7 @@ use opencv::prelude::*;
 use crate::geometry::{self, Segment, P2};
 use crate::params::DefaultParams;
 use crate::spinner::{find_circles, CircleSearch, EdgePoint};
-use crate::tower::{fit_tower, GradX};
+use crate::tower::{fit_tower, fit_tower_one_edge, scan_tower_edges, GradX};
 use crate::{hough_segments, us_since, DetectError, Found, Hints, LineKind, Scratch};
 
 /// Number of bins of the gradient-magnitude histogram: the Sobel 3×3 L1 magnitude of 8-bit
@@ -61,8 +61,9 @@ const MAX_PEAKS: usize = 6;
 /// distance tolerance: the blade edges sit half a chord off the blade axis.
 const SUPPORT_ANGLE_DEG: f64 = 12.0;
 
-/// Run the default pipeline on the working image.
-pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints) -> Result<Found, DetectError> {
+/// Run the default pipeline on the working image. `tower_width` is the tower width expected
+/// from a tracker's distance, working px.
+pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints, tower_width: Option<f64>) -> Result<Found, DetectError> {
     let t = Instant::now();
     imgproc::spatial_gradient(small, &mut s.dx, &mut s.dy, 3, core::BORDER_DEFAULT)?;
     let high = adaptive_high(p, &s.dx, &s.dy, &mut s.hist)?;
@@ -99,7 +100,7 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
     };
     let gx = s.dx.data_typed::<i16>()?;
     let grad = GradX { data: gx, width: w as usize, height: h as usize };
-    let mut found = recognise(p, &segs, w, h, hints, &mut search, Some(&grad))?;
+    let mut found = recognise(p, &segs, w, h, hints, &mut search, Some(&grad), tower_width)?;
     log::trace!("spinner search {search_us:.0} us of geometry {:.0} us", us_since(t));
     found.line_count = line_count;
     found.edge_count = edge_count;
@@ -534,10 +535,11 @@ fn group_blades(p: &DefaultParams, segs: &[Segment], lines: &[usize], c: P2) -> 
 }
 
 /// Tower lines for a hub at `c`: near vertical after roll, top end not far below `c`,
-/// horizontally close, extending downward.
-fn tower_lines(p: &DefaultParams, segs: &[Segment], c: P2, h: f64, roll_deg: f64) -> Vec<usize> {
-    let max_below = p.tower_top_max_below_frac * h;
-    let max_dx = p.tower_max_dx_frac * h;
+/// horizontally close, extending downward. "Not far" scales with the spinner radius
+/// `spinner_r` (0: none) at close range, where the nacelle and tower grow past the fixed limits.
+fn tower_lines(p: &DefaultParams, segs: &[Segment], c: P2, h: f64, roll_deg: f64, spinner_r: f64) -> Vec<usize> {
+    let max_below = (p.tower_top_max_below_frac * h).max(p.tower_top_max_below_radii * spinner_r);
+    let max_dx = (p.tower_max_dx_frac * h).max(p.tower_max_dx_radii * spinner_r);
     (0..segs.len())
         .filter(|&i| {
             let s = &segs[i];
@@ -618,7 +620,9 @@ fn evaluate(
             }
         }
     }
-    let tower = tower_lines(p, segs, c, h, roll_deg);
+    // The fixed window here: a window grown with the spinner takes the edges of a blade
+    // pointing down for tower lines, and the blade is then dropped as "the tower itself".
+    let tower = tower_lines(p, segs, c, h, roll_deg, 0.0);
     // A "blade" pointing straight down along the tower is the tower itself.
     let down = 180.0 - roll_deg;
     let mut rejected = Vec::new();
@@ -729,6 +733,82 @@ fn refine(segs: &[Segment], blades: &[Blade], centre: P2) -> Option<P2> {
     Some([(a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det])
 }
 
+/// The tower of candidate `b` from both edges (see `tower.rs`), and the row of its top
+/// (working px). Seeds are the Hough tower lines, longest first; without a fit from them (and
+/// for a detected hub only) the gradient is scanned for edges below the hub. `tower_width`:
+/// the width expected from a tracker's distance; with it one edge alone places the tower.
+#[allow(clippy::too_many_arguments)]
+fn measure_tower(
+    p: &DefaultParams,
+    segs: &[Segment],
+    b: &Candidate,
+    g: &GradX<'_>,
+    tower_width: Option<f64>,
+    hub_distance_m: Option<f64>,
+    roll_deg: f64,
+    h: f64,
+    detected: bool,
+) -> Option<(crate::tower::TowerFit, f64)> {
+    // With a blade pointing down, the tower hides behind it and the band seen below the hub
+    // is that blade: its axis runs through the hub.
+    let down = 180.0 - roll_deg;
+    let near_down = |a: f64| geometry::ang_dist(a, down) <= p.tower_blade_down_tol_deg;
+    let blade_down = b.blades.iter().any(|bl| near_down(bl.angle_deg))
+        || b.blades.first().is_some_and(|bl| (0..3).any(|k| near_down(bl.angle_deg + 120.0 * k as f64)));
+    let is_blade = |f: &crate::tower::TowerFit| {
+        blade_down && f.axis.x_at_y(b.centre[1]).is_some_and(|x| (x - b.centre[0]).abs() <= p.tower_blade_axis_tol_frac * h)
+    };
+    // Widths a tower band may have: about the expected one, and about the spinner's radius
+    // (the tower top is 2.2 m wide, the spinner 3.2 m).
+    let mut window = (0.0, f64::INFINITY);
+    if let Some(e) = tower_width {
+        window = (e / p.tower_width_hint_tol, e * p.tower_width_hint_tol);
+    }
+    let spinner_r = b.spinner.map_or(0.0, |k| k[2]);
+    if spinner_r > 0.0 {
+        window = (window.0.max(p.tower_width_min_radii * spinner_r), window.1.min(p.tower_width_max_radii * spinner_r));
+    }
+    let both = |seeds: &[Segment]| seeds.iter().take(TOWER_SEEDS).filter_map(|s| fit_tower(p, g, s, window)).find(|f| !is_blade(f));
+    // Only one edge in sight (the other behind a blade pointing down): with the width expected
+    // from the tracker's distance, that edge places the axis. Tried last: a blade edge taken
+    // for the tower's would place it wrongly.
+    // Only with a blade pointing down, which explains the hidden edge and puts the tower
+    // body on the hub's side of the visible one (the blade hangs from the hub; elsewhere a
+    // lone edge may be the tower's near or far one), and only at close range: farther out the
+    // lone edge was as often the blade's as the tower's (rendered flights, 15–25 m). Only edges closer to vertical than a
+    // blade beside the tower usually is, most vertical first.
+    let one = |seeds: &[Segment]| {
+        let e = tower_width.filter(|_| blade_down && hub_distance_m.is_some_and(|d| d <= p.tower_one_edge_max_distance_m))?;
+        let tilt = |s: &Segment| geometry::roll_compensated_tilt_deg(s, roll_deg).abs();
+        let mut upright: Vec<&Segment> = seeds.iter().take(TOWER_SEEDS).filter(|s| tilt(s) <= p.tower_one_edge_max_tilt_deg).collect();
+        upright.sort_by(|x, y| tilt(x).total_cmp(&tilt(y)));
+        upright.into_iter().filter_map(|s| fit_tower_one_edge(g, s, e, b.centre[0])).find(|f| !is_blade(f))
+    };
+    // Seeds: the tower lines in a window grown with the spinner (at close range the tower
+    // top and edges lie beyond the fixed one).
+    let mut hough: Vec<Segment> = tower_lines(p, segs, b.centre, h, roll_deg, spinner_r).into_iter().map(|i| segs[i]).collect();
+    hough.sort_by(|x, y| y.length().total_cmp(&x.length()));
+    let hough_top = hough.iter().flat_map(|s| [s.a[1], s.b[1]]).fold(f64::INFINITY, f64::min);
+    if let Some(fit) = both(&hough) {
+        return Some((fit, hough_top));
+    }
+    if !detected {
+        return None;
+    }
+    // The tower top (under the nacelle) is ~1.1 spinner radii below the hub centre.
+    let top = b.centre[1] + (p.tower_scan_start_frac * h).max(p.tower_scan_start_radii * spinner_r);
+    let max_dx = (p.tower_max_dx_frac * h).max(p.tower_max_dx_radii * spinner_r);
+    let scanned = scan_tower_edges(g, b.centre[0], top, max_dx, p.tower_max_tilt_deg + roll_deg.abs(), p.tower_scan_min_salience, TOWER_SEEDS)
+        .into_iter()
+        .filter(|s| geometry::roll_compensated_tilt_deg(s, roll_deg).abs() <= p.tower_max_tilt_deg)
+        .collect::<Vec<_>>();
+    log::trace!("tower scan from row {top:.0}: seeds {scanned:?}");
+    both(&scanned)
+        .map(|fit| (fit, top))
+        .or_else(|| one(&hough).map(|fit| (fit, hough_top)))
+        .or_else(|| one(&scanned).map(|fit| (fit, top)))
+}
+
 /// Steps after the Hough transform, on plain data (working px).
 /// Ordering of candidates: higher confidence, then more blade support.
 fn better(a: &Candidate, b: &Candidate) -> bool {
@@ -762,7 +842,9 @@ fn spinner_candidate(
 /// Steps after the Hough transform, on plain data (working px) except for `search`, which
 /// looks for spinner circles in the image.
 /// `grad` (the horizontal gradient) measures the tower from both edges ([`crate::tower`]);
-/// without it the tower axis is the mean of the tower lines.
+/// without it the tower axis is the mean of the tower lines. `tower_width` (working px), the
+/// width expected from a tracker's distance, narrows the widths a tower band may have.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn recognise(
     p: &DefaultParams,
     segs: &[Segment],
@@ -771,6 +853,7 @@ pub(crate) fn recognise(
     hints: &Hints,
     search: &mut CircleFinder<'_>,
     grad: Option<&GradX<'_>>,
+    tower_width: Option<f64>,
 ) -> Result<Found, DetectError> {
     let roll_deg = match hints.roll_rad {
         Some(r) => r.to_degrees(),
@@ -871,41 +954,25 @@ pub(crate) fn recognise(
         found.detected = b.confidence >= p.min_confidence;
         found.hub = b.centre;
         found.search_circle = Some([b.centre[0], b.centre[1], p.support_end_dist_frac * h]);
-        if !b.tower.is_empty() {
-            let top = b
-                .tower
-                .iter()
-                .flat_map(|&i| [segs[i].a, segs[i].b])
-                .min_by(|x, y| x[1].total_cmp(&y[1]))
-                .unwrap_or(b.centre);
-            let row = top[1] + p.tower_width_below_top_frac * h;
-            match grad {
-                Some(g) => {
-                    // From the tower edges, longest first, find the band (see `tower.rs`).
-                    let mut seeds: Vec<Segment> = b.tower.iter().map(|&i| segs[i]).collect();
-                    seeds.sort_by(|x, y| y.length().total_cmp(&x.length()));
-                    // With a blade pointing down, the tower hides behind it and the band seen
-                    // below the hub is that blade: its axis runs through the hub.
-                    let down = 180.0 - roll_deg;
-                    let blade_down = b.blades.first().is_some_and(|bl| {
-                        (0..3).any(|k| geometry::ang_dist(bl.angle_deg + 120.0 * k as f64, down) <= p.tower_blade_down_tol_deg)
-                    });
-                    let is_blade = |f: &crate::tower::TowerFit| {
-                        blade_down && f.axis.x_at_y(b.centre[1]).is_some_and(|x| (x - b.centre[0]).abs() <= p.tower_blade_axis_tol_frac * h)
-                    };
-                    if let Some(fit) = seeds.iter().take(TOWER_SEEDS).filter_map(|s| fit_tower(p, g, s)).find(|f| !is_blade(f)) {
-                        found.tower_top = fit.axis.x_at_y(top[1]).map(|x| [x, top[1]]);
-                        found.tower_axis = Some(fit.axis);
-                        found.tower_width = fit.width_at(row).map(|wd| (wd, row));
-                    }
-                }
-                None => {
-                    let axis = crate::thesis::tower_axis(segs, &b.tower);
-                    found.tower_top = Some(axis.and_then(|a| a.x_at_y(top[1])).map_or(top, |x| [x, top[1]]));
-                    found.tower_axis = axis;
-                    found.tower_width = crate::thesis::tower_width_at(segs, &b.tower, row, 1.0).map(|wd| (wd, row));
+        match grad {
+            Some(g) => {
+                if let Some((fit, top_y)) = measure_tower(p, segs, &b, g, tower_width, hints.hub_distance_m, roll_deg, h, found.detected) {
+                    let row = top_y + p.tower_width_below_top_frac * h;
+                    found.tower_top = fit.axis.x_at_y(top_y).map(|x| [x, top_y]);
+                    found.tower_axis = Some(fit.axis);
+                    // A width that was assumed is no measurement of the distance.
+                    found.tower_width = if fit.one_edge { None } else { fit.width_at(row).map(|wd| (wd, row)) };
                 }
             }
+            None if !b.tower.is_empty() => {
+                let top = b.tower.iter().flat_map(|&i| [segs[i].a, segs[i].b]).min_by(|x, y| x[1].total_cmp(&y[1])).unwrap_or(b.centre);
+                let row = top[1] + p.tower_width_below_top_frac * h;
+                let axis = crate::thesis::tower_axis(segs, &b.tower);
+                found.tower_top = Some(axis.and_then(|a| a.x_at_y(top[1])).map_or(top, |x| [x, top[1]]));
+                found.tower_axis = axis;
+                found.tower_width = crate::thesis::tower_width_at(segs, &b.tower, row, 1.0).map(|wd| (wd, row));
+            }
+            None => {}
         }
     }
     found.lines = segs.iter().copied().zip(kinds).collect();
@@ -946,7 +1013,7 @@ mod tests {
         // Horizon split by the tower: two long pieces ending at the tower.
         segs.push(Segment::new([0.0, 125.0], [196.0, 125.0]));
         segs.push(Segment::new([204.0, 125.0], [479.0, 125.0]));
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), predicted_hub_px: None }, &mut no_circles, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, None).unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 3.0, "{:?}", f.hub);
         assert_eq!(f.blade_angles.len(), 3);
@@ -978,7 +1045,7 @@ mod tests {
         let p = DefaultParams::default();
         // Power-line like: several long near-parallel sagging wires.
         let segs: Vec<Segment> = (0..5).map(|k| Segment::new([0.0, 50.0 + 10.0 * k as f64], [479.0, 60.0 + 12.0 * k as f64])).collect();
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints::default(), &mut no_circles, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints::default(), &mut no_circles, None, None).unwrap();
         assert!(!f.detected);
     }
 
@@ -1025,7 +1092,7 @@ mod tests {
         for a in [40.0, 160.0, 280.0] {
             segs.extend(blade_edges(hub, a, 55.0, 120.0, 18.0, 9.0));
         }
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), predicted_hub_px: None }, &mut no_circles, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, None).unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 2.0, "{:?}", f.hub);
     }
@@ -1040,14 +1107,14 @@ mod tests {
         for a in [20.0, 140.0, 260.0] {
             segs.push(blade_edges(hub, a, 30.0, 100.0, 6.0, 2.0)[0]);
         }
-        let hints = Hints { roll_rad: Some(0.0), predicted_hub_px: None };
+        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
         let mut at_hub = |_: P2| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0]]) };
-        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None, None).unwrap();
         assert!(f.detected && f.circle.is_some(), "{f:?}");
         assert!(geometry::dist(f.hub, [hub[0] + 0.5, hub[1] - 0.5]) < 1e-9, "{:?}", f.hub);
         // A circle far from every candidate is ignored.
         let mut far_away = |_: P2| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[400.0, 240.0, 30.0]]) };
-        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut far_away, None).unwrap();
+        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut far_away, None, None).unwrap();
         assert!(g.circle.is_none(), "{g:?}");
     }
 

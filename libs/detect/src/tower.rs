@@ -12,7 +12,8 @@
 //! is their midline. Without a partner the axis is unknown and no tower is reported. A blade
 //! pointing down is also a band of two edges, but it narrows toward its tip, while the tower
 //! keeps its width in the image (its taper and the growing distance toward its base cancel
-//! roughly): bands narrowing downward are no tower.
+//! roughly): bands narrowing downward are no tower, nor are bands widening fast (from a tower
+//! edge to the edge of a blade crossing it).
 
 use crate::geometry::{Segment, P2};
 use crate::params::DefaultParams;
@@ -52,6 +53,9 @@ pub(crate) struct TowerFit {
     pub edges: [Segment; 2],
     /// The midline, from the top row of the fit down.
     pub axis: Segment,
+    /// Only one edge was seen; the other is placed at the expected width, so the width is no
+    /// measurement (see [`fit_tower_one_edge`]).
+    pub one_edge: bool,
 }
 
 impl TowerFit {
@@ -63,7 +67,8 @@ impl TowerFit {
 
 /// Finds the tower's second edge from `seed` (one tower edge, from its top down) and fits both;
 /// `None` when no edge of the opposite gradient sign runs beside it at a tower-like width.
-pub(crate) fn fit_tower(p: &DefaultParams, g: &GradX<'_>, seed: &Segment) -> Option<TowerFit> {
+/// `window` (working px, min and max) narrows the tower-like widths further.
+pub(crate) fn fit_tower(p: &DefaultParams, g: &GradX<'_>, seed: &Segment, window: (f64, f64)) -> Option<TowerFit> {
     let h = g.height as f64;
     let top = seed.a[1].min(seed.b[1]).max(0.0);
     let seed_bottom = seed.a[1].max(seed.b[1]);
@@ -89,8 +94,8 @@ pub(crate) fn fit_tower(p: &DefaultParams, g: &GradX<'_>, seed: &Segment) -> Opt
     // Partner: opposite sign, on either side, at an offset that may drift linearly from the
     // top row to the bottom one (the two edges of a tapered tower seen in perspective are not
     // parallel), accumulated over all rows.
-    let wmin = (p.tower_min_width_frac * h).ceil().max(1.0) as i64;
-    let wmax = (p.tower_max_width_frac * h).floor() as i64;
+    let wmin = (p.tower_min_width_frac * h).max(window.0).ceil().max(1.0) as i64;
+    let wmax = (p.tower_max_width_frac * h).min(window.1).floor() as i64;
     if wmax < wmin || rows.is_empty() {
         return None;
     }
@@ -142,11 +147,93 @@ pub(crate) fn fit_tower(p: &DefaultParams, g: &GradX<'_>, seed: &Segment) -> Opt
     let bottom = h - 1.0;
     let mid = |y: f64| Some((left.x_at_y(y)? + right.x_at_y(y)?) / 2.0);
     let axis = Segment::new([mid(top)?, top], [mid(bottom)?, bottom]);
-    let fit = TowerFit { edges: [left, right], axis };
+    let fit = TowerFit { edges: [left, right], axis, one_edge: false };
     // A blade pointing down is a band too, but narrows toward its tip; the tower does not.
     let taper = fit.width_at(bottom)? / fit.width_at(top)?.max(1e-9);
     log::trace!("tower band {:?}: width ratio bottom/top {taper:.2}", fit.axis);
-    (taper >= p.tower_min_width_ratio).then_some(fit)
+    (taper >= p.tower_min_width_ratio && taper <= p.tower_max_width_ratio).then_some(fit)
+}
+
+/// Tower edges straight from the gradient, for when the Hough transform has none: near a
+/// jagged, slightly tilted edge its walk along the accumulator direction leaves the edge
+/// within a few tens of pixels, the short piece is dropped with its votes, and a tower edge
+/// 80 px long in plain view goes missing. Here every near-vertical line from row `top` to the
+/// bottom whose top is within `max_dx` of `hub_x` is scored by its mean signed horizontal
+/// gradient (a tower edge keeps its sign all the way down); the `max_seeds` strongest local
+/// maxima, each at least `min_salience` times the mean score, are returned as segments (top
+/// first). `max_tilt_deg` bounds the tilt from the image vertical (roll included).
+pub(crate) fn scan_tower_edges(g: &GradX<'_>, hub_x: f64, top: f64, max_dx: f64, max_tilt_deg: f64, min_salience: f64, max_seeds: usize) -> Vec<Segment> {
+    let y0 = top.max(0.0).ceil() as i64;
+    let y1 = g.height as i64 - 1;
+    if y1 - y0 < EDGE_MIN_POINTS as i64 || max_dx <= 0.0 {
+        return Vec::new();
+    }
+    let n = (y1 - y0) as f64;
+    let max_drift = (max_tilt_deg.to_radians().tan() * n).round() as i64;
+    let x_lo = (hub_x - max_dx).floor().max(0.0) as i64;
+    let x_hi = (hub_x + max_dx).ceil().min(g.width as f64 - 1.0) as i64;
+    let (nx, nd) = ((x_hi - x_lo + 1).max(0) as usize, (2 * max_drift + 1) as usize);
+    let mut score = vec![0.0f64; nx * nd];
+    for (i, x) in (x_lo..=x_hi).enumerate() {
+        for (j, d) in (-max_drift..=max_drift).enumerate() {
+            let mut acc = 0.0;
+            for y in y0..y1 {
+                let xf = x as f64 + d as f64 * (y - y0) as f64 / n;
+                acc += g.at(xf.round() as i64, y);
+            }
+            score[i * nd + j] = (acc / n).abs();
+        }
+    }
+    let mean = score.iter().sum::<f64>() / score.len().max(1) as f64;
+    let mut peaks: Vec<(f64, usize, usize)> = Vec::new();
+    for i in 0..nx {
+        for j in 0..nd {
+            let v = score[i * nd + j];
+            if v < min_salience * mean || v <= 0.0 {
+                continue;
+            }
+            // A local maximum over neighbouring positions and drifts.
+            let is_max = (i.saturating_sub(2)..(i + 3).min(nx)).all(|a| (j.saturating_sub(2)..(j + 3).min(nd)).all(|b| score[a * nd + b] <= v));
+            if is_max {
+                peaks.push((v, i, j));
+            }
+        }
+    }
+    peaks.sort_by(|a, b| b.0.total_cmp(&a.0));
+    peaks
+        .into_iter()
+        .take(max_seeds)
+        .map(|(_, i, j)| {
+            let x = (x_lo + i as i64) as f64;
+            let d = j as f64 - max_drift as f64;
+            Segment::new([x, y0 as f64], [x + d, y1 as f64])
+        })
+        .collect()
+}
+
+/// The tower from one edge and its expected width (working px): for a tower whose other edge
+/// hides behind a blade pointing down, which at close range covers the tower's near half. The
+/// tower lies on the side of `seed` toward `hub_x` (the blade that hides it hangs from the
+/// hub). `None` when the edge cannot be fitted.
+pub(crate) fn fit_tower_one_edge(g: &GradX<'_>, seed: &Segment, width: f64, hub_x: f64) -> Option<TowerFit> {
+    let h = g.height as f64;
+    let top = seed.a[1].min(seed.b[1]).max(0.0);
+    let seed_bottom = seed.a[1].max(seed.b[1]);
+    let rows: Vec<i64> = (top.ceil() as i64..g.height as i64 - 1).collect();
+    let x0 = |y: i64| seed.x_at_y(y as f64);
+    let sum: f64 = rows.iter().filter(|&&y| (y as f64) <= seed_bottom).filter_map(|&y| Some(g.at(x0(y)?.round() as i64, y))).sum();
+    if sum == 0.0 || !(width > 0.0) {
+        return None;
+    }
+    let edge = fit_edge(g, &rows, x0, sum.signum())?;
+    let side = if hub_x >= seed.x_at_y(top)? { 1.0 } else { -1.0 };
+    let shift = |s: &Segment, dx: f64| Segment::new([s.a[0] + dx, s.a[1]], [s.b[0] + dx, s.b[1]]);
+    let other = shift(&edge, side * width);
+    let (left, right) = if side > 0.0 { (edge, other) } else { (other, edge) };
+    let bottom = h - 1.0;
+    let mid = |y: f64| Some((left.x_at_y(y)? + right.x_at_y(y)?) / 2.0);
+    let axis = Segment::new([mid(top)?, top], [mid(bottom)?, bottom]);
+    Some(TowerFit { edges: [left, right], axis, one_edge: true })
 }
 
 /// Sub-pixel points of an edge of gradient sign `sign` within ±`EDGE_SEARCH_PX` of `predict(y)`
@@ -206,6 +293,9 @@ fn fit_x_of_y(pts: &[P2]) -> Option<(f64, f64)> {
 mod tests {
     use super::*;
 
+    /// No limit on the band width beyond the parameters'.
+    const ANY_WIDTH: (f64, f64) = (0.0, f64::INFINITY);
+
     /// A bright vertical band (the tower) on a dark background, slightly tilted, with one
     /// blade-like bright stripe crossing its right edge on some rows.
     fn image(w: usize, h: usize, left: f64, width: f64, tilt: f64) -> Vec<u8> {
@@ -245,7 +335,7 @@ mod tests {
         let g = GradX { data: &gx, width: w, height: h };
         // Hough found only the left edge, from row 40 to 100.
         let seed = Segment::new([left + tilt * 40.0, 40.0], [left + tilt * 100.0, 100.0]);
-        let fit = fit_tower(&DefaultParams::default(), &g, &seed).expect("partner found");
+        let fit = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("partner found");
         for y in [40.0, 100.0, 150.0] {
             let axis = fit.axis.x_at_y(y).unwrap();
             let truth = left + tilt * y + width / 2.0;
@@ -255,12 +345,12 @@ mod tests {
         }
         // The same from the right edge.
         let seed = Segment::new([left + width + tilt * 100.0, 100.0], [left + width + tilt * 150.0, 150.0]);
-        let fit2 = fit_tower(&DefaultParams::default(), &g, &seed).expect("partner found from the right");
+        let fit2 = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("partner found from the right");
         assert!((fit2.axis.x_at_y(120.0).unwrap() - fit.axis.x_at_y(120.0).unwrap()).abs() < 0.6);
     }
 
     #[test]
-    fn a_band_narrowing_downward_is_a_blade_not_the_tower() {
+    fn bands_changing_width_fast_are_no_tower() {
         // Left edge vertical at x = 80, right edge from x = 116 at the top to x = 96 at the bottom.
         let (w, h) = (200, 160);
         let img: Vec<u8> = (0..w * h)
@@ -272,13 +362,22 @@ mod tests {
         let gx = sobel_x(&img, w, h);
         let g = GradX { data: &gx, width: w, height: h };
         let seed = Segment::new([80.0, 20.0], [80.0, 120.0]);
-        assert!(fit_tower(&DefaultParams::default(), &g, &seed).is_none());
-        // The same band widening downward is accepted.
+        assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_none());
+        // The same band widening downward that fast is a tower edge beside a blade's edge.
         let flipped: Vec<u8> = (0..w * h).map(|i| img[(h - 1 - i / w) * w + i % w]).collect();
         let gx = sobel_x(&flipped, w, h);
         let g = GradX { data: &gx, width: w, height: h };
-        let seed = Segment::new([80.0, 20.0], [80.0, 120.0]);
-        assert!(fit_tower(&DefaultParams::default(), &g, &seed).is_some());
+        assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_none());
+        // A band widening as a tapered tower does (30 → 33 px) is accepted.
+        let tower: Vec<u8> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64);
+                if x > 80.0 && x < 110.0 + 3.0 * y / h as f64 { 200 } else { 40 }
+            })
+            .collect();
+        let gx = sobel_x(&tower, w, h);
+        let g = GradX { data: &gx, width: w, height: h };
+        assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_some());
     }
 
     #[test]
@@ -289,6 +388,79 @@ mod tests {
         let gx = sobel_x(&img, w, h);
         let g = GradX { data: &gx, width: w, height: h };
         let seed = Segment::new([90.0, 40.0], [90.0, 120.0]);
-        assert!(fit_tower(&DefaultParams::default(), &g, &seed).is_none());
+        assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_none());
+    }
+
+    #[test]
+    fn a_width_window_keeps_a_blade_beside_the_tower_out_of_the_band() {
+        // Tower x 80..100 on a dark background; a blade pointing down in front of it covers
+        // x 96..130 on every row. The blade's outer edge is the strongest edge around.
+        let (w, h) = (200, 240); // widths up to 0.25 h = 60 px
+        let scene = |tower: u8, blade: u8| -> Vec<u8> {
+            (0..w * h)
+                .map(|i| {
+                    let x = (i % w) as f64 + 0.5;
+                    if x > 96.0 && x < 130.0 { blade } else if x > 80.0 && x < 100.0 { tower } else { 0 }
+                })
+                .collect()
+        };
+        let seed = Segment::new([80.0, 20.0], [80.0, 120.0]);
+        let p = DefaultParams::default();
+        // A blade darker than the tower: the tower's visible right boundary (x 96) is an edge
+        // of the opposite sign, but weaker than the blade's outer one.
+        let gx = sobel_x(&scene(220, 150), w, h);
+        let g = GradX { data: &gx, width: w, height: h };
+        let wide = fit_tower(&p, &g, &seed, ANY_WIDTH).expect("some band");
+        assert!((wide.width_at(60.0).unwrap() - 50.0).abs() < 1.5, "{:?}", wide.width_at(60.0));
+        // Expecting ~18 px (from a tracker's distance), the partner is the boundary at 96.
+        let fit = fit_tower(&p, &g, &seed, (12.0, 27.0)).expect("tower band");
+        assert!((fit.width_at(60.0).unwrap() - 16.0).abs() < 1.5, "{:?}", fit.width_at(60.0));
+        // A blade brighter than the tower leaves no opposite edge at a tower-like width: no
+        // tower rather than the wrong band.
+        let gx = sobel_x(&scene(120, 200), w, h);
+        let g = GradX { data: &gx, width: w, height: h };
+        assert!(fit_tower(&p, &g, &seed, ANY_WIDTH).is_some());
+        assert!(fit_tower(&p, &g, &seed, (12.0, 27.0)).is_none());
+    }
+
+    #[test]
+    fn one_edge_and_the_expected_width_place_the_axis_toward_the_hub() {
+        // Tower x 80..100, its right half hidden behind a blade of the same shade (no edge).
+        let (w, h) = (200, 160);
+        let img: Vec<u8> = (0..w * h).map(|i| if (i % w) as f64 + 0.5 > 80.0 && (i % w) < 140 { 200 } else { 40 }).collect();
+        let gx = sobel_x(&img, w, h);
+        let g = GradX { data: &gx, width: w, height: h };
+        let seed = Segment::new([80.0, 20.0], [80.0, 120.0]);
+        let fit = fit_tower_one_edge(&g, &seed, 20.0, 120.0).expect("edge fitted");
+        assert!(fit.one_edge);
+        assert!((fit.axis.x_at_y(60.0).unwrap() - 90.0).abs() < 1.0, "{:?}", fit.axis);
+        // With the hub on the other side the tower is placed there.
+        let fit = fit_tower_one_edge(&g, &seed, 20.0, 40.0).unwrap();
+        assert!((fit.axis.x_at_y(60.0).unwrap() - 70.0).abs() < 1.0, "{:?}", fit.axis);
+    }
+
+    #[test]
+    fn scan_finds_a_jagged_tilted_edge_hough_would_miss() {
+        // A bright tower from x = 100 at row 60 drifting to x = 104 at the bottom (3°), in
+        // whole-pixel steps as a rasterised edge is, beside a dim uniform background.
+        let (w, h) = (200, 160);
+        let img: Vec<u8> = (0..w * h)
+            .map(|i| {
+                let (x, y): (usize, usize) = (i % w, i / w);
+                let edge = 100 + (y.saturating_sub(60)) * 4 / 100;
+                if x >= edge && x < edge + 20 { 180 } else { 50 }
+            })
+            .collect();
+        let gx = sobel_x(&img, w, h);
+        let g = GradX { data: &gx, width: w, height: h };
+        let seeds = scan_tower_edges(&g, 110.0, 60.0, 40.0, 8.0, 3.0, 4);
+        assert!(seeds.len() >= 2, "{seeds:?}");
+        // Both tower edges are found, with their drift.
+        let near = |x_top: f64| seeds.iter().any(|s| (s.a[0] - x_top).abs() <= 1.0 && ((s.b[0] - s.a[0]) - 4.0).abs() <= 1.5);
+        assert!(near(100.0) && near(120.0), "{seeds:?}");
+        // Nothing but texture: no seeds.
+        let flat = vec![0i16; w * h];
+        let g = GradX { data: &flat, width: w, height: h };
+        assert!(scan_tower_edges(&g, 110.0, 60.0, 40.0, 8.0, 3.0, 4).is_empty());
     }
 }

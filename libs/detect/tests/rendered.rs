@@ -18,7 +18,7 @@ fn run(mode: Mode, pose: CameraPose) -> (hubtrack_detect::Output, hubtrack_rende
     let truth = r.render(&sunlit_sea(), &pose, &mut buf).unwrap();
     let mut det = Detector::new(DetectConfig { mode, ..DetectConfig::default() }).unwrap();
     let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
-    (det.detect(&view, &Hints { roll_rad: Some(0.0), predicted_hub_px: None }).unwrap(), truth)
+    (det.detect(&view, &Hints { roll_rad: Some(0.0), ..Hints::default() }).unwrap(), truth)
 }
 
 #[test]

@@ -252,11 +252,15 @@ pub struct YawConfig {
     /// L: horizontal offset from the tower axis to the rotor centre along the rotor axis, m
     /// (eq. 7.14). Default 4.2 (modelled turbine; the thesis assumed 5 m hub-to-tower-top).
     pub hub_tower_offset_m: f64,
-    /// Standard deviation of the hub–tower gap, px at the reference width. Measured on rendered
-    /// approach frames with the two-edge tower fit: median |error| ≈ 5 px at 960 px width, i.e.
-    /// 2.5 px here, with heavy tails (the hub point wanders between spinner circle and blade
-    /// crossing; a wrong band now and then): 5 px keeps single outliers from steering the yaw.
-    pub gap_std_px: f64,
+    /// Standard deviation of the hub–tower gap when the hub comes from the spinner circle, px
+    /// at the reference width, (0, 1e4]. Measured in rendered flights (960 px wide): the circle centre is
+    /// within a median 1.8 px of the true hub and the two-edge tower axis within 3.4 px, so
+    /// ~2.5 px here with tails.
+    pub gap_std_spinner_px: f64,
+    /// ... when the hub comes from blade lines only: their crossing wanders a median 14 px
+    /// (960 px wide) from the hub at 15–25 m (~7 px here), heavy-tailed. 5 px, as tuned in
+    /// flights before the split; higher values slowed the yaw at long range (all hubs from lines).
+    pub gap_std_lines_px: f64,
     /// Standard deviation of each detected blade angle, degrees.
     pub blade_angle_std_deg: f64,
     /// Number of blades of the rotor (equally spaced).
@@ -290,7 +294,8 @@ impl Default for YawConfig {
     fn default() -> Self {
         YawConfig {
             hub_tower_offset_m: 4.2,
-            gap_std_px: 5.0,
+            gap_std_spinner_px: 3.0,
+            gap_std_lines_px: 5.0,
             blade_angle_std_deg: 2.0,
             rotor_blades: 3,
             use_blade_skew: false,
@@ -375,7 +380,8 @@ impl TrackConfig {
         let c = Check::new("track.yaw");
         let y = &self.yaw;
         c.open_closed("hub_tower_offset_m", y.hub_tower_offset_m, 0.0, MAX_SIZE_M)?;
-        c.open_closed("gap_std_px", y.gap_std_px, 0.0, MAX_PX)?;
+        c.open_closed("gap_std_spinner_px", y.gap_std_spinner_px, 0.0, MAX_PX)?;
+        c.open_closed("gap_std_lines_px", y.gap_std_lines_px, 0.0, MAX_PX)?;
         c.open_closed("blade_angle_std_deg", y.blade_angle_std_deg, 0.0, 90.0)?;
         c.count("rotor_blades", y.rotor_blades, 2, hubtrack_types::MAX_BLADES as u32)?;
         c.count("min_blades", y.min_blades, 2, y.rotor_blades)?;

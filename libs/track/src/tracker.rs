@@ -366,7 +366,7 @@ impl Core {
         let yaw = tower.and_then(|td| {
             yaw_from_gap(
                 det.hub_tower_gap_px,
-                y.gap_std_px * self.scale(),
+                y.gap_std_lines_px * self.scale(),
                 td,
                 self.camera().f_px,
                 y.hub_tower_offset_m,
@@ -422,7 +422,9 @@ impl Core {
             Some(Estimate { value: d.value + offset * psi.cos(), std: d.std })
         });
         let gap = if det.tower_found && det.detected && !tower_rejected {
-            tower_depth.and_then(|td| yaw_from_gap(det.hub_tower_gap_px, yc.gap_std_px * s, td, f, offset, max_yaw))
+            // How well the hub end of the gap is known depends on how the hub was found.
+            let gap_std = if det.circle_found { yc.gap_std_spinner_px } else { yc.gap_std_lines_px };
+            tower_depth.and_then(|td| yaw_from_gap(det.hub_tower_gap_px, gap_std * s, td, f, offset, max_yaw))
         } else {
             None
         };

@@ -11,15 +11,12 @@ use hubtrack_runtime::stage::Stage;
 use hubtrack_types::services::{DETECTIONS, OVERLAY, TRACK, VEHICLE};
 use hubtrack_types::time::monotonic_ns;
 use hubtrack_types::{
-    DetectOverlay, Detection, OverlayKind, OverlaySegment, Stamps, TrackMode, TrackState, VehicleState, MAX_OVERLAY_LINES,
+    DetectOverlay, Detection, OverlayKind, OverlaySegment, Stamps, TrackState, VehicleState, MAX_OVERLAY_LINES,
 };
 use std::time::Duration;
 
 /// Longest sleep between checks for shutdown when no frame comes.
 const FRAME_WAIT: Duration = Duration::from_millis(50);
-/// The tracker's hub is used as a search hint only when its state is at most this much older
-/// than the frame.
-const MAX_HINT_AGE_NS: u64 = 500_000_000;
 /// A vehicle attitude further than this from the frame's capture time is not used for roll
 /// compensation (both on the pipeline clock, which is the simulator's clock in a simulation).
 const MAX_ATTITUDE_AGE_NS: u64 = 200_000_000;
@@ -73,8 +70,8 @@ fn run() -> anyhow::Result<()> {
         let roll_rad = last_vehicle
             .filter(|v| v.attitude_valid && header.capture_ns.abs_diff(v.recv_ns) < MAX_ATTITUDE_AGE_NS)
             .map(|v| v.roll_rad);
-        let predicted_hub_px = last_track.as_ref().and_then(|t| predicted_hub(t, &header));
-        let output = match detector.detect(&image, &Hints { roll_rad, predicted_hub_px }) {
+        let hints = last_track.as_ref().map_or_else(Hints::default, |t| Hints::from_track(t, header.width, header.height, header.capture_ns));
+        let output = match detector.detect(&image, &Hints { roll_rad, ..hints }) {
             Ok(o) => o,
             Err(e) => {
                 log::error!("frame {}: {e}", header.seq);
@@ -115,19 +112,4 @@ fn run() -> anyhow::Result<()> {
     status.publish_now();
     log::info!("processed {} frames, skipped {}", status.status.outputs, frames.skipped);
     Ok(())
-}
-
-/// Where the track puts the hub at this frame's capture time (full-resolution px), if the track
-/// is live, recent and of the same image size.
-fn predicted_hub(t: &TrackState, frame: &hubtrack_types::FrameHeader) -> Option<[f64; 2]> {
-    let live = matches!(t.mode, TrackMode::Tracking | TrackMode::Coasting);
-    let same_size = (t.image_width, t.image_height) == (frame.width, frame.height);
-    let age_ns = frame.capture_ns.checked_sub(t.stamps.capture_ns)?;
-    if !live || !same_size || age_ns > MAX_HINT_AGE_NS {
-        return None;
-    }
-    let dt = age_ns as f64 / 1e9;
-    let p = [t.hub_px[0] + t.hub_velocity_px_s[0] * dt, t.hub_px[1] + t.hub_velocity_px_s[1] * dt];
-    (p.iter().all(|v| v.is_finite()) && p[0] >= 0.0 && p[1] >= 0.0 && p[0] < f64::from(frame.width) && p[1] < f64::from(frame.height))
-        .then_some(p)
 }

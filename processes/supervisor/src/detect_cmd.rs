@@ -42,9 +42,39 @@ pub struct DetectArgs {
     /// Write an overlay PNG per image into this folder.
     #[arg(long, value_name = "DIR")]
     pub annotate: Option<PathBuf>,
+    /// What the detect stage gets from the tracker, for looking at one frame as the pipeline
+    /// saw it: the predicted hub, full-resolution px.
+    #[arg(long, value_name = "X,Y", value_parser = parse_point)]
+    pub hint_hub: Option<[f64; 2]>,
+    /// ... and the tracker's distance to the hub, metres.
+    #[arg(long, value_name = "M")]
+    pub hint_distance: Option<f64>,
+    /// ... and the camera roll from the IMU, degrees (clockwise positive).
+    #[arg(long, value_name = "DEG")]
+    pub hint_roll: Option<f64>,
     /// Image files or folders of images (taken in file-name order).
     #[arg(required = true, value_name = "PATH")]
     pub paths: Vec<PathBuf>,
+}
+
+/// Parses `X,Y` (two finite numbers).
+fn parse_point(s: &str) -> Result<[f64; 2], String> {
+    let v: Vec<f64> = s.split(',').map(|p| p.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|e| format!("{s:?}: {e}"))?;
+    match v[..] {
+        [x, y] if x.is_finite() && y.is_finite() => Ok([x, y]),
+        _ => Err(format!("{s:?}: expected X,Y")),
+    }
+}
+
+impl DetectArgs {
+    /// The hints given on the command line (none by default: photos have no tracker).
+    fn hints(&self) -> Hints {
+        Hints {
+            roll_rad: self.hint_roll.map(f64::to_radians),
+            predicted_hub_px: self.hint_hub,
+            hub_distance_m: self.hint_distance,
+        }
+    }
 }
 
 /// Expands folders into their images (name order); files stay as given.
@@ -92,8 +122,9 @@ pub fn run(args: DetectArgs) -> anyhow::Result<()> {
     if let Some(dir) = &args.annotate {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
+    let hints = args.hints();
     for path in expand(&args.paths) {
-        let line = match detect_one(&mut det, &path, args.annotate.as_deref()) {
+        let line = match detect_one(&mut det, &path, args.annotate.as_deref(), &hints) {
             Ok(v) => v,
             Err(e) => json!({"path": path, "error": format!("{e:#}")}),
         };
@@ -102,14 +133,14 @@ pub fn run(args: DetectArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn detect_one(det: &mut Detector, path: &Path, annotate: Option<&Path>) -> anyhow::Result<serde_json::Value> {
+fn detect_one(det: &mut Detector, path: &Path, annotate: Option<&Path>, hints: &Hints) -> anyhow::Result<serde_json::Value> {
     if !path.exists() {
         anyhow::bail!("no such file");
     }
     let mat = read_image(path)?;
     let view = view_of(&mat)?;
     let t = Instant::now();
-    let out = det.detect(&view, &Hints::default())?;
+    let out = det.detect(&view, hints)?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     if let Some(dir) = annotate {
         let stem = path.file_stem().map_or("image".into(), |s| s.to_string_lossy().into_owned());

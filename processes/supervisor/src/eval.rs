@@ -138,7 +138,7 @@ fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::D
                 (false, true, Some(hub), Some(nose)) => Truth::Visible { axis: hub, hub: nose },
                 _ => Truth::Hidden,
             };
-            let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), predicted_hub_px: None };
+            let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() };
             let hubs = detect_all(detectors, &view, &hints)?;
             let outcomes: Vec<_> = hubs.iter().map(|h| score(&t, *h, view.height as f64)).collect();
             add(&mut table, &case.categories, &t, &outcomes);

@@ -141,7 +141,7 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64) -> anyhow::Res
             let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &pixels };
             let capture_ns = (i as f64 / FLIGHT_FPS * 1e9).round() as u64;
             let mut det: Detection = detector
-                .detect(&view, &Hints { roll_rad: Some(fr.pose.roll_deg.to_radians()), predicted_hub_px: None })?
+                .detect(&view, &Hints { roll_rad: Some(fr.pose.roll_deg.to_radians()), ..Hints::default() })?
                 .detection;
             det.stamps.seq = i as u64;
             det.stamps.capture_ns = capture_ns;

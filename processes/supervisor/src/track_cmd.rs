@@ -42,13 +42,16 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     let config = args.config.load()?;
     let mut det = detector(&config.detect, args.mode.map(Into::into))?;
     let mut tracker = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
+    // As in the live pipeline, the tracker's newest state focuses the detector on the next frame.
+    let mut last: Option<hubtrack_types::TrackState> = None;
     for (i, path) in expand(&args.paths).into_iter().enumerate() {
         let capture_ns = (i as f64 / args.fps * 1e9).round() as u64;
         // An unreadable frame is a frame without detection: the track predicts through it.
         let (detection, error) = match read_image(&path) {
             Ok(mat) => {
                 let view = view_of(&mat)?;
-                let mut d = det.detect(&view, &Hints::default())?.detection;
+                let hints = last.as_ref().map_or_else(Hints::default, |t| Hints::from_track(t, view.width, view.height, capture_ns));
+                let mut d = det.detect(&view, &hints)?.detection;
                 d.stamps.seq = i as u64;
                 d.stamps.capture_ns = capture_ns;
                 (d, None)
@@ -61,6 +64,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
             }
         };
         let t = tracker.update(&detection, None);
+        last = Some(t);
         let has_track = !matches!(t.mode, TrackMode::Acquiring | TrackMode::Lost) || detection.detected;
         let mut line = json!({
             "path": path, "detected": detection.detected,
