@@ -113,15 +113,21 @@ pub(crate) fn fit_tower(p: &DefaultParams, g: &GradX<'_>, seed: &Segment, window
     }
     let (y_top, y_bot) = (rows[0] as f64, *rows.last()? as f64);
     let frac = |y: i64| if y_bot > y_top { (y as f64 - y_top) / (y_bot - y_top) } else { 0.0 };
+    // Rows are consecutive: row k is at fraction k / last of the way down, and the offset there
+    // is o_top + round(drift · k / last). Those steps are tabulated once per drift, so the
+    // innermost loop (offsets × drifts × rows) is additions only.
+    let last = rows.len() as i64 - 1;
+    let max_drift = 2 + wmax / 4;
+    let steps: Vec<Vec<i64>> = (-max_drift..=max_drift).map(|d| round_steps(d, last)).collect();
     let mut best: Option<(f64, i64, i64)> = None; // (mean response, signed offsets at top and bottom)
     for side in [-1i64, 1] {
         for o_top in wmin..=wmax {
             let drift = 2 + o_top / 4;
             for o_bot in (o_top - drift).max(wmin)..=(o_top + drift).min(reach) {
+                let step = &steps[(o_bot - o_top + max_drift) as usize];
                 let mut acc = 0.0;
-                for (k, &y) in rows.iter().enumerate() {
-                    let o = o_top as f64 + (o_bot - o_top) as f64 * frac(y);
-                    acc += resp[k * span + (side * o.round() as i64 + reach) as usize];
+                for (k, st) in step.iter().enumerate() {
+                    acc += resp[k * span + (side * (o_top + st) + reach) as usize];
                 }
                 let mean = acc / rows.len() as f64;
                 if best.is_none_or(|(b, _, _)| mean > b) {
@@ -174,13 +180,11 @@ pub(crate) fn scan_tower_edges(g: &GradX<'_>, hub_x: f64, top: f64, max_dx: f64,
     let x_hi = (hub_x + max_dx).ceil().min(g.width as f64 - 1.0) as i64;
     let (nx, nd) = ((x_hi - x_lo + 1).max(0) as usize, (2 * max_drift + 1) as usize);
     let mut score = vec![0.0f64; nx * nd];
+    // Column shift of each row for each drift, tabulated once (additions only in the loop).
+    let steps: Vec<Vec<i64>> = (-max_drift..=max_drift).map(|d| round_steps(d, y1 - y0)).collect();
     for (i, x) in (x_lo..=x_hi).enumerate() {
-        for (j, d) in (-max_drift..=max_drift).enumerate() {
-            let mut acc = 0.0;
-            for y in y0..y1 {
-                let xf = x as f64 + d as f64 * (y - y0) as f64 / n;
-                acc += g.at(xf.round() as i64, y);
-            }
+        for (j, step) in steps.iter().enumerate() {
+            let acc: f64 = (y0..y1).zip(step).map(|(y, st)| g.at(x + st, y)).sum();
             score[i * nd + j] = (acc / n).abs();
         }
     }
@@ -270,6 +274,16 @@ fn fit_edge(g: &GradX<'_>, rows: &[i64], predict: impl Fn(i64) -> Option<f64>, s
     let (a, b) = fit_x_of_y(&kept)?;
     let (y0, y1) = (kept.first()?[1], kept.last()?[1]);
     Some(Segment::new([a + b * y0, y0], [a + b * y1, y1]))
+}
+
+/// `floor(delta · k / last + 0.5)` for k = 0 ..= last (all 0 when `last` is 0): the rounded
+/// shift of row k along a line drifting by `delta` over `last` rows. Added to a positive start,
+/// it rounds as `f64::round` does.
+fn round_steps(delta: i64, last: i64) -> Vec<i64> {
+    if last <= 0 {
+        return vec![0; (last + 1).max(1) as usize];
+    }
+    (0..=last).map(|k| (2 * delta * k + last).div_euclid(2 * last)).collect()
 }
 
 /// Least-squares `x = a + b·y`; `None` with fewer than `EDGE_MIN_POINTS` points or no spread in y.
@@ -462,5 +476,19 @@ mod tests {
         let flat = vec![0i16; w * h];
         let g = GradX { data: &flat, width: w, height: h };
         assert!(scan_tower_edges(&g, 110.0, 60.0, 40.0, 8.0, 3.0, 4).is_empty());
+    }
+
+    #[test]
+    fn tabulated_steps_round_as_f64_round_from_a_positive_start() {
+        for last in 0..40i64 {
+            for delta in -20..=20i64 {
+                let steps = round_steps(delta, last);
+                assert_eq!(steps.len() as i64, last + 1);
+                for (k, st) in steps.iter().enumerate() {
+                    let exact = if last > 0 { 30.0 + delta as f64 * k as f64 / last as f64 } else { 30.0 };
+                    assert_eq!(30 + st, exact.round() as i64, "delta {delta} k {k} last {last}");
+                }
+            }
+        }
     }
 }
