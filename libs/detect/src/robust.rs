@@ -770,13 +770,11 @@ fn measure_tower(
     }
     let both = |seeds: &[Segment]| seeds.iter().take(TOWER_SEEDS).filter_map(|s| fit_tower(p, g, s, window)).find(|f| !is_blade(f));
     // Only one edge in sight (the other behind a blade pointing down): with the width expected
-    // from the tracker's distance, that edge places the axis. Tried last: a blade edge taken
-    // for the tower's would place it wrongly.
-    // Only with a blade pointing down, which explains the hidden edge and puts the tower
-    // body on the hub's side of the visible one (the blade hangs from the hub; elsewhere a
-    // lone edge may be the tower's near or far one), and only at close range: farther out the
-    // lone edge was as often the blade's as the tower's (rendered flights, 15–25 m). Only edges closer to vertical than a
-    // blade beside the tower usually is, most vertical first.
+    // from the tracker's distance, that edge places the axis on the hub's side of it (the
+    // blade hangs from the hub; without one a lone edge may be the tower's near or far one).
+    // Tried last, only at close range (farther out the lone edge was as often the blade's:
+    // rendered flights, 15–25 m), and only with edges more upright than a blade's beside the
+    // tower, most upright first.
     let one = |seeds: &[Segment]| {
         let e = tower_width.filter(|_| blade_down && hub_distance_m.is_some_and(|d| d <= p.tower_one_edge_max_distance_m))?;
         let tilt = |s: &Segment| geometry::roll_compensated_tilt_deg(s, roll_deg).abs();
