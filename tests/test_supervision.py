@@ -29,13 +29,26 @@ def running(runner, name, not_pid=None):
     return None
 
 
+def nice(pid):
+    """A process's niceness, from /proc (field 19 of stat; the name may contain spaces)."""
+    stat = open(f"/proc/{pid}/stat").read()
+    return int(stat[stat.rindex(")") + 2:].split()[16])
+
+
 def test_killed_and_hung_stages_come_back_and_camera_never_stops(runner, tmp_path):
     rec = tmp_path / "run.mcap"
-    run = runner.start("hubtrack", "run", "--record", rec, "--duration", "25", *ALL, *USB, label="run")
+    run = runner.start("hubtrack", "run", "--record", rec, "--duration", "25", *ALL, *USB,
+                       "--set", "run.nice.track=3", label="run")
     wait_until(lambda: all(running(runner, n) for n in ("capture", "detect", "track", "control", "recorder")),
                timeout=30, what="all stages running")
     witness = runner.start("hubtrack", "tap", label="witness")
     capture_pid = status(runner)["capture"]["pid"]
+    # [run.nice]: the recorder's default +10, track +3 from the override, the rest at the
+    # supervisor's own niceness.
+    base = nice(run.pid)
+    expect = {"capture": 0, "detect": 0, "control": 0, "track": 3, "recorder": 10}
+    got = {n: nice(status(runner)[n]["pid"]) - base for n in expect}
+    assert got == expect, got
     assert runner.run("hubtrack", "status").returncode == 0
 
     recovered = {}
@@ -53,6 +66,7 @@ def test_killed_and_hung_stages_come_back_and_camera_never_stops(runner, tmp_pat
     wait_until(lambda: running(runner, "detect", not_pid=old), timeout=15, interval=0.05, what="hung detect replaced")
     hung_recovered = time.monotonic() - t0
     final = status(runner)
+    assert nice(final["recorder"]["pid"]) - base == 10, "a restarted stage runs at its niceness again"
     assert final["capture"]["pid"] == capture_pid and final["capture"]["restarts"] == 0, "the camera kept its process"
     assert final["detect"]["restarts"] == 2 and final["track"]["restarts"] == 1 and final["recorder"]["restarts"] == 1
     assert final["control"]["restarts"] == 1

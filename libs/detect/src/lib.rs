@@ -15,6 +15,7 @@
 pub mod geometry;
 pub mod params;
 
+mod hough;
 mod image;
 mod robust;
 mod spinner;
@@ -24,7 +25,6 @@ mod tower;
 use std::time::Instant;
 
 use opencv::core::{Mat, Vec4i, Vector};
-use opencv::imgproc;
 
 use geometry::{Segment, P2};
 use hubtrack_types::{Detection, PixelFormat, TrackMode, TrackState, MAX_BLADES};
@@ -166,6 +166,7 @@ pub(crate) struct Scratch {
     pub segments: Vec<Segment>,
     pub hist: Vec<u32>,
     pub edge_points: Vec<spinner::EdgePoint>,
+    pub hough: hough::OrientedHough,
 }
 
 /// What a pipeline found, in working-image px.
@@ -194,24 +195,6 @@ pub(crate) struct Found {
 /// Microseconds since `t`.
 pub(crate) fn us_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e6
-}
-
-/// Run HoughLinesP on `edges` into `out` (working px).
-pub(crate) fn hough_segments(
-    edges: &Mat,
-    lines: &mut Vector<Vec4i>,
-    out: &mut Vec<Segment>,
-    rho: f64,
-    theta_deg: f64,
-    threshold: i32,
-    min_len: f64,
-    max_gap: f64,
-) -> Result<(), DetectError> {
-    lines.clear();
-    imgproc::hough_lines_p(edges, lines, rho, theta_deg.to_radians(), threshold.max(1), min_len, max_gap)?;
-    out.clear();
-    out.extend(lines.iter().map(|l| Segment::new([l[0] as f64, l[1] as f64], [l[2] as f64, l[3] as f64])));
-    Ok(())
 }
 
 /// The hub detector; owns all reusable buffers.

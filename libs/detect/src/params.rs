@@ -178,6 +178,13 @@ pub struct DefaultParams {
     pub hough_min_length_frac: f64,
     /// Maximum gap inside one Hough segment, fraction of image height.
     pub hough_max_gap_frac: f64,
+    /// Each edge pixel votes only for line normals within this angle of its own gradient
+    /// direction, degrees (`hough.rs`): a straight edge's gradients are its normal, so its
+    /// votes are kept while the cost drops from 180 to 2·tol + 1 bins per pixel and texture
+    /// stops voting for lines it is not on. Sobel directions on a clean 1-px edge scatter by
+    /// a few degrees, on a jagged or blurred one by up to ~8°. 90 = every angle, as OpenCV's
+    /// `HoughLinesP`.
+    pub hough_orientation_tol_deg: f64,
     /// At most this many segments (the longest) enter the geometry, bounding its O(n²) steps.
     pub max_segments: usize,
     /// Collinear merge: maximum angle between two segments, degrees.
@@ -409,6 +416,7 @@ impl Default for DefaultParams {
             hough_threshold_frac: 0.1,
             hough_min_length_frac: 0.08,
             hough_max_gap_frac: 0.02,
+            hough_orientation_tol_deg: 10.0,
             max_segments: 200,
             merge_angle_deg: 3.0,
             merge_offset_px: 2.0,
@@ -557,6 +565,7 @@ impl DefaultParams {
         c.closed("hough_threshold_frac", self.hough_threshold_frac, 0.001, 1.0)?;
         c.closed("hough_min_length_frac", self.hough_min_length_frac, 0.001, 1.0)?;
         c.closed("hough_max_gap_frac", self.hough_max_gap_frac, 0.0, 1.0)?;
+        c.closed("hough_orientation_tol_deg", self.hough_orientation_tol_deg, 0.0, 90.0)?;
         c.closed("max_segments", self.max_segments as f64, 2.0, 10_000.0)?;
         c.closed("merge_angle_deg", self.merge_angle_deg, 0.0, 30.0)?;
         c.closed("merge_offset_px", self.merge_offset_px, 0.0, 50.0)?;

@@ -8,7 +8,8 @@
 //!
 //! 1. Sobel gradients → Canny thresholds from a percentile of the gradient magnitude (contrast
 //!    adaptive) → Canny on the same gradients (no second Sobel).
-//! 2. HoughLinesP with lengths relative to the image height; collinear pieces merged.
+//! 2. Probabilistic Hough with lengths relative to the image height, each edge pixel voting only
+//!    for line directions its gradient allows (`hough.rs`); collinear pieces merged.
 //! 3. Roll: the hint, or the roll in ±`roll_search_deg` that makes most line length vertical.
 //! 4. Horizon candidates (long, near-horizontal after roll) never count as blades.
 //! 5. Proposals: intersections of pairs of long, clearly non-parallel segments lying just beyond
@@ -24,7 +25,8 @@
 //!    proposals and axes may end further from the hub (blades start at the spinner rim).
 //! 9. Spinner step: around the best few candidates, circles in the Canny edges (gradient vote,
 //!    rim coverage, circle fit; `spinner.rs`); a circle with two blades starting at its rim
-//!    becomes a candidate centred on it, with a confidence bonus.
+//!    becomes a candidate centred on it, with a confidence bonus. Around the tracker's predicted
+//!    hub the search runs on a second thread from step 2 on.
 //! 10. Penalties: a long line passing through a candidate (tower, mast) lowers its confidence;
 //!    a supporting line that continues collinearly beyond the candidate (horizon or field border
 //!    hidden by the turbine) is no blade. Best candidate by confidence, then support.
@@ -39,7 +41,8 @@ use crate::geometry::{self, Segment, P2};
 use crate::params::DefaultParams;
 use crate::spinner::{find_circles, CircleSearch, EdgePoint};
 use crate::tower::{fit_tower, fit_tower_one_edge, scan_tower_edges, GradX};
-use crate::{hough_segments, us_since, DetectError, Found, Hints, LineKind, Scratch};
+use crate::hough::HoughSettings;
+use crate::{us_since, DetectError, Found, Hints, LineKind, Scratch};
 
 /// Number of bins of the gradient-magnitude histogram: the Sobel 3×3 L1 magnitude of 8-bit
 /// images is at most 4·255·2 = 2040.
@@ -71,69 +74,87 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
     let edge_count = core::count_non_zero(&s.edges)? as u32;
     let edges_us = us_since(t);
 
-    let t = Instant::now();
-    let h = small.rows() as f64;
-    let w = small.cols() as f64;
-    hough_segments(
-        &s.edges,
-        &mut s.lines,
-        &mut s.segments,
-        p.hough_rho_px,
-        p.hough_theta_deg,
-        (p.hough_threshold_frac * h).round() as i32,
-        p.hough_min_length_frac * h,
-        p.hough_max_gap_frac * h,
-    )?;
-    let hough_us = us_since(t);
-
-    let t = Instant::now();
-    let line_count = s.segments.len() as u32;
-    let segs = merge_collinear(p, &s.segments, h);
-    log::trace!("hough {} merged {} high {high} longest {:?}", s.segments.len(), segs.len(), segs.iter().take(5).collect::<Vec<_>>());
-    let (edges, dx, dy, pts) = (&s.edges, &s.dx, &s.dy, &mut s.edge_points);
-    let mut search_us = 0.0;
-    let mut search = |c: P2| {
-        let t = Instant::now();
-        let r = search_circles(p, edges, dx, dy, c, h, pts);
-        search_us += us_since(t);
-        r
+    let (ew, eh) = (s.edges.cols() as usize, s.edges.rows() as usize);
+    let img = EdgeImage { edges: s.edges.data_typed::<u8>()?, dx: s.dx.data_typed::<i16>()?, dy: s.dy.data_typed::<i16>()?, width: ew, height: eh };
+    let h = eh as f64;
+    let w = ew as f64;
+    let settings = HoughSettings {
+        rho: p.hough_rho_px,
+        theta_deg: p.hough_theta_deg,
+        threshold: (p.hough_threshold_frac * h).round().max(1.0) as u32,
+        min_length: p.hough_min_length_frac * h,
+        max_gap: p.hough_max_gap_frac * h,
+        orientation_tol_deg: p.hough_orientation_tol_deg,
     };
-    let gx = s.dx.data_typed::<i16>()?;
-    let grad = GradX { data: gx, width: w as usize, height: h as usize };
-    let mut found = recognise(p, &segs, w, h, hints, &mut search, Some(&grad), tower_width)?;
-    log::trace!("spinner search {search_us:.0} us of geometry {:.0} us", us_since(t));
-    found.line_count = line_count;
-    found.edge_count = edge_count;
-    found.edges_us = edges_us;
-    found.hough_us = hough_us;
-    found.geometry_us = us_since(t);
-    Ok(found)
+    let (hough, segments, pts) = (&mut s.hough, &mut s.segments, &mut s.edge_points);
+    std::thread::scope(|scope| {
+        // The spinner around the tracker's predicted hub needs only the edges, so it is searched
+        // on a second thread while this one runs Hough and the geometry; the first candidate
+        // near the prediction takes its circles, as a candidate near an already searched one
+        // does in `recognise`.
+        let img = &img;
+        let mut ahead = hints.predicted_hub_px.map(|c| (c, scope.spawn(move || search_circles(p, img, c, h, &mut Vec::new()))));
+        let t = Instant::now();
+        hough.run(img.edges, img.dx, img.dy, ew, eh, &settings, segments);
+        let hough_us = us_since(t);
+
+        let t = Instant::now();
+        let line_count = segments.len() as u32;
+        let segs = merge_collinear(p, segments, h);
+        log::trace!("hough {} merged {} high {high} longest {:?}", segments.len(), segs.len(), segs.iter().take(5).collect::<Vec<_>>());
+        let reuse = SPINNER_REUSE_OF_OFFSET * p.spinner_max_offset_frac * h;
+        let mut search = |c: P2| -> Result<Vec<[f64; 3]>, DetectError> {
+            match ahead.take_if(|(q, _)| geometry::dist(*q, c) <= reuse) {
+                Some((_, job)) => job.join().map_err(|_| DetectError::BadImage("spinner search thread panicked".into())),
+                None => Ok(search_circles(p, img, c, h, pts)),
+            }
+        };
+        let grad = GradX { data: img.dx, width: ew, height: eh };
+        let mut found = recognise(p, &segs, w, h, hints, &mut search, Some(&grad), tower_width)?;
+        found.line_count = line_count;
+        found.edge_count = edge_count;
+        found.edges_us = edges_us;
+        found.hough_us = hough_us;
+        found.geometry_us = us_since(t);
+        Ok(found)
+    })
+}
+
+/// The Canny edge image and its Sobel gradients, row-major (working px).
+struct EdgeImage<'a> {
+    edges: &'a [u8],
+    dx: &'a [i16],
+    dy: &'a [i16],
+    width: usize,
+    height: usize,
 }
 
 /// Spinner candidates around `c`: circles `[x, y, r]` (working px, best first) among the Canny
 /// edge pixels in a square of half side `spinner_search_frac · h`, see [`crate::spinner`].
 #[allow(clippy::too_many_arguments)]
-fn search_circles(p: &DefaultParams, edges: &Mat, dx: &Mat, dy: &Mat, c: P2, h: f64, pts: &mut Vec<EdgePoint>) -> Result<Vec<[f64; 3]>, DetectError> {
+fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 3]> {
     let half = p.spinner_search_frac * h;
-    let (cols, rows) = (edges.cols(), edges.rows());
+    let (cols, rows) = (img.width as i32, img.height as i32);
     let x0 = ((c[0] - half).floor() as i32).clamp(0, cols);
     let y0 = ((c[1] - half).floor() as i32).clamp(0, rows);
     let x1 = ((c[0] + half).ceil() as i32).clamp(0, cols);
     let y1 = ((c[1] + half).ceil() as i32).clamp(0, rows);
     let max_r = p.spinner_max_radius_frac * h;
     if max_r <= p.spinner_min_radius_px || x1 - x0 < 2 || y1 - y0 < 2 {
-        return Ok(Vec::new());
+        return Vec::new();
     }
     pts.clear();
     for y in y0..y1 {
-        let (e, gx, gy) = (edges.at_row::<u8>(y)?, dx.at_row::<i16>(y)?, dy.at_row::<i16>(y)?);
+        let row = y as usize * img.width;
+        let (e, gx, gy) = (&img.edges[row..], &img.dx[row..], &img.dy[row..]);
         for x in x0..x1 {
             let xi = x as usize;
             if e[xi] == 0 {
                 continue;
             }
             let (vx, vy) = (gx[xi] as f64, gy[xi] as f64);
-            let m = vx.hypot(vy);
+            // Plain sqrt: i16 components cannot overflow, and libm's hypot is several times slower.
+            let m = (vx * vx + vy * vy).sqrt();
             if m > 0.0 {
                 pts.push(EdgePoint { p: [x as f64, y as f64], u: [vx / m, vy / m] });
             }
@@ -149,7 +170,7 @@ fn search_circles(p: &DefaultParams, edges: &Mat, dx: &Mat, dy: &Mat, c: P2, h: 
         min_coverage: p.spinner_min_coverage,
         max_peaks: SPINNER_PEAKS,
     };
-    Ok(find_circles(pts, &cs).into_iter().map(|k| [k[0], k[1], k[2]]).collect())
+    find_circles(pts, &cs).into_iter().map(|k| [k[0], k[1], k[2]]).collect()
 }
 
 /// High Canny threshold: the `canny_high_percentile` of the L1 gradient magnitude, clamped.

@@ -111,12 +111,15 @@ pub(crate) fn find_circles(points: &[EdgePoint], cs: &CircleSearch) -> Vec<[f64;
 fn rim(points: &[EdgePoint], c: P2, cs: &CircleSearch) -> Option<[f64; 4]> {
     let nb = cs.max_r.ceil() as usize + 2;
     let mut hist = vec![0u32; nb];
+    // Squared bounds first: most points are outside the ring, and need no square root.
+    let (lo2, hi2) = ((cs.min_r - 1.0).max(0.0).powi(2), (cs.max_r + 1.0).powi(2));
     let radial = |e: &EdgePoint, c: P2| -> Option<f64> {
         let (vx, vy) = (e.p[0] - c[0], e.p[1] - c[1]);
-        let d = vx.hypot(vy);
-        if d < cs.min_r - 1.0 || d > cs.max_r + 1.0 {
+        let d2 = vx * vx + vy * vy;
+        if d2 < lo2 || d2 > hi2 || d2 == 0.0 {
             return None;
         }
+        let d = d2.sqrt();
         ((vx * e.u[0] + vy * e.u[1]).abs() / d >= cs.radial_cos).then_some(d)
     };
     for e in points {

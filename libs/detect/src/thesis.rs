@@ -8,13 +8,13 @@
 
 use std::time::Instant;
 
-use opencv::core::{self, Mat};
+use opencv::core::{self, Mat, Vec4i, Vector};
 use opencv::imgproc;
 use opencv::prelude::*;
 
 use crate::geometry::{self, Segment, P2};
 use crate::params::ThesisParams;
-use crate::{hough_segments, us_since, DetectError, Found, Hints, LineKind, Scratch};
+use crate::{us_since, DetectError, Found, Hints, LineKind, Scratch};
 
 /// Run the thesis pipeline on the working image.
 pub(crate) fn run(p: &ThesisParams, small: &Mat, s: &mut Scratch, hints: &Hints) -> Result<Found, DetectError> {
@@ -212,6 +212,26 @@ pub(crate) fn recognise(p: &ThesisParams, segs: &[Segment], width: f64, height: 
         found.confidence = 1.0;
     }
     found
+}
+
+
+/// Run HoughLinesP on `edges` into `out` (working px).
+#[allow(clippy::too_many_arguments)]
+fn hough_segments(
+    edges: &Mat,
+    lines: &mut Vector<Vec4i>,
+    out: &mut Vec<Segment>,
+    rho: f64,
+    theta_deg: f64,
+    threshold: i32,
+    min_len: f64,
+    max_gap: f64,
+) -> Result<(), DetectError> {
+    lines.clear();
+    imgproc::hough_lines_p(edges, lines, rho, theta_deg.to_radians(), threshold.max(1), min_len, max_gap)?;
+    out.clear();
+    out.extend(lines.iter().map(|l| Segment::new([l[0] as f64, l[1] as f64], [l[2] as f64, l[3] as f64])));
+    Ok(())
 }
 
 #[cfg(test)]

@@ -44,6 +44,11 @@ impl GradX<'_> {
         }
         self.data[y as usize * self.width + x as usize] as f64
     }
+
+    /// Row `y` (in range).
+    fn row(&self, y: i64) -> &[i16] {
+        &self.data[y as usize * self.width..][..self.width]
+    }
 }
 
 /// The tower measured from its two edges (working px).
@@ -100,36 +105,58 @@ pub(crate) fn fit_tower(p: &DefaultParams, g: &GradX<'_>, seed: &Segment, window
         return None;
     }
     let reach = wmax + wmax / 4 + 2;
-    // Per row, the partner response at every offset −reach..=reach from the seed.
+    // Per row, the partner response at every offset −reach..=reach from the seed. Gradients are
+    // integers, so the sums below are exact in i32 (≤ rows · 2¹⁵) and equal to f64 sums.
     let span = (2 * reach + 1) as usize;
-    let mut resp = vec![0.0; rows.len() * span];
+    let mut resp = vec![0i32; rows.len() * span];
+    let isign = sign as i32;
     for (k, &y) in rows.iter().enumerate() {
         if let Some(x) = x0(y) {
-            let xi = x.round() as i64;
-            for o in -reach..=reach {
-                resp[k * span + (o + reach) as usize] = (-sign * g.at(xi + o, y)).max(0.0);
+            // Columns xi − reach ..= xi + reach, clipped to the image (outside stays 0).
+            let first = x.round() as i64 - reach;
+            let o_lo = (-first).max(0) as usize;
+            let o_hi = ((g.width as i64 - first).max(0) as usize).min(span);
+            if o_lo < o_hi {
+                let src = &g.row(y)[(first + o_lo as i64) as usize..];
+                resp[k * span + o_lo..k * span + o_hi].iter_mut().zip(src).for_each(|(r, &v)| *r = (-isign * v as i32).max(0));
             }
         }
     }
     let (y_top, y_bot) = (rows[0] as f64, *rows.last()? as f64);
     let frac = |y: i64| if y_bot > y_top { (y as f64 - y_top) / (y_bot - y_top) } else { 0.0 };
     // Rows are consecutive: row k is at fraction k / last of the way down, and the offset there
-    // is o_top + round(drift · k / last). Those steps are tabulated once per drift, so the
-    // innermost loop (offsets × drifts × rows) is additions only.
+    // is o_top + round(drift · k / last). Those steps are tabulated once per drift; for one
+    // drift, every top offset is summed at once along the row (contiguous, vectorised).
     let last = rows.len() as i64 - 1;
     let max_drift = 2 + wmax / 4;
-    let steps: Vec<Vec<i64>> = (-max_drift..=max_drift).map(|d| round_steps(d, last)).collect();
+    let n_top = (wmax - wmin + 1) as usize;
+    let n_drift = (2 * max_drift + 1) as usize;
+    // sums[(side, drift, o_top)]: the summed response along that path.
+    let mut sums = vec![0i32; 2 * n_drift * n_top];
+    for (si, side) in [-1i64, 1].into_iter().enumerate() {
+        for (di, d) in (-max_drift..=max_drift).enumerate() {
+            let acc = &mut sums[(si * n_drift + di) * n_top..][..n_top];
+            for (k, st) in round_steps(d, last).into_iter().enumerate() {
+                let row = &resp[k * span..(k + 1) * span];
+                if side > 0 {
+                    // Index reach + o_top + st for o_top = wmin.. : ascending.
+                    let lo = (reach + wmin + st) as usize;
+                    acc.iter_mut().zip(&row[lo..lo + n_top]).for_each(|(a, v)| *a += v);
+                } else {
+                    // Index reach − o_top − st: descending with o_top.
+                    let hi = (reach - wmin - st) as usize;
+                    acc.iter_mut().zip(row[hi + 1 - n_top..=hi].iter().rev()).for_each(|(a, v)| *a += v);
+                }
+            }
+        }
+    }
     let mut best: Option<(f64, i64, i64)> = None; // (mean response, signed offsets at top and bottom)
-    for side in [-1i64, 1] {
+    for (si, side) in [-1i64, 1].into_iter().enumerate() {
         for o_top in wmin..=wmax {
             let drift = 2 + o_top / 4;
             for o_bot in (o_top - drift).max(wmin)..=(o_top + drift).min(reach) {
-                let step = &steps[(o_bot - o_top + max_drift) as usize];
-                let mut acc = 0.0;
-                for (k, st) in step.iter().enumerate() {
-                    acc += resp[k * span + (side * (o_top + st) + reach) as usize];
-                }
-                let mean = acc / rows.len() as f64;
+                let di = (o_bot - o_top + max_drift) as usize;
+                let mean = sums[(si * n_drift + di) * n_top + (o_top - wmin) as usize] as f64 / rows.len() as f64;
                 if best.is_none_or(|(b, _, _)| mean > b) {
                     best = Some((mean, side * o_top, side * o_bot));
                 }
@@ -138,7 +165,7 @@ pub(crate) fn fit_tower(p: &DefaultParams, g: &GradX<'_>, seed: &Segment, window
     }
     let (response, off_top, off_bot) = best?;
     // The background: the mean response over all offsets (texture, other edges).
-    let background = resp.iter().sum::<f64>() / resp.len() as f64;
+    let background = resp.iter().map(|&v| v as f64).sum::<f64>() / resp.len() as f64;
     log::trace!(
         "tower partner of {seed:?} (sign {sign}): offsets {off_top}..{off_bot} px, response {response:.0}, seed {strength:.0}, background {background:.1}"
     );
@@ -180,12 +207,24 @@ pub(crate) fn scan_tower_edges(g: &GradX<'_>, hub_x: f64, top: f64, max_dx: f64,
     let x_hi = (hub_x + max_dx).ceil().min(g.width as f64 - 1.0) as i64;
     let (nx, nd) = ((x_hi - x_lo + 1).max(0) as usize, (2 * max_drift + 1) as usize);
     let mut score = vec![0.0f64; nx * nd];
-    // Column shift of each row for each drift, tabulated once (additions only in the loop).
-    let steps: Vec<Vec<i64>> = (-max_drift..=max_drift).map(|d| round_steps(d, y1 - y0)).collect();
-    for (i, x) in (x_lo..=x_hi).enumerate() {
-        for (j, step) in steps.iter().enumerate() {
-            let acc: f64 = (y0..y1).zip(step).map(|(y, st)| g.at(x + st, y)).sum();
-            score[i * nd + j] = (acc / n).abs();
+    // For each drift, every start column is summed at once along the row (contiguous,
+    // vectorised); integer sums are exact, so equal to summing the f64 values.
+    let mut acc = vec![0i32; nx];
+    for (j, d) in (-max_drift..=max_drift).enumerate() {
+        acc.iter_mut().for_each(|a| *a = 0);
+        for (y, st) in (y0..y1).zip(round_steps(d, y1 - y0)) {
+            // Columns x_lo + i + st inside the image; outside counts as 0.
+            let first = x_lo + st;
+            let i_lo = (-first).max(0) as usize;
+            let i_hi = ((g.width as i64 - first).max(0) as usize).min(nx);
+            if i_lo >= i_hi {
+                continue;
+            }
+            let row = &g.row(y)[(first + i_lo as i64) as usize..];
+            acc[i_lo..i_hi].iter_mut().zip(row).for_each(|(a, &v)| *a += v as i32);
+        }
+        for (i, a) in acc.iter().enumerate() {
+            score[i * nd + j] = (*a as f64 / n).abs();
         }
     }
     let mean = score.iter().sum::<f64>() / score.len().max(1) as f64;

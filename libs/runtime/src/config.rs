@@ -140,6 +140,13 @@ pub struct RunConfig {
     pub status_interval_ms: u64,
     /// What the supervisor does when a stage dies or hangs.
     pub restart: RestartConfig,
+    /// Scheduling niceness per stage, added to the niceness `hubtrack run` itself runs at (a
+    /// systemd `Nice=` sets the base), -20 … 19. A stage not listed keeps its default: +10 for
+    /// the recorder, 0 for the others (see [`RunConfig::nice_of`]). The recorder is
+    /// throughput-bound (its queue absorbs delays) while detect → track → control is
+    /// latency-bound, so on a 2-core computer the recorder yields the CPU to them. Going below
+    /// the base needs CAP_SYS_NICE.
+    pub nice: std::collections::BTreeMap<String, i32>,
 }
 
 /// When a stage is restarted.
@@ -195,6 +202,16 @@ impl RestartConfig {
     }
 }
 
+/// Default niceness of the stages that do not run at 0 (see [`RunConfig::nice`]).
+pub const DEFAULT_NICE: &[(&str, i32)] = &[("recorder", 10)];
+
+impl RunConfig {
+    /// The niceness stage `name` runs at: `[run.nice]`, else its default.
+    pub fn nice_of(&self, name: &str) -> i32 {
+        self.nice.get(name).copied().unwrap_or_else(|| DEFAULT_NICE.iter().find(|(n, _)| *n == name).map_or(0, |(_, v)| *v))
+    }
+}
+
 impl Default for RunConfig {
     fn default() -> Self {
         RunConfig {
@@ -204,6 +221,7 @@ impl Default for RunConfig {
             startup_timeout_ms: 5000,
             status_interval_ms: 250,
             restart: RestartConfig::default(),
+            nice: DEFAULT_NICE.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
         }
     }
 }
@@ -543,6 +561,12 @@ impl Config {
                 return Err(out_of_range(&format!("run.restart.policy.{stage}"), stage, format!("a stage of {KNOWN_STAGES:?}")));
             }
         }
+        for (stage, nice) in &r.nice {
+            if !KNOWN_STAGES.contains(&stage.as_str()) {
+                return Err(out_of_range(&format!("run.nice.{stage}"), stage, format!("a stage of {KNOWN_STAGES:?}")));
+            }
+            range(&format!("run.nice.{stage}"), *nice, -20, 19)?;
+        }
         range("run.restart.backoff_initial_ms", rs.backoff_initial_ms, 0, 60_000)?;
         range("run.restart.backoff_max_ms", rs.backoff_max_ms, rs.backoff_initial_ms, 600_000)?;
         range("run.restart.max_restarts", rs.max_restarts, 0, 1000)?;
@@ -665,6 +689,19 @@ mod tests {
         let err = Config::parse("[capture]\nfps = 5000\n", "t.toml").unwrap_err();
         let msg = err.to_string();
         assert!(msg.contains("capture.fps") && msg.contains("[0, 1000]"), "{msg}");
+    }
+
+    #[test]
+    fn stage_niceness_defaults_overrides_and_range() {
+        let d = Config::default();
+        assert_eq!((d.run.nice_of("recorder"), d.run.nice_of("detect")), (10, 0));
+        // Naming one stage keeps the other stages' defaults.
+        let c = Config::parse("[run.nice]\ncapture = 5\n", "t.toml").unwrap();
+        assert_eq!((c.run.nice_of("capture"), c.run.nice_of("recorder"), c.run.nice_of("track")), (5, 10, 0));
+        let err = Config::parse("[run.nice]\ndetect = 25\n", "t.toml").unwrap_err().to_string();
+        assert!(err.contains("run.nice.detect") && err.contains("[-20, 19]"), "{err}");
+        let err = Config::parse("[run.nice]\ncamera = 1\n", "t.toml").unwrap_err().to_string();
+        assert!(err.contains("run.nice.camera"), "{err}");
     }
 
     #[test]

@@ -3,6 +3,7 @@
 use anyhow::{bail, Context};
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
+use std::os::unix::process::CommandExt;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
@@ -47,16 +48,28 @@ pub struct Stage {
 }
 
 impl Stage {
-    /// Starts `binary args...`, forwarding its stdout and stderr line by line to ours (its stdout
-    /// to our stderr when `stdout_to_stderr`, to keep our stdout machine-readable).
-    pub fn spawn(name: &str, binary: &Path, args: &[String], stdout_to_stderr: bool) -> anyhow::Result<Stage> {
-        let mut child = Command::new(binary)
-            .args(args)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
+    /// Starts `binary args...` at niceness `nice` relative to our own (so a systemd `Nice=`
+    /// sets the base), forwarding its stdout and stderr line by line to ours (its stdout to our
+    /// stderr when `stdout_to_stderr`, to keep our stdout machine-readable).
+    pub fn spawn(name: &str, binary: &Path, args: &[String], stdout_to_stderr: bool, nice: i32) -> anyhow::Result<Stage> {
+        let mut cmd = Command::new(binary);
+        cmd.args(args).stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
+        let target = (own_nice()? + nice).clamp(-20, 19);
+        if nice != 0 {
+            // SAFETY: setpriority(2) is a plain system call, safe between fork and exec. Set
+            // before exec, so every thread the stage starts inherits it.
+            unsafe {
+                cmd.pre_exec(move || {
+                    if libc::setpriority(libc::PRIO_PROCESS, 0, target) != 0 {
+                        return Err(std::io::Error::last_os_error());
+                    }
+                    Ok(())
+                });
+            }
+        }
+        let mut child = cmd
             .spawn()
-            .with_context(|| format!("starting stage {name} ({})", binary.display()))?;
+            .with_context(|| format!("starting stage {name} ({}) at nice {target} (ours {nice:+})", binary.display()))?;
         forward(name, child.stdout.take().expect("piped"), stdout_to_stderr);
         forward(name, child.stderr.take().expect("piped"), true);
         Ok(Stage {
@@ -100,6 +113,19 @@ impl Stage {
         let _ = self.child.kill();
         self.exited = self.child.wait().ok();
         self.exited
+    }
+}
+
+/// Our own niceness.
+fn own_nice() -> anyhow::Result<i32> {
+    // SAFETY: getpriority(2) on ourselves; -1 is also a valid niceness, so errno tells errors apart.
+    unsafe {
+        *libc::__errno_location() = 0;
+        let n = libc::getpriority(libc::PRIO_PROCESS, 0);
+        if n == -1 && *libc::__errno_location() != 0 {
+            return Err(std::io::Error::last_os_error()).context("reading our own niceness");
+        }
+        Ok(n)
     }
 }
 

@@ -113,8 +113,9 @@ impl Supervisor {
     fn start(&mut self, i: usize) -> anyhow::Result<()> {
         let args = self.args_for(&self.stages[i]);
         let s = &mut self.stages[i];
-        let stage = Stage::spawn(s.name, &s.binary, &args, self.stage_stdout_to_stderr)?;
-        log::info!("started {} (pid {})", s.name, stage.pid());
+        let nice = self.config.run.nice_of(s.name);
+        let stage = Stage::spawn(s.name, &s.binary, &args, self.stage_stdout_to_stderr, nice)?;
+        log::info!("started {} (pid {}, nice {nice})", s.name, stage.pid());
         s.process = Some(stage);
         s.state = StageState::Starting;
         s.last_heartbeat = None;
