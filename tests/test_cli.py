@@ -134,8 +134,9 @@ def test_detect_hints_find_the_tower_at_close_range(runner, tmp_path):
         return good
 
     without, with_hints = towers_found(False), towers_found(True)
-    # Measured when written: 15 without hints, 19 with (before the gradient scan: 5 without).
-    assert without >= 12 and with_hints >= 15 and with_hints >= without, (without, with_hints)
+    # Measured when written: 15 without hints, 19 with (before the gradient scan: 5 without);
+    # with the orientation-restricted Hough (and the one-edge rule off): 17 and 22.
+    assert without >= 14 and with_hints >= 18 and with_hints >= without, (without, with_hints)
     # A malformed hint is a clear error, not a silent default.
     res = runner.run("hubtrack", "detect", "--hint-hub", "12", frames[0][0])
     assert res.returncode != 0 and "X,Y" in res.stderr

@@ -150,8 +150,8 @@ pub struct Approach {
     last_distance_m: Option<f64>,
     /// The hub was last seen right of centre (search direction); `None` if never seen.
     last_seen_right: Option<bool>,
-    /// Since when T2 has had no valid yaw (None: it has one).
-    yaw_unknown_since_ns: Option<u64>,
+    /// Since when the yaw or the distance has been missing (None: both are there).
+    cue_missing_since_ns: Option<u64>,
     /// Sideways displacement commanded by the current yaw probe, m (+ = right).
     probe_offset_m: f64,
     /// Direction of the probe's sweep (+1 right, −1 left).
@@ -252,7 +252,7 @@ impl Approach {
             backoff_m: 0.0,
             last_distance_m: None,
             last_seen_right: None,
-            yaw_unknown_since_ns: None,
+            cue_missing_since_ns: None,
             probe_offset_m: 0.0,
             probe_dir: 1.0,
         })
@@ -540,30 +540,33 @@ impl Approach {
         let vz_t = limit_abs(c.climb_gain_m_s * deadband(ey, c.deadband_y), c.max_vertical_m_s);
 
         // T2 lateral: on in T2 and T3 (keeps the yaw small during the approach), off in T1.
-        // Without any yaw for long, probe sideways: the view a few metres aside may show it.
-        let unknown_s = match yaw {
-            Some(_) => {
-                self.yaw_unknown_since_ns = None;
-                self.probe_offset_m = 0.0;
-                0.0
-            }
-            None => secs(*self.yaw_unknown_since_ns.get_or_insert(now), now),
+        // Without a yaw (T2) or a distance (T3: no forward motion) for long, probe sideways: both
+        // cues come from the tower, which from some spots hides behind a blade pointing down,
+        // and a few metres aside the view changes. T2 steering on a known yaw goes first.
+        let forward_ok = t.distance_valid && dist.is_some();
+        let missing_s = if yaw.is_some() && forward_ok {
+            self.cue_missing_since_ns = None;
+            self.probe_offset_m = 0.0;
+            0.0
+        } else {
+            secs(*self.cue_missing_since_ns.get_or_insert(now), now)
         };
         let probe_span_m = dist.unwrap_or(c.nominal_distance_m) * c.yaw_probe_span_deg.to_radians().tan();
-        let probing = yaw.is_none() && !self.t1_active && probe_span_m > 0.0 && unknown_s >= c.yaw_probe_after_s;
+        let steering = yaw.is_some() && self.t2_active;
+        let probing = !steering && !self.t1_active && probe_span_m > 0.0 && missing_s >= c.yaw_probe_after_s;
         let vy_t = match (self.t1_active, yaw) {
-            (false, Some(y)) => {
-                let d = dist.unwrap_or(c.nominal_distance_m);
-                let lateral_m = d * y.to_radians().sin();
-                // Positive yaw = on the turbine's left = the vehicle must go to its left.
-                limit_abs(-c.lateral_gain_per_s * lateral_m, c.max_lateral_m_s)
-            }
-            (false, None) if probing => {
+            (false, _) if probing => {
                 // Sweep between −span and +span around where the probe started.
                 if self.probe_offset_m * self.probe_dir >= probe_span_m {
                     self.probe_dir = -self.probe_dir;
                 }
                 limit_abs(self.probe_dir * c.yaw_probe_speed_m_s, c.max_lateral_m_s)
+            }
+            (false, Some(y)) => {
+                let d = dist.unwrap_or(c.nominal_distance_m);
+                let lateral_m = d * y.to_radians().sin();
+                // Positive yaw = on the turbine's left = the vehicle must go to its left.
+                limit_abs(-c.lateral_gain_per_s * lateral_m, c.max_lateral_m_s)
             }
             _ => 0.0,
         };
@@ -581,7 +584,6 @@ impl Approach {
             _ => 0.0,
         };
         // Never forward without a valid distance in this very track state.
-        let forward_ok = t.distance_valid && dist.is_some();
         let vx_t = if forward_ok { vx_t } else { vx_t.min(0.0) };
 
         // --- rate limits ---
@@ -618,7 +620,7 @@ impl Approach {
                     )
                 }
                 None if probing => format!(
-                    "T2: no valid yaw for {unknown_s:.0} s, probing sideways {:+.1}/{:.1} m",
+                    "T2: no valid yaw for {missing_s:.0} s, probing sideways {:+.1}/{:.1} m",
                     self.probe_offset_m, probe_span_m
                 ),
                 None => "T2: no valid yaw, holding position".into(),
@@ -632,6 +634,10 @@ impl Approach {
                     c.done_hold_s
                 ),
                 (Some(d), true) => format!("T3: {d:.1} m to hub, target {:.1} m", c.target_distance_m),
+                _ if probing => format!(
+                    "T3: no valid distance for {missing_s:.0} s, not moving forward, probing sideways {:+.1}/{:.1} m",
+                    self.probe_offset_m, probe_span_m
+                ),
                 _ => "T3: no valid distance, not moving forward".into(),
             };
             (ApproachTask::Approach, reason)

@@ -87,9 +87,10 @@ pub struct ApproachConfig {
     /// (-vy / distance) added ahead of the image error, dimensionless: 1 flies a clean arc round
     /// the hub, 0 leaves it to the T1 feedback. Range [0, 1]; default 1.
     pub arc_feedforward: f64,
-    /// T2 without any valid yaw for this long, s, starts a sideways probe: the yaw cue (the
-    /// hub–tower gap) can stay hidden from one spot, e.g. behind a blade pointing down, and a
-    /// few metres aside the view changes. Range [0, 600]; default 8.
+    /// No valid yaw (T2) or no valid distance (T3, which then cannot move forward) for this
+    /// long, s, starts a sideways probe: both come from the tower (hub–tower gap, tower width),
+    /// which from one spot can stay hidden, e.g. behind a blade pointing down, and a few metres
+    /// aside the view changes. Range [0, 600]; default 8.
     pub yaw_probe_after_s: f64,
     /// Sideways speed of the probe, m/s. Range (0, 10]; default 0.5.
     pub yaw_probe_speed_m_s: f64,

@@ -354,6 +354,26 @@ fn no_yaw_for_long_probes_sideways_within_the_span_then_t2_takes_over() {
 }
 
 #[test]
+fn no_distance_for_long_probes_sideways_never_forward() {
+    let c = ApproachConfig::default();
+    let mut rig = Rig::new();
+    // Centred, yaw known and small, distance never valid: T3 cannot move forward ...
+    let out = rig.run(Some(track(0.0, 0.0, None, Some(1.0))), c.yaw_probe_after_s - 1.0);
+    assert_eq!(out.task, ApproachTask::Approach);
+    assert!(out.vy_m_s.abs() < 0.1 && out.vx_m_s <= 0.0, "{out:?}");
+    // ... so after a while it looks from a few metres aside, still never forward.
+    let from = rig.log.len();
+    rig.run(Some(track(0.0, 0.0, None, Some(1.0))), 20.0);
+    assert!(rig.log[from..].iter().all(|o| o.vx_m_s <= 0.0));
+    assert!(rig.log[from..].iter().any(|o| o.vy_m_s.abs() > 0.9 * c.yaw_probe_speed_m_s), "no sideways sweep");
+    let last = rig.log.last().unwrap();
+    assert!(last.reason.starts_with("T3: no valid distance") && last.reason.contains("probing"), "{}", last.reason);
+    // A distance ends the probe: forward again.
+    let out = rig.run(Some(track(0.0, 0.0, Some(20.0), Some(1.0))), 3.0);
+    assert!(out.vx_m_s > 0.0 && out.reason.starts_with("T3: 20"), "{out:?}");
+}
+
+#[test]
 fn no_forward_motion_with_a_stale_track() {
     let good = track(0.0, 0.0, Some(20.0), Some(0.0));
     let mut rig = Rig::new();
