@@ -70,8 +70,12 @@ impl OrientedHough {
         let theta = s.theta_deg.to_radians();
         let num_angle = ((std::f64::consts::PI / theta).round() as usize).max(1);
         let irho = 1.0 / s.rho;
-        let num_rho = (((width + height) * 2 + 1) as f64 / s.rho).round() as usize;
-        let rho_round = ((num_rho - 1) / 2) as f64 + 0.5;
+        // Distances from the image centre (not a corner, as HoughLinesP): |rho| is at most half
+        // the diagonal, so the accumulator is ~3x smaller and stays in cache.
+        let (xc, yc) = (width as f64 / 2.0, height as f64 / 2.0);
+        let half_rho = (xc.hypot(yc) / s.rho).ceil() as usize + 1;
+        let num_rho = 2 * half_rho + 1;
+        let rho_round = half_rho as f64 + 0.5;
         self.cos.clear();
         self.sin.clear();
         for k in 0..num_angle {
@@ -129,7 +133,7 @@ impl OrientedHough {
             let first = self.first[i];
             // Vote, keeping the strongest bin.
             let (mut best, mut best_n) = (0u16, 0usize);
-            let (xf, yf) = (x as f64, y as f64);
+            let (xf, yf) = (x as f64 - xc, y as f64 - yc);
             let mut t = first as usize;
             for _ in 0..span {
                 // rho_off + ½ makes the value positive, so truncation rounds (half up).
@@ -193,7 +197,7 @@ impl OrientedHough {
                     }
                     let i = r as usize * width + c as usize;
                     if self.mask[i] == 2 && good {
-                        let (cf, rf) = (c as f64, r as f64);
+                        let (cf, rf) = (c as f64 - xc, r as f64 - yc);
                         let mut t = self.first[i] as usize;
                         for _ in 0..span {
                             let rr = (cf * self.cos[t] + rf * self.sin[t] + rho_round) as usize;

@@ -174,17 +174,19 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, pts: &m
 }
 
 /// High Canny threshold: the `canny_high_percentile` of the L1 gradient magnitude, clamped.
+/// Every other pixel of every other row is counted: 30 000 samples at 480×270 pin a percentile
+/// as well as all 130 000 do, at a quarter of the cost.
 fn adaptive_high(p: &DefaultParams, dx: &Mat, dy: &Mat, hist: &mut Vec<u32>) -> Result<f64, DetectError> {
     hist.clear();
     hist.resize(GRAD_BINS, 0);
     let mut n = 0u64;
-    for r in 0..dx.rows() {
+    for r in (0..dx.rows()).step_by(2) {
         let (rx, ry) = (dx.at_row::<i16>(r)?, dy.at_row::<i16>(r)?);
-        for (a, b) in rx.iter().zip(ry) {
+        for (a, b) in rx.iter().zip(ry).step_by(2) {
             let m = (a.unsigned_abs() as usize + b.unsigned_abs() as usize).min(GRAD_BINS - 1);
             hist[m] += 1;
+            n += 1;
         }
-        n += rx.len() as u64;
     }
     let target = (p.canny_high_percentile * n as f64) as u64;
     let mut acc = 0u64;
