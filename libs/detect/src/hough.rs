@@ -59,7 +59,9 @@ pub(crate) struct OrientedHough {
 
 impl OrientedHough {
     /// Segments among the non-zero pixels of `edges` (`width`·`height`, row-major), whose
-    /// gradients are `dx`, `dy` (same layout); appended to `out` in the order found.
+    /// gradients are `dx`, `dy` (same layout), written to `out` (cleared first) in the order
+    /// found. Buffers shorter than `width`·`height`, or sides beyond u16 (working images are at
+    /// most a few hundred px), give no segments.
     #[allow(clippy::too_many_arguments)]
     pub fn run(&mut self, edges: &[u8], dx: &[i16], dy: &[i16], width: usize, height: usize, s: &HoughSettings, out: &mut Vec<Segment>) {
         out.clear();
