@@ -9,11 +9,17 @@ from conftest import SHARED_DATA
 REQUIRED_DETECT_KEYS = {"path": str, "width": int, "height": int, "detected": bool, "confidence": float, "ms": float}
 # Real photos the default detector found within 1 % of height (a margin below the 3 % hit limit)
 # when it was last accepted: a regression guard that protects what works (the full evaluation is
-# `hubtrack eval`). Re-baselined when the pair/spinner detector was accepted: it traded real-photo
-# hits (36 -> 23 %) for half the false positives and twice the synthetic hit rate; see the notes.
-REGRESSION_SET = ["wta_envA_25.jpg", "wta_envB_30.jpg", "wta_envA_21.jpg", "wta_envA_49.jpg",
-                  "wta_envA_41.jpg", "wta_envA_17.jpg", "wta_envA_29.jpg", "wta_envA_39.jpg"]
+# `hubtrack eval`). Re-baselined when the pair/spinner detector was accepted (it traded real-photo
+# hits, 36 -> 23 %, for half the false positives and twice the synthetic hit rate), and again for
+# the orientation-restricted Hough (23 -> 30 % hits, false positives 3 of 8 -> 0 of 8; three
+# photos of the old set moved to candidates on the tower, see the notes).
+REGRESSION_SET = ["wta_envA_07t.jpg", "wta_envA_21.jpg", "wta_envA_29.jpg", "wta_envA_37.jpg",
+                  "wta_envA_41.jpg", "wta_envA_45.jpg", "wta_envB_30.jpg", "wta_envB_39.jpg"]
 REGRESSION_MIN_HITS = 7
+# Over the whole development set (3 % hits among photos with a visible hub; detections on the
+# negatives), measured when accepted: 16 of 53 and 0 of 8.
+ALL_MIN_HITS = 14
+ALL_MAX_FALSE = 1
 
 
 def needs_shared():
@@ -78,6 +84,27 @@ def test_detect_regression_on_real_photos(runner):
         if l["detected"] and seg_dist(l["hub"], t["axis_point"], t["hub"]) <= 0.03 * t["height"]:
             hits.append(l["path"])
     assert len(hits) >= REGRESSION_MIN_HITS, f"only {len(hits)} hits: {hits}"
+
+
+def test_detect_hit_rate_on_all_real_photos(runner):
+    needs_shared()
+    truth = {}
+    for l in (SHARED_DATA / "real-dev" / "truth.jsonl").read_text().splitlines():
+        t = json.loads(l)
+        truth[t["file"].split("/")[-1]] = t
+    paths = [SHARED_DATA / "real-dev" / t["file"] for t in truth.values()]
+    res = runner.run("hubtrack", "detect", *paths)
+    assert res.returncode == 0, res.stderr
+    hits = false = visible = 0
+    for l in map(json.loads, res.stdout.splitlines()):
+        t = truth[l["path"].split("/")[-1]]
+        if t["set"] != "positive":
+            false += l["detected"]
+        elif t["hub_visible"]:
+            visible += 1
+            hits += l["detected"] and seg_dist(l["hub"], t["axis_point"], t["hub"]) <= 0.03 * t["height"]
+    assert visible > 0
+    assert hits >= ALL_MIN_HITS and false <= ALL_MAX_FALSE, f"{hits} hits of {visible}, {false} false detections"
 
 
 def test_track_prints_one_json_object_per_frame(runner, tmp_path):
