@@ -102,10 +102,11 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
         let line_count = segments.len() as u32;
         let segs = merge_collinear(p, segments, h);
         log::trace!("hough {} merged {} high {high} longest {:?}", segments.len(), segs.len(), segs.iter().take(5).collect::<Vec<_>>());
-        let reuse = SPINNER_REUSE_OF_OFFSET * p.spinner_max_offset_frac * h;
+        let reuse = spinner_reuse_px(p, h);
         let mut search = |c: P2| -> Result<Vec<[f64; 3]>, DetectError> {
             match ahead.take_if(|(q, _)| geometry::dist(*q, c) <= reuse) {
-                Some((_, job)) => job.join().map_err(|_| DetectError::BadImage("spinner search thread panicked".into())),
+                // A panic there is a bug here: carry it on.
+                Some((_, job)) => Ok(job.join().unwrap_or_else(|e| std::panic::resume_unwind(e))),
                 None => Ok(search_circles(p, img, c, h, pts)),
             }
         };
@@ -129,9 +130,14 @@ struct EdgeImage<'a> {
     height: usize,
 }
 
+/// A candidate this close (working px) to an already searched one takes its circles: the search
+/// box of the first covers most of the second's.
+fn spinner_reuse_px(p: &DefaultParams, h: f64) -> f64 {
+    SPINNER_REUSE_OF_OFFSET * p.spinner_max_offset_frac * h
+}
+
 /// Spinner candidates around `c`: circles `[x, y, r]` (working px, best first) among the Canny
 /// edge pixels in a square of half side `spinner_search_frac · h`, see [`crate::spinner`].
-#[allow(clippy::too_many_arguments)]
 fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 3]> {
     let half = p.spinner_search_frac * h;
     let (cols, rows) = (img.width as i32, img.height as i32);
@@ -929,7 +935,7 @@ pub(crate) fn recognise(
     // first covers most of the second's).
     let mut searched: Vec<(P2, Vec<[f64; 3]>)> = Vec::new();
     let mut extra: Vec<Candidate> = Vec::new();
-    let reuse = SPINNER_REUSE_OF_OFFSET * p.spinner_max_offset_frac * h;
+    let reuse = spinner_reuse_px(p, h);
     // The tracker's predicted hub is searched too, with or without blades: at close range the
     // blades leave the frame and only the spinner is left to see.
     let predicted = |c: &Candidate| hints.predicted_hub_px.is_some_and(|q| geometry::dist(q, c.centre) < 1e-9);
