@@ -20,6 +20,10 @@ use crate::geometry::Segment;
 
 /// Fixed-point fraction bits of the line walk.
 const SHIFT: u32 = 16;
+/// Fixed-point fraction bits of a vote's rho: enough that integer votes fall in the same bins
+/// as exact arithmetic would (the error, |x|·2⁻³², is far below any bin boundary distance
+/// that occurs), and few enough that i64 cannot overflow for sides up to u16.
+const VOTE_SHIFT: u32 = 32;
 /// Seed of the visiting order (any fixed value: the order must only be the same every frame).
 const ORDER_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
 
@@ -55,6 +59,10 @@ pub(crate) struct OrientedHough {
     points: Vec<(u16, u16)>,
     cos: Vec<f64>,
     sin: Vec<f64>,
+    /// `cos / rho` and `sin / rho` in fixed point (`VOTE_SHIFT - 1` fraction bits, for coordinates
+    /// doubled so that a half-pixel image centre stays an integer): votes in integer arithmetic.
+    cos_q: Vec<i64>,
+    sin_q: Vec<i64>,
 }
 
 impl OrientedHough {
@@ -77,14 +85,21 @@ impl OrientedHough {
         let (xc, yc) = (width as f64 / 2.0, height as f64 / 2.0);
         let half_rho = (xc.hypot(yc) / s.rho).ceil() as usize + 1;
         let num_rho = 2 * half_rho + 1;
-        let rho_round = half_rho as f64 + 0.5;
+        // rho_off + ½ makes the value positive, so truncation rounds (half up).
+        let rho_round = to_fixed(half_rho as f64 + 0.5, VOTE_SHIFT);
         self.cos.clear();
         self.sin.clear();
+        self.cos_q.clear();
+        self.sin_q.clear();
         for k in 0..num_angle {
             let a = k as f64 * theta;
             self.cos.push(a.cos() * irho);
             self.sin.push(a.sin() * irho);
+            self.cos_q.push(to_fixed(a.cos() * irho, VOTE_SHIFT - 1));
+            self.sin_q.push(to_fixed(a.sin() * irho, VOTE_SHIFT - 1));
         }
+        let (cos_q, sin_q) = (&self.cos_q, &self.sin_q);
+        let bin = move |x2: i64, y2: i64, t: usize| rho_bin(x2, y2, cos_q[t], sin_q[t], rho_round);
         // Bins each pixel votes for: 2·half + 1 around its gradient angle (all when ≥ 90°).
         let half = if s.orientation_tol_deg >= 90.0 { num_angle } else { (s.orientation_tol_deg / s.theta_deg).round().max(0.0) as usize };
         let (span, all) = if 2 * half + 1 >= num_angle { (num_angle, true) } else { (2 * half + 1, false) };
@@ -135,11 +150,10 @@ impl OrientedHough {
             let first = self.first[i];
             // Vote, keeping the strongest bin.
             let (mut best, mut best_n) = (0u16, 0usize);
-            let (xf, yf) = (x as f64 - xc, y as f64 - yc);
+            let (x2, y2) = (2 * x as i64 - width as i64, 2 * y as i64 - height as i64);
             let mut t = first as usize;
             for _ in 0..span {
-                // rho_off + ½ makes the value positive, so truncation rounds (half up).
-                let r = (xf * self.cos[t] + yf * self.sin[t] + rho_round) as usize;
+                let r = bin(x2, y2, t);
                 let v = &mut self.acc[r * num_angle + t];
                 *v = v.saturating_add(1);
                 if *v > best {
@@ -199,10 +213,10 @@ impl OrientedHough {
                     }
                     let i = r as usize * width + c as usize;
                     if self.mask[i] == 2 && good {
-                        let (cf, rf) = (c as f64 - xc, r as f64 - yc);
+                        let (c2, r2) = (2 * c - width as i64, 2 * r - height as i64);
                         let mut t = self.first[i] as usize;
                         for _ in 0..span {
-                            let rr = (cf * self.cos[t] + rf * self.sin[t] + rho_round) as usize;
+                            let rr = bin(c2, r2, t);
                             let v = &mut self.acc[rr * num_angle + t];
                             *v = v.saturating_sub(1);
                             t += 1;
@@ -225,6 +239,20 @@ impl OrientedHough {
             }
         }
     }
+}
+
+/// `v` in fixed point with `bits` fraction bits.
+fn to_fixed(v: f64, bits: u32) -> i64 {
+    (v * (1i64 << bits) as f64).round() as i64
+}
+
+/// Rho bin of a pixel given as doubled centred coordinates (`2x - width`, `2y - height`: a
+/// half-pixel image centre stays an integer), with `cos_q`, `sin_q` (cos/rho, sin/rho) at
+/// `VOTE_SHIFT - 1` and the offset `rho_round` at `VOTE_SHIFT` fraction bits. Integer
+/// arithmetic: the vote loop's cost, and no float-to-int conversion per vote.
+#[inline]
+fn rho_bin(x2: i64, y2: i64, cos_q: i64, sin_q: i64, rho_round: i64) -> usize {
+    ((x2 * cos_q + y2 * sin_q + rho_round) >> VOTE_SHIFT) as usize
 }
 
 /// The gradient direction `(gx, gy)` modulo π, in [0, π]: the normal of the edge through the
@@ -261,6 +289,35 @@ fn normal_angle(gx: i16, gy: i16) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn integer_votes_fall_in_the_bins_of_exact_arithmetic() {
+        // Every pixel of a 480x270 working image (and of an odd-sized one, whose centre is a
+        // half pixel), every 1° angle, 1 px rho: the fixed-point bin equals the f64 bin, except
+        // on exact bin boundaries (cos 60° = 0.5 puts some pixels there), where f64's own
+        // rounding of cos decides and either bin is right.
+        for (w, h) in [(480usize, 270usize), (321, 241)] {
+            let (xc, yc) = (w as f64 / 2.0, h as f64 / 2.0);
+            let half_rho = xc.hypot(yc).ceil() as usize + 1;
+            let rho_round = to_fixed(half_rho as f64 + 0.5, VOTE_SHIFT);
+            for k in 0..180 {
+                let a = (k as f64).to_radians();
+                let (c, s) = (a.cos(), a.sin());
+                let (cq, sq) = (to_fixed(c, VOTE_SHIFT - 1), to_fixed(s, VOTE_SHIFT - 1));
+                for y in 0..h {
+                    for x in 0..w {
+                        let v = (x as f64 - xc) * c + (y as f64 - yc) * s + half_rho as f64 + 0.5;
+                        if (v - v.round()).abs() < 1e-9 {
+                            continue;
+                        }
+                        let exact = v as usize;
+                        let fixed = rho_bin(2 * x as i64 - w as i64, 2 * y as i64 - h as i64, cq, sq, rho_round);
+                        assert_eq!(fixed, exact, "pixel ({x}, {y}) angle {k} in {w}x{h}");
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn fast_normal_angle_matches_atan2() {

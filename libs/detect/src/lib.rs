@@ -226,7 +226,10 @@ impl Detector {
         image::check_view(image)?;
         let levels = pyramid_levels(image.width, image.height, min_side, max_side);
         let k = (1u64 << levels) as f64;
-        let tower_width = hints.hub_distance_m.and_then(|d| self.expected_tower_width_px(d, image.width)).map(|w| w / k);
+        let expected = robust::Expected {
+            tower_width: hints.hub_distance_m.and_then(|d| self.expected_tower_width_px(d, image.width)).map(|w| w / k),
+            spinner_radius: hints.hub_distance_m.and_then(|d| self.expected_spinner_radius_px(d, image.width)).map(|r| r / k),
+        };
         let small = self.pyramid.build(image, levels)?;
         let pyramid_us = us_since(t0);
         // Hint in working px.
@@ -237,7 +240,7 @@ impl Detector {
         };
         let found = match self.config.mode {
             Mode::Thesis => thesis::run(&self.config.thesis, small, &mut self.scratch, &hints_small)?,
-            Mode::Default => robust::run(&self.config.default, small, &mut self.scratch, &hints_small, tower_width)?,
+            Mode::Default => robust::run(&self.config.default, small, &mut self.scratch, &hints_small, expected)?,
         };
         let mut out = self.to_output(&found, k, image.width, image.height);
         out.detection.timings.pyramid_us = pyramid_us;
@@ -252,6 +255,12 @@ impl Detector {
         let c = &self.config.camera;
         (hub_distance_m.is_finite() && hub_distance_m > 0.0)
             .then(|| self.focal_px(width) * c.tower_top_diameter_m / (hub_distance_m + c.hub_tower_gap_m))
+    }
+
+    /// The spinner's radius seen from `hub_distance_m` in front of the hub, full-resolution px.
+    /// `None` for a distance that is not a positive finite number.
+    fn expected_spinner_radius_px(&self, hub_distance_m: f64, width: u32) -> Option<f64> {
+        (hub_distance_m.is_finite() && hub_distance_m > 0.0).then(|| self.focal_px(width) * self.config.camera.spinner_diameter_m / 2.0 / hub_distance_m)
     }
 
     /// Focal length in full-resolution px.

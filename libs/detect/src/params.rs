@@ -57,12 +57,16 @@ pub struct CameraParams {
     /// Distance from the hub centre to the tower axis along the rotor axis, metres (~4 m); the
     /// yaw estimate (thesis eq. 7.14) divides the image gap by it.
     pub hub_tower_gap_m: f64,
+    /// Spinner (nose cone) diameter at the blade roots, metres (3.2 m on the modelled turbine):
+    /// with the tracker's distance it gives the spinner radius to search for. Must equal
+    /// `track.distance.spinner_diameter_m` (checked at load).
+    pub spinner_diameter_m: f64,
 }
 
 impl Default for CameraParams {
     #[allow(clippy::approx_constant)] // 0.4343 is the GoPro lens (833.9 / 1920), not log10(e)
     fn default() -> Self {
-        CameraParams { hfov_deg: 118.0, focal_length_per_width: 0.4343, tower_top_diameter_m: 2.2, hub_tower_gap_m: 4.2 }
+        CameraParams { hfov_deg: 118.0, focal_length_per_width: 0.4343, tower_top_diameter_m: 2.2, hub_tower_gap_m: 4.2, spinner_diameter_m: 3.2 }
     }
 }
 
@@ -369,6 +373,14 @@ pub struct DefaultParams {
     pub spinner_min_radius_px: f64,
     /// Spinner step: largest circle radius searched, fraction of image height.
     pub spinner_max_radius_frac: f64,
+    /// Spinner step with the tracker's distance: only radii from this times the radius expected
+    /// at that distance (`detect.camera.spinner_diameter_m`) are searched, within the two limits
+    /// above. The window allows the distance to be off by a factor of two either way (the
+    /// tracker's distance is good to ~30 %); the narrower search is faster and finds fewer
+    /// circles of the wrong size. 0 = search all radii always.
+    pub spinner_hint_radius_lo: f64,
+    /// ... up to this times the expected radius.
+    pub spinner_hint_radius_hi: f64,
     /// Spinner step: centre accumulator cell and radius step of the gradient circle vote, working px.
     pub spinner_cell_px: f64,
     /// Spinner step: an edge pixel is on a rim when its gradient is within this of the radial
@@ -486,6 +498,8 @@ impl Default for DefaultParams {
             spinner_max_offset_frac: 0.15,
             spinner_min_radius_px: 4.0,
             spinner_max_radius_frac: 0.32,
+            spinner_hint_radius_lo: 0.5,
+            spinner_hint_radius_hi: 2.0,
             spinner_cell_px: 2.0,
             spinner_radial_tol_deg: 25.0,
             spinner_min_coverage: 0.4,
@@ -520,7 +534,8 @@ impl CameraParams {
             c.closed("focal_length_per_width", self.focal_length_per_width, 0.05, 10.0)?;
         }
         c.closed("tower_top_diameter_m", self.tower_top_diameter_m, 0.1, 30.0)?;
-        c.closed("hub_tower_gap_m", self.hub_tower_gap_m, 0.1, 50.0)
+        c.closed("hub_tower_gap_m", self.hub_tower_gap_m, 0.1, 50.0)?;
+        c.closed("spinner_diameter_m", self.spinner_diameter_m, 0.1, 30.0)
     }
 }
 
@@ -638,6 +653,8 @@ impl DefaultParams {
         c.closed("spinner_max_offset_frac", self.spinner_max_offset_frac, 0.0, 1.0)?;
         c.closed("spinner_min_radius_px", self.spinner_min_radius_px, 1.0, 1000.0)?;
         c.closed("spinner_max_radius_frac", self.spinner_max_radius_frac, 0.01, 1.0)?;
+        c.closed("spinner_hint_radius_lo", self.spinner_hint_radius_lo, 0.0, 1.0)?;
+        c.closed("spinner_hint_radius_hi", self.spinner_hint_radius_hi, 1.0, 100.0)?;
         c.closed("spinner_cell_px", self.spinner_cell_px, 0.5, 20.0)?;
         c.closed("spinner_radial_tol_deg", self.spinner_radial_tol_deg, 0.0, 90.0)?;
         c.closed("spinner_min_coverage", self.spinner_min_coverage, 0.0, 1.0)?;

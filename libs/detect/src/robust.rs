@@ -64,9 +64,18 @@ const MAX_PEAKS: usize = 6;
 /// distance tolerance: the blade edges sit half a chord off the blade axis.
 const SUPPORT_ANGLE_DEG: f64 = 12.0;
 
-/// Run the default pipeline on the working image. `tower_width` is the tower width expected
-/// from a tracker's distance, working px.
-pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints, tower_width: Option<f64>) -> Result<Found, DetectError> {
+/// Sizes a tracker's distance lets the detector expect, working px.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Expected {
+    /// Tower width just under the nacelle.
+    pub tower_width: Option<f64>,
+    /// Spinner radius.
+    pub spinner_radius: Option<f64>,
+}
+
+/// Run the default pipeline on the working image, with the sizes `expected` from the tracker's
+/// distance (if any).
+pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints, expected: Expected) -> Result<Found, DetectError> {
     let t = Instant::now();
     imgproc::spatial_gradient(small, &mut s.dx, &mut s.dy, 3, core::BORDER_DEFAULT)?;
     let high = adaptive_high(p, &s.dx, &s.dy, &mut s.hist)?;
@@ -93,7 +102,7 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
         // near the prediction takes its circles, as a candidate near an already searched one
         // does in `recognise`.
         let img = &img;
-        let mut ahead = hints.predicted_hub_px.map(|c| (c, scope.spawn(move || search_circles(p, img, c, h, &mut Vec::new()))));
+        let mut ahead = hints.predicted_hub_px.map(|c| (c, scope.spawn(move || search_circles(p, img, c, h, expected.spinner_radius, &mut Vec::new()))));
         let t = Instant::now();
         hough.run(img.edges, img.dx, img.dy, ew, eh, &settings, segments);
         let hough_us = us_since(t);
@@ -107,11 +116,11 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
             match ahead.take_if(|(q, _)| geometry::dist(*q, c) <= reuse) {
                 // A panic there is a bug here: carry it on.
                 Some((_, job)) => Ok(job.join().unwrap_or_else(|e| std::panic::resume_unwind(e))),
-                None => Ok(search_circles(p, img, c, h, pts)),
+                None => Ok(search_circles(p, img, c, h, expected.spinner_radius, pts)),
             }
         };
         let grad = GradX { data: img.dx, width: ew, height: eh };
-        let mut found = recognise(p, &segs, w, h, hints, &mut search, Some(&grad), tower_width)?;
+        let mut found = recognise(p, &segs, w, h, hints, &mut search, Some(&grad), expected.tower_width)?;
         found.line_count = line_count;
         found.edge_count = edge_count;
         found.edges_us = edges_us;
@@ -138,15 +147,18 @@ fn spinner_reuse_px(p: &DefaultParams, h: f64) -> f64 {
 
 /// Spinner candidates around `c`: circles `[x, y, r]` (working px, best first) among the Canny
 /// edge pixels in a square of half side `spinner_search_frac · h`, see [`crate::spinner`].
-fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 3]> {
-    let half = p.spinner_search_frac * h;
+/// With an `expected` radius only the radii of the `spinner_hint_radius_*` window around it are
+/// searched, and only the edge pixels such circles can reach are collected.
+fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 3]> {
+    let (min_r, max_r) = spinner_radii(p, h, expected);
+    let off = p.spinner_max_offset_frac * h;
+    let half = (p.spinner_search_frac * h).min(off + max_r + p.spinner_cell_px);
     let (cols, rows) = (img.width as i32, img.height as i32);
     let x0 = ((c[0] - half).floor() as i32).clamp(0, cols);
     let y0 = ((c[1] - half).floor() as i32).clamp(0, rows);
     let x1 = ((c[0] + half).ceil() as i32).clamp(0, cols);
     let y1 = ((c[1] + half).ceil() as i32).clamp(0, rows);
-    let max_r = p.spinner_max_radius_frac * h;
-    if max_r <= p.spinner_min_radius_px || x1 - x0 < 2 || y1 - y0 < 2 {
+    if max_r <= min_r || x1 - x0 < 2 || y1 - y0 < 2 {
         return Vec::new();
     }
     pts.clear();
@@ -166,10 +178,9 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, pts: &m
             }
         }
     }
-    let off = p.spinner_max_offset_frac * h;
     let cs = CircleSearch {
         roi: [(c[0] - off).max(0.0), (c[1] - off).max(0.0), (c[0] + off).min(cols as f64), (c[1] + off).min(rows as f64)],
-        min_r: p.spinner_min_radius_px,
+        min_r,
         max_r,
         cell: p.spinner_cell_px,
         radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
@@ -177,6 +188,17 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, pts: &m
         max_peaks: SPINNER_PEAKS,
     };
     find_circles(pts, &cs).into_iter().map(|k| [k[0], k[1], k[2]]).collect()
+}
+
+/// Radii `[min, max]` the spinner step searches (working px): the configured limits, narrowed
+/// to the `spinner_hint_radius_*` window around an `expected` radius. An empty range (min ≥ max)
+/// means the expected spinner is too small or too large to search for.
+fn spinner_radii(p: &DefaultParams, h: f64, expected: Option<f64>) -> (f64, f64) {
+    let (lo, hi) = (p.spinner_min_radius_px, p.spinner_max_radius_frac * h);
+    match expected.filter(|r| p.spinner_hint_radius_lo > 0.0 && r.is_finite() && *r > 0.0) {
+        Some(r) => (lo.max(p.spinner_hint_radius_lo * r), hi.min(p.spinner_hint_radius_hi * r)),
+        None => (lo, hi),
+    }
 }
 
 /// High Canny threshold: the `canny_high_percentile` of the L1 gradient magnitude, clamped.
@@ -1122,6 +1144,21 @@ mod tests {
         let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, None).unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 2.0, "{:?}", f.hub);
+    }
+
+    #[test]
+    fn tracker_distance_narrows_the_spinner_radii() {
+        let p = DefaultParams::default();
+        let all = spinner_radii(&p, 270.0, None);
+        assert_eq!(all, (p.spinner_min_radius_px, p.spinner_max_radius_frac * 270.0));
+        // Expected 20 px: 10..40 px, inside the configured limits.
+        assert_eq!(spinner_radii(&p, 270.0, Some(20.0)), (10.0, 40.0));
+        // Far away (expected 3 px): clipped to the limits, and empty: nothing to search.
+        let (lo, hi) = spinner_radii(&p, 270.0, Some(1.5));
+        assert!(lo >= hi, "{lo} {hi}");
+        // Nonsense distances and a disabled window fall back to all radii.
+        assert_eq!(spinner_radii(&p, 270.0, Some(f64::NAN)), all);
+        assert_eq!(spinner_radii(&DefaultParams { spinner_hint_radius_lo: 0.0, ..p.clone() }, 270.0, Some(20.0)), all);
     }
 
     #[test]

@@ -42,6 +42,9 @@ pub struct Report {
     pub hops: Vec<Stat>,
     /// Capture to the last stage's output.
     pub end_to_end: Vec<Stat>,
+    /// The detect stage's own split of its time (`pyramid`, `edges`, `hough`, `geometry`), from
+    /// the timings each detection carries: where to look when the detect stage is slow.
+    pub detect_steps: Vec<Stat>,
     /// Messages without usable stamps (all zero), per topic.
     pub unstamped: BTreeMap<String, u64>,
     /// Messages on topics this tool does not know (ignored), per topic.
@@ -209,6 +212,16 @@ pub fn analyze(path: &Path) -> Result<Report, LatencyError> {
             report.end_to_end.push(stat(name, st.values().filter_map(|s| us(s.publish_ns, s.capture_ns)).collect(), dropped));
         }
     }
+    if !dets.is_empty() {
+        let t = |f: fn(&Detection) -> f64| dets.values().map(f).filter(|v| *v > 0.0).collect::<Vec<f64>>();
+        report.detect_steps = vec![
+            stat("pyramid", t(|d| d.timings.pyramid_us), 0),
+            stat("edges", t(|d| d.timings.edges_us), 0),
+            stat("hough", t(|d| d.timings.hough_us), 0),
+            stat("geometry", t(|d| d.timings.geometry_us), 0),
+        ];
+        report.detect_steps.retain(|s| s.count > 0);
+    }
     Ok(report)
 }
 
@@ -226,6 +239,7 @@ pub fn print(report: &Report) {
     section("stage", &report.stages);
     section("hop", &report.hops);
     section("end to end", &report.end_to_end);
+    section("detect steps", &report.detect_steps);
     for (t, n) in &report.unstamped {
         println!("note: {n} messages on {t} lack stamps (ignored)");
     }
@@ -256,7 +270,9 @@ mod tests {
             let h = FrameHeader { seq, capture_ns: base, publish_ns: base + 1_000_000, ..Default::default() };
             rec.write_frame(&h, None, 1).unwrap();
             if seq % 2 == 0 {
-                let d = Detection { stamps: stamps(seq, base), ..Default::default() };
+                let mut d = Detection { stamps: stamps(seq, base), ..Default::default() };
+                d.timings.pyramid_us = 100.0 + seq as f64;
+                d.timings.hough_us = 700.0;
                 rec.write_json(ChannelKind::Detection, seq, 1, 1, &d).unwrap();
             }
         }
@@ -271,6 +287,9 @@ mod tests {
         assert_eq!((hop.p50_us, hop.count, hop.dropped), (1000.0, 5, 4), "4 frames skipped inside 0..=8");
         assert_eq!(r.end_to_end[0].p50_us, 5000.0);
         assert_eq!(r.unstamped.get("/detections"), Some(&1));
+        // Steps the detector did not time (zero) are left out, not reported as 0 us.
+        let steps: Vec<(&str, f64, u64)> = r.detect_steps.iter().map(|s| (s.name.as_str(), s.p50_us, s.count)).collect();
+        assert_eq!(steps, vec![("pyramid", 104.0, 5), ("hough", 700.0, 5)]);
     }
 
     #[test]

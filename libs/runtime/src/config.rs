@@ -621,6 +621,7 @@ impl Config {
             ("detect.camera.focal_length_per_width", dc.focal_length_per_width, "track.camera.focal_length_per_width", tc.camera.focal_length_per_width),
             ("detect.camera.tower_top_diameter_m", dc.tower_top_diameter_m, "track.distance.tower_diameter_m", tc.distance.tower_diameter_m),
             ("detect.camera.hub_tower_gap_m", dc.hub_tower_gap_m, "track.yaw.hub_tower_offset_m", tc.yaw.hub_tower_offset_m),
+            ("detect.camera.spinner_diameter_m", dc.spinner_diameter_m, "track.distance.spinner_diameter_m", tc.distance.spinner_diameter_m),
         ] {
             if dv != tv {
                 return Err(ConfigError::OutOfRange {

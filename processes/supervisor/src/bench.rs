@@ -356,7 +356,9 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
             if let Some(s) = proc_sample(pid) {
                 let name = proc_name(pid);
                 first.entry(pid).or_insert((name, s, Instant::now()));
-                last.insert(pid, (s, Instant::now()));
+                // The peak of all samples: an exiting process (zombie) reports no VmHWM.
+                let peak = last.get(&pid).map_or(0, |(p, _)| p.peak_rss_kb).max(s.peak_rss_kb);
+                last.insert(pid, (ProcSample { peak_rss_kb: peak, ..s }, Instant::now()));
             }
         }
         std::thread::sleep(Duration::from_millis(500));

@@ -136,13 +136,16 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64) -> anyhow::Res
         let (mut so, mut st) = (Scorer::new(), Scorer::new());
         let mut raw_sq = Vec::new();
         let mut prev_heading: Option<(f64, u64)> = None;
+        // As in the live pipeline, the tracker's newest state focuses the detector on the next
+        // frame (predicted hub, expected tower and spinner sizes); the thesis filter is fed the
+        // same detections, so the two columns differ by the filter alone.
+        let mut last: Option<hubtrack_types::TrackState> = None;
         for (i, fr) in path.iter().enumerate() {
             let truth = renderer.render(&fr.scene, &fr.pose, &mut pixels).map_err(|e| anyhow::anyhow!("{e}"))?;
             let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &pixels };
             let capture_ns = (i as f64 / FLIGHT_FPS * 1e9).round() as u64;
-            let mut det: Detection = detector
-                .detect(&view, &Hints { roll_rad: Some(fr.pose.roll_deg.to_radians()), ..Hints::default() })?
-                .detection;
+            let hints = last.as_ref().map_or_else(Hints::default, |t| Hints::from_track(t, cam.width, cam.height, capture_ns));
+            let mut det: Detection = detector.detect(&view, &Hints { roll_rad: Some(fr.pose.roll_deg.to_radians()), ..hints })?.detection;
             det.stamps.seq = i as u64;
             det.stamps.capture_ns = capture_ns;
             if fr.dropout {
@@ -166,7 +169,9 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64) -> anyhow::Res
                 body_rates_rad_s: [0.0, 0.0, yaw_rate],
                 ..Default::default()
             };
-            so.add(&ours.update(&det, Some(&vehicle)), &truth, height);
+            let state = ours.update(&det, Some(&vehicle));
+            so.add(&state, &truth, height);
+            last = Some(state);
             st.add(&thesis.update(&det, None), &truth, height);
         }
         so.m.raw_sq = raw_sq.clone();
