@@ -684,6 +684,21 @@ fn evaluate(
         }
         !is_tower
     });
+    // A rotor has three blades: with four or more, one pointing straight down along which a
+    // tower line runs is the tower, even when some of its lines are not tower lines (a short
+    // piece of a tower edge, the nacelle's underside, the shadow edge). Without this the true
+    // hub loses to a point lower on the tower, where ground lines behind it pass for blades.
+    if blades.len() > 3 {
+        let down_blade = blades
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| geometry::ang_dist(b.angle_deg, down) <= p.tower_max_tilt_deg && b.lines.iter().any(|i| tower.contains(i)))
+            .min_by(|(_, a), (_, b)| geometry::ang_dist(a.angle_deg, down).total_cmp(&geometry::ang_dist(b.angle_deg, down)))
+            .map(|(k, _)| k);
+        if let Some(k) = down_blade {
+            rejected.extend(blades.remove(k).lines);
+        }
+    }
     // Weak blades (total length below one minimum Hough segment) are noise.
     let min_weight = p.candidate_min_length_frac * h;
     blades.retain(|b| {
@@ -1066,6 +1081,24 @@ mod tests {
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 3.0, "{:?}", f.hub);
         assert_eq!(f.blade_angles.len(), 3);
+    }
+
+    #[test]
+    fn fourth_blade_pointing_down_the_tower_is_the_tower() {
+        let p = DefaultParams::default();
+        let hub = [200.0, 100.0];
+        let mut segs = rotor(hub, 0.0);
+        // Edges of the nacelle's shadow on the tower, 7.5° and 8.5° off vertical: they join the
+        // tower lines' "blade" pointing down, and the second leans more than a tower line may.
+        segs.push(ray(hub, 187.5, 8.0, 60.0));
+        segs.push(ray(hub, 188.5, 8.0, 60.0));
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, None).unwrap();
+        assert!(f.detected, "{f:?}");
+        assert!(geometry::dist(f.hub, hub) < 3.0, "{:?}", f.hub);
+        let mut angles: Vec<f64> = f.blade_angles.iter().map(|a| a.round()).collect();
+        angles.sort_by(f64::total_cmp);
+        assert_eq!(angles.len(), 3, "three blades, the tower is no blade: {angles:?}");
+        assert!(angles.iter().all(|a| geometry::ang_dist(*a, 180.0) > 30.0), "{angles:?}");
     }
 
     #[test]
