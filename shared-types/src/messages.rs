@@ -454,9 +454,10 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::field_reassign_with_default)] // fixed-size messages, filled field by field
     fn messages_round_trip_through_json_exactly() {
         let mut d = Detection::default();
-        d.hub_px = [1234.567_890_123, 0.1 + 0.2];
+        d.hub_px = [1_234.567_890_123, 0.1 + 0.2];
         d.stamps.seq = u64::MAX;
         let json = serde_json::to_string(&d).unwrap();
         let back: Detection = serde_json::from_str(&json).unwrap();

@@ -355,7 +355,7 @@ mod tests {
         assert_eq!(d.tower_width_row, 474.0);
         assert_eq!(d.hub_tower_gap_px, -20.0);
         // The default lens: the GoPro's centre focal length, 0.4343 of the width.
-        let focal = 0.4343 * 1920.0;
+        let focal = params::CameraParams::default().focal_length_per_width * 1920.0;
         let dist = out.distance_m.unwrap();
         assert!((dist - focal * 2.2 / 40.0).abs() < 1e-9);
         let yaw = out.yaw_deg.unwrap();

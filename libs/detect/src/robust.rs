@@ -28,8 +28,8 @@
 //!    becomes a candidate centred on it, with a confidence bonus. Around the tracker's predicted
 //!    hub the search runs on a second thread from step 2 on.
 //! 10. Penalties: a long line passing through a candidate (tower, mast) lowers its confidence;
-//!    a supporting line that continues collinearly beyond the candidate (horizon or field border
-//!    hidden by the turbine) is no blade. Best candidate by confidence, then support.
+//!     a supporting line that continues collinearly beyond the candidate (horizon or field border
+//!     hidden by the turbine) is no blade. Best candidate by confidence, then support.
 
 use std::time::Instant;
 

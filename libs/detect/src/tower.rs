@@ -265,7 +265,8 @@ pub(crate) fn fit_tower_one_edge(g: &GradX<'_>, seed: &Segment, width: f64, hub_
     let rows: Vec<i64> = (top.ceil() as i64..g.height as i64 - 1).collect();
     let x0 = |y: i64| seed.x_at_y(y as f64);
     let sum: f64 = rows.iter().filter(|&&y| (y as f64) <= seed_bottom).filter_map(|&y| Some(g.at(x0(y)?.round() as i64, y))).sum();
-    if sum == 0.0 || !(width > 0.0) {
+    // `width > 0.0` is false for NaN too.
+    if sum == 0.0 || width.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let edge = fit_edge(g, &rows, x0, sum.signum())?;

@@ -105,6 +105,7 @@ mod tests {
     use hubtrack_types::OverlaySegment;
 
     #[test]
+    #[allow(clippy::field_reassign_with_default)] // a fixed-size message, filled field by field
     fn overlay_becomes_line_lists_and_markers() {
         let mut o = DetectOverlay::default();
         o.segment_count = 3;

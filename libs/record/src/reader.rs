@@ -92,7 +92,7 @@ mod tests {
         assert!(!report.input_complete);
         assert!(report.messages < 30, "{report:?}");
         // Each frame is 3 messages (image, header, stats) flushed into its own chunk.
-        assert!(report.messages >= 9 && report.messages % 3 == 0, "{report:?}");
+        assert!(report.messages >= 9 && report.messages.is_multiple_of(3), "{report:?}");
         assert!(report.messages < 30, "{report:?}");
         // The recovered file is complete: the indexed reader accepts it.
         let data = std::fs::read(&out).unwrap();

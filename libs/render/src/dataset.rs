@@ -25,7 +25,7 @@ pub struct Rng(pub u64);
 
 impl Rng {
     /// Next 64 random bits.
-    pub fn next(&mut self) -> u64 {
+    pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -34,7 +34,7 @@ impl Rng {
     }
     /// Uniform in `[lo, hi)`.
     pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
+        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 
@@ -54,7 +54,7 @@ pub struct SynthCase {
 pub fn synth_case(seed: u64, class: usize, index: u64, negative: bool) -> SynthCase {
     let mut r = Rng(seed ^ (class as u64) << 40 ^ index.wrapping_mul(0x9E37));
     let (name, lo, hi) = CLASSES[class];
-    let mut scene = Scene::random(r.next());
+    let mut scene = Scene::random(r.next_u64());
     scene.turbine_present = !negative;
     if negative && scene.distractor == Distractor::None {
         scene.distractor = Distractor::Mast;
@@ -69,7 +69,7 @@ pub fn synth_case(seed: u64, class: usize, index: u64, negative: bool) -> SynthC
     pose.yaw_deg += r.range(-MAX_POINTING_DEG, MAX_POINTING_DEG);
     pose.pitch_deg += r.range(-0.6, 0.6) * MAX_POINTING_DEG;
     pose.roll_deg = r.range(-MAX_ROLL_DEG, MAX_ROLL_DEG);
-    let wide = r.next() % 4 != 0;
+    let wide = !r.next_u64().is_multiple_of(4);
     let mut categories = vec!["all".to_string(), format!("distance:{name}")];
     categories.push(format!("sky:{:?}", scene.sky).to_lowercase());
     categories.push(if rel_yaw.abs() > OBLIQUE_DEG { "view:oblique".into() } else { "view:front".into() });
@@ -126,7 +126,7 @@ pub struct FlightFrame {
 pub fn flight(seed: u64, frames: u64) -> Vec<FlightFrame> {
     use std::f64::consts::TAU;
     let mut r = Rng(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0xF1_1647);
-    let mut scene = Scene::random(r.next());
+    let mut scene = Scene::random(r.next_u64());
     scene.turbine_present = true;
     scene.distractor = Distractor::None;
     let nacelle = r.range(-20.0, 20.0);
@@ -135,12 +135,12 @@ pub fn flight(seed: u64, frames: u64) -> Vec<FlightFrame> {
     let drift_period = r.range(0.6, 1.4);
     let h0 = r.range(FLIGHT_START_HEIGHT_M.0, FLIGHT_START_HEIGHT_M.1);
     let turn_at = r.range(0.3, 0.6);
-    let turn_sign = if r.next() % 2 == 0 { 1.0 } else { -1.0 };
+    let turn_sign = if r.next_u64().is_multiple_of(2) { 1.0 } else { -1.0 };
     let roll_phase = r.range(0.0, TAU);
     let mut drop_ranges = Vec::new();
     for _ in 0..FLIGHT_DROPOUTS {
         let start = (r.range(0.15, 0.9) * frames as f64) as u64;
-        let len = FLIGHT_DROPOUT_FRAMES.0 + r.next() % (FLIGHT_DROPOUT_FRAMES.1 - FLIGHT_DROPOUT_FRAMES.0 + 1);
+        let len = FLIGHT_DROPOUT_FRAMES.0 + r.next_u64() % (FLIGHT_DROPOUT_FRAMES.1 - FLIGHT_DROPOUT_FRAMES.0 + 1);
         drop_ranges.push(start..start + len);
     }
     let n = frames.max(2) as f64;

@@ -21,7 +21,7 @@ fn clamp_u8(v: i32) -> u8 {
 /// Converts a packed YUYV 4:2:2 image (`stride` bytes per row) to tightly packed BGR8.
 pub fn yuyv_to_bgr(src: &[u8], width: usize, height: usize, stride: usize, dst: &mut [u8]) -> Result<(), CaptureError> {
     check_len(dst, width * height * 3)?;
-    if width % 2 != 0 || stride < width * 2 || src.len() < stride * (height.max(1) - 1) + width * 2 {
+    if !width.is_multiple_of(2) || stride < width * 2 || src.len() < stride * (height.max(1) - 1) + width * 2 {
         return Err(CaptureError::BadFrame {
             seq: 0,
             reason: format!("YUYV buffer of {} bytes does not hold {width}x{height} (stride {stride})", src.len()),
@@ -78,6 +78,19 @@ pub fn mat_to_bgr(mat: &Mat, dst: &mut [u8]) -> Result<(), CaptureError> {
     Ok(())
 }
 
+/// Writes tightly packed BGR8 pixels to an image file (format from the extension: .png, .jpg, ...).
+pub fn write_bgr_image(path: &std::path::Path, width: u32, height: u32, bgr: &[u8]) -> Result<(), CaptureError> {
+    use opencv::prelude::*;
+    check_len(bgr, width as usize * height as usize * 3)?;
+    let flat = Mat::new_rows_cols_with_data(height as i32, (width * 3) as i32, bgr)?;
+    let mat = flat.reshape(3, height as i32)?;
+    let name = path.to_str().ok_or_else(|| CaptureError::BadFrame { seq: 0, reason: "non-UTF-8 path".into() })?;
+    if !opencv::imgcodecs::imwrite_def(name, &mat)? {
+        return Err(CaptureError::BadFrame { seq: 0, reason: format!("cannot write {name}") });
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -114,17 +127,4 @@ mod tests {
         let mut small = [0u8; 5];
         assert!(matches!(yuyv_to_bgr(&[0u8; 8], 2, 2, 4, &mut small), Err(CaptureError::BufferSize { .. })));
     }
-}
-
-/// Writes tightly packed BGR8 pixels to an image file (format from the extension: .png, .jpg, ...).
-pub fn write_bgr_image(path: &std::path::Path, width: u32, height: u32, bgr: &[u8]) -> Result<(), CaptureError> {
-    use opencv::prelude::*;
-    check_len(bgr, width as usize * height as usize * 3)?;
-    let flat = Mat::new_rows_cols_with_data(height as i32, (width * 3) as i32, bgr)?;
-    let mat = flat.reshape(3, height as i32)?;
-    let name = path.to_str().ok_or_else(|| CaptureError::BadFrame { seq: 0, reason: "non-UTF-8 path".into() })?;
-    if !opencv::imgcodecs::imwrite_def(name, &mat)? {
-        return Err(CaptureError::BadFrame { seq: 0, reason: format!("cannot write {name}") });
-    }
-    Ok(())
 }

@@ -96,7 +96,7 @@ fn fourcc_text(f: V4lFormat) -> &'static str {
 /// Maps an OS error on `path` to a clear capture error.
 fn device_error(path: &Path, what: &'static str, e: io::Error) -> CaptureError {
     match e.raw_os_error() {
-        Some(libc_enoent) if libc_enoent == 2 => CaptureError::DeviceNotFound { path: path.into() },
+        Some(2) => CaptureError::DeviceNotFound { path: path.into() }, // ENOENT
         Some(16) => CaptureError::DeviceBusy { path: path.into() }, // EBUSY
         _ => CaptureError::Device { path: path.into(), what, reason: e.to_string() },
     }

@@ -245,7 +245,7 @@ impl DiskGuard {
         }
         // SAFETY: rc == 0, so `st` is initialised.
         let st = unsafe { st.assume_init() };
-        Some((st.f_bavail as u64).saturating_mul(st.f_frsize as u64))
+        Some(st.f_bavail.saturating_mul(st.f_frsize))
     }
 
     fn check(&mut self) {

@@ -54,7 +54,7 @@ fn run() -> anyhow::Result<()> {
     let cfg = &config.sim;
     let scenario = Scenario::from_seed(cfg.seed, cfg);
     let camera = render_camera(&cfg.camera);
-    let mut renderer = Renderer::new(camera.clone());
+    let mut renderer = Renderer::new(camera);
     let mut vehicle = Multicopter::new(&scenario.start, &cfg.vehicle);
     let mut wind = Wind::new(cfg.seed, &cfg.wind);
     let mut autopilot = Autopilot::new(&cfg.autopilot);

@@ -125,7 +125,7 @@ fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::D
     let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
     let mut buffers: Vec<Vec<u8>> = renderers.iter().map(|r| vec![0u8; r.camera().frame_bytes()]).collect();
     let mut table = Table::new();
-    for class in 0..CLASSES.len() {
+    for (class, class_def) in CLASSES.iter().enumerate() {
         for i in 0..per_class + per_class / 12 {
             let negative = i >= per_class;
             let case = synth_case(seed, class, i, negative);
@@ -143,7 +143,7 @@ fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::D
             let outcomes: Vec<_> = hubs.iter().map(|h| score(&t, *h, view.height as f64)).collect();
             add(&mut table, &case.categories, &t, &outcomes);
         }
-        eprintln!("[eval] synthetic class {} done", CLASSES[class].0);
+        eprintln!("[eval] synthetic class {} done", class_def.0);
     }
     Ok(table)
 }

@@ -116,7 +116,7 @@ impl Scorer {
 pub fn run(config: &Config, flights: u64, frames: u64, seed: u64) -> anyhow::Result<()> {
     let mut detector = Detector::new(config.detect.clone())?;
     let mut renderer = Renderer::new(Camera::gopro_hero3());
-    let cam = renderer.camera().clone();
+    let cam = *renderer.camera();
     let mut pixels = vec![0u8; cam.frame_bytes()];
     let height = cam.height as f64;
     let (mut total_ours, mut total_thesis) = (Metrics::default(), Metrics::default());

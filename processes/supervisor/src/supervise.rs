@@ -284,7 +284,7 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
     let started = Instant::now();
     let deadline = duration;
     let mut status_at = Instant::now() - STATUS_PERIOD;
-    while failure.is_none() && !shutdown.requested() && !deadline.is_some_and(|d| started.elapsed() >= d) {
+    while failure.is_none() && !shutdown.requested() && deadline.is_none_or(|d| started.elapsed() < d) {
         std::thread::sleep(TICK);
         drain(&heartbeats, &mut sup, &mut last_status)?;
         let now = Instant::now();
