@@ -321,7 +321,9 @@ pub struct DefaultParams {
     pub tower_partner_min_salience: f64,
     /// The tower band's width at the image bottom over its width at its top must be at least
     /// this: a blade pointing down narrows toward its tip (~0.65 over the visible part), the
-    /// tower keeps its image width within ~15 %.
+    /// tower keeps its image width within ~10 %. A blade pointing down in front of the tower
+    /// merges with it into one band that narrows by ~13 % (rendered approaches at ~40 m),
+    /// whose width and hub–tower gap are both wrong: 0.9 rejects it (0.85 let it through).
     pub tower_min_width_ratio: f64,
     /// ... and at most this: the visible part of the tower widens by less than 10 % (its taper;
     /// its rows are at about the same depth), while a band from a tower edge to the edge of a
@@ -479,7 +481,7 @@ impl Default for DefaultParams {
             tower_max_width_frac: 0.25,
             tower_partner_min_ratio: 0.15,
             tower_partner_min_salience: 4.0,
-            tower_min_width_ratio: 0.85,
+            tower_min_width_ratio: 0.9,
             tower_max_width_ratio: 1.25,
             tower_blade_down_tol_deg: 12.0,
             tower_blade_axis_tol_frac: 0.025,
