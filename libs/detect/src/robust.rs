@@ -60,6 +60,9 @@ const SPINNER_PEAKS: usize = 3;
 const TOWER_SEEDS: usize = 4;
 /// Number of vote peaks examined in detail.
 const MAX_PEAKS: usize = 6;
+/// Blades of the rotor (the thesis's turbines and practically every utility-scale one): the
+/// strongest this many blade groups make a candidate's rotor, more are penalised.
+const ROTOR_BLADES: usize = 3;
 /// A supporting line may point past the candidate by this angle (degrees) on top of the fixed
 /// distance tolerance: the blade edges sit half a chord off the blade axis.
 const SUPPORT_ANGLE_DEG: f64 = 12.0;
@@ -625,7 +628,7 @@ fn is_paired(segs: &[Segment], b: &Blade, c: P2) -> bool {
 /// Score of how well blade directions fit a rotor: all pairwise separations of the (up to 3)
 /// strongest blades within `blade_sep_tol_deg` of 120° (or of 240° for the reflex angle).
 fn rotor_geometry_ok(p: &DefaultParams, blades: &[Blade]) -> bool {
-    let n = blades.len().min(3);
+    let n = blades.len().min(ROTOR_BLADES);
     if n < 2 {
         return false;
     }
@@ -688,7 +691,7 @@ fn evaluate(
     // tower line runs is the tower, even when some of its lines are not tower lines (a short
     // piece of a tower edge, the nacelle's underside, the shadow edge). Without this the true
     // hub loses to a point lower on the tower, where ground lines behind it pass for blades.
-    if blades.len() > 3 {
+    if blades.len() > ROTOR_BLADES {
         let down_blade = blades
             .iter()
             .enumerate()
@@ -724,7 +727,7 @@ fn evaluate(
         if blades.iter().filter(|b| b.axis.is_some() || is_paired(segs, b, c)).count() >= 2 {
             conf += p.conf_paired;
         }
-        conf -= p.conf_extra_blade_penalty * nb.saturating_sub(3) as f64;
+        conf -= p.conf_extra_blade_penalty * nb.saturating_sub(ROTOR_BLADES) as f64;
         if spinner.is_some() {
             conf += p.conf_spinner;
         }
@@ -740,7 +743,7 @@ fn evaluate(
     if spinner_r > 0.0 && spinner_r >= p.close_spinner_radius_frac * h {
         conf = conf.max(p.conf_close_spinner);
     }
-    let support = blades.iter().take(3).map(|b| b.weight).sum();
+    let support = blades.iter().take(ROTOR_BLADES).map(|b| b.weight).sum();
     Candidate { centre: c, blades, rejected, tower, confidence: conf.min(1.0), support, spinner }
 }
 
@@ -761,14 +764,14 @@ fn passes_through(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h
 /// least two paired blades, their axes alone (the edges meet at the spinner rim, the axes at
 /// its centre).
 fn refine(segs: &[Segment], blades: &[Blade], centre: P2) -> Option<P2> {
-    let axes: Vec<(Segment, f64)> = blades.iter().take(3).filter_map(|b| b.axis.map(|a| (a, 1.0))).collect();
+    let axes: Vec<(Segment, f64)> = blades.iter().take(ROTOR_BLADES).filter_map(|b| b.axis.map(|a| (a, 1.0))).collect();
     if axes.len() >= 2 {
         if let Some(x) = geometry::lines_nearest_point(&axes) {
             return Some(x);
         }
     }
     let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for bl in blades.iter().take(3) {
+    for bl in blades.iter().take(ROTOR_BLADES) {
         // Each side of the blade (each edge) weighs half, so a blade seen with both edges pulls
         // toward its axis, not toward its longer edge.
         let d = geometry::dir_from_up_cw(bl.angle_deg);
