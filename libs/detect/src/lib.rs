@@ -15,6 +15,7 @@
 pub mod geometry;
 pub mod params;
 
+mod blade;
 mod hough;
 mod image;
 mod robust;

@@ -418,6 +418,22 @@ pub struct DefaultParams {
     pub occluded_angle_deg: f64,
     /// ... and within this offset from its line, fraction of image height.
     pub occluded_offset_frac: f64,
+    /// Blade seen by one edge (`blade.rs`): its partner edge is searched at least this far
+    /// from it, working px (closer is the edge's own Sobel spread).
+    pub blade_partner_min_width_px: f64,
+    /// ... and at most this far, fraction of image height (blade chords reach ~0.1 h at 8 m
+    /// with the GoPro).
+    pub blade_partner_max_width_frac: f64,
+    /// ... at this many points along the edge.
+    pub blade_partner_samples: u32,
+    /// ... and must be found at this fraction of them.
+    pub blade_partner_min_found_frac: f64,
+    /// ... with a response of opposite sign of at least this fraction of the edge's own.
+    pub blade_partner_response_ratio: f64,
+    /// ... at offsets within this RMS of a straight line, working px.
+    pub blade_partner_max_rms_px: f64,
+    /// ... whose slope (band width change per px along the blade) is at most this.
+    pub blade_partner_max_taper: f64,
 }
 
 impl Default for DefaultParams {
@@ -502,6 +518,13 @@ impl Default for DefaultParams {
             spinner_max_radius_frac: 0.32,
             spinner_hint_radius_lo: 0.5,
             spinner_hint_radius_hi: 2.0,
+            blade_partner_min_width_px: 2.0,
+            blade_partner_max_width_frac: 0.1,
+            blade_partner_samples: 9,
+            blade_partner_min_found_frac: 0.6,
+            blade_partner_response_ratio: 0.3,
+            blade_partner_max_rms_px: 1.5,
+            blade_partner_max_taper: 0.15,
             spinner_cell_px: 2.0,
             spinner_radial_tol_deg: 25.0,
             spinner_min_coverage: 0.4,
@@ -657,6 +680,13 @@ impl DefaultParams {
         c.closed("spinner_max_radius_frac", self.spinner_max_radius_frac, 0.01, 1.0)?;
         c.closed("spinner_hint_radius_lo", self.spinner_hint_radius_lo, 0.0, 1.0)?;
         c.closed("spinner_hint_radius_hi", self.spinner_hint_radius_hi, 1.0, 100.0)?;
+        c.closed("blade_partner_min_width_px", self.blade_partner_min_width_px, 1.0, 100.0)?;
+        c.closed("blade_partner_max_width_frac", self.blade_partner_max_width_frac, 0.0, 1.0)?;
+        c.closed("blade_partner_samples", self.blade_partner_samples as f64, 2.0, 100.0)?;
+        c.closed("blade_partner_min_found_frac", self.blade_partner_min_found_frac, 0.0, 1.0)?;
+        c.closed("blade_partner_response_ratio", self.blade_partner_response_ratio, 0.0, 10.0)?;
+        c.closed("blade_partner_max_rms_px", self.blade_partner_max_rms_px, 0.0, 100.0)?;
+        c.closed("blade_partner_max_taper", self.blade_partner_max_taper, 0.0, 1.0)?;
         c.closed("spinner_cell_px", self.spinner_cell_px, 0.5, 20.0)?;
         c.closed("spinner_radial_tol_deg", self.spinner_radial_tol_deg, 0.0, 90.0)?;
         c.closed("spinner_min_coverage", self.spinner_min_coverage, 0.0, 1.0)?;

@@ -18,8 +18,9 @@
 //! 6. Each peak: supporting lines (near end close, line pointing at it) grouped into blades;
 //!    a downward "blade" that is the tower is dropped; tower lines below are looked up;
 //!    confidence from blade count, tower, and blade separations vs a (skewed) 120° rotor.
-//! 7. Hub refined by least squares over its blade lines, each blade weighted equally; with two
-//!    or more paired blades, over their axes instead.
+//! 7. Hub refined by least squares over its blade lines, each blade weighted equally; a blade
+//!    seen by one edge contributes its axis instead when its partner edge is found in the
+//!    gradient image (`blade.rs`); with two or more known axes, over the axes alone.
 //! 8. Edge pairing (`pair_edges`): the two edges of a blade (nearly parallel, overlapping, a
 //!    slender band) give its axis, the internal bisector; axis–axis crossings are extra
 //!    proposals and axes may end further from the hub (blades start at the spinner rim).
@@ -40,7 +41,8 @@ use opencv::prelude::*;
 use crate::geometry::{self, Segment, P2};
 use crate::params::DefaultParams;
 use crate::spinner::{find_circles, CircleSearch, EdgePoint};
-use crate::tower::{fit_tower, fit_tower_one_edge, scan_tower_edges, GradX};
+use crate::blade::{partner_axis, Gradients, PartnerSearch};
+use crate::tower::{fit_tower, fit_tower_one_edge, scan_tower_edges, GradPlane};
 use crate::hough::HoughSettings;
 use crate::{us_since, DetectError, Found, Hints, LineKind, Scratch};
 
@@ -122,7 +124,7 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
                 None => Ok(search_circles(p, img, c, h, expected.spinner_radius, pts)),
             }
         };
-        let grad = GradX { data: img.dx, width: ew, height: eh };
+        let grad = Gradients { x: GradPlane { data: img.dx, width: ew, height: eh }, y: GradPlane { data: img.dy, width: ew, height: eh } };
         let mut found = recognise(p, &segs, w, h, hints, &mut search, Some(&grad), expected.tower_width)?;
         found.line_count = line_count;
         found.edge_count = edge_count;
@@ -504,7 +506,11 @@ struct Candidate {
     blades: Vec<Blade>,
     rejected: Vec<usize>,
     tower: Vec<usize>,
+    /// Reported confidence, at most 1.
     confidence: f64,
+    /// The confidence before capping, for ranking: a candidate with every cue and a spinner
+    /// beats one with every cue but the spinner.
+    score: f64,
     support: f64,
     spinner: Option<[f64; 3]>,
 }
@@ -744,7 +750,7 @@ fn evaluate(
         conf = conf.max(p.conf_close_spinner);
     }
     let support = blades.iter().take(ROTOR_BLADES).map(|b| b.weight).sum();
-    Candidate { centre: c, blades, rejected, tower, confidence: conf.min(1.0), support, spinner }
+    Candidate { centre: c, blades, rejected, tower, confidence: conf.min(1.0), score: conf, support, spinner }
 }
 
 /// A long usable line passes through `c` (not ending near it): `c` lies on a tower, mast or wire.
@@ -761,17 +767,22 @@ fn passes_through(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h
 }
 
 /// Least-squares point closest to all lines, each blade's lines together weighing 1. With at
-/// least two paired blades, their axes alone (the edges meet at the spinner rim, the axes at
-/// its centre).
-fn refine(segs: &[Segment], blades: &[Blade], centre: P2) -> Option<P2> {
-    let axes: Vec<(Segment, f64)> = blades.iter().take(ROTOR_BLADES).filter_map(|b| b.axis.map(|a| (a, 1.0))).collect();
+/// least two blades of known axis, their axes alone (the edges meet at the spinner rim, the
+/// axes at its centre). A blade seen by one edge only has its axis from `partner` (the partner
+/// edge in the image, see `blade.rs`) when that finds one.
+fn refine(segs: &[Segment], blades: &[Blade], centre: P2, partner: &dyn Fn(&Segment, P2) -> Option<Segment>) -> Option<P2> {
+    let axes: Vec<(Segment, f64)> = blades.iter().take(ROTOR_BLADES).filter_map(|b| b.axis.or_else(|| one_sided_axis(segs, b, centre, partner)).map(|a| (a, 1.0))).collect();
     if axes.len() >= 2 {
         if let Some(x) = geometry::lines_nearest_point(&axes) {
             return Some(x);
         }
     }
-    let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    let mut lines: Vec<(Segment, f64)> = Vec::new();
     for bl in blades.iter().take(ROTOR_BLADES) {
+        if let Some(axis) = bl.axis.or_else(|| one_sided_axis(segs, bl, centre, partner)) {
+            lines.push((axis, 1.0));
+            continue;
+        }
         // Each side of the blade (each edge) weighs half, so a blade seen with both edges pulls
         // toward its axis, not toward its longer edge.
         let d = geometry::dir_from_up_cw(bl.angle_deg);
@@ -784,22 +795,21 @@ fn refine(segs: &[Segment], blades: &[Blade], centre: P2) -> Option<P2> {
         let sides = (tr > 0.0) as u32 + (tl > 0.0) as u32;
         for &i in &bl.lines {
             let s = &segs[i];
-            let len = s.length().max(1e-9);
-            let n = [-(s.b[1] - s.a[1]) / len, (s.b[0] - s.a[0]) / len];
-            let w = len / if side(s) { tr } else { tl }.max(1e-9) / sides.max(1) as f64;
-            let c = n[0] * s.a[0] + n[1] * s.a[1];
-            a11 += w * n[0] * n[0];
-            a12 += w * n[0] * n[1];
-            a22 += w * n[1] * n[1];
-            b1 += w * n[0] * c;
-            b2 += w * n[1] * c;
+            let w = s.length() / if side(s) { tr } else { tl }.max(1e-9) / sides.max(1) as f64;
+            lines.push((*s, w));
         }
     }
-    let det = a11 * a22 - a12 * a12;
-    if det.abs() < 1e-9 {
+    geometry::lines_nearest_point(&lines)
+}
+
+/// The axis of a blade whose lines all lie on one side of it (one edge seen), from the partner
+/// of its longest line.
+fn one_sided_axis(segs: &[Segment], b: &Blade, centre: P2, partner: &dyn Fn(&Segment, P2) -> Option<Segment>) -> Option<Segment> {
+    if is_paired(segs, b, centre) {
         return None;
     }
-    Some([(a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det])
+    let longest = b.lines.iter().max_by(|&&i, &&j| segs[i].length().total_cmp(&segs[j].length()))?;
+    partner(&segs[*longest], centre)
 }
 
 /// The tower of candidate `b` from both edges (see `tower.rs`), and the row of its top
@@ -811,7 +821,7 @@ fn measure_tower(
     p: &DefaultParams,
     segs: &[Segment],
     b: &Candidate,
-    g: &GradX<'_>,
+    g: &GradPlane<'_>,
     tower_width: Option<f64>,
     hub_distance_m: Option<f64>,
     roll_deg: f64,
@@ -877,9 +887,9 @@ fn measure_tower(
 }
 
 /// Steps after the Hough transform, on plain data (working px).
-/// Ordering of candidates: higher confidence, then more blade support.
+/// Ordering of candidates: higher uncapped confidence, then more blade support.
 fn better(a: &Candidate, b: &Candidate) -> bool {
-    a.confidence > b.confidence + 1e-9 || (a.confidence >= b.confidence - 1e-9 && a.support > b.support)
+    a.score > b.score + 1e-9 || (a.score >= b.score - 1e-9 && a.support > b.support)
 }
 
 /// A spinner circle search: circles `[x, y, r]` (working px, best first) around a point.
@@ -919,9 +929,19 @@ pub(crate) fn recognise(
     h: f64,
     hints: &Hints,
     search: &mut CircleFinder<'_>,
-    grad: Option<&GradX<'_>>,
+    grad: Option<&Gradients<'_>>,
     tower_width: Option<f64>,
 ) -> Result<Found, DetectError> {
+    let partner_search = PartnerSearch {
+        min_width: p.blade_partner_min_width_px,
+        max_width: p.blade_partner_max_width_frac * h,
+        samples: p.blade_partner_samples as usize,
+        min_found_frac: p.blade_partner_min_found_frac,
+        min_response_ratio: p.blade_partner_response_ratio,
+        max_rms_px: p.blade_partner_max_rms_px,
+        max_taper: p.blade_partner_max_taper,
+    };
+    let partner = |s: &Segment, c: P2| grad.and_then(|g| partner_axis(g, s, c, &partner_search));
     let roll_deg = match hints.roll_rad {
         Some(r) => r.to_degrees(),
         None => search_roll(p, segs),
@@ -947,11 +967,11 @@ pub(crate) fn recognise(
     for c in centres {
         let mut cand = evaluate(p, segs, &usable, &axes, c, h, roll_deg, hints, None);
         if cand.blades.len() >= 2 {
-            if let Some(r) = refine(segs, &cand.blades, c) {
+            if let Some(r) = refine(segs, &cand.blades, c, &partner) {
                 if geometry::dist(r, c) <= p.cluster_radius_frac * h * 2.0 {
                     // Re-evaluate at the refined point so blades and tower match the output.
                     let again = evaluate(p, segs, &usable, &axes, r, h, roll_deg, hints, None);
-                    if again.confidence >= cand.confidence {
+                    if again.score >= cand.score {
                         cand = again;
                     }
                 }
@@ -1023,7 +1043,7 @@ pub(crate) fn recognise(
         found.search_circle = Some([b.centre[0], b.centre[1], p.support_end_dist_frac * h]);
         match grad {
             Some(g) => {
-                if let Some((fit, top_y)) = measure_tower(p, segs, &b, g, tower_width, hints.hub_distance_m, roll_deg, h, found.detected) {
+                if let Some((fit, top_y)) = measure_tower(p, segs, &b, &g.x, tower_width, hints.hub_distance_m, roll_deg, h, found.detected) {
                     let row = top_y + p.tower_width_below_top_frac * h;
                     found.tower_top = fit.axis.x_at_y(top_y).map(|x| [x, top_y]);
                     found.tower_axis = Some(fit.axis);

@@ -27,8 +27,8 @@ const EDGE_OUTLIER_PX: f64 = 1.5;
 /// An edge fit needs at least this many points.
 const EDGE_MIN_POINTS: usize = 6;
 
-/// The horizontal Sobel gradient of the working image, row-major.
-pub(crate) struct GradX<'a> {
+/// One Sobel gradient plane (x or y) of the working image, row-major.
+pub(crate) struct GradPlane<'a> {
     /// `width · height` values.
     pub data: &'a [i16],
     /// Image width, px.
@@ -37,8 +37,9 @@ pub(crate) struct GradX<'a> {
     pub height: usize,
 }
 
-impl GradX<'_> {
-    fn at(&self, x: i64, y: i64) -> f64 {
+impl GradPlane<'_> {
+    /// The value at `(x, y)`; 0 outside the image.
+    pub fn at(&self, x: i64, y: i64) -> f64 {
         if x < 0 || y < 0 || x >= self.width as i64 || y >= self.height as i64 {
             return 0.0;
         }
@@ -73,7 +74,7 @@ impl TowerFit {
 /// Finds the tower's second edge from `seed` (one tower edge, from its top down) and fits both;
 /// `None` when no edge of the opposite gradient sign runs beside it at a tower-like width.
 /// `window` (working px, min and max) narrows the tower-like widths further.
-pub(crate) fn fit_tower(p: &DefaultParams, g: &GradX<'_>, seed: &Segment, window: (f64, f64)) -> Option<TowerFit> {
+pub(crate) fn fit_tower(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, window: (f64, f64)) -> Option<TowerFit> {
     let h = g.height as f64;
     let top = seed.a[1].min(seed.b[1]).max(0.0);
     let seed_bottom = seed.a[1].max(seed.b[1]);
@@ -195,7 +196,7 @@ pub(crate) fn fit_tower(p: &DefaultParams, g: &GradX<'_>, seed: &Segment, window
 /// gradient (a tower edge keeps its sign all the way down); the `max_seeds` strongest local
 /// maxima, each at least `min_salience` times the mean score, are returned as segments (top
 /// first). `max_tilt_deg` bounds the tilt from the image vertical (roll included).
-pub(crate) fn scan_tower_edges(g: &GradX<'_>, hub_x: f64, top: f64, max_dx: f64, max_tilt_deg: f64, min_salience: f64, max_seeds: usize) -> Vec<Segment> {
+pub(crate) fn scan_tower_edges(g: &GradPlane<'_>, hub_x: f64, top: f64, max_dx: f64, max_tilt_deg: f64, min_salience: f64, max_seeds: usize) -> Vec<Segment> {
     let y0 = top.max(0.0).ceil() as i64;
     let y1 = g.height as i64 - 1;
     if y1 - y0 < EDGE_MIN_POINTS as i64 || max_dx <= 0.0 {
@@ -258,7 +259,7 @@ pub(crate) fn scan_tower_edges(g: &GradX<'_>, hub_x: f64, top: f64, max_dx: f64,
 /// hides behind a blade pointing down, which at close range covers the tower's near half. The
 /// tower lies on the side of `seed` toward `hub_x` (the blade that hides it hangs from the
 /// hub). `None` when the edge cannot be fitted.
-pub(crate) fn fit_tower_one_edge(g: &GradX<'_>, seed: &Segment, width: f64, hub_x: f64) -> Option<TowerFit> {
+pub(crate) fn fit_tower_one_edge(g: &GradPlane<'_>, seed: &Segment, width: f64, hub_x: f64) -> Option<TowerFit> {
     let h = g.height as f64;
     let top = seed.a[1].min(seed.b[1]).max(0.0);
     let seed_bottom = seed.a[1].max(seed.b[1]);
@@ -284,7 +285,7 @@ pub(crate) fn fit_tower_one_edge(g: &GradX<'_>, seed: &Segment, width: f64, hub_
 /// on each row, and the line `x = a + b·y` through them (least squares, outliers dropped once).
 /// Rows where the edge is hidden (response below `EDGE_POINT_MIN_OF_TYPICAL` of its typical
 /// response) give no point.
-fn fit_edge(g: &GradX<'_>, rows: &[i64], predict: impl Fn(i64) -> Option<f64>, sign: f64) -> Option<Segment> {
+fn fit_edge(g: &GradPlane<'_>, rows: &[i64], predict: impl Fn(i64) -> Option<f64>, sign: f64) -> Option<Segment> {
     let mut peaks: Vec<(f64, P2)> = Vec::new();
     for &y in rows {
         let Some(x) = predict(y) else { continue };
@@ -386,7 +387,7 @@ mod tests {
         let (left, width, tilt) = (80.3, 24.0, 0.02);
         let img = image(w, h, left, width, tilt);
         let gx = sobel_x(&img, w, h);
-        let g = GradX { data: &gx, width: w, height: h };
+        let g = GradPlane { data: &gx, width: w, height: h };
         // Hough found only the left edge, from row 40 to 100.
         let seed = Segment::new([left + tilt * 40.0, 40.0], [left + tilt * 100.0, 100.0]);
         let fit = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("partner found");
@@ -414,13 +415,13 @@ mod tests {
             })
             .collect();
         let gx = sobel_x(&img, w, h);
-        let g = GradX { data: &gx, width: w, height: h };
+        let g = GradPlane { data: &gx, width: w, height: h };
         let seed = Segment::new([80.0, 20.0], [80.0, 120.0]);
         assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_none());
         // The same band widening downward that fast is a tower edge beside a blade's edge.
         let flipped: Vec<u8> = (0..w * h).map(|i| img[(h - 1 - i / w) * w + i % w]).collect();
         let gx = sobel_x(&flipped, w, h);
-        let g = GradX { data: &gx, width: w, height: h };
+        let g = GradPlane { data: &gx, width: w, height: h };
         assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_none());
         // A band widening as a tapered tower does (30 → 33 px) is accepted.
         let tower: Vec<u8> = (0..w * h)
@@ -430,7 +431,7 @@ mod tests {
             })
             .collect();
         let gx = sobel_x(&tower, w, h);
-        let g = GradX { data: &gx, width: w, height: h };
+        let g = GradPlane { data: &gx, width: w, height: h };
         assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_some());
     }
 
@@ -440,7 +441,7 @@ mod tests {
         let (w, h) = (200, 160);
         let img: Vec<u8> = (0..w * h).map(|i| if i % w >= 90 { 200 } else { 40 }).collect();
         let gx = sobel_x(&img, w, h);
-        let g = GradX { data: &gx, width: w, height: h };
+        let g = GradPlane { data: &gx, width: w, height: h };
         let seed = Segment::new([90.0, 40.0], [90.0, 120.0]);
         assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_none());
     }
@@ -463,7 +464,7 @@ mod tests {
         // A blade darker than the tower: the tower's visible right boundary (x 96) is an edge
         // of the opposite sign, but weaker than the blade's outer one.
         let gx = sobel_x(&scene(220, 150), w, h);
-        let g = GradX { data: &gx, width: w, height: h };
+        let g = GradPlane { data: &gx, width: w, height: h };
         let wide = fit_tower(&p, &g, &seed, ANY_WIDTH).expect("some band");
         assert!((wide.width_at(60.0).unwrap() - 50.0).abs() < 1.5, "{:?}", wide.width_at(60.0));
         // Expecting ~18 px (from a tracker's distance), the partner is the boundary at 96.
@@ -472,7 +473,7 @@ mod tests {
         // A blade brighter than the tower leaves no opposite edge at a tower-like width: no
         // tower rather than the wrong band.
         let gx = sobel_x(&scene(120, 200), w, h);
-        let g = GradX { data: &gx, width: w, height: h };
+        let g = GradPlane { data: &gx, width: w, height: h };
         assert!(fit_tower(&p, &g, &seed, ANY_WIDTH).is_some());
         assert!(fit_tower(&p, &g, &seed, (12.0, 27.0)).is_none());
     }
@@ -483,7 +484,7 @@ mod tests {
         let (w, h) = (200, 160);
         let img: Vec<u8> = (0..w * h).map(|i| if (i % w) as f64 + 0.5 > 80.0 && (i % w) < 140 { 200 } else { 40 }).collect();
         let gx = sobel_x(&img, w, h);
-        let g = GradX { data: &gx, width: w, height: h };
+        let g = GradPlane { data: &gx, width: w, height: h };
         let seed = Segment::new([80.0, 20.0], [80.0, 120.0]);
         let fit = fit_tower_one_edge(&g, &seed, 20.0, 120.0).expect("edge fitted");
         assert!(fit.one_edge);
@@ -506,7 +507,7 @@ mod tests {
             })
             .collect();
         let gx = sobel_x(&img, w, h);
-        let g = GradX { data: &gx, width: w, height: h };
+        let g = GradPlane { data: &gx, width: w, height: h };
         let seeds = scan_tower_edges(&g, 110.0, 60.0, 40.0, 8.0, 3.0, 4);
         assert!(seeds.len() >= 2, "{seeds:?}");
         // Both tower edges are found, with their drift.
@@ -514,7 +515,7 @@ mod tests {
         assert!(near(100.0) && near(120.0), "{seeds:?}");
         // Nothing but texture: no seeds.
         let flat = vec![0i16; w * h];
-        let g = GradX { data: &flat, width: w, height: h };
+        let g = GradPlane { data: &flat, width: w, height: h };
         assert!(scan_tower_edges(&g, 110.0, 60.0, 40.0, 8.0, 3.0, 4).is_empty());
     }
 

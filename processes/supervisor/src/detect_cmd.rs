@@ -144,7 +144,7 @@ fn detect_one(det: &mut Detector, path: &Path, annotate: Option<&Path>, hints: &
     let ms = t.elapsed().as_secs_f64() * 1e3;
     if let Some(dir) = annotate {
         let stem = path.file_stem().map_or("image".into(), |s| s.to_string_lossy().into_owned());
-        draw_overlay(&mat, &out, &dir.join(format!("{stem}.png")))?;
+        draw_overlay(&mat, &out, None, &dir.join(format!("{stem}.png")))?;
     }
     Ok(result_json(path, view.width, view.height, &out, ms))
 }
@@ -165,8 +165,9 @@ pub fn result_json(path: &Path, width: u32, height: u32, out: &Output, ms: f64) 
     })
 }
 
-/// Draws what the detector saw over the image and writes it.
-pub fn draw_overlay(image: &Mat, out: &Output, path: &Path) -> anyhow::Result<()> {
+/// Draws what the detector saw over the image (and the truth segment, axis point to spinner
+/// centre, in red when given) and writes it.
+pub fn draw_overlay(image: &Mat, out: &Output, truth: Option<[[f64; 2]; 2]>, path: &Path) -> anyhow::Result<()> {
     let mut canvas = image.try_clone()?;
     let scale = (image.rows() as f64 / 540.0).max(1.0);
     let thickness = (2.0 * scale).round() as i32;
@@ -196,6 +197,11 @@ pub fn draw_overlay(image: &Mat, out: &Output, path: &Path) -> anyhow::Result<()
         imgproc::circle(&mut canvas, c, r, Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
         imgproc::line(&mut canvas, Point::new(c.x - 2 * r, c.y), Point::new(c.x + 2 * r, c.y), Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
         imgproc::line(&mut canvas, Point::new(c.x, c.y - 2 * r), Point::new(c.x, c.y + 2 * r), Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
+    }
+    if let Some([a, b]) = truth {
+        let red = Scalar::new(0.0, 0.0, 255.0, 0.0);
+        imgproc::line(&mut canvas, pt(a), pt(b), red, thickness, imgproc::LINE_AA, 0)?;
+        imgproc::circle(&mut canvas, pt(b), (4.0 * scale) as i32, red, thickness, imgproc::LINE_AA, 0)?;
     }
     let name = path.to_str().context("non-UTF-8 path")?;
     anyhow::ensure!(opencv::imgcodecs::imwrite_def(name, &canvas)?, "cannot write {name}");

@@ -1,16 +1,18 @@
 //! `hubtrack eval`: the detector over real photos with truth (`truth.jsonl` as in
 //! `../shared/data`) and over synthetic frames with exact truth, every mode side by side.
 
-use crate::detect_cmd::{detector, view_of};
-use crate::score::{print_table, score, Table, Tally, Truth};
+use crate::detect_cmd::{detector, draw_overlay, result_json, view_of};
+use crate::score::{print_table, score, Outcome, Table, Tally, Truth};
 use anyhow::Context;
 use hubtrack_capture::images::read_image;
 use hubtrack_detect::params::Mode;
-use hubtrack_detect::{Hints, ImageView};
+use hubtrack_detect::{Hints, ImageView, Output};
 use hubtrack_render::dataset::{synth_case, CLASSES};
 use hubtrack_render::{Camera, Renderer};
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_types::PixelFormat;
+use opencv::core::{Mat, MatTraitConst};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// The modes compared, in column order.
@@ -38,6 +40,10 @@ pub struct EvalArgs {
     /// Frames per flight for --sequence.
     #[arg(long, default_value_t = 300)]
     pub frames: u64,
+    /// Write an overlay PNG (truth in red) of every `default`-mode miss and false positive to
+    /// this folder, with `misses.jsonl` listing them.
+    #[arg(long, value_name = "DIR")]
+    pub misses: Option<PathBuf>,
 }
 
 /// Runs the command.
@@ -46,6 +52,11 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     if args.sequence {
         return crate::eval_seq::run(&config, args.flights, args.frames, args.seed);
     }
+    if let Some(dir) = &args.misses {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        std::fs::write(dir.join("misses.jsonl"), "").with_context(|| format!("writing {}", dir.display()))?;
+    }
+    let misses = args.misses.as_deref();
     let mut detectors = MODES.iter().map(|(m, _)| detector(&config.detect, Some(*m))).collect::<anyhow::Result<Vec<_>>>()?;
     let names: Vec<&str> = MODES.iter().map(|(_, n)| *n).collect();
     let mut truths = args.truth.clone();
@@ -58,17 +69,17 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         }
     }
     for truth in &truths {
-        let table = eval_truth_file(truth, &mut detectors)?;
+        let table = eval_truth_file(truth, &mut detectors, misses)?;
         print_table(&format!("real photos: {}", truth.display()), &names, &table);
     }
     if args.synthetic > 0 {
-        let table = eval_synthetic(args.synthetic, args.seed, &mut detectors)?;
+        let table = eval_synthetic(args.synthetic, args.seed, &mut detectors, misses)?;
         print_table(&format!("synthetic frames: {} per distance class, seed {}", args.synthetic, args.seed), &names, &table);
     }
     Ok(())
 }
 
-fn add(table: &mut Table, categories: &[String], truth: &Truth, outcomes: &[crate::score::Outcome]) {
+fn add(table: &mut Table, categories: &[String], truth: &Truth, outcomes: &[Outcome]) {
     for cat in categories {
         let row = table.entry(cat.clone()).or_insert_with(|| vec![Tally::default(); outcomes.len()]);
         for (t, o) in row.iter_mut().zip(outcomes) {
@@ -77,14 +88,40 @@ fn add(table: &mut Table, categories: &[String], truth: &Truth, outcomes: &[crat
     }
 }
 
-fn detect_all(detectors: &mut [hubtrack_detect::Detector], view: &ImageView<'_>, hints: &Hints) -> anyhow::Result<Vec<Option<[f64; 2]>>> {
-    detectors
-        .iter_mut()
-        .map(|d| Ok(d.detect(view, hints).map(|o| o.detection.detected.then_some(o.detection.hub_px))?))
-        .collect()
+fn detect_all(detectors: &mut [hubtrack_detect::Detector], view: &ImageView<'_>, hints: &Hints) -> anyhow::Result<Vec<Output>> {
+    detectors.iter_mut().map(|d| Ok(d.detect(view, hints)?)).collect()
 }
 
-fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector]) -> anyhow::Result<Table> {
+/// Scores every mode's output against the truth.
+fn score_all(outputs: &[Output], truth: &Truth, height: u32) -> Vec<Outcome> {
+    outputs.iter().map(|o| score(truth, o.detection.detected.then_some(o.detection.hub_px), height as f64)).collect()
+}
+
+/// Writes the overlay of the last (`default`) mode's output when it missed or fired on a negative.
+fn write_miss(dir: Option<&Path>, name: &str, image: &Mat, truth: &Truth, outputs: &[Output], outcomes: &[Outcome]) -> anyhow::Result<()> {
+    let (Some(dir), Some(out), Some(o)) = (dir, outputs.last(), outcomes.last()) else { return Ok(()) };
+    let missed = match truth {
+        Truth::Visible { .. } => !o.hit,
+        Truth::Negative => o.detected,
+        Truth::Hidden => false,
+    };
+    if !missed {
+        return Ok(());
+    }
+    let png = dir.join(format!("{name}.png"));
+    let truth_segment = match truth {
+        Truth::Visible { axis, hub } => Some([*axis, *hub]),
+        _ => None,
+    };
+    draw_overlay(image, out, truth_segment, &png)?;
+    let line = serde_json::json!({"name": name, "truth": truth_segment, "error_pct": o.error_pct,
+        "result": result_json(&png, image.cols() as u32, image.rows() as u32, out, 0.0)});
+    let mut f = std::fs::OpenOptions::new().append(true).open(dir.join("misses.jsonl"))?;
+    writeln!(f, "{line}")?;
+    Ok(())
+}
+
+fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>) -> anyhow::Result<Table> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let mut table = Table::new();
@@ -108,8 +145,10 @@ fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector]) -> 
             }
         };
         let view = view_of(&mat)?;
-        let hubs = detect_all(detectors, &view, &Hints::default())?;
-        let outcomes: Vec<_> = hubs.iter().map(|h| score(&truth, *h, view.height as f64)).collect();
+        let outputs = detect_all(detectors, &view, &Hints::default())?;
+        let outcomes = score_all(&outputs, &truth, view.height);
+        let id = v["id"].as_str().map_or_else(|| format!("line{}", n + 1), |s| s.replace('/', "_"));
+        write_miss(misses, &id, &mat, &truth, &outputs, &outcomes)?;
         let mut cats = vec!["all".to_string()];
         for key in ["distance_class", "view", "env"] {
             if let Some(c) = v[key].as_str() {
@@ -121,7 +160,7 @@ fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector]) -> 
     Ok(table)
 }
 
-fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::Detector]) -> anyhow::Result<Table> {
+fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>) -> anyhow::Result<Table> {
     let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
     let mut buffers: Vec<Vec<u8>> = renderers.iter().map(|r| vec![0u8; r.camera().frame_bytes()]).collect();
     let mut table = Table::new();
@@ -139,8 +178,12 @@ fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::D
                 _ => Truth::Hidden,
             };
             let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() };
-            let hubs = detect_all(detectors, &view, &hints)?;
-            let outcomes: Vec<_> = hubs.iter().map(|h| score(&t, *h, view.height as f64)).collect();
+            let outputs = detect_all(detectors, &view, &hints)?;
+            let outcomes = score_all(&outputs, &t, view.height);
+            if misses.is_some() {
+                let mat = Mat::from_slice(&buffers[k])?.reshape(3, cam.height as i32)?.try_clone()?;
+                write_miss(misses, &format!("{}_{i:04}", class_def.0), &mat, &t, &outputs, &outcomes)?;
+            }
             add(&mut table, &case.categories, &t, &outcomes);
         }
         eprintln!("[eval] synthetic class {} done", class_def.0);
