@@ -97,16 +97,17 @@ fn score_all(outputs: &[Output], truth: &Truth, height: u32) -> Vec<Outcome> {
     outputs.iter().map(|o| score(truth, o.detection.detected.then_some(o.detection.hub_px), height as f64)).collect()
 }
 
-/// Writes the overlay of the last (`default`) mode's output when it missed or fired on a negative.
-fn write_miss(dir: Option<&Path>, name: &str, image: &Mat, truth: &Truth, outputs: &[Output], outcomes: &[Outcome]) -> anyhow::Result<()> {
-    let (Some(dir), Some(out), Some(o)) = (dir, outputs.last(), outcomes.last()) else { return Ok(()) };
+/// Writes the overlay of the last (`default`) mode's output when it missed or fired on a
+/// negative; true when it did.
+fn write_miss(dir: Option<&Path>, name: &str, image: &Mat, truth: &Truth, outputs: &[Output], outcomes: &[Outcome]) -> anyhow::Result<bool> {
+    let (Some(dir), Some(out), Some(o)) = (dir, outputs.last(), outcomes.last()) else { return Ok(false) };
     let missed = match truth {
         Truth::Visible { .. } => !o.hit,
         Truth::Negative => o.detected,
         Truth::Hidden => false,
     };
     if !missed {
-        return Ok(());
+        return Ok(false);
     }
     let png = dir.join(format!("{name}.png"));
     let truth_segment = match truth {
@@ -118,7 +119,7 @@ fn write_miss(dir: Option<&Path>, name: &str, image: &Mat, truth: &Truth, output
         "result": result_json(&png, image.cols() as u32, image.rows() as u32, out, 0.0)});
     let mut f = std::fs::OpenOptions::new().append(true).open(dir.join("misses.jsonl"))?;
     writeln!(f, "{line}")?;
-    Ok(())
+    Ok(true)
 }
 
 fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>) -> anyhow::Result<Table> {
@@ -182,7 +183,13 @@ fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::D
             let outcomes = score_all(&outputs, &t, view.height);
             if misses.is_some() {
                 let mat = Mat::from_slice(&buffers[k])?.reshape(3, cam.height as i32)?.try_clone()?;
-                write_miss(misses, &format!("{}_{i:04}", class_def.0), &mat, &t, &outputs, &outcomes)?;
+                let name = format!("{}_{i:04}", class_def.0);
+                if write_miss(misses, &name, &mat, &t, &outputs, &outcomes)? {
+                    // The rendered input too, to re-run `hubtrack detect` on (with RUST_LOG=trace).
+                    let input = misses.unwrap_or(Path::new(".")).join(format!("{name}_input.png"));
+                    let path = input.to_str().context("non-UTF-8 path")?;
+                    anyhow::ensure!(opencv::imgcodecs::imwrite_def(path, &mat)?, "cannot write {path}");
+                }
             }
             add(&mut table, &case.categories, &t, &outcomes);
         }
