@@ -57,10 +57,10 @@ const ROLL_VERTICAL_TOL_DEG: f64 = 1.5;
 /// spinner circles.
 const SPINNER_REUSE_OF_OFFSET: f64 = 0.5;
 /// Centre peaks examined per spinner search. Small circles (corners, blade–nacelle junctions)
-/// take the strongest accumulator peaks, and a close spinner was often only the 4th to 6th:
-/// 3 → 6 took synthetic hits 56.8 → 57.5 % and real 34.0 → 35.8 %; 12 found more spinners
-/// (synthetic 60 %) but also false circles in textured ground (real 28 %).
-const SPINNER_PEAKS: usize = 6;
+/// take the strongest accumulator peaks, and a close spinner was often only the 4th to 12th:
+/// 3 → 12 took synthetic hits 57.5 → 60.2 %. More peaks find more false circles in textured
+/// ground too (real photos 35.8 → 28.3 % alone); `spinner_max_interior_density` removes those.
+const SPINNER_PEAKS: usize = 12;
 /// Tower edges tried as seeds of the two-edge tower fit, longest first.
 const TOWER_SEEDS: usize = 4;
 /// Number of vote peaks examined in detail.
@@ -193,6 +193,7 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expecte
         cell: p.spinner_cell_px,
         radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
         min_coverage: p.spinner_min_coverage,
+        max_interior_density: p.spinner_max_interior_density,
         max_peaks: SPINNER_PEAKS,
     };
     find_circles(pts, &cs).into_iter().map(|k| [k[0], k[1], k[2]]).collect()

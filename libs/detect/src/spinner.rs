@@ -24,9 +24,16 @@ pub(crate) struct CircleSearch {
     pub radial_cos: f64,
     /// Smallest accepted fraction of the rim covered by edge points.
     pub min_coverage: f64,
+    /// Largest accepted density of edge points (per px²) inside [`INNER_FRAC`] of the radius:
+    /// a spinner is a smooth body, a "circle" in clutter is full of edges.
+    pub max_interior_density: f64,
     /// Centre peaks examined.
     pub max_peaks: usize,
 }
+
+/// The interior whose edge density is limited, fraction of the radius (the nose highlight and
+/// the blade roots lie outside it).
+pub(crate) const INNER_FRAC: f64 = 0.7;
 
 /// Circles `[x, y, r, coverage]` among `points`, best coverage first.
 pub(crate) fn find_circles(points: &[EdgePoint], cs: &CircleSearch) -> Vec<[f64; 4]> {
@@ -143,6 +150,11 @@ fn rim(points: &[EdgePoint], c: P2, cs: &CircleSearch) -> Option<[f64; 4]> {
     let rim_pts: Vec<P2> = points.iter().filter(|e| radial(e, c).is_some_and(|d| (d - best_r).abs() <= tol)).map(|e| e.p).collect();
     let fit = fit_circle(&rim_pts).filter(|f| crate::geometry::dist([f[0], f[1]], c) <= tol + cs.cell && (f[2] - best_r).abs() <= tol);
     let [x, y, r] = fit.unwrap_or([c[0], c[1], best_r]);
+    let inner2 = (INNER_FRAC * r).powi(2);
+    let inside = points.iter().filter(|e| (e.p[0] - x).powi(2) + (e.p[1] - y).powi(2) < inner2).count();
+    if inside as f64 > cs.max_interior_density * std::f64::consts::PI * inner2 {
+        return None;
+    }
     Some([x, y, r, best_cov.min(1.0)])
 }
 
@@ -195,7 +207,7 @@ mod tests {
     }
 
     fn search() -> CircleSearch {
-        CircleSearch { roi: [0.0, 0.0, 120.0, 120.0], min_r: 4.0, max_r: 40.0, cell: 2.0, radial_cos: 0.9, min_coverage: 0.4, max_peaks: 3 }
+        CircleSearch { roi: [0.0, 0.0, 120.0, 120.0], min_r: 4.0, max_r: 40.0, cell: 2.0, radial_cos: 0.9, min_coverage: 0.4, max_interior_density: 0.05, max_peaks: 3 }
     }
 
     #[test]
@@ -221,6 +233,26 @@ mod tests {
         // A 60° arc covers a sixth of its rim: below min_coverage.
         let arc = rim_points([60.0, 60.0], 25.0, &[(0.0, 60.0)]);
         assert!(find_circles(&arc, &search()).is_empty());
+    }
+
+    #[test]
+    fn a_rim_around_clutter_is_no_spinner() {
+        let c = [60.0, 60.0];
+        let rim = rim_points(c, 20.0, &[(0.0, 360.0)]);
+        assert_eq!(find_circles(&rim, &search()).len(), 1);
+        // The same rim with a textured inside (an edge pixel every 3 px each way, gradients
+        // pointing anywhere): clutter that happens to contain a ring of edges.
+        let mut cluttered = rim.clone();
+        for y in (46..75).step_by(3) {
+            for x in (46..75).step_by(3) {
+                let t = ((x * 7 + y * 13) % 360) as f64;
+                cluttered.push(EdgePoint { p: [x as f64, y as f64], u: [t.to_radians().cos(), t.to_radians().sin()] });
+            }
+        }
+        let inner = (INNER_FRAC * 20.0_f64).powi(2) * std::f64::consts::PI;
+        let inside = cluttered.iter().filter(|e| crate::geometry::dist(e.p, c).powi(2) < (INNER_FRAC * 20.0_f64).powi(2)).count();
+        assert!(inside as f64 > search().max_interior_density * inner, "the clutter must exceed the limit");
+        assert!(find_circles(&cluttered, &search()).iter().all(|f| crate::geometry::dist([f[0], f[1]], c) > 2.0));
     }
 
     #[test]
