@@ -27,7 +27,9 @@
 //! 9. Spinner step: around the best few candidates, circles in the Canny edges (gradient vote,
 //!    rim coverage, circle fit; `spinner.rs`); a circle with two blades starting at its rim
 //!    becomes a candidate centred on it, with a confidence bonus. Around the tracker's predicted
-//!    hub the search runs on a second thread from step 2 on.
+//!    hub the search runs on a second thread from step 2 on. When nothing is detected, large
+//!    (close-range) circles are searched over the whole image; a circle whose inside is full
+//!    of edges is clutter, not a spinner.
 //! 10. Penalties: a long line passing through a candidate (tower, mast) lowers its confidence;
 //!     a supporting line that continues collinearly beyond the candidate (horizon or field border
 //!     hidden by the turbine) is no blade. Best candidate by confidence, then support.
@@ -120,7 +122,8 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
         let segs = merge_collinear(p, segments, h);
         log::trace!("hough {} merged {} high {high} longest {:?}", segments.len(), segs.len(), segs.iter().take(5).collect::<Vec<_>>());
         let reuse = spinner_reuse_px(p, h);
-        let mut search = |c: P2| -> Result<Vec<[f64; 3]>, DetectError> {
+        let mut search = |q: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> {
+            let CircleQuery::Around(c) = q else { return Ok(search_close_circles(p, img, h, expected.spinner_radius, pts)) };
             match ahead.take_if(|(q, _)| geometry::dist(*q, c) <= reuse) {
                 // A panic there is a bug here: carry it on.
                 Some((_, job)) => Ok(job.join().unwrap_or_else(|e| std::panic::resume_unwind(e))),
@@ -169,6 +172,22 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expecte
     if max_r <= min_r || x1 - x0 < 2 || y1 - y0 < 2 {
         return Vec::new();
     }
+    edge_points(img, [x0, y0, x1, y1], pts);
+    let cs = CircleSearch {
+        roi: [(c[0] - off).max(0.0), (c[1] - off).max(0.0), (c[0] + off).min(cols as f64), (c[1] + off).min(rows as f64)],
+        min_r,
+        max_r,
+        cell: p.spinner_cell_px,
+        radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
+        min_coverage: p.spinner_min_coverage,
+        max_interior_density: p.spinner_max_interior_density,
+        max_peaks: SPINNER_PEAKS,
+    };
+    find_circles(pts, &cs).into_iter().map(|k| [k[0], k[1], k[2]]).collect()
+}
+
+/// The Canny edge pixels of the box `[x0, y0, x1, y1)` with their unit gradient directions.
+fn edge_points(img: &EdgeImage<'_>, [x0, y0, x1, y1]: [i32; 4], pts: &mut Vec<EdgePoint>) {
     pts.clear();
     for y in y0..y1 {
         let row = y as usize * img.width;
@@ -186,11 +205,26 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expecte
             }
         }
     }
+}
+
+/// Close-range spinners anywhere in the image: circles of radius at least
+/// `close_spinner_radius_frac · h` (working px, best first). At 5–8 m the blades run out of the
+/// frame and no blade crossing may lie near the spinner to search around; this runs only when
+/// nothing else was detected, and with an `expected` radius only over the radii it allows.
+fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 3]> {
+    // With a tracker's distance, only the radii it allows (none when the hub is far).
+    let (lo, max_r) = spinner_radii(p, h, expected);
+    let min_r = lo.max(p.close_spinner_radius_frac * h);
+    if max_r <= min_r {
+        return Vec::new();
+    }
+    edge_points(img, [0, 0, img.width as i32, img.height as i32], pts);
     let cs = CircleSearch {
-        roi: [(c[0] - off).max(0.0), (c[1] - off).max(0.0), (c[0] + off).min(cols as f64), (c[1] + off).min(rows as f64)],
+        roi: [0.0, 0.0, img.width as f64, img.height as f64],
         min_r,
         max_r,
-        cell: p.spinner_cell_px,
+        // Large circles need no fine centre cells; the rim fit refines the centre.
+        cell: 2.0 * p.spinner_cell_px,
         radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
         min_coverage: p.spinner_min_coverage,
         max_interior_density: p.spinner_max_interior_density,
@@ -896,8 +930,17 @@ fn better(a: &Candidate, b: &Candidate) -> bool {
     a.score > b.score + 1e-9 || (a.score >= b.score - 1e-9 && a.support > b.support)
 }
 
-/// A spinner circle search: circles `[x, y, r]` (working px, best first) around a point.
-pub(crate) type CircleFinder<'a> = dyn FnMut(P2) -> Result<Vec<[f64; 3]>, DetectError> + 'a;
+/// Where a spinner circle search looks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum CircleQuery {
+    /// Around a hub candidate ([`search_circles`]).
+    Around(P2),
+    /// Anywhere in the image, for close-range spinners only ([`search_close_circles`]).
+    Close,
+}
+
+/// A spinner circle search: circles `[x, y, r]` (working px, best first).
+pub(crate) type CircleFinder<'a> = dyn FnMut(CircleQuery) -> Result<Vec<[f64; 3]>, DetectError> + 'a;
 
 /// The first circle near `cand` (within `spinner_max_offset_frac · h`) that at least two blades
 /// start from, evaluated as a spinner-centred candidate.
@@ -1010,7 +1053,7 @@ pub(crate) fn recognise(
         let circles = match searched.iter().find(|(q, _)| geometry::dist(*q, cand.centre) <= reuse) {
             Some((_, c)) => c.clone(),
             None => {
-                let c = search(cand.centre)?;
+                let c = search(CircleQuery::Around(cand.centre))?;
                 searched.push((cand.centre, c.clone()));
                 c
             }
@@ -1025,6 +1068,18 @@ pub(crate) fn recognise(
     for cand in cands.into_iter().chain(extra) {
         if best.as_ref().is_none_or(|b| better(&cand, b)) {
             best = Some(cand);
+        }
+    }
+    // Nothing detected: a close spinner anywhere in the image with two blades at its rim.
+    if best.as_ref().is_none_or(|b| b.confidence < p.min_confidence) {
+        let min_r = p.close_spinner_radius_frac * h;
+        for k in search(CircleQuery::Close)?.into_iter().filter(|k| k[2] >= min_r) {
+            let cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some(k));
+            log::trace!("close spinner {k:?}: conf {:.2} blades {}", cand.confidence, cand.blades.len());
+            if cand.blades.len() >= 2 && best.as_ref().is_none_or(|b| better(&cand, b)) {
+                best = Some(cand);
+                break;
+            }
         }
     }
     if let Some(b) = best {
@@ -1075,7 +1130,7 @@ mod tests {
     use super::*;
     use crate::geometry::dir_from_up_cw;
 
-    fn no_circles(_: P2) -> Result<Vec<[f64; 3]>, DetectError> {
+    fn no_circles(_: CircleQuery) -> Result<Vec<[f64; 3]>, DetectError> {
         Ok(Vec::new())
     }
 
@@ -1232,14 +1287,29 @@ mod tests {
             segs.push(blade_edges(hub, a, 30.0, 100.0, 6.0, 2.0)[0]);
         }
         let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
-        let mut at_hub = |_: P2| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0]]) };
+        let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0]]) };
         let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None, None).unwrap();
         assert!(f.detected && f.circle.is_some(), "{f:?}");
         assert!(geometry::dist(f.hub, [hub[0] + 0.5, hub[1] - 0.5]) < 1e-9, "{:?}", f.hub);
         // A circle far from every candidate is ignored.
-        let mut far_away = |_: P2| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[400.0, 240.0, 30.0]]) };
+        let mut far_away = |_: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[400.0, 240.0, 30.0]]) };
         let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut far_away, None, None).unwrap();
         assert!(g.circle.is_none(), "{g:?}");
+    }
+
+    #[test]
+    fn close_spinner_is_searched_anywhere_when_nothing_else_is_found() {
+        let p = DefaultParams::default();
+        let (hub, r) = ([300.0, 150.0], 40.0);
+        // Two blades seen by one edge each, starting at the rim of a close spinner: no
+        // candidate from them alone.
+        let segs: Vec<Segment> = [30.0, 150.0].iter().map(|&a| blade_edges(hub, a, r, 200.0, 12.0, 6.0)[0]).collect();
+        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, None).unwrap();
+        assert!(!f.detected, "{f:?}");
+        let mut close = |q: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(if q == CircleQuery::Close { vec![[hub[0], hub[1], r]] } else { vec![] }) };
+        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut close, None, None).unwrap();
+        assert!(g.detected && g.circle.is_some() && geometry::dist(g.hub, hub) < 1e-9, "{g:?}");
     }
 
     #[test]
