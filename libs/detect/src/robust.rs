@@ -210,7 +210,8 @@ fn edge_points(img: &EdgeImage<'_>, [x0, y0, x1, y1]: [i32; 4], pts: &mut Vec<Ed
 /// Close-range spinners anywhere in the image: circles of radius at least
 /// `close_spinner_radius_frac · h` (working px, best first). At 5–8 m the blades run out of the
 /// frame and no blade crossing may lie near the spinner to search around; this runs only when
-/// nothing else was detected, and with an `expected` radius only over the radii it allows.
+/// nothing else was detected and no hub was predicted, and with an `expected` radius only over
+/// the radii it allows.
 fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 3]> {
     // With a tracker's distance, only the radii it allows (none when the hub is far).
     let (lo, max_r) = spinner_radii(p, h, expected);
@@ -1070,8 +1071,10 @@ pub(crate) fn recognise(
             best = Some(cand);
         }
     }
-    // Nothing detected: a close spinner anywhere in the image with two blades at its rim.
-    if best.as_ref().is_none_or(|b| b.confidence < p.min_confidence) {
+    // Nothing detected: a close spinner anywhere in the image with two blades at its rim. Not
+    // with a tracker's prediction: its neighbourhood was searched already, and a frame missed
+    // while tracking would pay for the whole-image search.
+    if hints.predicted_hub_px.is_none() && best.as_ref().is_none_or(|b| b.confidence < p.min_confidence) {
         let min_r = p.close_spinner_radius_frac * h;
         for k in search(CircleQuery::Close)?.into_iter().filter(|k| k[2] >= min_r) {
             let cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some(k));

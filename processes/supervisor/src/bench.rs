@@ -236,6 +236,10 @@ pub struct PipelineBenchArgs {
     /// CPU list to pin the pipeline to (taskset syntax).
     #[arg(long, default_value = "0,1")]
     pub cpus: String,
+    /// Override one key of the benchmarked pipeline's config, after the benchmark's own, e.g.
+    /// `--set recorder.compression="none"` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
 }
 
 /// CPU time and peak memory of one process, from /proc.
@@ -318,6 +322,7 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
         "--set".into(),
         format!("run.nice.capture={SYNTHETIC_CAMERA_NICE}"),
     ];
+    let run_args: Vec<String> = run_args.into_iter().chain(args.set.iter().flat_map(|kv| ["--set".to_string(), kv.clone()])).collect();
     let mut cmd = match taskset {
         Some(ts) => {
             let mut c = Command::new(ts);
