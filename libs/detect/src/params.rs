@@ -421,6 +421,13 @@ pub struct DefaultParams {
     pub occluded_angle_deg: f64,
     /// ... and within this offset from its line, fraction of image height.
     pub occluded_offset_frac: f64,
+    /// ... plus, for lines within `occluded_bent_max_tilt_deg` of horizontal (horizons and
+    /// field borders, which a wide lens bends), this angle (degrees) times the distance from
+    /// the candidate: the continuation drifts off the straight extension farther out.
+    pub occluded_bend_deg: f64,
+    /// See `occluded_bend_deg`, degrees from horizontal. Only such lines: a blade pointing up
+    /// is nearly collinear with the tower below the hub.
+    pub occluded_bent_max_tilt_deg: f64,
     /// Blade seen by one edge (`blade.rs`): its partner edge is searched at least this far
     /// from it, working px (closer is the edge's own Sobel spread).
     pub blade_partner_min_width_px: f64,
@@ -541,6 +548,8 @@ impl Default for DefaultParams {
             conf_through_penalty: 0.3,
             occluded_angle_deg: 3.0,
             occluded_offset_frac: 0.008,
+            occluded_bend_deg: 3.0,
+            occluded_bent_max_tilt_deg: 20.0,
         }
     }
 }
@@ -703,7 +712,9 @@ impl DefaultParams {
         c.closed("through_margin_frac", self.through_margin_frac, 0.0, 2.0)?;
         c.closed("conf_through_penalty", self.conf_through_penalty, 0.0, 1.0)?;
         c.closed("occluded_angle_deg", self.occluded_angle_deg, 0.0, 45.0)?;
-        c.closed("occluded_offset_frac", self.occluded_offset_frac, 0.0, 1.0)
+        c.closed("occluded_offset_frac", self.occluded_offset_frac, 0.0, 1.0)?;
+        c.closed("occluded_bend_deg", self.occluded_bend_deg, 0.0, 45.0)?;
+        c.closed("occluded_bent_max_tilt_deg", self.occluded_bent_max_tilt_deg, 0.0, 90.0)
     }
 }
 

@@ -587,12 +587,16 @@ fn continues_beyond(p: &DefaultParams, segs: &[Segment], usable: &[bool], i: usi
     let d = [s.b[0] - s.a[0], s.b[1] - s.a[1]];
     let side = |q: P2| (q[0] - c[0]) * d[0] + (q[1] - c[1]) * d[1];
     let own = side(s.midpoint());
+    // A near-horizontal line may be a horizon or field border, which the wide lens bends: its
+    // continuation may drift off the straight extension, the more so the farther out.
+    let bend = if s.tilt_from_vertical_deg().abs() >= 90.0 - p.occluded_bent_max_tilt_deg { p.occluded_bend_deg.to_radians().tan() } else { 0.0 };
+    let tol = |q: P2| off + bend * geometry::dist(q, c);
     segs.iter().enumerate().any(|(j, t)| {
         if j == i || !usable[j] {
             return false;
         }
         // Cheap tests first: this runs for every supporting line against every segment.
-        if side(t.a) * own >= 0.0 || side(t.b) * own >= 0.0 || s.line_distance(t.a) > off || s.line_distance(t.b) > off {
+        if side(t.a) * own >= 0.0 || side(t.b) * own >= 0.0 || s.line_distance(t.a) > tol(t.a) || s.line_distance(t.b) > tol(t.b) {
             return false;
         }
         let da = (s.orientation_deg() - t.orientation_deg()).abs();
@@ -1324,5 +1328,26 @@ mod tests {
         let usable = vec![true; segs.len()];
         assert!(continues_beyond(&p, &segs, &usable, 0, c, 270.0));
         assert!(support_lines(&p, &segs, &usable, c, 270.0, 0.0).is_empty());
+    }
+
+    #[test]
+    fn horizon_bent_by_the_lens_still_continues_behind_the_candidate() {
+        let p = DefaultParams::default();
+        let c = [200.0, 120.0];
+        // A horizon seen through a wide lens, interrupted by the tower: the right piece bends
+        // 2° away from the left piece's extension (7 px off it at its far end).
+        let right_dir = (8.0_f64 - 2.0).to_radians();
+        let segs = vec![
+            Segment::new([60.0, 120.0 - 140.0 * 8f64.to_radians().tan()], [190.0, 120.0 - 10.0 * 8f64.to_radians().tan()]),
+            Segment::new([212.0, 120.0 + 12.0 * 8f64.to_radians().tan()], [212.0 + 190.0 * right_dir.cos(), 120.0 + 12.0 * 8f64.to_radians().tan() + 190.0 * right_dir.sin()]),
+        ];
+        let usable = vec![true; segs.len()];
+        assert!(continues_beyond(&p, &segs, &usable, 0, c, 270.0));
+        // Straight lines only (no bend allowed): the far end is too far off.
+        let straight = DefaultParams { occluded_bend_deg: 0.0, ..p.clone() };
+        assert!(!continues_beyond(&straight, &segs, &usable, 0, c, 270.0));
+        // A blade pointing up, nearly in line with a tower edge below: no bend allowance.
+        let up = vec![Segment::new([200.0, 20.0], [201.0, 110.0]), Segment::new([203.0, 135.0], [210.0, 265.0])];
+        assert!(!continues_beyond(&p, &up, &[true, true], 0, c, 270.0));
     }
 }
