@@ -173,8 +173,17 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expecte
         return Vec::new();
     }
     edge_points(img, [x0, y0, x1, y1], pts);
-    let roi = [(c[0] - off).max(0.0), (c[1] - off).max(0.0), (c[0] + off).min(cols as f64), (c[1] + off).min(rows as f64)];
-    find_circles(pts, &circle_search(p, roi, (min_r, max_r), p.spinner_cell_px)).into_iter().map(|k| [k[0], k[1], k[2]]).collect()
+    let cs = CircleSearch {
+        roi: [(c[0] - off).max(0.0), (c[1] - off).max(0.0), (c[0] + off).min(cols as f64), (c[1] + off).min(rows as f64)],
+        min_r,
+        max_r,
+        cell: p.spinner_cell_px,
+        radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
+        min_coverage: p.spinner_min_coverage,
+        max_interior_density: p.spinner_max_interior_density,
+        max_peaks: SPINNER_PEAKS,
+    };
+    find_circles(pts, &cs).into_iter().map(|k| [k[0], k[1], k[2]]).collect()
 }
 
 /// The Canny edge pixels of the box `[x0, y0, x1, y1)` with their unit gradient directions.
@@ -211,24 +220,18 @@ fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected
         return Vec::new();
     }
     edge_points(img, [0, 0, img.width as i32, img.height as i32], pts);
-    let roi = [0.0, 0.0, img.width as f64, img.height as f64];
-    // Large circles need no fine centre cells; the rim fit refines the centre.
-    find_circles(pts, &circle_search(p, roi, (min_r, max_r), 2.0 * p.spinner_cell_px)).into_iter().map(|k| [k[0], k[1], k[2]]).collect()
-}
-
-/// The spinner circle search over centres in `roi` with radii `[min, max]` and accumulator
-/// `cell`, everything else from the parameters.
-fn circle_search(p: &DefaultParams, roi: [f64; 4], (min_r, max_r): (f64, f64), cell: f64) -> CircleSearch {
-    CircleSearch {
-        roi,
+    let cs = CircleSearch {
+        roi: [0.0, 0.0, img.width as f64, img.height as f64],
         min_r,
         max_r,
-        cell,
+        // Large circles need no fine centre cells; the rim fit refines the centre.
+        cell: 2.0 * p.spinner_cell_px,
         radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
         min_coverage: p.spinner_min_coverage,
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: SPINNER_PEAKS,
-    }
+    };
+    find_circles(pts, &cs).into_iter().map(|k| [k[0], k[1], k[2]]).collect()
 }
 
 /// Radii `[min, max]` the spinner step searches (working px): the configured limits, narrowed
@@ -542,18 +545,13 @@ struct Candidate {
     blades: Vec<Blade>,
     rejected: Vec<usize>,
     tower: Vec<usize>,
+    /// Reported confidence, at most 1.
+    confidence: f64,
     /// The confidence before capping, for ranking: a candidate with every cue and a spinner
     /// beats one with every cue but the spinner.
     score: f64,
     support: f64,
     spinner: Option<[f64; 3]>,
-}
-
-impl Candidate {
-    /// The reported confidence, at most 1.
-    fn confidence(&self) -> f64 {
-        self.score.min(1.0)
-    }
 }
 
 /// Lines supporting a hub at `c`: near end within reach, line pointing at `c`.
@@ -795,7 +793,7 @@ fn evaluate(
         conf = conf.max(p.conf_close_spinner);
     }
     let support = blades.iter().take(ROTOR_BLADES).map(|b| b.weight).sum();
-    Candidate { centre: c, blades, rejected, tower, score: conf, support, spinner }
+    Candidate { centre: c, blades, rejected, tower, confidence: conf.min(1.0), score: conf, support, spinner }
 }
 
 /// A long usable line passes through `c` (not ending near it): `c` lies on a tower, mast or wire.
@@ -816,17 +814,16 @@ fn passes_through(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h
 /// axes at its centre). A blade seen by one edge only has its axis from `partner` (the partner
 /// edge in the image, see `blade.rs`) when that finds one.
 fn refine(segs: &[Segment], blades: &[Blade], centre: P2, partner: &dyn Fn(&Segment, P2) -> Option<Segment>) -> Option<P2> {
-    let known: Vec<Option<Segment>> = blades.iter().take(ROTOR_BLADES).map(|b| b.axis.or_else(|| one_sided_axis(segs, b, centre, partner))).collect();
-    let axes: Vec<(Segment, f64)> = known.iter().flatten().map(|a| (*a, 1.0)).collect();
+    let axes: Vec<(Segment, f64)> = blades.iter().take(ROTOR_BLADES).filter_map(|b| b.axis.or_else(|| one_sided_axis(segs, b, centre, partner)).map(|a| (a, 1.0))).collect();
     if axes.len() >= 2 {
         if let Some(x) = geometry::lines_nearest_point(&axes) {
             return Some(x);
         }
     }
     let mut lines: Vec<(Segment, f64)> = Vec::new();
-    for (bl, axis) in blades.iter().zip(&known) {
-        if let Some(axis) = axis {
-            lines.push((*axis, 1.0));
+    for bl in blades.iter().take(ROTOR_BLADES) {
+        if let Some(axis) = bl.axis.or_else(|| one_sided_axis(segs, bl, centre, partner)) {
+            lines.push((axis, 1.0));
             continue;
         }
         // Each side of the blade (each edge) weighs half, so a blade seen with both edges pulls
@@ -1036,7 +1033,7 @@ pub(crate) fn recognise(
             log::trace!(
                 "candidate {:?} conf {:.2} support {:.0} blades {:?} tower {}",
                 cand.centre,
-                cand.confidence(),
+                cand.confidence,
                 cand.support,
                 cand.blades.iter().map(|b| (b.angle_deg.round(), b.weight.round(), b.lines.len())).collect::<Vec<_>>(),
                 cand.tower.len()
@@ -1068,7 +1065,7 @@ pub(crate) fn recognise(
         };
         log::trace!("spinner search at {:?}: {:?}", cand.centre, circles);
         if let Some(sc) = spinner_candidate(p, segs, &usable, &axes, cand, &circles, h, roll_deg, hints) {
-            log::trace!("spinner candidate {:?} conf {:.2} blades {}", sc.spinner, sc.confidence(), sc.blades.len());
+            log::trace!("spinner candidate {:?} conf {:.2} blades {}", sc.spinner, sc.confidence, sc.blades.len());
             extra.push(sc);
         }
     }
@@ -1081,11 +1078,11 @@ pub(crate) fn recognise(
     // Nothing detected: a close spinner anywhere in the image with two blades at its rim. Not
     // with a tracker's prediction: its neighbourhood was searched already, and a frame missed
     // while tracking would pay for the whole-image search.
-    if hints.predicted_hub_px.is_none() && best.as_ref().is_none_or(|b| b.confidence() < p.min_confidence) {
+    if hints.predicted_hub_px.is_none() && best.as_ref().is_none_or(|b| b.confidence < p.min_confidence) {
         let min_r = p.close_spinner_radius_frac * h;
         for k in search(CircleQuery::Close)?.into_iter().filter(|k| k[2] >= min_r) {
             let cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some(k));
-            log::trace!("close spinner {k:?}: conf {:.2} blades {}", cand.confidence(), cand.blades.len());
+            log::trace!("close spinner {k:?}: conf {:.2} blades {}", cand.confidence, cand.blades.len());
             if cand.blades.len() >= 2 && best.as_ref().is_none_or(|b| better(&cand, b)) {
                 best = Some(cand);
                 break;
@@ -1106,8 +1103,8 @@ pub(crate) fn recognise(
             }
         }
         found.blade_angles = b.blades.iter().map(|x| x.angle_deg).collect();
-        found.confidence = b.confidence();
-        found.detected = b.confidence() >= p.min_confidence;
+        found.confidence = b.confidence;
+        found.detected = b.confidence >= p.min_confidence;
         found.hub = b.centre;
         found.search_circle = Some([b.centre[0], b.centre[1], p.support_end_dist_frac * h]);
         match grad {
