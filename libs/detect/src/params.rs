@@ -293,6 +293,11 @@ pub struct DefaultParams {
     pub conf_two_blades: f64,
     /// Confidence weight of having 3 blades.
     pub conf_three_blades: f64,
+    /// Two blades whose missing third would point straight down (within this, degrees) count
+    /// as three when a tower supports the candidate: a blade pointing down lies over the tower
+    /// and its edges are the tower's (or hidden by it). The third direction of a rotor is taken
+    /// opposite the bisector of the two seen blades; 0 turns the rule off.
+    pub hidden_blade_tol_deg: f64,
     /// Confidence added when a tower supports the candidate.
     pub conf_tower: f64,
     /// Confidence added when the blade separations fit a (possibly skewed) 120° rotor.
@@ -497,6 +502,7 @@ impl Default for DefaultParams {
             prediction_bonus: 0.1,
             conf_two_blades: 0.3,
             conf_three_blades: 0.5,
+            hidden_blade_tol_deg: 15.0,
             conf_tower: 0.25,
             conf_geometry: 0.15,
             conf_paired: 0.1,
@@ -660,6 +666,7 @@ impl DefaultParams {
         c.closed("prediction_bonus", self.prediction_bonus, 0.0, 1.0)?;
         c.closed("conf_two_blades", self.conf_two_blades, 0.0, 1.0)?;
         c.closed("conf_three_blades", self.conf_three_blades, 0.0, 1.0)?;
+        c.closed("hidden_blade_tol_deg", self.hidden_blade_tol_deg, 0.0, 60.0)?;
         c.closed("conf_tower", self.conf_tower, 0.0, 1.0)?;
         c.closed("conf_geometry", self.conf_geometry, 0.0, 1.0)?;
         c.closed("conf_paired", self.conf_paired, 0.0, 1.0)?;

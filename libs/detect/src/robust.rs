@@ -63,6 +63,8 @@ const SPINNER_REUSE_OF_OFFSET: f64 = 0.5;
 /// 3 → 12 took synthetic hits 57.5 → 60.2 %. More peaks find more false circles in textured
 /// ground too (real photos 35.8 → 28.3 % alone); `spinner_max_interior_density` removes those.
 const SPINNER_PEAKS: usize = 12;
+/// A circle lies inside another when it reaches at most this far (working px) beyond its rim.
+const SPINNER_NEST_TOL_PX: f64 = 1.0;
 /// Tower edges tried as seeds of the two-edge tower fit, longest first.
 const TOWER_SEEDS: usize = 4;
 /// Number of vote peaks examined in detail.
@@ -273,9 +275,30 @@ fn adaptive_high(p: &DefaultParams, dx: &Mat, dy: &Mat, hist: &mut Vec<u32>) -> 
     Ok((level as f64).clamp(p.canny_high_min, p.canny_high_max))
 }
 
-/// Greedy merge of collinear segments (longest first): a shorter segment that is nearly parallel,
-/// on the same line and close along it extends the longer one. Returns at most `max_segments`.
+/// Passes of [`merge_collinear_once`] at most: each pass can only join pieces that the previous
+/// one grew toward each other, and two passes settle practically every image.
+const MERGE_PASSES: usize = 4;
+
+/// Merge collinear segments until no two merge any more (at most [`MERGE_PASSES`] passes).
+/// One greedy pass leaves pieces of one line apart when a piece grew toward another only
+/// after that one was placed: a horizon cut by the tower stayed in pieces too short to be
+/// seen as a horizon, and one of them passed for a blade at hub height.
 pub(crate) fn merge_collinear(p: &DefaultParams, input: &[Segment], h: f64) -> Vec<Segment> {
+    let mut segs = merge_collinear_once(p, input, h);
+    for _ in 1..MERGE_PASSES {
+        let n = segs.len();
+        segs = merge_collinear_once(p, &segs, h);
+        if segs.len() == n {
+            break;
+        }
+    }
+    segs.truncate(p.max_segments);
+    segs
+}
+
+/// One greedy pass (longest first): a shorter segment that is nearly parallel, on the same line
+/// and close along it extends the longer one. Longest first.
+fn merge_collinear_once(p: &DefaultParams, input: &[Segment], h: f64) -> Vec<Segment> {
     let mut segs: Vec<Segment> = input.to_vec();
     segs.sort_by(|a, b| b.length().total_cmp(&a.length()));
     let max_gap = p.merge_gap_frac * h;
@@ -304,10 +327,9 @@ pub(crate) fn merge_collinear(p: &DefaultParams, input: &[Segment], h: f64) -> V
             *m = Segment::new(at(nlo), at(nhi));
             continue 'next;
         }
-        if out.len() < p.max_segments {
-            out.push(s);
-        }
+        out.push(s);
     }
+    out.sort_by(|a, b| b.length().total_cmp(&a.length()));
     out
 }
 
@@ -763,6 +785,7 @@ fn evaluate(
     let nb = blades.len();
     let mut conf = match nb {
         0 | 1 => 0.0,
+        2 if !tower.is_empty() && hidden_blade_down(p, &blades, down) => p.conf_three_blades,
         2 => p.conf_two_blades,
         _ => p.conf_three_blades,
     };
@@ -794,6 +817,17 @@ fn evaluate(
     }
     let support = blades.iter().take(ROTOR_BLADES).map(|b| b.weight).sum();
     Candidate { centre: c, blades, rejected, tower, confidence: conf.min(1.0), score: conf, support, spinner }
+}
+
+/// The rotor's third blade, not seen, would point straight down (`down`, degrees from up
+/// clockwise): opposite the bisector of the two seen blades, which are about 120° apart.
+fn hidden_blade_down(p: &DefaultParams, blades: &[Blade], down: f64) -> bool {
+    let [a, b] = [blades[0].angle_deg, blades[1].angle_deg];
+    if p.hidden_blade_tol_deg <= 0.0 || (geometry::ang_dist(a, b) - p.blade_target_deg).abs() > p.blade_sep_tol_deg {
+        return false;
+    }
+    let third = geometry::circular_mean_deg(&[a, b], None) + 180.0;
+    geometry::ang_dist(third, down) <= p.hidden_blade_tol_deg
 }
 
 /// A long usable line passes through `c` (not ending near it): `c` lies on a tower, mast or wire.
@@ -948,7 +982,10 @@ pub(crate) enum CircleQuery {
 pub(crate) type CircleFinder<'a> = dyn FnMut(CircleQuery) -> Result<Vec<[f64; 3]>, DetectError> + 'a;
 
 /// The first circle near `cand` (within `spinner_max_offset_frac · h`) that at least two blades
-/// start from, evaluated as a spinner-centred candidate.
+/// start from, evaluated as a spinner-centred candidate. A larger such circle around it wins:
+/// the shading of the nose cone draws circles inside the spinner's outline, and the blades
+/// start at the outline (a nose-cone circle put the hub 2 % of the height high and its size
+/// put the hub 50 % too far: rendered flights at 30 m).
 #[allow(clippy::too_many_arguments)]
 fn spinner_candidate(
     p: &DefaultParams,
@@ -961,11 +998,15 @@ fn spinner_candidate(
     roll_deg: f64,
     hints: &Hints,
 ) -> Option<Candidate> {
-    circles
+    let mut with_blades = circles
         .iter()
         .filter(|k| geometry::dist([k[0], k[1]], cand.centre) <= p.spinner_max_offset_frac * h)
         .map(|k| evaluate(p, segs, usable, axes, [k[0], k[1]], h, roll_deg, hints, Some(*k)))
-        .find(|c| c.blades.len() >= 2)
+        .filter(|c| c.blades.len() >= 2);
+    let first = with_blades.next()?;
+    let inner = first.spinner?;
+    let encloses = |c: &Candidate| c.spinner.is_some_and(|k| k[2] > inner[2] && geometry::dist([k[0], k[1]], [inner[0], inner[1]]) + inner[2] <= k[2] + SPINNER_NEST_TOL_PX);
+    Some(with_blades.filter(encloses).max_by(|a, b| a.spinner.map_or(0.0, |k| k[2]).total_cmp(&b.spinner.map_or(0.0, |k| k[2]))).unwrap_or(first))
 }
 
 /// Steps after the Hough transform, on plain data (working px) except for `search`, which
@@ -1209,6 +1250,37 @@ mod tests {
         let m = merge_collinear(&p, &segs, 270.0);
         assert_eq!(m.len(), 2);
         assert!(m[0].length() > 105.0, "{m:?}");
+    }
+
+    #[test]
+    fn pieces_bridged_by_a_shorter_one_merge_into_one_line() {
+        let p = DefaultParams::default();
+        // Longest first: B is placed, A is too far from it, then C bridges A and B but only
+        // extends B. A second pass joins A to the grown B.
+        let a = Segment::new([0.0, 100.0], [60.0, 100.0]);
+        let b = Segment::new([100.0, 100.0], [170.0, 100.0]);
+        let c = Segment::new([55.0, 100.0], [105.0, 100.0]);
+        assert_eq!(merge_collinear_once(&p, &[a, b, c], 270.0).len(), 2);
+        let m = merge_collinear(&p, &[a, b, c], 270.0);
+        assert_eq!(m.len(), 1, "{m:?}");
+        assert!((m[0].length() - 170.0).abs() < 1e-6, "{m:?}");
+    }
+
+    #[test]
+    fn two_blades_up_with_the_third_hidden_by_the_tower_count_as_a_rotor() {
+        let mut p = DefaultParams::default();
+        let hub = [200.0, 100.0];
+        // Blades at 60° and 300°: the third would point straight down, over the tower.
+        let mut segs = rotor(hub, 60.0);
+        segs.retain(|s| geometry::ang_dist(s.angle_away_from(hub), 180.0) > 10.0 || s.tilt_from_vertical_deg().abs() < 1.0);
+        assert_eq!(segs.len(), 6, "tower edges and two blades");
+        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, None).unwrap();
+        assert!(f.detected && geometry::dist(f.hub, hub) < 3.0, "{f:?}");
+        let with_rule = f.confidence;
+        p.hidden_blade_tol_deg = 0.0;
+        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, None).unwrap();
+        assert!(f.confidence < with_rule, "{} vs {with_rule}", f.confidence);
     }
 
     #[test]

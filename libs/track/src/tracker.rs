@@ -27,6 +27,8 @@ struct Options {
     ego_motion: bool,
     /// Report the thesis's raw per-frame distance and yaw instead of the filtered ones.
     raw_estimates: bool,
+    /// Filter with `thesis_filter`'s damping and noise instead of `filter`'s.
+    thesis_filter: bool,
 }
 
 /// The hub track.
@@ -132,9 +134,21 @@ impl Core {
         Pinhole::with_focal(w, h, f)
     }
 
+    /// The filter's (damping, process noise, measurement noise) at the reference width: the
+    /// thesis's for the baseline, ours otherwise.
+    fn noise(&self) -> (f64, f64, f64) {
+        if self.opts.thesis_filter {
+            let t = &self.cfg.thesis_filter;
+            (t.damping, t.process_noise, t.measurement_noise)
+        } else {
+            let f = &self.cfg.filter;
+            (f.damping, f.process_noise, f.measurement_noise)
+        }
+    }
+
     /// Measurement variance R, px² at the frame's resolution.
     fn r(&self) -> f64 {
-        self.cfg.filter.measurement_noise * self.scale().powi(2)
+        self.noise().2 * self.scale().powi(2)
     }
 
     fn initial_velocity_var(&self) -> f64 {
@@ -194,12 +208,8 @@ impl Core {
         let dt = dt.max(0.0);
         let cam = self.camera();
         let pose1 = self.pose_at(t);
-        let model = CvModel::from_thesis(
-            self.cfg.filter.damping,
-            self.cfg.filter.process_noise,
-            self.cfg.filter.reference_rate_hz,
-            self.scale(),
-        );
+        let (damping, process_noise, _) = self.noise();
+        let model = CvModel::from_thesis(damping, process_noise, self.cfg.filter.reference_rate_hz, self.scale());
         let range = self.distance.estimate().map(|e| e.value);
         let frac2 = self.cfg.ego_motion.shift_std_fraction.powi(2);
         let pose0 = self.pose;
@@ -274,8 +284,9 @@ impl Core {
         self.candidate = None;
     }
 
-    /// Handles one hub measurement at `t_ns`; returns whether it was accepted into the track.
-    fn measure_hub(&mut self, z: [f64; 2], t_ns: u64) -> bool {
+    /// Handles one hub measurement at `t_ns`; returns whether it was accepted into the track,
+    /// and whether it also lay within `gating.estimate_gate_px` of the prediction.
+    fn measure_hub(&mut self, z: [f64; 2], t_ns: u64) -> (bool, bool) {
         let r = self.r();
         let gating = self.gating_enabled();
         let g = self.cfg.gating.clone();
@@ -284,10 +295,11 @@ impl Core {
         let Some(track) = self.track.as_mut().filter(|t| !t.lost) else {
             // No track, or it is lost: any detection starts a new one.
             self.start_track(z, 1);
-            return true;
+            return (true, false);
         };
         let (nu, _, d2) = track.filter.innovation(z, r);
         let inside = !gating || d2 <= g.chi2_threshold || nu.norm() <= g.min_gate_px * scale;
+        let close = nu.norm() <= g.estimate_gate_px * scale;
         if inside {
             track.filter.update(z, r);
             track.consistent = track.consistent.saturating_add(1);
@@ -296,12 +308,12 @@ impl Core {
                 self.ever_confirmed = true;
             }
             self.candidate = None;
-            return true;
+            return (true, close);
         }
         if !track.confirmed {
             // Acquiring: an inconsistent detection restarts the tentative track.
             self.start_track(z, 1);
-            return true;
+            return (true, false);
         }
         // A confirmed track rejects the measurement; count it towards a persistent jump.
         let radius = g.jump_consistency_px * scale;
@@ -312,11 +324,11 @@ impl Core {
         if count >= g.jump_accept_count {
             log::info!("track: persistent jump to ({:.1}, {:.1}) accepted after {count} detections", z[0], z[1]);
             self.start_track(z, count);
-            return true;
+            return (true, false);
         }
         log::debug!("track: gated out ({:.1}, {:.1}), Mahalanobis² {d2:.1}", z[0], z[1]);
         self.candidate = Some(Candidate { px: z, count, t_ns });
-        false
+        (false, false)
     }
 
     fn update(&mut self, det: &Detection, vehicle: Option<&VehicleState>) -> TrackState {
@@ -329,7 +341,7 @@ impl Core {
         let usable = det.detected
             && det.confidence >= self.cfg.filter.min_confidence
             && det.hub_px.iter().all(|v| v.is_finite());
-        let accepted = usable && self.measure_hub(det.hub_px, t);
+        let (accepted, close) = if usable { self.measure_hub(det.hub_px, t) } else { (false, false) };
         if accepted {
             self.last_accept_ns = Some(t);
             self.missed_streak = 0;
@@ -340,7 +352,7 @@ impl Core {
         }
         if self.opts.raw_estimates {
             self.raw = if usable { self.raw_estimates(det) } else { (None, None) };
-        } else if accepted {
+        } else if close {
             self.filtered_estimates(det, t);
         }
         self.apply_timeouts(t);
@@ -556,7 +568,7 @@ impl Tracker {
     /// A tracker with a validated configuration.
     pub fn new(config: crate::params::TrackConfig) -> Result<Tracker, crate::params::ParamError> {
         Ok(Tracker {
-            core: Core::new(config, Options { gating: true, ego_motion: true, raw_estimates: false })?,
+            core: Core::new(config, Options { gating: true, ego_motion: true, raw_estimates: false, thesis_filter: false })?,
         })
     }
 
@@ -602,7 +614,7 @@ impl BaselineTracker {
     /// `distance` and `yaw` from the configuration.
     pub fn new(config: crate::params::TrackConfig) -> Result<BaselineTracker, crate::params::ParamError> {
         Ok(BaselineTracker {
-            core: Core::new(config, Options { gating: false, ego_motion: false, raw_estimates: true })?,
+            core: Core::new(config, Options { gating: false, ego_motion: false, raw_estimates: true, thesis_filter: true })?,
         })
     }
 

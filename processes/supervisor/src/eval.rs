@@ -44,13 +44,17 @@ pub struct EvalArgs {
     /// this folder, with `misses.jsonl` listing them.
     #[arg(long, value_name = "DIR")]
     pub misses: Option<PathBuf>,
+    /// With --sequence: write one JSON line per frame (flight, frame, truth, detection, both
+    /// trackers' outputs) to this file, to see where a flight's errors come from.
+    #[arg(long, value_name = "FILE", requires = "sequence")]
+    pub trace: Option<PathBuf>,
 }
 
 /// Runs the command.
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let config = args.config.load()?;
     if args.sequence {
-        return crate::eval_seq::run(&config, args.flights, args.frames, args.seed);
+        return crate::eval_seq::run(&config, args.flights, args.frames, args.seed, args.trace.as_deref());
     }
     if let Some(dir) = &args.misses {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;

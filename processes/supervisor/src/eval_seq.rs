@@ -112,8 +112,40 @@ impl Scorer {
     }
 }
 
-/// Runs `flights` flights of `frames` frames and prints the tables.
-pub fn run(config: &Config, flights: u64, frames: u64, seed: u64) -> anyhow::Result<()> {
+/// One frame of `--trace` output.
+fn trace_line(flight: u64, frame: usize, truth: &hubtrack_render::Truth, det: &Detection, ours: &TrackState, thesis: &TrackState) -> serde_json::Value {
+    let track = |s: &TrackState| {
+        serde_json::json!({
+            "mode": format!("{:?}", s.mode).to_lowercase(),
+            "hub": s.hub_px,
+            "distance_m": s.distance_valid.then_some(s.distance_m),
+            "yaw_deg": s.yaw_valid.then_some(s.yaw_deg),
+        })
+    };
+    serde_json::json!({
+        "flight": flight,
+        "frame": frame,
+        "truth": {"hub": truth.hub_px, "nose": truth.nose_px, "distance_m": truth.distance_m, "yaw_deg": truth.relative_yaw_deg, "tower_width": truth.tower_width_px},
+        "detection": {
+            "detected": det.detected,
+            "hub": det.detected.then_some(det.hub_px),
+            "confidence": det.confidence,
+            "spinner_radius": det.circle_found.then_some(det.circle[2]),
+            "tower_width": det.tower_found.then_some(det.tower_width_px),
+        },
+        "ours": track(ours),
+        "thesis": track(thesis),
+    })
+}
+
+/// Runs `flights` flights of `frames` frames and prints the tables; with `trace`, writes one
+/// JSON line per frame there.
+pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, trace: Option<&std::path::Path>) -> anyhow::Result<()> {
+    use std::io::Write as _;
+    let mut trace = match trace {
+        Some(p) => Some(std::io::BufWriter::new(std::fs::File::create(p).map_err(|e| anyhow::anyhow!("creating {}: {e}", p.display()))?)),
+        None => None,
+    };
     let mut detector = Detector::new(config.detect.clone())?;
     let mut renderer = Renderer::new(Camera::gopro_hero3());
     let cam = *renderer.camera();
@@ -171,8 +203,12 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64) -> anyhow::Res
             };
             let state = ours.update(&det, Some(&vehicle));
             so.add(&state, &truth, height);
+            let thesis_state = thesis.update(&det, None);
+            st.add(&thesis_state, &truth, height);
+            if let Some(w) = trace.as_mut() {
+                writeln!(w, "{}", trace_line(f, i, &truth, &det, &state, &thesis_state))?;
+            }
             last = Some(state);
-            st.add(&thesis.update(&det, None), &truth, height);
         }
         so.m.raw_sq = raw_sq.clone();
         st.m.raw_sq = raw_sq;
