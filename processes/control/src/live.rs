@@ -34,7 +34,7 @@ pub fn run(stage: Stage) -> anyhow::Result<()> {
 
     let tracks = MsgSubscriber::<TrackState>::new(&node, &TRACK, TRACK_BUFFER)?;
     let clock = match cfg.clock {
-        ClockSource::Sim => Some(MsgSubscriber::<SimClock>::new(&node, &CLOCK, 4)?),
+        ClockSource::Sim => Some(MsgSubscriber::<SimClock>::polling(&node, &CLOCK, 4)?),
         ClockSource::Monotonic => None,
     };
     let vehicle_out = MsgPublisher::new(&node, &VEHICLE)?;

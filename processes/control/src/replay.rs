@@ -30,7 +30,7 @@ pub fn run(stage: Stage) -> anyhow::Result<()> {
     let ms_to_ns = |ms: u64| ms * 1_000_000;
     let (link_timeout_ns, state_timeout_ns) = (ms_to_ns(cfg.link_timeout_ms), ms_to_ns(cfg.vehicle_timeout_ms));
     let tracks = MsgSubscriber::<TrackState>::new(&node, &TRACK, TRACK_BUFFER)?;
-    let vehicles = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, VEHICLE_BUFFER)?;
+    let vehicles = MsgSubscriber::<VehicleState>::polling(&node, &VEHICLE, VEHICLE_BUFFER)?;
     log::info!("replay mode: no MAVLink link; vehicle states from the vehicle service, time from the track states");
     // Before the first vehicle state, what live control sees before the autopilot is heard from.
     let mut vehicle = VehicleState::default();

@@ -39,9 +39,9 @@ fn run() -> anyhow::Result<()> {
     log::info!("mode {:?}", config.detect.mode);
 
     let mut frames = FrameSubscriber::new(&node, 1)?;
-    let vehicle = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, 4)?;
+    let vehicle = MsgSubscriber::<VehicleState>::polling(&node, &VEHICLE, 4)?;
     // The tracker's prediction focuses the search (and finds the spinner at close range).
-    let tracks = MsgSubscriber::<TrackState>::new(&node, &TRACK, 4)?;
+    let tracks = MsgSubscriber::<TrackState>::polling(&node, &TRACK, 4)?;
     let mut last_track: Option<TrackState> = None;
     let detections = MsgPublisher::<Detection>::new(&node, &DETECTIONS)?;
     let overlays = MsgPublisher::<DetectOverlay>::new(&node, &OVERLAY)?;

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
 use std::time::{Duration, Instant};
 
-/// Longest sleep of the reader between checks for shutdown and non-frame services.
+/// Sleep of the reader between checks for frames, shutdown and the other services.
 const READER_WAIT: Duration = Duration::from_millis(5);
 /// Result-service receive buffer (messages are small; a generous buffer loses none).
 const RESULT_BUFFER: usize = 64;
@@ -72,13 +72,15 @@ fn run() -> anyhow::Result<()> {
     let recording = Recording::create(&args.output, &options(&cfg))?;
     log::info!("recording to {}", args.output.display());
 
-    let mut frames = FrameSubscriber::new(&node, usize::MAX)?;
-    let detections = MsgSubscriber::<Detection>::new(&node, &DETECTIONS, RESULT_BUFFER)?;
-    let track = MsgSubscriber::<TrackState>::new(&node, &TRACK, RESULT_BUFFER)?;
-    let setpoints = MsgSubscriber::<Setpoint>::new(&node, &SETPOINTS, RESULT_BUFFER)?;
-    let vehicle = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, RESULT_BUFFER)?;
-    let status_in = MsgSubscriber::<StageStatus>::new(&node, &STATUS, RESULT_BUFFER)?;
-    let overlays = MsgSubscriber::<DetectOverlay>::new(&node, &OVERLAY, OVERLAY.qos.subscriber_max_buffer_size)?;
+    // Polled, not woken by each frame: the camera's notification goes to detect alone (see
+    // `FrameSubscriber::polling`); the buffer holds many sleeps' worth of frames.
+    let mut frames = FrameSubscriber::polling(&node, usize::MAX)?;
+    let detections = MsgSubscriber::<Detection>::polling(&node, &DETECTIONS, RESULT_BUFFER)?;
+    let track = MsgSubscriber::<TrackState>::polling(&node, &TRACK, RESULT_BUFFER)?;
+    let setpoints = MsgSubscriber::<Setpoint>::polling(&node, &SETPOINTS, RESULT_BUFFER)?;
+    let vehicle = MsgSubscriber::<VehicleState>::polling(&node, &VEHICLE, RESULT_BUFFER)?;
+    let status_in = MsgSubscriber::<StageStatus>::polling(&node, &STATUS, RESULT_BUFFER)?;
+    let overlays = MsgSubscriber::<DetectOverlay>::polling(&node, &OVERLAY, OVERLAY.qos.subscriber_max_buffer_size)?;
 
     // Fixed pool of frame buffers: `free` holds empty ones, `queue` carries filled ones.
     let (free_tx, free_rx) = mpsc::sync_channel::<Vec<u8>>(cfg.queue_frames);

@@ -33,7 +33,7 @@ fn run() -> anyhow::Result<()> {
     let mut tracker = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
 
     let detections = MsgSubscriber::<Detection>::new(&node, &DETECTIONS, DETECTION_BUFFER)?;
-    let vehicle = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, 4)?;
+    let vehicle = MsgSubscriber::<VehicleState>::polling(&node, &VEHICLE, 4)?;
     let track = MsgPublisher::<TrackState>::new(&node, &TRACK)?;
     let mut last_vehicle: Option<VehicleState> = None;
     let mut last_seq: Option<u64> = None;
