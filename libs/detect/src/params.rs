@@ -324,6 +324,14 @@ pub struct DefaultParams {
     /// Tower partner edge: its response must also be this many times the mean response over
     /// all offsets searched (it must stand out of the background texture).
     pub tower_partner_min_salience: f64,
+    /// A tower edge moves outward to the end of its shading ramp: as far as the summed gradient
+    /// response along the shifted edge stays at least this fraction of the response at the
+    /// fitted (steepest) position. A side-lit tower's dark limb on dark ground has no edge, only
+    /// the end of a ramp; a sharp edge's response halves within a pixel and stays put. ≥ 1
+    /// disables it.
+    pub tower_ramp_min_frac: f64,
+    /// ... by at most this fraction of the tower width.
+    pub tower_ramp_max_frac: f64,
     /// The tower band's width at the image bottom over its width at its top must be at least
     /// this: a blade pointing down narrows toward its tip (~0.65 over the visible part), the
     /// tower keeps its image width within ~10 %. A blade pointing down in front of the tower
@@ -513,6 +521,8 @@ impl Default for DefaultParams {
             tower_max_width_frac: 0.25,
             tower_partner_min_ratio: 0.15,
             tower_partner_min_salience: 4.0,
+            tower_ramp_min_frac: 0.8,
+            tower_ramp_max_frac: 0.3,
             tower_min_width_ratio: 0.9,
             tower_max_width_ratio: 1.25,
             tower_blade_down_tol_deg: 12.0,
@@ -677,6 +687,8 @@ impl DefaultParams {
         c.closed("tower_max_width_frac", self.tower_max_width_frac, 0.0, 1.0)?;
         c.closed("tower_partner_min_ratio", self.tower_partner_min_ratio, 0.0, 1.0)?;
         c.closed("tower_partner_min_salience", self.tower_partner_min_salience, 0.0, 1000.0)?;
+        c.closed("tower_ramp_min_frac", self.tower_ramp_min_frac, 0.0, 1.0)?;
+        c.closed("tower_ramp_max_frac", self.tower_ramp_max_frac, 0.0, 1.0)?;
         c.closed("tower_min_width_ratio", self.tower_min_width_ratio, 0.0, 10.0)?;
         c.closed("tower_max_width_ratio", self.tower_max_width_ratio, 0.0, 10.0)?;
         c.less("tower_min_width_ratio", self.tower_min_width_ratio, "tower_max_width_ratio", self.tower_max_width_ratio)?;

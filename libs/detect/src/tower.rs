@@ -177,6 +177,13 @@ pub(crate) fn fit_tower(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, wi
 
     let seed_fit = fit_edge(g, &rows, x0, sign)?;
     let partner_fit = fit_edge(g, &rows, |y| x0(y).map(|x| x + offset(y)), -sign)?;
+    // Each edge moves outward to the end of its shading ramp, if it is one.
+    let out = off_top.signum() as f64; // from the seed toward the partner
+    // Within the width window: half the room left to its upper end for each edge.
+    let room = (window.1 - off_top.abs().max(off_bot.abs()) as f64) / 2.0;
+    let max_ramp = (off_top.abs() as f64 * p.tower_ramp_max_frac).min(room).floor().max(0.0) as i64;
+    let seed_fit = to_ramp_end(g, &rows, seed_fit, sign, -out, p.tower_ramp_min_frac, max_ramp);
+    let partner_fit = to_ramp_end(g, &rows, partner_fit, -sign, out, p.tower_ramp_min_frac, max_ramp);
     let (left, right) = if off_top > 0 { (seed_fit, partner_fit) } else { (partner_fit, seed_fit) };
     let bottom = h - 1.0;
     let mid = |y: f64| Some((left.x_at_y(y)? + right.x_at_y(y)?) / 2.0);
@@ -317,6 +324,25 @@ fn fit_edge(g: &GradPlane<'_>, rows: &[i64], predict: impl Fn(i64) -> Option<f64
     Some(Segment::new([a + b * y0, y0], [a + b * y1, y1]))
 }
 
+/// The edge `line` (gradient sign `sign`) moved `k` px toward `outward` (±1), `k` the largest
+/// shift up to `max_k` at which the summed response along the shifted line, and at every smaller
+/// shift, still reaches `min_frac` of the response along `line`. A tower lit from one side is a
+/// shading ramp toward its dark limb; where the limb is as dark as the ground behind it there is
+/// no edge at the silhouette, only the ramp's end, and the steepest part of the ramp (where the
+/// edge fit lands) lies inside the tower: widths read 0.7× the truth in such renders. A sharp
+/// edge's response halves within a pixel, so it stays in place. `min_frac` ≥ 1 or `max_k` 0:
+/// `line` unchanged.
+fn to_ramp_end(g: &GradPlane<'_>, rows: &[i64], line: Segment, sign: f64, outward: f64, min_frac: f64, max_k: i64) -> Segment {
+    let along = |dx: f64| -> f64 { rows.iter().filter_map(|&y| Some(sign * g.at((line.x_at_y(y as f64)? + dx).round() as i64, y))).sum() };
+    let base = along(0.0);
+    if base <= 0.0 || min_frac >= 1.0 {
+        return line;
+    }
+    let k = (1..=max_k).take_while(|&k| along(outward * k as f64) >= min_frac * base).last().unwrap_or(0);
+    let dx = outward * k as f64;
+    Segment::new([line.a[0] + dx, line.a[1]], [line.b[0] + dx, line.b[1]])
+}
+
 /// `floor(delta · k / last + 0.5)` for k = 0 ..= last (all 0 when `last` is 0): the rounded
 /// shift of row k along a line drifting by `delta` over `last` rows. Added to a positive start,
 /// it rounds as `f64::round` does.
@@ -402,6 +428,42 @@ mod tests {
         let seed = Segment::new([left + width + tilt * 100.0, 100.0], [left + width + tilt * 150.0, 150.0]);
         let fit2 = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("partner found from the right");
         assert!((fit2.axis.x_at_y(120.0).unwrap() - fit.axis.x_at_y(120.0).unwrap()).abs() < 0.6);
+    }
+
+    /// A tower lit from the left on ground as dark as its shaded limb: a sharp lit edge, a
+    /// bright face, then a steady brightness ramp (as in the renderer's side-lit towers) that
+    /// meets the ground level at the silhouette, and no edge there.
+    fn side_lit_image(w: usize, h: usize, left: f64, width: f64) -> Vec<u8> {
+        let (ground, lit) = (60.0, 215.0);
+        let mut img = vec![ground as u8; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let t = (x as f64 + 0.5 - left) / width;
+                if (0.0..1.0).contains(&t) {
+                    // Flat for the first 40 %, then linearly down to the ground level.
+                    let r = ((t - 0.4) / 0.6).max(0.0);
+                    img[y * w + x] = (lit - (lit - ground) * r).round() as u8;
+                }
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn a_side_lit_tower_is_measured_to_the_end_of_its_shading_ramp() {
+        let (w, h) = (200, 160);
+        let (left, width) = (80.0, 14.0);
+        let img = side_lit_image(w, h, left, width);
+        let gx = sobel_x(&img, w, h);
+        let g = GradPlane { data: &gx, width: w, height: h };
+        let seed = Segment::new([left, 40.0], [left, 150.0]);
+        let ramp = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("tower with the ramp");
+        let steepest = DefaultParams { tower_ramp_min_frac: 1.0, ..DefaultParams::default() };
+        let fixed = fit_tower(&steepest, &g, &seed, ANY_WIDTH).expect("tower without");
+        let (with, without) = (ramp.width_at(100.0).unwrap(), fixed.width_at(100.0).unwrap());
+        assert!(without < width - 2.0, "the steepest point lies inside the tower: {without}");
+        assert!(with > without + 1.5 && (with - width).abs() < (without - width).abs(), "ramp end {with} vs steepest {without}, truth {width}");
+        assert!(with <= width + 1.0, "never beyond the silhouette: {with}");
     }
 
     #[test]
