@@ -169,6 +169,13 @@ pub struct GatingConfig {
     /// Two gated-out measurements are consistent when they lie within this distance of each
     /// other (after the ego-motion prediction), px at the reference width.
     pub jump_consistency_px: f64,
+    /// After a jump the track before it is kept, predicted, for this long, s: a detection
+    /// inside its gate, while the new track has fewer consistent detections than it had,
+    /// brings it back. Three frames of a false feature (the nacelle's underside, a tower-top
+    /// junction) otherwise capture the track, and the true hub found again is gated out as an
+    /// outlier of the false track (a rendered flight stayed 120 px off for 2 s that way).
+    /// 0 disables it. Range [0, 60]; default 3.
+    pub jump_fallback_s: f64,
 }
 
 impl Default for GatingConfig {
@@ -180,6 +187,7 @@ impl Default for GatingConfig {
             estimate_gate_px: 5.0,
             jump_accept_count: 3,
             jump_consistency_px: 5.0,
+            jump_fallback_s: 3.0,
         }
     }
 }
@@ -398,6 +406,7 @@ impl TrackConfig {
         c.closed("estimate_gate_px", g.estimate_gate_px, 0.0, MAX_PX)?;
         c.count("jump_accept_count", g.jump_accept_count, 1, MAX_COUNT)?;
         c.open_closed("jump_consistency_px", g.jump_consistency_px, 0.0, MAX_PX)?;
+        c.closed("jump_fallback_s", g.jump_fallback_s, 0.0, 60.0)?;
 
         let c = Check::new("track.modes");
         let m = &self.modes;

@@ -59,6 +59,8 @@ struct Core {
     r_bc: Rotation3<f64>,
     track: Option<HubTrack>,
     candidate: Option<Candidate>,
+    /// The track before the last jump and the jump's time (see `gating.jump_fallback_s`).
+    before_jump: Option<(HubTrack, u64)>,
     /// Time of the state, ns.
     t_ns: Option<u64>,
     /// Time of the first update, ns.
@@ -90,6 +92,7 @@ impl Core {
             r_bc,
             track: None,
             candidate: None,
+            before_jump: None,
             t_ns: None,
             first_ns: None,
             last_accept_ns: None,
@@ -231,6 +234,17 @@ impl Core {
             };
             track.filter.predict(&model, dt, shift, var);
         }
+        if let Some((old, _)) = self.before_jump.as_mut() {
+            let px = old.filter.position();
+            let (shift, var) = match warp(px, range) {
+                Some(m) => {
+                    let s = [m.px[0] - px[0], m.px[1] - px[1]];
+                    (s, frac2 * (s[0] * s[0] + s[1] * s[1]))
+                }
+                None => ([0.0, 0.0], 0.0),
+            };
+            old.filter.predict(&model, dt, shift, var);
+        }
         if let Some(c) = self.candidate.as_mut() {
             if let Some(m) = warp(c.px, None) {
                 c.px = m.px;
@@ -270,6 +284,9 @@ impl Core {
         if self.candidate.is_some_and(|c| dt_s(t_ns, c.t_ns) >= lost_after) {
             self.candidate = None;
         }
+        if self.before_jump.is_some_and(|(_, at)| dt_s(t_ns, at) > self.cfg.gating.jump_fallback_s) {
+            self.before_jump = None;
+        }
     }
 
     fn start_track(&mut self, z: [f64; 2], consistent: u32) {
@@ -295,6 +312,7 @@ impl Core {
         let Some(track) = self.track.as_mut().filter(|t| !t.lost) else {
             // No track, or it is lost: any detection starts a new one.
             self.start_track(z, 1);
+            self.before_jump = None;
             return (true, false);
         };
         let (nu, _, d2) = track.filter.innovation(z, r);
@@ -315,7 +333,22 @@ impl Core {
             self.start_track(z, 1);
             return (true, false);
         }
-        // A confirmed track rejects the measurement; count it towards a persistent jump.
+        // A confirmed track rejects the measurement. The track before a recent jump may take
+        // it back, if it had more support than the new one has.
+        let new_support = track.consistent;
+        if let Some((mut old, _)) = self.before_jump.filter(|(old, _)| gating && old.consistent > new_support) {
+            let (nu_old, _, d2_old) = old.filter.innovation(z, r);
+            if d2_old <= g.chi2_threshold || nu_old.norm() <= g.min_gate_px * scale {
+                log::info!("track: back to the track before the jump at ({:.1}, {:.1})", z[0], z[1]);
+                old.filter.update(z, r);
+                old.consistent = old.consistent.saturating_add(1);
+                self.track = Some(old);
+                self.before_jump = None;
+                self.candidate = None;
+                return (true, false);
+            }
+        }
+        // Count it towards a persistent jump.
         let radius = g.jump_consistency_px * scale;
         let count = match self.candidate {
             Some(c) if ((c.px[0] - z[0]).powi(2) + (c.px[1] - z[1]).powi(2)).sqrt() <= radius => c.count + 1,
@@ -323,7 +356,9 @@ impl Core {
         };
         if count >= g.jump_accept_count {
             log::info!("track: persistent jump to ({:.1}, {:.1}) accepted after {count} detections", z[0], z[1]);
+            let old = *track;
             self.start_track(z, count);
+            self.before_jump = (self.cfg.gating.jump_fallback_s > 0.0).then_some((old, t_ns));
             return (true, false);
         }
         log::debug!("track: gated out ({:.1}, {:.1}), Mahalanobis² {d2:.1}", z[0], z[1]);

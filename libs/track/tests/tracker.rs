@@ -214,6 +214,49 @@ fn gating_rejects_an_injected_outlier_the_baseline_jumps() {
 }
 
 #[test]
+fn the_true_hub_seen_again_after_a_false_jump_brings_the_old_track_back() {
+    // Three frames of a false feature 120 px below the hub (the nacelle's underside) make a
+    // jump; the hub detected again is inside the old track's gate, not the new one's.
+    for fallback_s in [3.0, 0.0] {
+        let mut cfg = pinhole_config();
+        cfg.gating.jump_fallback_s = fallback_s;
+        let mut tr = Tracker::new(cfg).unwrap();
+        let mut rng = Rng::new(21);
+        let fps = 15.0;
+        let hub = [960.0, 540.0];
+        let (_, mut k) = settle(&mut tr, hub, 2.0, fps, 2.0, &mut rng);
+        let false_feature = [960.0, 660.0];
+        let mut s = TrackState::default();
+        for _ in 0..3 {
+            s = tr.update(&det(k, frame_t(k, fps), Some(false_feature)), None);
+            k += 1;
+        }
+        assert!(dist(s.hub_px, false_feature) < 5.0, "the jump was accepted: {:?}", s.hub_px);
+        // The first detection of the hub again.
+        s = tr.update(&det(k, frame_t(k, fps), Some([hub[0] + rng.normal(), hub[1] + rng.normal()])), None);
+        if fallback_s > 0.0 {
+            assert!(dist(s.hub_px, hub) < 3.0, "back on the hub at once: {:?}", s.hub_px);
+            assert_eq!(s.mode, TrackMode::Tracking);
+        } else {
+            // Without the fallback it is an outlier of the false track.
+            assert!(dist(s.hub_px, false_feature) < 5.0, "still on the false feature: {:?}", s.hub_px);
+            assert_eq!(s.mode, TrackMode::Coasting);
+        }
+    }
+    // The fallback cannot take a hub it never tracked: a detection far from both stays out.
+    let mut tr = Tracker::new(pinhole_config()).unwrap();
+    let mut rng = Rng::new(22);
+    let (_, mut k) = settle(&mut tr, [960.0, 540.0], 2.0, 15.0, 2.0, &mut rng);
+    for _ in 0..3 {
+        tr.update(&det(k, frame_t(k, 15.0), Some([960.0, 660.0])), None);
+        k += 1;
+    }
+    let s = tr.update(&det(k, frame_t(k, 15.0), Some([500.0, 300.0])), None);
+    assert!(dist(s.hub_px, [960.0, 660.0]) < 5.0, "a third place took the track: {:?}", s.hub_px);
+    assert_eq!(s.mode, TrackMode::Coasting);
+}
+
+#[test]
 fn a_persistent_jump_is_accepted_after_the_configured_count() {
     for count in [3u32, 5] {
         let mut cfg = pinhole_config();
