@@ -289,6 +289,12 @@ pub struct DefaultParams {
     pub prediction_radius_frac: f64,
     /// Score bonus (confidence units) for candidates near the predicted hub.
     pub prediction_bonus: f64,
+    /// A spinner candidate whose circle is within this factor of the radius the tracker's
+    /// distance expects ...
+    pub spinner_size_match_tol: f64,
+    /// ... gets this added to its score and confidence (the spinner at the predicted size is the
+    /// strongest single cue at close range; blade lines meeting near it can still outscore it).
+    pub spinner_size_match_bonus: f64,
     /// Confidence weight of having 2 blades.
     pub conf_two_blades: f64,
     /// Confidence weight of having 3 blades.
@@ -508,6 +514,8 @@ impl Default for DefaultParams {
             roll_search_deg: 10.0,
             prediction_radius_frac: 0.15,
             prediction_bonus: 0.1,
+            spinner_size_match_tol: 1.25,
+            spinner_size_match_bonus: 0.15,
             conf_two_blades: 0.3,
             conf_three_blades: 0.5,
             hidden_blade_tol_deg: 15.0,
@@ -674,6 +682,8 @@ impl DefaultParams {
         c.closed("roll_search_deg", self.roll_search_deg, 0.0, 45.0)?;
         c.closed("prediction_radius_frac", self.prediction_radius_frac, 0.0, 2.0)?;
         c.closed("prediction_bonus", self.prediction_bonus, 0.0, 1.0)?;
+        c.closed("spinner_size_match_tol", self.spinner_size_match_tol, 1.0, 10.0)?;
+        c.closed("spinner_size_match_bonus", self.spinner_size_match_bonus, 0.0, 1.0)?;
         c.closed("conf_two_blades", self.conf_two_blades, 0.0, 1.0)?;
         c.closed("conf_three_blades", self.conf_three_blades, 0.0, 1.0)?;
         c.closed("hidden_blade_tol_deg", self.hidden_blade_tol_deg, 0.0, 60.0)?;

@@ -133,7 +133,7 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
             }
         };
         let grad = Gradients { x: GradPlane { data: img.dx, width: ew, height: eh }, y: GradPlane { data: img.dy, width: ew, height: eh } };
-        let mut found = recognise(p, &segs, w, h, hints, &mut search, Some(&grad), expected.tower_width)?;
+        let mut found = recognise(p, &segs, w, h, hints, &mut search, Some(&grad), expected)?;
         found.line_count = line_count;
         found.edge_count = edge_count;
         found.edges_us = edges_us;
@@ -1023,8 +1023,9 @@ pub(crate) fn recognise(
     hints: &Hints,
     search: &mut CircleFinder<'_>,
     grad: Option<&Gradients<'_>>,
-    tower_width: Option<f64>,
+    expected: Expected,
 ) -> Result<Found, DetectError> {
+    let tower_width = expected.tower_width;
     let partner_search = PartnerSearch {
         min_width: p.blade_partner_min_width_px,
         max_width: p.blade_partner_max_width_frac * h,
@@ -1105,7 +1106,18 @@ pub(crate) fn recognise(
             }
         };
         log::trace!("spinner search at {:?}: {:?}", cand.centre, circles);
-        if let Some(sc) = spinner_candidate(p, segs, &usable, &axes, cand, &circles, h, roll_deg, hints) {
+        if let Some(mut sc) = spinner_candidate(p, segs, &usable, &axes, cand, &circles, h, roll_deg, hints) {
+            // A circle of the size the tracker's distance expects is the spinner with more
+            // certainty than blade lines meeting somewhere near it: at close range under an
+            // overcast sky the lines of two blades met at the tower top, 0.15 h below the
+            // hub, scored 0.9 with the tower, and the spinner, found at the expected size,
+            // 0.8.
+            if let (Some(e), Some(k)) = (expected.spinner_radius, sc.spinner) {
+                if k[2] >= e / p.spinner_size_match_tol && k[2] <= e * p.spinner_size_match_tol {
+                    sc.score += p.spinner_size_match_bonus;
+                    sc.confidence = (sc.confidence + p.spinner_size_match_bonus).min(1.0);
+                }
+            }
             log::trace!("spinner candidate {:?} conf {:.2} blades {}", sc.spinner, sc.confidence, sc.blades.len());
             extra.push(sc);
         }
@@ -1207,7 +1219,7 @@ mod tests {
         // Horizon split by the tower: two long pieces ending at the tower.
         segs.push(Segment::new([0.0, 125.0], [196.0, 125.0]));
         segs.push(Segment::new([204.0, 125.0], [479.0, 125.0]));
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, Expected::default()).unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 3.0, "{:?}", f.hub);
         assert_eq!(f.blade_angles.len(), 3);
@@ -1222,7 +1234,7 @@ mod tests {
         // tower lines' "blade" pointing down, and the second leans more than a tower line may.
         segs.push(ray(hub, 187.5, 8.0, 60.0));
         segs.push(ray(hub, 188.5, 8.0, 60.0));
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, Expected::default()).unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 3.0, "{:?}", f.hub);
         let mut angles: Vec<f64> = f.blade_angles.iter().map(|a| a.round()).collect();
@@ -1275,11 +1287,11 @@ mod tests {
         segs.retain(|s| geometry::ang_dist(s.angle_away_from(hub), 180.0) > 10.0 || s.tilt_from_vertical_deg().abs() < 1.0);
         assert_eq!(segs.len(), 6, "tower edges and two blades");
         let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
-        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
         assert!(f.detected && geometry::dist(f.hub, hub) < 3.0, "{f:?}");
         let with_rule = f.confidence;
         p.hidden_blade_tol_deg = 0.0;
-        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
         assert!(f.confidence < with_rule, "{} vs {with_rule}", f.confidence);
     }
 
@@ -1288,7 +1300,7 @@ mod tests {
         let p = DefaultParams::default();
         // Power-line like: several long near-parallel sagging wires.
         let segs: Vec<Segment> = (0..5).map(|k| Segment::new([0.0, 50.0 + 10.0 * k as f64], [479.0, 60.0 + 12.0 * k as f64])).collect();
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints::default(), &mut no_circles, None, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints::default(), &mut no_circles, None, Expected::default()).unwrap();
         assert!(!f.detected);
     }
 
@@ -1335,7 +1347,7 @@ mod tests {
         for a in [40.0, 160.0, 280.0] {
             segs.extend(blade_edges(hub, a, 55.0, 120.0, 18.0, 9.0));
         }
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, Expected::default()).unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 2.0, "{:?}", f.hub);
     }
@@ -1367,12 +1379,12 @@ mod tests {
         }
         let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
         let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0]]) };
-        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None, Expected::default()).unwrap();
         assert!(f.detected && f.circle.is_some(), "{f:?}");
         assert!(geometry::dist(f.hub, [hub[0] + 0.5, hub[1] - 0.5]) < 1e-9, "{:?}", f.hub);
         // A circle far from every candidate is ignored.
         let mut far_away = |_: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[400.0, 240.0, 30.0]]) };
-        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut far_away, None, None).unwrap();
+        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut far_away, None, Expected::default()).unwrap();
         assert!(g.circle.is_none(), "{g:?}");
     }
 
@@ -1384,10 +1396,10 @@ mod tests {
         // candidate from them alone.
         let segs: Vec<Segment> = [30.0, 150.0].iter().map(|&a| blade_edges(hub, a, r, 200.0, 12.0, 6.0)[0]).collect();
         let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
-        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, None).unwrap();
+        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
         assert!(!f.detected, "{f:?}");
         let mut close = |q: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(if q == CircleQuery::Close { vec![[hub[0], hub[1], r]] } else { vec![] }) };
-        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut close, None, None).unwrap();
+        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut close, None, Expected::default()).unwrap();
         assert!(g.detected && g.circle.is_some() && geometry::dist(g.hub, hub) < 1e-9, "{g:?}");
     }
 
