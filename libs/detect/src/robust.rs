@@ -1386,6 +1386,19 @@ mod tests {
         let mut far_away = |_: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[400.0, 240.0, 30.0]]) };
         let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut far_away, None, Expected::default()).unwrap();
         assert!(g.circle.is_none(), "{g:?}");
+        // The circle at the size the tracker's distance expects counts for more; at another
+        // size it counts as before.
+        let conf = |r_expected: f64| {
+            let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0]]) };
+            let expected = Expected { spinner_radius: Some(r_expected), ..Expected::default() };
+            let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None, expected).unwrap();
+            assert!(f.circle.is_some(), "{f:?}");
+            f.confidence
+        };
+        let (base, matched, other) = (f.confidence, conf(32.0), conf(60.0));
+        assert!(base + p.spinner_size_match_bonus <= 1.0 + 1e-9, "room for the bonus: {base}");
+        assert!((matched - base - p.spinner_size_match_bonus).abs() < 1e-9, "{matched} vs {base}");
+        assert!((other - base).abs() < 1e-9, "{other} vs {base}");
     }
 
     #[test]
