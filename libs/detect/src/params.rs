@@ -410,6 +410,10 @@ pub struct DefaultParams {
     /// Spinner step: smallest fraction of the rim covered by edge pixels (blade roots, the
     /// nacelle and shading hide parts of it).
     pub spinner_min_coverage: f64,
+    /// ... when the tracker's distance gives the expected radius (the radii searched are then
+    /// 0.5–2× that one, around the predicted hub): at 5 m under an overcast sky the grey
+    /// spinner on grey blades shows 25–40 % of its rim, and the track was lost at the target.
+    pub spinner_hint_min_coverage: f64,
     /// Spinner step: a circle whose inner 70 % holds more Canny edge pixels than this per px² is
     /// clutter (textured ground, a tower with blades and horizon), not the smooth spinner.
     pub spinner_max_interior_density: f64,
@@ -562,6 +566,7 @@ impl Default for DefaultParams {
             spinner_cell_px: 2.0,
             spinner_radial_tol_deg: 25.0,
             spinner_min_coverage: 0.4,
+            spinner_hint_min_coverage: 0.25,
             spinner_max_interior_density: 0.1,
             spinner_reach_radii: 2.0,
             conf_spinner: 0.2,
@@ -732,6 +737,7 @@ impl DefaultParams {
         c.closed("spinner_cell_px", self.spinner_cell_px, 0.5, 20.0)?;
         c.closed("spinner_radial_tol_deg", self.spinner_radial_tol_deg, 0.0, 90.0)?;
         c.closed("spinner_min_coverage", self.spinner_min_coverage, 0.0, 1.0)?;
+        c.closed("spinner_hint_min_coverage", self.spinner_hint_min_coverage, 0.0, 1.0)?;
         c.closed("spinner_max_interior_density", self.spinner_max_interior_density, 0.0, 1.0)?;
         c.closed("spinner_reach_radii", self.spinner_reach_radii, 0.0, 10.0)?;
         c.closed("conf_spinner", self.conf_spinner, 0.0, 1.0)?;

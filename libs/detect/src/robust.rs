@@ -181,7 +181,8 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expecte
         max_r,
         cell: p.spinner_cell_px,
         radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
-        min_coverage: p.spinner_min_coverage,
+        // With the size known, the radii searched are few and a weaker rim suffices.
+        min_coverage: if expected.is_some() { p.spinner_hint_min_coverage } else { p.spinner_min_coverage },
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: SPINNER_PEAKS,
     };
