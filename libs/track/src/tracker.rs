@@ -224,25 +224,21 @@ impl Core {
         // Hub track (and, through its position, the distance and yaw changes).
         let hub_px = self.track.map_or([cam.cx, cam.cy], |t| t.filter.position());
         let ego = warp(hub_px, range);
+        // The image shift from `from` to `to` (the ego-motion prediction) and its variance.
+        let shift_var = |from: [f64; 2], to: Option<[f64; 2]>| match to {
+            Some(p) => {
+                let s = [p[0] - from[0], p[1] - from[1]];
+                (s, frac2 * (s[0] * s[0] + s[1] * s[1]))
+            }
+            None => ([0.0, 0.0], 0.0),
+        };
         if let Some(track) = self.track.as_mut() {
-            let (shift, var) = match ego {
-                Some(m) => {
-                    let s = [m.px[0] - hub_px[0], m.px[1] - hub_px[1]];
-                    (s, frac2 * (s[0] * s[0] + s[1] * s[1]))
-                }
-                None => ([0.0, 0.0], 0.0),
-            };
+            let (shift, var) = shift_var(hub_px, ego.map(|m| m.px));
             track.filter.predict(&model, dt, shift, var);
         }
         if let Some((old, _)) = self.before_jump.as_mut() {
             let px = old.filter.position();
-            let (shift, var) = match warp(px, range) {
-                Some(m) => {
-                    let s = [m.px[0] - px[0], m.px[1] - px[1]];
-                    (s, frac2 * (s[0] * s[0] + s[1] * s[1]))
-                }
-                None => ([0.0, 0.0], 0.0),
-            };
+            let (shift, var) = shift_var(px, warp(px, range).map(|m| m.px));
             old.filter.predict(&model, dt, shift, var);
         }
         if let Some(c) = self.candidate.as_mut() {
@@ -315,8 +311,10 @@ impl Core {
             self.before_jump = None;
             return (true, false);
         };
+        // Inside a filter's gate: a small Mahalanobis distance or a short innovation.
+        let in_gate = |nu_norm: f64, d2: f64| d2 <= g.chi2_threshold || nu_norm <= g.min_gate_px * scale;
         let (nu, _, d2) = track.filter.innovation(z, r);
-        let inside = !gating || d2 <= g.chi2_threshold || nu.norm() <= g.min_gate_px * scale;
+        let inside = !gating || in_gate(nu.norm(), d2);
         let close = nu.norm() <= g.estimate_gate_px * scale;
         if inside {
             track.filter.update(z, r);
@@ -338,7 +336,7 @@ impl Core {
         let new_support = track.consistent;
         if let Some((mut old, _)) = self.before_jump.filter(|(old, _)| gating && old.consistent > new_support) {
             let (nu_old, _, d2_old) = old.filter.innovation(z, r);
-            if d2_old <= g.chi2_threshold || nu_old.norm() <= g.min_gate_px * scale {
+            if in_gate(nu_old.norm(), d2_old) {
                 log::info!("track: back to the track before the jump at ({:.1}, {:.1})", z[0], z[1]);
                 old.filter.update(z, r);
                 old.consistent = old.consistent.saturating_add(1);
