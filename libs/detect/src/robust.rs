@@ -1369,6 +1369,31 @@ mod tests {
     }
 
     #[test]
+    fn a_spinner_rim_partly_seen_is_enough_at_the_expected_size() {
+        // 30 % of a spinner's rim in the edges (the rest grey on grey blades): below
+        // `spinner_min_coverage`, above `spinner_hint_min_coverage`.
+        let p = DefaultParams::default();
+        let (w, h, c, r) = (480usize, 270usize, [240.0, 135.0], 40.0);
+        let (mut edges, mut dx, mut dy) = (vec![0u8; w * h], vec![0i16; w * h], vec![0i16; w * h]);
+        let mut a = 200.0f64;
+        while a < 200.0 + 0.3 * 360.0 {
+            let (s, co) = a.to_radians().sin_cos();
+            let (x, y) = ((c[0] + r * co).round() as usize, (c[1] + r * s).round() as usize);
+            edges[y * w + x] = 255;
+            dx[y * w + x] = (200.0 * co).round() as i16;
+            dy[y * w + x] = (200.0 * s).round() as i16;
+            a += 0.25;
+        }
+        let img = EdgeImage { edges: &edges, dx: &dx, dy: &dy, width: w, height: h };
+        assert!(p.spinner_hint_min_coverage < 0.3 && 0.3 < p.spinner_min_coverage);
+        let blind = search_circles(&p, &img, c, h as f64, None, &mut Vec::new());
+        assert!(blind.is_empty(), "{blind:?}");
+        let hinted = search_circles(&p, &img, c, h as f64, Some(r), &mut Vec::new());
+        let k = hinted.first().expect("found with the expected radius");
+        assert!(geometry::dist([k[0], k[1]], c) < 2.0 && (k[2] - r).abs() < 2.0, "{k:?}");
+    }
+
+    #[test]
     fn spinner_circle_accepted_only_near_the_candidate_with_blades_at_its_rim() {
         let p = DefaultParams::default();
         let hub = [240.0, 120.0];
