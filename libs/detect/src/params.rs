@@ -202,6 +202,12 @@ pub struct DefaultParams {
     pub horizon_min_length_frac: f64,
     /// See `horizon_min_length_frac`, degrees from horizontal.
     pub horizon_max_tilt_deg: f64,
+    /// A horizon candidate whose edge pairs with another into a slender band (`pair_*`) that
+    /// narrows by at least this ratio from one end to the other is a blade lying level, not a
+    /// horizon, and stays usable. A horizon is a single line; a road or a field strip is a
+    /// band of even width (ratio ~1; a road beside a real turbine paired so, untapered). 0
+    /// disables the exception.
+    pub horizon_band_min_taper: f64,
     /// Convergence: only segments at least this long (fraction of image height) propose hub candidates.
     pub candidate_min_length_frac: f64,
     /// Convergence: two proposing segments must differ in direction by at least this, degrees.
@@ -490,6 +496,7 @@ impl Default for DefaultParams {
             merge_gap_frac: 0.05,
             horizon_min_length_frac: 0.4,
             horizon_max_tilt_deg: 8.0,
+            horizon_band_min_taper: 1.25,
             candidate_min_length_frac: 0.1,
             candidate_min_angle_deg: 25.0,
             candidate_end_reach_frac: 0.6,
@@ -658,6 +665,7 @@ impl DefaultParams {
         c.closed("merge_gap_frac", self.merge_gap_frac, 0.0, 1.0)?;
         c.closed("horizon_min_length_frac", self.horizon_min_length_frac, 0.0, 2.0)?;
         c.closed("horizon_max_tilt_deg", self.horizon_max_tilt_deg, 0.0, 45.0)?;
+        c.closed("horizon_band_min_taper", self.horizon_band_min_taper, 0.0, 100.0)?;
         c.closed("candidate_min_length_frac", self.candidate_min_length_frac, 0.0, 2.0)?;
         c.closed("candidate_min_angle_deg", self.candidate_min_angle_deg, 0.0, 90.0)?;
         c.closed("candidate_end_reach_frac", self.candidate_end_reach_frac, 0.0, 10.0)?;

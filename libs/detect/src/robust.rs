@@ -359,6 +359,26 @@ pub(crate) fn is_horizon(p: &DefaultParams, s: &Segment, w: f64, roll_deg: f64) 
         && (90.0 - geometry::roll_compensated_tilt_deg(s, roll_deg).abs()) <= p.horizon_max_tilt_deg
 }
 
+/// Lines that may be blade or tower edges: all but horizon candidates ([`is_horizon`]), except
+/// that a horizon candidate pairing into a slender band narrowing by `horizon_band_min_taper`
+/// is a blade lying level. A blade lying level is as long and flat as a horizon, but its two
+/// edges pair; a horizon is one line, a road or field strip a band of even width (rendered
+/// flights at 30 m lost the level blade as "horizon", and two blade roots at the tower top
+/// then outscored the hub).
+pub(crate) fn usable_lines(p: &DefaultParams, segs: &[Segment], w: f64, h: f64, roll_deg: f64) -> Vec<bool> {
+    let mut usable: Vec<bool> = segs.iter().map(|s| !is_horizon(p, s, w, roll_deg)).collect();
+    if p.horizon_band_min_taper > 0.0 && usable.iter().any(|u| !u) {
+        for b in pair_edges(p, segs, &vec![true; segs.len()], h) {
+            let taper = b.width[0].max(b.width[1]) / b.width[0].min(b.width[1]).max(1e-9);
+            if (!usable[b.edges[0]] || !usable[b.edges[1]]) && taper >= p.horizon_band_min_taper {
+                usable[b.edges[0]] = true;
+                usable[b.edges[1]] = true;
+            }
+        }
+    }
+    usable
+}
+
 /// Intersections of pairs of long, non-parallel segments that lie just beyond an end of both,
 /// with weight `min(len)`.
 pub(crate) fn proposals(p: &DefaultParams, segs: &[Segment], usable: &[bool], w: f64, h: f64) -> Vec<(P2, f64)> {
@@ -730,6 +750,7 @@ fn evaluate(
 ) -> Candidate {
     let spinner_r = spinner.map_or(0.0, |k| k[2]);
     let mut lines = support_lines(p, segs, usable, c, h, spinner_r);
+
     let supporting: Vec<&BandAxis> = axes.iter().filter(|a| axis_points_at(p, a, c, h, spinner_r)).collect();
     for a in &supporting {
         for e in a.edges {
@@ -1003,6 +1024,7 @@ fn spinner_candidate(
         .iter()
         .filter(|k| geometry::dist([k[0], k[1]], cand.centre) <= p.spinner_max_offset_frac * h)
         .map(|k| evaluate(p, segs, usable, axes, [k[0], k[1]], h, roll_deg, hints, Some(*k)))
+        .inspect(|c| log::trace!("circle {:?}: conf {:.2} blades {:?}", c.spinner, c.confidence, c.blades.iter().map(|b| (b.angle_deg.round(), b.weight.round())).collect::<Vec<_>>()))
         .filter(|c| c.blades.len() >= 2);
     let first = with_blades.next()?;
     let inner = first.spinner?;
@@ -1043,7 +1065,7 @@ pub(crate) fn recognise(
     };
     let mut found = Found { roll_used_deg: roll_deg, line_count: segs.len() as u32, ..Found::default() };
     let mut kinds = vec![LineKind::Other; segs.len()];
-    let usable: Vec<bool> = segs.iter().map(|s| !is_horizon(p, s, w, roll_deg)).collect();
+    let usable = usable_lines(p, segs, w, h, roll_deg);
     for (i, u) in usable.iter().enumerate() {
         if !u {
             kinds[i] = LineKind::Rejected;
@@ -1312,6 +1334,22 @@ mod tests {
         let n = [-d[1], d[0]];
         let at = |t: f64, off: f64| [hub[0] + d[0] * t + n[0] * off, hub[1] + d[1] * t + n[1] * off];
         [Segment::new(at(start, w0), at(start + len, w1)), Segment::new(at(start, -w0), at(start + len, -w1))]
+    }
+
+    #[test]
+    fn a_level_blade_is_no_horizon_but_a_road_is() {
+        let p = DefaultParams::default();
+        let (w, h) = (480.0, 270.0);
+        // Both edges of a blade lying level, 220 px long, narrowing from 20 to 6 px across.
+        let blade = blade_edges([400.0, 120.0], 270.0, 10.0, 220.0, 10.0, 3.0);
+        // A road of even width and the horizon itself.
+        let road = [Segment::new([10.0, 200.0], [300.0, 205.0]), Segment::new([10.0, 214.0], [300.0, 219.0])];
+        let horizon = Segment::new([0.0, 160.0], [479.0, 162.0]);
+        let segs = vec![blade[0], blade[1], road[0], road[1], horizon];
+        assert!(segs.iter().all(|s| is_horizon(&p, s, w, 0.0)), "all are horizon candidates");
+        assert_eq!(usable_lines(&p, &segs, w, h, 0.0), vec![true, true, false, false, false]);
+        let off = DefaultParams { horizon_band_min_taper: 0.0, ..p };
+        assert_eq!(usable_lines(&off, &segs, w, h, 0.0), vec![false; 5]);
     }
 
     #[test]

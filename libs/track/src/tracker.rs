@@ -317,7 +317,8 @@ impl Core {
         let inside = !gating || in_gate(nu.norm(), d2);
         let close = nu.norm() <= g.estimate_gate_px * scale;
         if inside {
-            track.filter.update(z, r);
+            let robust = gating && g.robust_chi2 > 0.0 && d2 > g.robust_chi2 && nu.norm() > g.min_gate_px * scale;
+            track.filter.update(z, if robust { r * d2 / g.robust_chi2 } else { r });
             track.consistent = track.consistent.saturating_add(1);
             if !track.confirmed && track.consistent >= confirm {
                 track.confirmed = true;

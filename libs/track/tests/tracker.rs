@@ -214,6 +214,39 @@ fn gating_rejects_an_injected_outlier_the_baseline_jumps() {
 }
 
 #[test]
+fn a_false_feature_every_third_frame_pulls_the_robust_track_less() {
+    // Every third detection is a feature 75 px below the hub (a tower-top junction at 30 m),
+    // inside the gate: the plain update settles a third of the way there (25 px), the robust
+    // one (noise scaled by d² / robust_chi2) 15 px off.
+    let mut offsets = Vec::new();
+    for robust_chi2 in [4.0, 0.0] {
+        let mut cfg = pinhole_config();
+        cfg.gating.robust_chi2 = robust_chi2;
+        let mut tr = Tracker::new(cfg).unwrap();
+        let mut rng = Rng::new(31);
+        let fps = 15.0;
+        let hub = [960.0, 540.0];
+        let (_, mut k) = settle(&mut tr, hub, 2.0, fps, 2.0, &mut rng);
+        let mut off = 0.0;
+        for i in 0..60 {
+            let z = if i % 3 == 0 { [hub[0], hub[1] + 75.0] } else { hub };
+            let s = tr.update(&det(k, frame_t(k, fps), Some(z)), None);
+            k += 1;
+            if i % 3 != 0 {
+                assert_eq!(s.mode, TrackMode::Tracking, "robust_chi2 {robust_chi2}: the hub is accepted");
+            }
+            if i >= 30 {
+                off += dist(s.hub_px, hub) / 30.0;
+            }
+        }
+        offsets.push(off);
+    }
+    let (robust, plain) = (offsets[0], offsets[1]);
+    assert!(plain > 20.0, "the false feature is inside the plain gate and pulls: {plain:.1} px");
+    assert!(robust < 0.7 * plain, "robust {robust:.1} px vs plain {plain:.1} px");
+}
+
+#[test]
 fn the_true_hub_seen_again_after_a_false_jump_brings_the_old_track_back() {
     // Three frames of a false feature 120 px below the hub (the nacelle's underside) make a
     // jump; the hub detected again is inside the old track's gate, not the new one's.

@@ -41,7 +41,8 @@ pub struct EvalArgs {
     #[arg(long, default_value_t = 300)]
     pub frames: u64,
     /// Write an overlay PNG (truth in red) of every `default`-mode miss and false positive to
-    /// this folder, with `misses.jsonl` listing them.
+    /// this folder, with `misses.jsonl` listing them; with --sequence, of every frame whose
+    /// detection lies off the truth (named `f<flight>_<frame>`).
     #[arg(long, value_name = "DIR")]
     pub misses: Option<PathBuf>,
     /// With --sequence: write one JSON line per frame (flight, frame, truth, detection, both
@@ -53,12 +54,13 @@ pub struct EvalArgs {
 /// Runs the command.
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let config = args.config.load()?;
-    if args.sequence {
-        return crate::eval_seq::run(&config, args.flights, args.frames, args.seed, args.trace.as_deref());
-    }
     if let Some(dir) = &args.misses {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         std::fs::write(dir.join("misses.jsonl"), "").with_context(|| format!("writing {}", dir.display()))?;
+    }
+    if args.sequence {
+        let out = crate::eval_seq::Outputs { trace: args.trace.as_deref(), misses: args.misses.as_deref() };
+        return crate::eval_seq::run(&config, args.flights, args.frames, args.seed, out);
     }
     let misses = args.misses.as_deref();
     let mut detectors = MODES.iter().map(|(m, _)| detector(&config.detect, Some(*m))).collect::<anyhow::Result<Vec<_>>>()?;
@@ -103,7 +105,7 @@ fn score_all(outputs: &[Output], truth: &Truth, height: u32) -> Vec<Outcome> {
 
 /// Writes the overlay of the last (`default`) mode's output when it missed or fired on a
 /// negative; true when it did.
-fn write_miss(dir: Option<&Path>, name: &str, image: &Mat, truth: &Truth, outputs: &[Output], outcomes: &[Outcome]) -> anyhow::Result<bool> {
+pub(crate) fn write_miss(dir: Option<&Path>, name: &str, image: &Mat, truth: &Truth, outputs: &[Output], outcomes: &[Outcome]) -> anyhow::Result<bool> {
     let (Some(dir), Some(out), Some(o)) = (dir, outputs.last(), outcomes.last()) else { return Ok(false) };
     let missed = match truth {
         Truth::Visible { .. } => !o.hit,

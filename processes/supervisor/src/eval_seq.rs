@@ -138,11 +138,19 @@ fn trace_line(flight: u64, frame: usize, truth: &hubtrack_render::Truth, det: &D
     })
 }
 
-/// Runs `flights` flights of `frames` frames and prints the tables; with `trace`, writes one
-/// JSON line per frame there.
-pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, trace: Option<&std::path::Path>) -> anyhow::Result<()> {
+/// Optional per-frame outputs of a sequence evaluation.
+pub struct Outputs<'a> {
+    /// One JSON line per frame (truth, detection, both trackers) to this file.
+    pub trace: Option<&'a std::path::Path>,
+    /// An overlay PNG of every frame whose detection misses the truth, in this folder.
+    pub misses: Option<&'a std::path::Path>,
+}
+
+/// Runs `flights` flights of `frames` frames and prints the tables, writing the optional
+/// per-frame outputs on the way.
+pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, outputs: Outputs<'_>) -> anyhow::Result<()> {
     use std::io::Write as _;
-    let mut trace = match trace {
+    let mut trace = match outputs.trace {
         Some(p) => Some(std::io::BufWriter::new(std::fs::File::create(p).map_err(|e| anyhow::anyhow!("creating {}: {e}", p.display()))?)),
         None => None,
     };
@@ -177,7 +185,11 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, trace: Option<
             let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &pixels };
             let capture_ns = (i as f64 / FLIGHT_FPS * 1e9).round() as u64;
             let hints = last.as_ref().map_or_else(Hints::default, |t| Hints::from_track(t, cam.width, cam.height, capture_ns));
-            let mut det: Detection = detector.detect(&view, &Hints { roll_rad: Some(fr.pose.roll_deg.to_radians()), ..hints })?.detection;
+            let output = detector.detect(&view, &Hints { roll_rad: Some(fr.pose.roll_deg.to_radians()), ..hints })?;
+            if outputs.misses.is_some() && !fr.dropout {
+                write_sequence_miss(outputs.misses, &format!("f{f}_{i:03}"), &pixels, &cam, &truth, &output)?;
+            }
+            let mut det: Detection = output.detection;
             det.stamps.seq = i as u64;
             det.stamps.capture_ns = capture_ns;
             if fr.dropout {
@@ -241,5 +253,35 @@ distance error median {:.1} % p90 {:.1} % (8-30 m), yaw error median {:.1} deg p
         pct(&t.dist_err_pct, 0.5), pct(&t.dist_err_pct, 0.9), pct(&t.yaw_err_deg, 0.5), pct(&t.yaw_err_deg, 0.9), t.false_locks
     );
     println!("RMS in % of image height over frames with a valid estimate after first lock; gap = frames without one.");
+    Ok(())
+}
+
+/// Writes the overlay of a frame whose detection misses the truth (scored as `hubtrack eval`
+/// scores photos) into `dir`.
+fn write_sequence_miss(
+    dir: Option<&std::path::Path>,
+    name: &str,
+    pixels: &[u8],
+    cam: &Camera,
+    truth: &hubtrack_render::Truth,
+    output: &hubtrack_detect::Output,
+) -> anyhow::Result<()> {
+    use opencv::core::{Mat, MatTraitConst};
+    let t = match (truth.turbine_in_view, truth.hub_px, truth.nose_px) {
+        (true, Some(hub), Some(nose)) => crate::score::Truth::Visible { axis: hub, hub: nose },
+        _ => crate::score::Truth::Hidden,
+    };
+    let d = &output.detection;
+    let outcome = crate::score::score(&t, d.detected.then_some(d.hub_px), cam.height as f64);
+    if outcome.hit || !outcome.detected {
+        return Ok(());
+    }
+    let mat = Mat::from_slice(pixels)?.reshape(3, cam.height as i32)?.try_clone()?;
+    if crate::eval::write_miss(dir, name, &mat, &t, std::slice::from_ref(output), &[outcome])? {
+        // The rendered input too, to re-run `hubtrack detect` on (with RUST_LOG=trace).
+        let input = dir.unwrap_or(std::path::Path::new(".")).join(format!("{name}_input.png"));
+        let path = input.to_str().ok_or_else(|| anyhow::anyhow!("non-UTF-8 path {}", input.display()))?;
+        anyhow::ensure!(opencv::imgcodecs::imwrite_def(path, &mat)?, "cannot write {path}");
+    }
     Ok(())
 }
