@@ -179,11 +179,7 @@ fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::D
             let truth = renderers[k].render(&case.scene, &case.pose, &mut buffers[k]).map_err(|e| anyhow::anyhow!("{e}"))?;
             let cam = renderers[k].camera();
             let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buffers[k] };
-            let t = match (negative, truth.turbine_in_view, truth.hub_px, truth.nose_px) {
-                (true, _, _, _) => Truth::Negative,
-                (false, true, Some(hub), Some(nose)) => Truth::Visible { axis: hub, hub: nose },
-                _ => Truth::Hidden,
-            };
+            let t = if negative { Truth::Negative } else { Truth::of_rendered(&truth) };
             let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() };
             let outputs = detect_all(detectors, &view, &hints)?;
             let outcomes = score_all(&outputs, &t, view.height);

@@ -267,10 +267,7 @@ fn write_sequence_miss(
     output: &hubtrack_detect::Output,
 ) -> anyhow::Result<()> {
     use opencv::core::{Mat, MatTraitConst};
-    let t = match (truth.turbine_in_view, truth.hub_px, truth.nose_px) {
-        (true, Some(hub), Some(nose)) => crate::score::Truth::Visible { axis: hub, hub: nose },
-        _ => crate::score::Truth::Hidden,
-    };
+    let t = crate::score::Truth::of_rendered(truth);
     let d = &output.detection;
     let outcome = crate::score::score(&t, d.detected.then_some(d.hub_px), cam.height as f64);
     if outcome.hit || !outcome.detected {

@@ -27,6 +27,17 @@ pub enum Truth {
     Negative,
 }
 
+impl Truth {
+    /// The truth of a rendered frame with a turbine: visible when the renderer saw the hub and
+    /// its nose, else hidden.
+    pub fn of_rendered(t: &hubtrack_render::Truth) -> Truth {
+        match (t.turbine_in_view, t.hub_px, t.nose_px) {
+            (true, Some(hub), Some(nose)) => Truth::Visible { axis: hub, hub: nose },
+            _ => Truth::Hidden,
+        }
+    }
+}
+
 /// Outcome of one image in one mode.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Outcome {
