@@ -336,6 +336,15 @@ pub struct DefaultParams {
     /// Tower partner edge: its response must also be this many times the mean response over
     /// all offsets searched (it must stand out of the background texture).
     pub tower_partner_min_salience: f64,
+    /// Tower partner edge of the seed's own gradient sign: taken instead of the best
+    /// opposite-sign one when that one is a shading ramp (the response 2 px nearer or farther
+    /// stays `tower_ramp_min_frac` of its own), the same-sign edge lies beyond it, and its
+    /// response is at least this fraction of the ramp's. A tower lit from one side against ground
+    /// of a middle shade is darker than the ground at one limb and brighter at the other: both
+    /// edges have one sign, the ramp inside is the only opposite-sign response (widths read
+    /// ~0.6x), and the lit limb may be barely brighter than the ground. A large value (1000)
+    /// disables it.
+    pub tower_same_sign_partner_min_ratio: f64,
     /// A tower edge moves outward to the end of its shading ramp: as far as the summed gradient
     /// response along the shifted edge stays at least this fraction of the response at the
     /// fitted (steepest) position. A side-lit tower's dark limb on dark ground has no edge, only
@@ -350,10 +359,16 @@ pub struct DefaultParams {
     /// merges with it into one band that narrows by ~13 % (rendered approaches at ~40 m),
     /// whose width and hub–tower gap are both wrong: 0.9 rejects it (0.85 let it through).
     pub tower_min_width_ratio: f64,
-    /// ... and at most this: the visible part of the tower widens by less than 10 % (its taper;
-    /// its rows are at about the same depth), while a band from a tower edge to the edge of a
-    /// blade crossing it widens fast.
+    /// ... and at most this times the widening the tower's taper gives over the visible rows
+    /// (`1 + tower_taper · rows / top width`, see `tower_taper`), while a band from a tower edge
+    /// to the edge of a blade crossing it widens fast.
     pub tower_max_width_ratio: f64,
+    /// Tower taper: growth of its diameter per metre down, m/m (steel towers ~0.02–0.035; the
+    /// renderer's 2.2 m top and 4.3 m base over ~70 m: 0.03). Its rows are at about the same
+    /// depth, so over `rows` px below a top `w` px wide (`rows·D/w` metres) the band widens by
+    /// `tower_taper · rows / w`: ~30 % at 30 m with the wide-angle camera, up to ~2x when the
+    /// whole tower is in view. 0 = the tower keeps its width.
+    pub tower_taper: f64,
     /// When a detected blade, or the strongest blade at 120° steps, is within this of straight
     /// down, degrees, that blade hides the tower ...
     pub tower_blade_down_tol_deg: f64,
@@ -540,10 +555,12 @@ impl Default for DefaultParams {
             tower_max_width_frac: 0.25,
             tower_partner_min_ratio: 0.15,
             tower_partner_min_salience: 4.0,
+            tower_same_sign_partner_min_ratio: 0.5,
             tower_ramp_min_frac: 0.8,
             tower_ramp_max_frac: 0.3,
             tower_min_width_ratio: 0.9,
-            tower_max_width_ratio: 1.25,
+            tower_max_width_ratio: 1.15,
+            tower_taper: 0.03,
             tower_blade_down_tol_deg: 12.0,
             tower_blade_axis_tol_frac: 0.025,
             pair_min_length_frac: 0.06,
@@ -710,10 +727,12 @@ impl DefaultParams {
         c.closed("tower_max_width_frac", self.tower_max_width_frac, 0.0, 1.0)?;
         c.closed("tower_partner_min_ratio", self.tower_partner_min_ratio, 0.0, 1.0)?;
         c.closed("tower_partner_min_salience", self.tower_partner_min_salience, 0.0, 1000.0)?;
+        c.closed("tower_same_sign_partner_min_ratio", self.tower_same_sign_partner_min_ratio, 0.0, 1000.0)?;
         c.closed("tower_ramp_min_frac", self.tower_ramp_min_frac, 0.0, 1.0)?;
         c.closed("tower_ramp_max_frac", self.tower_ramp_max_frac, 0.0, 1.0)?;
         c.closed("tower_min_width_ratio", self.tower_min_width_ratio, 0.0, 10.0)?;
         c.closed("tower_max_width_ratio", self.tower_max_width_ratio, 0.0, 10.0)?;
+        c.closed("tower_taper", self.tower_taper, 0.0, 1.0)?;
         c.less("tower_min_width_ratio", self.tower_min_width_ratio, "tower_max_width_ratio", self.tower_max_width_ratio)?;
         c.closed("tower_blade_down_tol_deg", self.tower_blade_down_tol_deg, 0.0, 60.0)?;
         c.closed("tower_blade_axis_tol_frac", self.tower_blade_axis_tol_frac, 0.0, 1.0)?;

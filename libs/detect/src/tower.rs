@@ -26,6 +26,9 @@ const EDGE_SEARCH_PX: i64 = 2;
 const EDGE_OUTLIER_PX: f64 = 1.5;
 /// An edge fit needs at least this many points.
 const EDGE_MIN_POINTS: usize = 6;
+/// A partner path is a shading ramp, not an edge, when the path this many px farther out
+/// keeps most of its response (a sharp edge's response halves within a pixel).
+const RAMP_PROBE_PX: i64 = 2;
 
 /// One Sobel gradient plane (x or y) of the working image, row-major.
 pub(crate) struct GradPlane<'a> {
@@ -97,102 +100,66 @@ pub(crate) fn fit_tower(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, wi
         return None;
     }
 
-    // Partner: opposite sign, on either side, at an offset that may drift linearly from the
-    // top row to the bottom one (the two edges of a tapered tower seen in perspective are not
-    // parallel), accumulated over all rows.
+    // Partner: on either side, at an offset that may drift linearly from the top row to the
+    // bottom one (the two edges of a tapered tower seen in perspective are not parallel),
+    // accumulated over all rows. Normally of the opposite gradient sign (a band of uniform
+    // shade). But a tower lit from one side against ground of a middle shade is darker than the
+    // ground at one limb and brighter at the other: both edges have the seed's sign, and the
+    // only opposite-sign response is the shading ramp inside (widths read ~0.6x). So when the
+    // opposite-sign partner is a ramp and a same-sign edge lies beyond it, that edge is the
+    // silhouette.
     let wmin = (p.tower_min_width_frac * h).max(window.0).ceil().max(1.0) as i64;
     let wmax = (p.tower_max_width_frac * h).min(window.1).floor() as i64;
     if wmax < wmin || rows.is_empty() {
         return None;
     }
-    let reach = wmax + wmax / 4 + 2;
-    // Per row, the partner response at every offset −reach..=reach from the seed. Gradients are
-    // integers, so the sums below are exact in i32 (≤ rows · 2¹⁵) and equal to f64 sums.
-    let span = (2 * reach + 1) as usize;
-    let mut resp = vec![0i32; rows.len() * span];
-    let isign = sign as i32;
-    for (k, &y) in rows.iter().enumerate() {
-        if let Some(x) = x0(y) {
-            // Columns xi − reach ..= xi + reach, clipped to the image (outside stays 0).
-            let first = x.round() as i64 - reach;
-            let o_lo = (-first).max(0) as usize;
-            let o_hi = ((g.width as i64 - first).max(0) as usize).min(span);
-            if o_lo < o_hi {
-                let src = &g.row(y)[(first + o_lo as i64) as usize..];
-                resp[k * span + o_lo..k * span + o_hi].iter_mut().zip(src).for_each(|(r, &v)| *r = (-isign * v as i32).max(0));
-            }
-        }
-    }
-    let (y_top, y_bot) = (rows[0] as f64, *rows.last()? as f64);
-    let frac = |y: i64| if y_bot > y_top { (y as f64 - y_top) / (y_bot - y_top) } else { 0.0 };
-    // Rows are consecutive: row k is at fraction k / last of the way down, and the offset there
-    // is o_top + round(drift · k / last). Those steps are tabulated once per drift; for one
-    // drift, every top offset is summed at once along the row (contiguous, vectorised).
-    let last = rows.len() as i64 - 1;
-    let max_drift = 2 + wmax / 4;
-    let n_top = (wmax - wmin + 1) as usize;
-    let n_drift = (2 * max_drift + 1) as usize;
-    // sums[(side, drift, o_top)]: the summed response along that path.
-    let mut sums = vec![0i32; 2 * n_drift * n_top];
-    for (si, side) in [-1i64, 1].into_iter().enumerate() {
-        for (di, d) in (-max_drift..=max_drift).enumerate() {
-            let acc = &mut sums[(si * n_drift + di) * n_top..][..n_top];
-            for (k, st) in round_steps(d, last).into_iter().enumerate() {
-                let row = &resp[k * span..(k + 1) * span];
-                if side > 0 {
-                    // Index reach + o_top + st for o_top = wmin.. : ascending.
-                    let lo = (reach + wmin + st) as usize;
-                    acc.iter_mut().zip(&row[lo..lo + n_top]).for_each(|(a, v)| *a += v);
-                } else {
-                    // Index reach − o_top − st: descending with o_top.
-                    let hi = (reach - wmin - st) as usize;
-                    acc.iter_mut().zip(row[hi + 1 - n_top..=hi].iter().rev()).for_each(|(a, v)| *a += v);
-                }
-            }
-        }
-    }
-    let mut best: Option<(f64, i64, i64)> = None; // (mean response, signed offsets at top and bottom)
-    for (si, side) in [-1i64, 1].into_iter().enumerate() {
-        for o_top in wmin..=wmax {
-            let drift = 2 + o_top / 4;
-            for o_bot in (o_top - drift).max(wmin)..=(o_top + drift).min(reach) {
-                let di = (o_bot - o_top + max_drift) as usize;
-                let mean = sums[(si * n_drift + di) * n_top + (o_top - wmin) as usize] as f64 / rows.len() as f64;
-                if best.is_none_or(|(b, _, _)| mean > b) {
-                    best = Some((mean, side * o_top, side * o_bot));
-                }
-            }
-        }
-    }
-    let (response, off_top, off_bot) = best?;
-    // The background: the mean response over all offsets (texture, other edges).
-    let background = resp.iter().map(|&v| v as f64).sum::<f64>() / resp.len() as f64;
+    let search = PartnerSearch { g, rows: &rows, x0: &x0, wmin, wmax };
+    let opposite = search.best(-sign);
+    let same = search.best(sign);
+    let beyond_ramp = |o: &Partner, s: &Partner| {
+        o.is_ramp(p.tower_ramp_min_frac) && o.off_top.signum() == s.off_top.signum() && s.off_top.abs() > o.off_top.abs()
+    };
+    let (partner_sign, found) = match (opposite, same) {
+        (Some(o), Some(s)) if beyond_ramp(&o, &s) && s.response >= p.tower_same_sign_partner_min_ratio * o.response => (sign, s),
+        (Some(o), _) => (-sign, o),
+        (None, _) => return None,
+    };
+    let Partner { response, off_top, off_bot, background, .. } = found;
     log::trace!(
-        "tower partner of {seed:?} (sign {sign}): offsets {off_top}..{off_bot} px, response {response:.0}, seed {strength:.0}, background {background:.1}"
+        "tower partner of {seed:?} (sign {sign}, partner {partner_sign}; opposite {:.0} ({:.0} farther out, {:.0} nearer), same {:.0}): offsets {off_top}..{off_bot} px, response {response:.0}, seed {strength:.0}, background {background:.1}",
+        opposite.map_or(0.0, |o| o.response),
+        opposite.map_or(0.0, |o| o.response_out),
+        opposite.map_or(0.0, |o| o.response_in),
+        same.map_or(0.0, |s| s.response),
     );
     if response < p.tower_partner_min_ratio * strength || response < p.tower_partner_min_salience * background {
         return None;
     }
+    let (y_top, y_bot) = (rows[0] as f64, *rows.last()? as f64);
+    let frac = |y: i64| if y_bot > y_top { (y as f64 - y_top) / (y_bot - y_top) } else { 0.0 };
     let offset = |y: i64| off_top as f64 + (off_bot - off_top) as f64 * frac(y);
 
     let seed_fit = fit_edge(g, &rows, x0, sign)?;
-    let partner_fit = fit_edge(g, &rows, |y| x0(y).map(|x| x + offset(y)), -sign)?;
+    let partner_fit = fit_edge(g, &rows, |y| x0(y).map(|x| x + offset(y)), partner_sign)?;
     // Each edge moves outward to the end of its shading ramp, if it is one.
     let out = off_top.signum() as f64; // from the seed toward the partner
     // Within the width window: half the room left to its upper end for each edge.
     let room = (window.1 - off_top.abs().max(off_bot.abs()) as f64) / 2.0;
     let max_ramp = (off_top.abs() as f64 * p.tower_ramp_max_frac).min(room).floor().max(0.0) as i64;
     let seed_fit = to_ramp_end(g, &rows, seed_fit, sign, -out, p.tower_ramp_min_frac, max_ramp);
-    let partner_fit = to_ramp_end(g, &rows, partner_fit, -sign, out, p.tower_ramp_min_frac, max_ramp);
+    let partner_fit = to_ramp_end(g, &rows, partner_fit, partner_sign, out, p.tower_ramp_min_frac, max_ramp);
     let (left, right) = if off_top > 0 { (seed_fit, partner_fit) } else { (partner_fit, seed_fit) };
     let bottom = h - 1.0;
     let mid = |y: f64| Some((left.x_at_y(y)? + right.x_at_y(y)?) / 2.0);
     let axis = Segment::new([mid(top)?, top], [mid(bottom)?, bottom]);
     let fit = TowerFit { edges: [left, right], axis, one_edge: false };
     // A blade pointing down is a band too, but narrows toward its tip; the tower does not.
-    let taper = fit.width_at(bottom)? / fit.width_at(top)?.max(1e-9);
-    log::trace!("tower band {:?}: width ratio bottom/top {taper:.2}", fit.axis);
-    (taper >= p.tower_min_width_ratio && taper <= p.tower_max_width_ratio).then_some(fit)
+    // It widens downward by its own taper only (its rows are at about the same depth).
+    let top_width = fit.width_at(top)?.max(1e-9);
+    let taper = fit.width_at(bottom)? / top_width;
+    let max_taper = p.tower_max_width_ratio * (1.0 + p.tower_taper * (bottom - top) / top_width);
+    log::trace!("tower band {:?}: width ratio bottom/top {taper:.2} (max {max_taper:.2})", fit.axis);
+    (taper >= p.tower_min_width_ratio && taper <= max_taper).then_some(fit)
 }
 
 /// Tower edges straight from the gradient, for when the Hough transform has none: near a
@@ -286,6 +253,124 @@ pub(crate) fn fit_tower_one_edge(g: &GradPlane<'_>, seed: &Segment, width: f64, 
     let mid = |y: f64| Some((left.x_at_y(y)? + right.x_at_y(y)?) / 2.0);
     let axis = Segment::new([mid(top)?, top], [mid(bottom)?, bottom]);
     Some(TowerFit { edges: [left, right], axis, one_edge: true })
+}
+
+/// The best partner edge of one gradient sign: mean response along its path, signed offsets
+/// from the seed at the top and bottom rows, and the mean response over all offsets searched.
+#[derive(Debug, Clone, Copy)]
+struct Partner {
+    response: f64,
+    off_top: i64,
+    off_bot: i64,
+    background: f64,
+    /// Mean response along the paths `RAMP_PROBE_PX` farther from and nearer to the seed (0
+    /// outside the offsets searched).
+    response_out: f64,
+    response_in: f64,
+}
+
+impl Partner {
+    /// Whether the path lies on a shading ramp: the response a little farther out or nearer in
+    /// stays at least `min_frac` of its own.
+    fn is_ramp(&self, min_frac: f64) -> bool {
+        self.response > 0.0 && self.response_out.max(self.response_in) >= min_frac * self.response
+    }
+}
+
+/// The partner-edge search of [`fit_tower`]: the rows from the tower top down, the seed's x on
+/// each row, and the offsets (px) a partner may lie at.
+struct PartnerSearch<'a, F: Fn(i64) -> Option<f64>> {
+    g: &'a GradPlane<'a>,
+    rows: &'a [i64],
+    x0: &'a F,
+    wmin: i64,
+    wmax: i64,
+}
+
+impl<F: Fn(i64) -> Option<f64>> PartnerSearch<'_, F> {
+    /// The best path of gradient sign `sign` (±1) on either side of the seed; `None` without rows.
+    fn best(&self, sign: f64) -> Option<Partner> {
+        let (g, rows, wmin, wmax) = (self.g, self.rows, self.wmin, self.wmax);
+        let reach = wmax + wmax / 4 + 2;
+        // Per row, the response at every offset −reach..=reach from the seed. Gradients are
+        // integers, so the sums below are exact in i32 (≤ rows · 2¹⁵) and equal to f64 sums.
+        let span = (2 * reach + 1) as usize;
+        let mut resp = vec![0i32; rows.len() * span];
+        let isign = sign as i32;
+        for (k, &y) in rows.iter().enumerate() {
+            if let Some(x) = (self.x0)(y) {
+                // Columns xi − reach ..= xi + reach, clipped to the image (outside stays 0).
+                let first = x.round() as i64 - reach;
+                let o_lo = (-first).max(0) as usize;
+                let o_hi = ((g.width as i64 - first).max(0) as usize).min(span);
+                if o_lo < o_hi {
+                    let src = &g.row(y)[(first + o_lo as i64) as usize..];
+                    resp[k * span + o_lo..k * span + o_hi].iter_mut().zip(src).for_each(|(r, &v)| *r = (isign * v as i32).max(0));
+                }
+            }
+        }
+        // Rows are consecutive: row k is at fraction k / last of the way down, and the offset
+        // there is o_top + round(drift · k / last). Those steps are tabulated once per drift; for
+        // one drift, every top offset is summed at once along the row (contiguous, vectorised).
+        let last = rows.len() as i64 - 1;
+        let max_drift = 2 + wmax / 4;
+        let n_top = (wmax - wmin + 1) as usize;
+        let n_drift = (2 * max_drift + 1) as usize;
+        // sums[(side, drift, o_top)]: the summed response along that path.
+        let mut sums = vec![0i32; 2 * n_drift * n_top];
+        for (si, side) in [-1i64, 1].into_iter().enumerate() {
+            for (di, d) in (-max_drift..=max_drift).enumerate() {
+                let acc = &mut sums[(si * n_drift + di) * n_top..][..n_top];
+                for (k, st) in round_steps(d, last).into_iter().enumerate() {
+                    let row = &resp[k * span..(k + 1) * span];
+                    if side > 0 {
+                        // Index reach + o_top + st for o_top = wmin.. : ascending.
+                        let lo = (reach + wmin + st) as usize;
+                        acc.iter_mut().zip(&row[lo..lo + n_top]).for_each(|(a, v)| *a += v);
+                    } else {
+                        // Index reach − o_top − st: descending with o_top.
+                        let hi = (reach - wmin - st) as usize;
+                        acc.iter_mut().zip(row[hi + 1 - n_top..=hi].iter().rev()).for_each(|(a, v)| *a += v);
+                    }
+                }
+            }
+        }
+        let mean = |si: usize, o_top: i64, o_bot: i64| {
+            let di = (o_bot - o_top + max_drift) as usize;
+            sums[(si * n_drift + di) * n_top + (o_top - wmin) as usize] as f64 / rows.len() as f64
+        };
+        let mut best: Option<(f64, usize, i64, i64)> = None;
+        for si in 0..2 {
+            for o_top in wmin..=wmax {
+                let drift = 2 + o_top / 4;
+                for o_bot in (o_top - drift).max(wmin)..=(o_top + drift).min(reach) {
+                    let m = mean(si, o_top, o_bot);
+                    if best.is_none_or(|(b, ..)| m > b) {
+                        best = Some((m, si, o_top, o_bot));
+                    }
+                }
+            }
+        }
+        let (response, si, o_top, o_bot) = best?;
+        // Along any path within reach, straight from the per-row responses.
+        let side = if si == 0 { -1 } else { 1 };
+        let probe = |d: i64| {
+            let (top, bot) = (o_top + d, o_bot + d);
+            if top < 1 || bot < 1 || top > reach || bot > reach {
+                return 0.0;
+            }
+            let sum: i64 = round_steps(bot - top, last)
+                .into_iter()
+                .enumerate()
+                .map(|(k, st)| i64::from(resp[k * span + (reach + side * (top + st)) as usize]))
+                .sum();
+            sum as f64 / rows.len() as f64
+        };
+        let (response_out, response_in) = (probe(RAMP_PROBE_PX), probe(-RAMP_PROBE_PX));
+        // The background: the mean response over all offsets (texture, other edges).
+        let background = resp.iter().map(|&v| v as f64).sum::<f64>() / resp.len() as f64;
+        Some(Partner { response, off_top: side * o_top, off_bot: side * o_bot, background, response_out, response_in })
+    }
 }
 
 /// Sub-pixel points of an edge of gradient sign `sign` within ±`EDGE_SEARCH_PX` of `predict(y)`
@@ -464,6 +549,72 @@ mod tests {
         assert!(without < width - 2.0, "the steepest point lies inside the tower: {without}");
         assert!(with > without + 1.5 && (with - width).abs() < (without - width).abs(), "ramp end {with} vs steepest {without}, truth {width}");
         assert!(with <= width + 1.0, "never beyond the silhouette: {with}");
+    }
+
+    /// Ground of a middle shade; a tower `width` px wide from `left`, dark at its left limb
+    /// (darker than the ground) and shaded linearly up to a lit right limb brighter than the
+    /// ground: both silhouette edges fall from left to right, only the ramp inside rises.
+    fn limbs_around_ground_image(w: usize, h: usize, left: f64, width: f64) -> Vec<u8> {
+        let (ground, dark, lit) = (120.0, 60.0, 170.0);
+        let mut img = vec![ground as u8; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let t = (x as f64 + 0.5 - left) / width;
+                if (0.0..1.0).contains(&t) {
+                    // Dark for the first 30 %, then a ramp up to the lit limb.
+                    let r = ((t - 0.3) / 0.7).max(0.0);
+                    img[y * w + x] = (dark + (lit - dark) * r).round() as u8;
+                }
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn a_tower_darker_and_brighter_than_the_ground_is_measured_between_its_silhouette_edges() {
+        let (w, h) = (200, 160);
+        let (left, width) = (80.0, 24.0);
+        let img = limbs_around_ground_image(w, h, left, width);
+        let gx = sobel_x(&img, w, h);
+        let g = GradPlane { data: &gx, width: w, height: h };
+        // From either limb the opposite-sign response is the ramp inside; the partner is the
+        // other limb's edge of the same sign beyond it.
+        for seed_x in [left, left + width] {
+            let seed = Segment::new([seed_x, 40.0], [seed_x, 150.0]);
+            let fit = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("tower");
+            let got = fit.width_at(100.0).unwrap();
+            assert!((got - width).abs() <= 1.5, "seed at {seed_x}: width {got}, truth {width}");
+            assert!((fit.axis.x_at_y(100.0).unwrap() - (left + width / 2.0)).abs() <= 1.0);
+        }
+        // Opposite signs only, from the lit limb: the band ends at the dark end of the ramp,
+        // inside the tower.
+        let opposite_only = DefaultParams { tower_same_sign_partner_min_ratio: 1000.0, ..DefaultParams::default() };
+        let seed = Segment::new([left + width, 40.0], [left + width, 150.0]);
+        let inside = fit_tower(&opposite_only, &g, &seed, ANY_WIDTH).map_or(0.0, |f| f.width_at(100.0).unwrap());
+        assert!(inside < width - 4.0, "opposite-sign band {inside}");
+    }
+
+    #[test]
+    fn a_tower_widening_by_its_taper_over_many_rows_is_a_tower() {
+        // 12 px wide at the top row, 150 rows down (12.5 top widths: ~27 m of a 2.2 m tower),
+        // widening by 0.03 m/m of taper to 12 · (1 + 0.03 · 150 / 12) = 16.5 px (ratio 1.38).
+        let (w, h) = (200, 160);
+        let (top, rows) = (9.0, 150.0);
+        let half = |y: f64| (12.0 + 4.5 * ((y - top) / rows).max(0.0)) / 2.0;
+        let img: Vec<u8> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64);
+                if (x - 100.0).abs() < half(y) { 200 } else { 40 }
+            })
+            .collect();
+        let gx = sobel_x(&img, w, h);
+        let g = GradPlane { data: &gx, width: w, height: h };
+        let seed = Segment::new([100.0 - half(20.0), 20.0], [100.0 - half(150.0), 150.0]);
+        let p = DefaultParams::default();
+        let fit = fit_tower(&p, &g, &seed, ANY_WIDTH).expect("tapered tower");
+        assert!((fit.width_at(100.0).unwrap() - 2.0 * half(100.0)).abs() < 1.0);
+        // Without the taper model the same band widens too much for a tower.
+        assert!(fit_tower(&DefaultParams { tower_taper: 0.0, ..p }, &g, &seed, ANY_WIDTH).is_none());
     }
 
     #[test]
