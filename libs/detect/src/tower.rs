@@ -6,13 +6,15 @@
 //! half a tower width off the axis (10–25 px at 10–25 m with the GoPro), which alone is a
 //! 10–20° yaw error. So from the edge Hough found (the *seed*), the partner edge is looked for
 //! in the horizontal gradient: the tower is a band of uniform shade, so its other edge has the
-//! opposite gradient sign at a near-constant offset on every row from the tower top down.
-//! Accumulating that signed response over all rows (blades crossing the tower hide only some
-//! of them) gives the width; both edges are then fitted to sub-pixel edge points and the axis
-//! is their midline. Without a partner the axis is unknown and no tower is reported. A blade
-//! pointing down is also a band of two edges, but it narrows toward its tip, while the tower
-//! keeps its width in the image (its taper and the growing distance toward its base cancel
-//! roughly): bands narrowing downward are no tower, nor are bands widening fast (from a tower
+//! opposite gradient sign at a near-constant offset on every row from the tower top down
+//! (unless it is lit from one side against ground of a middle shade: then both edges share a
+//! sign and the opposite one is the shading ramp inside, see [`fit_tower`]). Accumulating that
+//! signed response over all rows (blades crossing the tower hide only some of them) gives the
+//! width; both edges are then fitted to sub-pixel edge points and the axis is their midline.
+//! Without a partner the axis is unknown and no tower is reported. A blade pointing down is also
+//! a band of two edges, but it narrows toward its tip, while the tower widens downward by its
+//! taper only (its rows are at about the same depth from a level camera): bands narrowing
+//! downward are no tower, nor are bands widening faster than the taper allows (from a tower
 //! edge to the edge of a blade crossing it).
 
 use crate::geometry::{Segment, P2};
@@ -26,8 +28,8 @@ const EDGE_SEARCH_PX: i64 = 2;
 const EDGE_OUTLIER_PX: f64 = 1.5;
 /// An edge fit needs at least this many points.
 const EDGE_MIN_POINTS: usize = 6;
-/// A partner path is a shading ramp, not an edge, when the path this many px farther out
-/// keeps most of its response (a sharp edge's response halves within a pixel).
+/// A partner path is a shading ramp, not an edge, when the path this many px farther out or
+/// nearer in keeps most of its response (a sharp edge's response halves within a pixel).
 const RAMP_PROBE_PX: i64 = 2;
 
 /// One Sobel gradient plane (x or y) of the working image, row-major.
@@ -114,22 +116,24 @@ pub(crate) fn fit_tower(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, wi
         return None;
     }
     let search = PartnerSearch { g, rows: &rows, x0: &x0, wmin, wmax };
-    let opposite = search.best(-sign);
-    let same = search.best(sign);
-    let beyond_ramp = |o: &Partner, s: &Partner| {
-        o.is_ramp(p.tower_ramp_min_frac) && o.off_top.signum() == s.off_top.signum() && s.off_top.abs() > o.off_top.abs()
+    let opposite = search.best(-sign)?;
+    // The same-sign search only behind a ramp (it costs as much as the first).
+    let same = if opposite.is_ramp(p.tower_ramp_min_frac) { search.best(sign) } else { None };
+    let beyond_ramp = |s: &Partner| {
+        opposite.off_top.signum() == s.off_top.signum()
+            && s.off_top.abs() > opposite.off_top.abs()
+            && s.response >= p.tower_same_sign_partner_min_ratio * opposite.response
     };
-    let (partner_sign, found) = match (opposite, same) {
-        (Some(o), Some(s)) if beyond_ramp(&o, &s) && s.response >= p.tower_same_sign_partner_min_ratio * o.response => (sign, s),
-        (Some(o), _) => (-sign, o),
-        (None, _) => return None,
+    let (partner_sign, found) = match same {
+        Some(s) if beyond_ramp(&s) => (sign, s),
+        _ => (-sign, opposite),
     };
     let Partner { response, off_top, off_bot, background, .. } = found;
     log::trace!(
         "tower partner of {seed:?} (sign {sign}, partner {partner_sign}; opposite {:.0} ({:.0} farther out, {:.0} nearer), same {:.0}): offsets {off_top}..{off_bot} px, response {response:.0}, seed {strength:.0}, background {background:.1}",
-        opposite.map_or(0.0, |o| o.response),
-        opposite.map_or(0.0, |o| o.response_out),
-        opposite.map_or(0.0, |o| o.response_in),
+        opposite.response,
+        opposite.response_out,
+        opposite.response_in,
         same.map_or(0.0, |s| s.response),
     );
     if response < p.tower_partner_min_ratio * strength || response < p.tower_partner_min_salience * background {
