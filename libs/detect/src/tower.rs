@@ -519,23 +519,28 @@ mod tests {
         assert!((fit2.axis.x_at_y(120.0).unwrap() - fit.axis.x_at_y(120.0).unwrap()).abs() < 0.6);
     }
 
+    /// A vertical tower `width` px wide from `left` on uniform `ground`, its shade across the
+    /// tower given by `shade(t)` for t = 0 (left limb) .. 1 (right limb).
+    fn shaded_tower_image(w: usize, h: usize, left: f64, width: f64, ground: u8, shade: impl Fn(f64) -> f64) -> Vec<u8> {
+        let mut img = vec![ground; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let t = (x as f64 + 0.5 - left) / width;
+                if (0.0..1.0).contains(&t) {
+                    img[y * w + x] = shade(t).round() as u8;
+                }
+            }
+        }
+        img
+    }
+
     /// A tower lit from the left on ground as dark as its shaded limb: a sharp lit edge, a
     /// bright face, then a steady brightness ramp (as in the renderer's side-lit towers) that
     /// meets the ground level at the silhouette, and no edge there.
     fn side_lit_image(w: usize, h: usize, left: f64, width: f64) -> Vec<u8> {
         let (ground, lit) = (60.0, 215.0);
-        let mut img = vec![ground as u8; w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let t = (x as f64 + 0.5 - left) / width;
-                if (0.0..1.0).contains(&t) {
-                    // Flat for the first 40 %, then linearly down to the ground level.
-                    let r = ((t - 0.4) / 0.6).max(0.0);
-                    img[y * w + x] = (lit - (lit - ground) * r).round() as u8;
-                }
-            }
-        }
-        img
+        // Flat for the first 40 %, then linearly down to the ground level.
+        shaded_tower_image(w, h, left, width, ground as u8, |t| lit - (lit - ground) * ((t - 0.4) / 0.6).max(0.0))
     }
 
     #[test]
@@ -559,19 +564,9 @@ mod tests {
     /// (darker than the ground) and shaded linearly up to a lit right limb brighter than the
     /// ground: both silhouette edges fall from left to right, only the ramp inside rises.
     fn limbs_around_ground_image(w: usize, h: usize, left: f64, width: f64) -> Vec<u8> {
-        let (ground, dark, lit) = (120.0, 60.0, 170.0);
-        let mut img = vec![ground as u8; w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let t = (x as f64 + 0.5 - left) / width;
-                if (0.0..1.0).contains(&t) {
-                    // Dark for the first 30 %, then a ramp up to the lit limb.
-                    let r = ((t - 0.3) / 0.7).max(0.0);
-                    img[y * w + x] = (dark + (lit - dark) * r).round() as u8;
-                }
-            }
-        }
-        img
+        let (ground, dark, lit) = (120, 60.0, 170.0);
+        // Dark for the first 30 %, then a ramp up to the lit limb.
+        shaded_tower_image(w, h, left, width, ground, |t| dark + (lit - dark) * ((t - 0.3) / 0.7).max(0.0))
     }
 
     #[test]
