@@ -531,8 +531,17 @@ impl Approach {
                 ex,
                 ey
             );
-            // Hover: at target nothing needs correcting until an outer threshold trips.
-            return (ApproachTask::Done, Command::default(), reason);
+            // Hover, but hold the station sideways: at 5 m a gust that pushes the vehicle 1 m
+            // aside turns into ~11° of relative yaw, which zero velocity would leave until an
+            // outer threshold trips. Only T2's lateral law runs (slowly, through the rate
+            // limit); distance and image errors are noisier than the drift and wait for their
+            // outer thresholds.
+            let vy_t = yaw.map_or(0.0, |y| {
+                let lateral_m = dist.unwrap_or(c.nominal_distance_m) * y.to_radians().sin();
+                limit_abs(-c.done_lateral_gain_per_s * lateral_m, c.max_lateral_m_s)
+            });
+            let vy = slew(self.cmd.vy, vy_t, c.accel_xy_m_s2, dt);
+            return (ApproachTask::Done, Command { vy, ..Command::default() }, reason);
         }
 
         // --- targets of each axis ---

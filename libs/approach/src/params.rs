@@ -76,6 +76,11 @@ pub struct ApproachConfig {
     /// T2 lateral-speed gain, m/s per metre of lateral offset from the rotor axis
     /// (distance x sin(relative yaw)), i.e. 1/s. Range (0, 10]; default 0.15.
     pub lateral_gain_per_s: f64,
+    /// In Done, the lateral gain that holds the station sideways against drift, m/s per metre
+    /// off the rotor axis (the other axes hover until an outer threshold trips: the distance
+    /// and image errors are noisier than the drift). 0 = hover without correction. Range
+    /// [0, 10]; default 0.8.
+    pub done_lateral_gain_per_s: f64,
     /// T3 forward-speed gain, m/s per metre of distance error, i.e. 1/s. Range (0, 10];
     /// default 0.3.
     pub forward_gain_per_s: f64,
@@ -199,6 +204,7 @@ impl Default for ApproachConfig {
             yaw_gain_deg_s: 40.0,
             climb_gain_m_s: 2.0,
             lateral_gain_per_s: 0.15,
+            done_lateral_gain_per_s: 0.8,
             forward_gain_per_s: 0.3,
             slowdown_gain_per_s: 0.5,
             arc_feedforward: 1.0,
@@ -268,6 +274,7 @@ impl ApproachConfig {
         c.open_closed("yaw_gain_deg_s", self.yaw_gain_deg_s, 0.0, 1000.0)?;
         c.open_closed("climb_gain_m_s", self.climb_gain_m_s, 0.0, 100.0)?;
         c.open_closed("lateral_gain_per_s", self.lateral_gain_per_s, 0.0, 10.0)?;
+        c.closed("done_lateral_gain_per_s", self.done_lateral_gain_per_s, 0.0, 10.0)?;
         c.open_closed("forward_gain_per_s", self.forward_gain_per_s, 0.0, 10.0)?;
         c.open_closed("slowdown_gain_per_s", self.slowdown_gain_per_s, 0.0, 10.0)?;
         c.closed("arc_feedforward", self.arc_feedforward, 0.0, 1.0)?;

@@ -46,8 +46,12 @@ fn check_output(out: &ApproachOutput, c: &ApproachConfig) {
     assert!(out.vy_m_s.abs() <= c.max_lateral_m_s + EPS, "{out:?}");
     assert!(out.vz_m_s.abs() <= c.max_vertical_m_s + EPS, "{out:?}");
     assert!(out.yaw_rate_rad_s.abs() <= c.max_yaw_rate_deg_s.to_radians() + EPS, "{out:?}");
-    if matches!(out.task, ApproachTask::Hold | ApproachTask::Abort | ApproachTask::Done) {
+    if matches!(out.task, ApproachTask::Hold | ApproachTask::Abort) {
         assert_eq!((out.vx_m_s, out.vy_m_s, out.vz_m_s, out.yaw_rate_rad_s), (0.0, 0.0, 0.0, 0.0), "{out:?}");
+    }
+    if out.task == ApproachTask::Done {
+        // Hovering, holding the station sideways only.
+        assert_eq!((out.vx_m_s, out.vz_m_s, out.yaw_rate_rad_s), (0.0, 0.0, 0.0), "{out:?}");
     }
     if let Some(t) = &out.transition {
         assert_eq!(t.to, out.task);
@@ -654,14 +658,19 @@ fn done_after_hold_time_and_left_on_a_disturbance() {
     let held = (done_at - mark) as f64 * FRAME_NS as f64 * 1e-9;
     assert!(held >= c.done_hold_s && held < c.done_hold_s + 0.1, "{held}");
 
-    // Small disturbances inside the outer thresholds: still Done, still hovering.
+    // Small disturbances inside the outer thresholds: still Done, still hovering; a residual
+    // yaw (drift aside) is held against sideways, toward the rotor axis.
     for t in [
         track(0.08, 0.0, Some(5.1), Some(1.0)),
         track(0.0, -0.09, Some(5.1), Some(1.0)),
         track(0.0, 0.0, Some(5.45), Some(1.0)),
         track(0.0, 0.0, Some(5.1), Some(-4.5)),
     ] {
-        assert_eq!(rig.run(Some(t), 0.5).task, ApproachTask::Done);
+        let out = rig.run(Some(t), 0.5);
+        assert_eq!(out.task, ApproachTask::Done);
+        // Toward the axis, ramping (rate limit) to about the gain times the offset.
+        let target = -c.done_lateral_gain_per_s * 5.1 * t.yaw_deg.to_radians().sin();
+        assert!(out.vy_m_s * target > 0.0 && out.vy_m_s.abs() <= 1.25 * target.abs(), "vy {} for yaw {}, target {target}", out.vy_m_s, t.yaw_deg);
     }
     // Each outer threshold leaves Done for its task; coming back needs the hold again.
     for (t, task) in [
