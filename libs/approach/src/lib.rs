@@ -199,6 +199,16 @@ fn slew(cur: f64, target: f64, rate: f64, dt: f64) -> f64 {
     cur + limit(target - cur, -step, step)
 }
 
+/// The forward speed command from `cur` toward `target`: speeding up (or backing away) at
+/// `accel` at most, slowing down forward motion at `brake` (≥ `accel`) down to a standstill.
+fn slew_forward(cur: f64, target: f64, accel: f64, brake: f64, dt: f64) -> f64 {
+    if cur > 0.0 && target < cur {
+        (cur - brake * dt).max(target.max(0.0))
+    } else {
+        slew(cur, target, accel, dt)
+    }
+}
+
 /// First-order low-pass update with time constant `tau` over `dt`.
 fn low_pass(prev: Option<f64>, x: f64, tau: f64, dt: f64) -> f64 {
     match prev {
@@ -424,7 +434,7 @@ impl Approach {
         // away from the blades we are next to); back away slowly instead, until the whole
         // rotor is back in view.
         if let (true, false, Some(d)) = (want_search, self.search_exhausted, self.last_distance_m.filter(|d| *d < c.close_range_m)) {
-            let speed = slew(self.cmd.vx, -c.search_backoff_m_s, c.accel_xy_m_s2, dt);
+            let speed = slew_forward(self.cmd.vx, -c.search_backoff_m_s, c.accel_xy_m_s2, c.brake_x_m_s2, dt);
             self.backoff_m += speed.abs() * dt;
             if self.backoff_m < c.close_range_m - d {
                 let reason = format!("search: back off, {:.1}/{:.1} m, lost at {d:.1} m", self.backoff_m, c.close_range_m - d);
@@ -597,7 +607,7 @@ impl Approach {
 
         // --- rate limits ---
         let a_xy = c.accel_xy_m_s2;
-        let vx = slew(self.cmd.vx, vx_t, a_xy, dt);
+        let vx = slew_forward(self.cmd.vx, vx_t, a_xy, c.brake_x_m_s2, dt);
         let vx = if forward_ok { vx } else { vx.min(0.0) };
         let vy = slew(self.cmd.vy, vy_t, a_xy, dt);
         if probing {

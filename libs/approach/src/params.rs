@@ -124,6 +124,12 @@ pub struct ApproachConfig {
     /// out of the default box, so the default keeps the pitch near 3°. Range (0, 20];
     /// default 0.5.
     pub accel_xy_m_s2: f64,
+    /// Largest decrease of a forward speed command, m/s per second (m/s²): slowing down
+    /// toward the rotor may be quicker than speeding up (the pitch-up it costs is brief, and
+    /// the hub is nearer than thought when the distance drops at once). At 1.5 m/s the
+    /// stopping distance is 2.25 m at 0.5 m/s² and 1.1 m at 1. Range [accel_xy_m_s2, 20];
+    /// default 1.
+    pub brake_x_m_s2: f64,
     /// Largest change of the vertical speed command, m/s per second (m/s²). Range (0, 20];
     /// default 1.
     pub accel_z_m_s2: f64,
@@ -218,6 +224,7 @@ impl Default for ApproachConfig {
             max_vertical_m_s: 1.0,
             max_yaw_rate_deg_s: 20.0,
             accel_xy_m_s2: 0.5,
+            brake_x_m_s2: 1.0,
             accel_z_m_s2: 1.0,
             yaw_accel_deg_s2: 40.0,
             max_dt_s: 0.5,
@@ -289,6 +296,7 @@ impl ApproachConfig {
         c.open_closed("max_vertical_m_s", self.max_vertical_m_s, 0.0, 5.0)?;
         c.open_closed("max_yaw_rate_deg_s", self.max_yaw_rate_deg_s, 0.0, 180.0)?;
         c.open_closed("accel_xy_m_s2", self.accel_xy_m_s2, 0.0, 20.0)?;
+        c.closed("brake_x_m_s2", self.brake_x_m_s2, self.accel_xy_m_s2, 20.0)?;
         c.open_closed("accel_z_m_s2", self.accel_z_m_s2, 0.0, 20.0)?;
         c.open_closed("yaw_accel_deg_s2", self.yaw_accel_deg_s2, 0.0, 1000.0)?;
         c.open_closed("max_dt_s", self.max_dt_s, 0.0, 5.0)?;

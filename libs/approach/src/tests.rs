@@ -254,17 +254,17 @@ fn hub_leaving_the_box_during_t3_reverts_to_t1_then_back() {
     assert_eq!(rig.ap.task(), ApproachTask::Approach);
     assert!((rig.log.last().unwrap().vx_m_s - 1.5).abs() < EPS);
 
-    // The hub jumps 0.2 right: T1 at once, the forward speed ramps down at the accel limit.
+    // The hub jumps 0.2 right: T1 at once, the forward speed ramps down at the braking limit.
     let mark = rig.log.len();
     let first = rig.step(Some(track(0.2, 0.0, Some(30.0), Some(0.0))));
     assert_eq!(first.task, ApproachTask::CentreHub);
     assert_eq!(first.transition.as_ref().map(|t| t.from), Some(ApproachTask::Approach));
-    let out = rig.run(Some(track(0.2, 0.0, Some(30.0), Some(0.0))), 1.5 / c.accel_xy_m_s2 + 0.2);
+    let out = rig.run(Some(track(0.2, 0.0, Some(30.0), Some(0.0))), 1.5 / c.brake_x_m_s2 + 0.2);
     assert_eq!(out.task, ApproachTask::CentreHub);
     assert!(out.yaw_rate_rad_s > 0.0);
     assert_eq!(out.vx_m_s, 0.0, "T3 stopped");
     let vx: Vec<f64> = rig.log[mark - 1..].iter().map(|o| o.vx_m_s).collect();
-    let dv = c.accel_xy_m_s2 * FRAME_NS as f64 * 1e-9;
+    let dv = c.brake_x_m_s2 * FRAME_NS as f64 * 1e-9;
     for w in vx.windows(2) {
         assert!(w[1] <= w[0] + EPS && w[0] - w[1] <= dv + EPS, "ramp, not a jump: {w:?}");
     }
@@ -515,7 +515,9 @@ fn returning_track_resumes_through_rate_limits_with_fresh_filters() {
     assert!(out.reason.starts_with("T3: 20.0 m"), "{}", out.reason);
     let dt = FRAME_NS as f64 * 1e-9;
     for w in rig.log[mark - 1..].windows(2) {
-        assert!((w[1].vx_m_s - w[0].vx_m_s).abs() <= c.accel_xy_m_s2 * dt + EPS);
+        let slowing = w[0].vx_m_s > 0.0 && w[1].vx_m_s < w[0].vx_m_s && w[1].vx_m_s >= -EPS;
+        let ax = if slowing { c.brake_x_m_s2 } else { c.accel_xy_m_s2 };
+        assert!((w[1].vx_m_s - w[0].vx_m_s).abs() <= ax * dt + EPS);
         assert!(
             (w[1].yaw_rate_rad_s - w[0].yaw_rate_rad_s).abs() <= c.yaw_accel_deg_s2.to_radians() * dt + EPS
         );
@@ -713,6 +715,35 @@ impl Rng {
     }
 }
 
+/// The distance drops at once from 10 m to 5 m at full forward speed (a wrong size that snaps
+/// to the truth): the forward speed falls at the braking rate, not the acceleration rate, to a
+/// standstill, and only then backs away (at the acceleration rate).
+#[test]
+fn forward_motion_brakes_faster_than_it_accelerates() {
+    let c = ApproachConfig::default();
+    assert!(c.brake_x_m_s2 > c.accel_xy_m_s2);
+    let mut rig = Rig::with(c.clone());
+    let out = rig.run(Some(track(0.0, 0.0, Some(12.0), Some(0.0))), 10.0);
+    assert_eq!(out.task, ApproachTask::Approach);
+    assert!(out.vx_m_s > 1.0, "cruising: {out:?}");
+    let v0 = out.vx_m_s;
+    let mark = rig.log.len();
+    rig.run(Some(track(0.0, 0.0, Some(4.0), Some(0.0))), 3.0);
+    let dt = FRAME_NS as f64 * 1e-9;
+    let log = &rig.log[mark - 1..];
+    let stop = log.iter().position(|o| o.vx_m_s <= 0.0).expect("stops");
+    // The distance low-pass takes a few frames to fall below the cruise law.
+    let filter_steps = (c.distance_filter_s / dt).ceil() as usize;
+    let steps_at_brake = (v0 / (c.brake_x_m_s2 * dt)).ceil() as usize + filter_steps;
+    let steps_at_accel = (v0 / (c.accel_xy_m_s2 * dt)).floor() as usize;
+    assert!(steps_at_brake < steps_at_accel);
+    assert!(stop <= steps_at_brake, "stopped after {stop} steps, braking allows {steps_at_brake}");
+    for w in log[stop..].windows(2) {
+        assert!((w[1].vx_m_s - w[0].vx_m_s).abs() <= c.accel_xy_m_s2 * dt + EPS, "backing away accelerates gently");
+    }
+    assert!(log.last().unwrap().vx_m_s < 0.0, "backs away from 4 m");
+}
+
 #[test]
 fn rate_limits_hold_between_steps() {
     let c = ApproachConfig::default();
@@ -745,7 +776,10 @@ fn rate_limits_hold_between_steps() {
                 matches!(k, ApproachTask::CentreHub | ApproachTask::ReduceYaw | ApproachTask::Approach)
             };
             if moving(p.task) && moving(out.task) {
-                assert!((out.vx_m_s - p.vx_m_s).abs() <= c.accel_xy_m_s2 * dt + EPS, "{i}: vx {p:?} {out:?}");
+                // Forward motion may slow down at the braking rate, to a standstill at most.
+                let slowing = p.vx_m_s > 0.0 && out.vx_m_s < p.vx_m_s && out.vx_m_s >= -EPS;
+                let ax = if slowing { c.brake_x_m_s2 } else { c.accel_xy_m_s2 };
+                assert!((out.vx_m_s - p.vx_m_s).abs() <= ax * dt + EPS, "{i}: vx {p:?} {out:?}");
                 assert!((out.vy_m_s - p.vy_m_s).abs() <= c.accel_xy_m_s2 * dt + EPS, "{i}: vy");
                 assert!((out.vz_m_s - p.vz_m_s).abs() <= c.accel_z_m_s2 * dt + EPS, "{i}: vz");
                 assert!(

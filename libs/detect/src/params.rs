@@ -372,6 +372,21 @@ pub struct DefaultParams {
     /// When a detected blade, or the strongest blade at 120° steps, is within this of straight
     /// down, degrees, that blade hides the tower ...
     pub tower_blade_down_tol_deg: f64,
+    /// With a blade pointing down (see `tower_blade_down_tol_deg`) and the tracker's hub
+    /// distance at most this, m, no tower is measured. The blade hangs in front of the tower
+    /// (the hub overhang, ~4 m) and is about as wide near the hub: from the front, for yaws the
+    /// approach leaves (|ψ| ≲ 20°), it hides the tower over the whole image height, or all
+    /// but one edge, and the band seen is the blade or the blade and one tower edge merged
+    /// (rendered flights: 1.4–1.9× or 0.55× the tower's width, the hub–tower gap of the wrong
+    /// sign). Distance then comes from the spinner and yaw from the blade skew and the
+    /// turbine-heading memory. Farther out the tower shows below the blade's tip: from about
+    /// the blade length over the tangent of half the vertical field of view (33.5 m /
+    /// tan 31° ≈ 56 m for the modelled turbine and the GoPro), so 60 is the value to use.
+    /// Default 0 = always measure: with 60 the rendered sequences' yaw and distance tails
+    /// shrink (`eval --sequence --seed 7`: yaw p90 27 → 7°, distance p90 52 → 20 %), but the
+    /// flights lose, as no other cue gives the yaw's sign (`fly` seeds 1–39: 29 of 39
+    /// against 32, the failures still on the final yaw).
+    pub tower_blade_down_max_distance_m: f64,
     /// ... and a tower band whose axis passes within this of the hub, fraction of image
     /// height, is that blade, not the tower.
     pub tower_blade_axis_tol_frac: f64,
@@ -435,6 +450,11 @@ pub struct DefaultParams {
     /// 0.5–2× that one, around the predicted hub): at 5 m under an overcast sky the grey
     /// spinner on grey blades shows 25–40 % of its rim, and the track was lost at the target.
     pub spinner_hint_min_coverage: f64,
+    /// A circle enclosing the best-covered spinner circle replaces it (the silhouette round a
+    /// ring on the spinner's face) only when its rim coverage is at least this fraction of the
+    /// inner one's; a circle drawn by blade edges crossing near the spinner is covered less.
+    /// 0 = always the outer one.
+    pub spinner_nest_min_coverage_ratio: f64,
     /// Spinner step: a circle whose inner 70 % holds more Canny edge pixels than this per px² is
     /// clutter (textured ground, a tower with blades and horizon), not the smooth spinner.
     pub spinner_max_interior_density: f64,
@@ -562,6 +582,7 @@ impl Default for DefaultParams {
             tower_max_width_ratio: 1.15,
             tower_taper: 0.03,
             tower_blade_down_tol_deg: 12.0,
+            tower_blade_down_max_distance_m: 0.0,
             tower_blade_axis_tol_frac: 0.025,
             pair_min_length_frac: 0.06,
             pair_max_angle_deg: 10.0,
@@ -591,6 +612,7 @@ impl Default for DefaultParams {
             spinner_radial_tol_deg: 25.0,
             spinner_min_coverage: 0.4,
             spinner_hint_min_coverage: 0.25,
+            spinner_nest_min_coverage_ratio: 0.8,
             spinner_max_interior_density: 0.1,
             spinner_reach_radii: 2.0,
             conf_spinner: 0.2,
@@ -735,6 +757,7 @@ impl DefaultParams {
         c.closed("tower_taper", self.tower_taper, 0.0, 1.0)?;
         c.less("tower_min_width_ratio", self.tower_min_width_ratio, "tower_max_width_ratio", self.tower_max_width_ratio)?;
         c.closed("tower_blade_down_tol_deg", self.tower_blade_down_tol_deg, 0.0, 60.0)?;
+        c.closed("tower_blade_down_max_distance_m", self.tower_blade_down_max_distance_m, 0.0, 1000.0)?;
         c.closed("tower_blade_axis_tol_frac", self.tower_blade_axis_tol_frac, 0.0, 1.0)?;
         c.less("tower_min_width_frac", self.tower_min_width_frac, "tower_max_width_frac", self.tower_max_width_frac)?;
         c.closed("pair_min_length_frac", self.pair_min_length_frac, 0.0, 2.0)?;
@@ -765,6 +788,7 @@ impl DefaultParams {
         c.closed("spinner_radial_tol_deg", self.spinner_radial_tol_deg, 0.0, 90.0)?;
         c.closed("spinner_min_coverage", self.spinner_min_coverage, 0.0, 1.0)?;
         c.closed("spinner_hint_min_coverage", self.spinner_hint_min_coverage, 0.0, 1.0)?;
+        c.closed("spinner_nest_min_coverage_ratio", self.spinner_nest_min_coverage_ratio, 0.0, 10.0)?;
         c.closed("spinner_max_interior_density", self.spinner_max_interior_density, 0.0, 1.0)?;
         c.closed("spinner_reach_radii", self.spinner_reach_radii, 0.0, 10.0)?;
         c.closed("conf_spinner", self.conf_spinner, 0.0, 1.0)?;

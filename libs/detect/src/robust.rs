@@ -124,7 +124,7 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
         let segs = merge_collinear(p, segments, h);
         log::trace!("hough {} merged {} high {high} longest {:?}", segments.len(), segs.len(), segs.iter().take(5).collect::<Vec<_>>());
         let reuse = spinner_reuse_px(p, h);
-        let mut search = |q: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> {
+        let mut search = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
             let CircleQuery::Around(c) = q else { return Ok(search_close_circles(p, img, h, expected.spinner_radius, pts)) };
             match ahead.take_if(|(q, _)| geometry::dist(*q, c) <= reuse) {
                 // A panic there is a bug here: carry it on.
@@ -158,11 +158,12 @@ fn spinner_reuse_px(p: &DefaultParams, h: f64) -> f64 {
     SPINNER_REUSE_OF_OFFSET * p.spinner_max_offset_frac * h
 }
 
-/// Spinner candidates around `c`: circles `[x, y, r]` (working px, best first) among the Canny
+/// Spinner candidates around `c`: circles `[x, y, r, rim coverage]` (working px, best covered
+/// first) among the Canny
 /// edge pixels in a square of half side `spinner_search_frac · h`, see [`crate::spinner`].
 /// With an `expected` radius only the radii of the `spinner_hint_radius_*` window around it are
 /// searched, and only the edge pixels such circles can reach are collected.
-fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 3]> {
+fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 4]> {
     let (min_r, max_r) = spinner_radii(p, h, expected);
     let off = p.spinner_max_offset_frac * h;
     let half = (p.spinner_search_frac * h).min(off + max_r + p.spinner_cell_px);
@@ -186,7 +187,7 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expecte
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: SPINNER_PEAKS,
     };
-    find_circles(pts, &cs).into_iter().map(|k| [k[0], k[1], k[2]]).collect()
+    find_circles(pts, &cs)
 }
 
 /// The Canny edge pixels of the box `[x0, y0, x1, y1)` with their unit gradient directions.
@@ -215,7 +216,7 @@ fn edge_points(img: &EdgeImage<'_>, [x0, y0, x1, y1]: [i32; 4], pts: &mut Vec<Ed
 /// frame and no blade crossing may lie near the spinner to search around; this runs only when
 /// nothing else was detected and no hub was predicted, and with an `expected` radius only over
 /// the radii it allows.
-fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 3]> {
+fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 4]> {
     // With a tracker's distance, only the radii it allows (none when the hub is far).
     let (lo, max_r) = spinner_radii(p, h, expected);
     let min_r = lo.max(p.close_spinner_radius_frac * h);
@@ -234,7 +235,7 @@ fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: SPINNER_PEAKS,
     };
-    find_circles(pts, &cs).into_iter().map(|k| [k[0], k[1], k[2]]).collect()
+    find_circles(pts, &cs)
 }
 
 /// Radii `[min, max]` the spinner step searches (working px): the configured limits, narrowed
@@ -933,6 +934,13 @@ fn measure_tower(
     let near_down = |a: f64| geometry::ang_dist(a, down) <= p.tower_blade_down_tol_deg;
     let blade_down = b.blades.iter().any(|bl| near_down(bl.angle_deg))
         || b.blades.first().is_some_and(|bl| (0..3).any(|k| near_down(bl.angle_deg + 120.0 * k as f64)));
+    // Closer than a tower's distance from the rotor allows to see past it, that blade hides the
+    // tower wholly or but for one edge: any band below the hub is the blade, or the blade and
+    // the tower merged, and its width and gap mislead (see `tower_blade_down_max_distance_m`).
+    if blade_down && hub_distance_m.is_some_and(|d| d <= p.tower_blade_down_max_distance_m) {
+        log::trace!("a blade points down at {:.1} m: no tower measured", hub_distance_m.unwrap_or(f64::NAN));
+        return None;
+    }
     let is_blade = |f: &crate::tower::TowerFit| {
         blade_down && f.axis.x_at_y(b.centre[1]).is_some_and(|x| (x - b.centre[0]).abs() <= p.tower_blade_axis_tol_frac * h)
     };
@@ -1001,7 +1009,7 @@ pub(crate) enum CircleQuery {
 }
 
 /// A spinner circle search: circles `[x, y, r]` (working px, best first).
-pub(crate) type CircleFinder<'a> = dyn FnMut(CircleQuery) -> Result<Vec<[f64; 3]>, DetectError> + 'a;
+pub(crate) type CircleFinder<'a> = dyn FnMut(CircleQuery) -> Result<Vec<[f64; 4]>, DetectError> + 'a;
 
 /// The first circle near `cand` (within `spinner_max_offset_frac · h`) that at least two blades
 /// start from, evaluated as a spinner-centred candidate. A larger such circle around it wins:
@@ -1015,7 +1023,7 @@ fn spinner_candidate(
     usable: &[bool],
     axes: &[BandAxis],
     cand: &Candidate,
-    circles: &[[f64; 3]],
+    circles: &[[f64; 4]],
     h: f64,
     roll_deg: f64,
     hints: &Hints,
@@ -1023,13 +1031,20 @@ fn spinner_candidate(
     let mut with_blades = circles
         .iter()
         .filter(|k| geometry::dist([k[0], k[1]], cand.centre) <= p.spinner_max_offset_frac * h)
-        .map(|k| evaluate(p, segs, usable, axes, [k[0], k[1]], h, roll_deg, hints, Some(*k)))
-        .inspect(|c| log::trace!("circle {:?}: conf {:.2} blades {:?}", c.spinner, c.confidence, c.blades.iter().map(|b| (b.angle_deg.round(), b.weight.round())).collect::<Vec<_>>()))
-        .filter(|c| c.blades.len() >= 2);
-    let first = with_blades.next()?;
+        .map(|k| (evaluate(p, segs, usable, axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]])), k[3]))
+        .inspect(|(c, cov)| log::trace!("circle {:?} (rim {cov:.2}): conf {:.2} blades {:?}", c.spinner, c.confidence, c.blades.iter().map(|b| (b.angle_deg.round(), b.weight.round())).collect::<Vec<_>>()))
+        .filter(|(c, _)| c.blades.len() >= 2);
+    let (first, first_cov) = with_blades.next()?;
     let inner = first.spinner?;
-    let encloses = |c: &Candidate| c.spinner.is_some_and(|k| k[2] > inner[2] && geometry::dist([k[0], k[1]], [inner[0], inner[1]]) + inner[2] <= k[2] + SPINNER_NEST_TOL_PX);
-    Some(with_blades.filter(encloses).max_by(|a, b| a.spinner.map_or(0.0, |k| k[2]).total_cmp(&b.spinner.map_or(0.0, |k| k[2]))).unwrap_or(first))
+    // A circle round the best-covered one is the spinner's silhouette round a ring on its
+    // face, if its rim is about as well covered; a less covered one is drawn by blade edges
+    // crossing near the spinner (a rendered flight at 12 m: rim 0.45 round 0.7, 1.26x the
+    // radius, the hub 5 % of the image height off).
+    let encloses = |(c, cov): &(Candidate, f64)| {
+        *cov >= p.spinner_nest_min_coverage_ratio * first_cov
+            && c.spinner.is_some_and(|k| k[2] > inner[2] && geometry::dist([k[0], k[1]], [inner[0], inner[1]]) + inner[2] <= k[2] + SPINNER_NEST_TOL_PX)
+    };
+    Some(with_blades.filter(encloses).map(|(c, _)| c).max_by(|a, b| a.spinner.map_or(0.0, |k| k[2]).total_cmp(&b.spinner.map_or(0.0, |k| k[2]))).unwrap_or(first))
 }
 
 /// Steps after the Hough transform, on plain data (working px) except for `search`, which
@@ -1110,7 +1125,7 @@ pub(crate) fn recognise(
     // Spinner step on the best few distinct candidates with at least two blades.
     // A candidate near an already searched one reuses its circles (the search box of the
     // first covers most of the second's).
-    let mut searched: Vec<(P2, Vec<[f64; 3]>)> = Vec::new();
+    let mut searched: Vec<(P2, Vec<[f64; 4]>)> = Vec::new();
     let mut extra: Vec<Candidate> = Vec::new();
     let reuse = spinner_reuse_px(p, h);
     // The tracker's predicted hub is searched too, with or without blades: at close range the
@@ -1157,7 +1172,7 @@ pub(crate) fn recognise(
     if hints.predicted_hub_px.is_none() && best.as_ref().is_none_or(|b| b.confidence < p.min_confidence) {
         let min_r = p.close_spinner_radius_frac * h;
         for k in search(CircleQuery::Close)?.into_iter().filter(|k| k[2] >= min_r) {
-            let cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some(k));
+            let cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]]));
             log::trace!("close spinner {k:?}: conf {:.2} blades {}", cand.confidence, cand.blades.len());
             if cand.blades.len() >= 2 && best.as_ref().is_none_or(|b| better(&cand, b)) {
                 best = Some(cand);
@@ -1213,7 +1228,7 @@ mod tests {
     use super::*;
     use crate::geometry::dir_from_up_cw;
 
-    fn no_circles(_: CircleQuery) -> Result<Vec<[f64; 3]>, DetectError> {
+    fn no_circles(_: CircleQuery) -> Result<Vec<[f64; 4]>, DetectError> {
         Ok(Vec::new())
     }
 
@@ -1442,18 +1457,18 @@ mod tests {
             segs.push(blade_edges(hub, a, 30.0, 100.0, 6.0, 2.0)[0]);
         }
         let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
-        let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0]]) };
+        let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0, 1.0]]) };
         let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None, Expected::default()).unwrap();
         assert!(f.detected && f.circle.is_some(), "{f:?}");
         assert!(geometry::dist(f.hub, [hub[0] + 0.5, hub[1] - 0.5]) < 1e-9, "{:?}", f.hub);
         // A circle far from every candidate is ignored.
-        let mut far_away = |_: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[400.0, 240.0, 30.0]]) };
+        let mut far_away = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(vec![[400.0, 240.0, 30.0, 1.0]]) };
         let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut far_away, None, Expected::default()).unwrap();
         assert!(g.circle.is_none(), "{g:?}");
         // The circle at the size the tracker's distance expects counts for more; at another
         // size it counts as before.
         let conf = |r_expected: f64| {
-            let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0]]) };
+            let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0, 1.0]]) };
             let expected = Expected { spinner_radius: Some(r_expected), ..Expected::default() };
             let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None, expected).unwrap();
             assert!(f.circle.is_some(), "{f:?}");
@@ -1466,6 +1481,32 @@ mod tests {
     }
 
     #[test]
+    fn an_enclosing_circle_replaces_the_best_covered_one_only_with_a_rim_as_well_covered() {
+        let p = DefaultParams::default();
+        let hub = [240.0, 120.0];
+        let mut segs: Vec<Segment> = Vec::new();
+        for a in [20.0, 140.0, 260.0] {
+            segs.push(blade_edges(hub, a, 30.0, 100.0, 6.0, 2.0)[0]);
+        }
+        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+        // The spinner (best covered) and a larger circle round it, 6 px off centre, as blade
+        // edges crossing near the spinner draw one.
+        let inner = [hub[0], hub[1], 30.0];
+        let outer = [hub[0] + 4.0, hub[1] + 4.5, 36.5];
+        assert!(geometry::dist([outer[0], outer[1]], [inner[0], inner[1]]) + inner[2] <= outer[2] + SPINNER_NEST_TOL_PX, "nested");
+        let circle = |outer_cov: f64| {
+            let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
+                Ok(vec![[inner[0], inner[1], inner[2], 0.6], [outer[0], outer[1], outer[2], outer_cov]])
+            };
+            recognise(&p, &segs, 480.0, 270.0, &hints, &mut circles, None, Expected::default()).unwrap().circle
+        };
+        let ratio = p.spinner_nest_min_coverage_ratio;
+        assert!(ratio > 0.0 && ratio < 1.0);
+        assert_eq!(circle(0.6 * ratio - 0.05), Some(inner), "a weakly covered outer circle is no silhouette");
+        assert_eq!(circle(0.6 * ratio + 0.05), Some(outer), "the silhouette round a ring on the spinner's face");
+    }
+
+    #[test]
     fn close_spinner_is_searched_anywhere_when_nothing_else_is_found() {
         let p = DefaultParams::default();
         let (hub, r) = ([300.0, 150.0], 40.0);
@@ -1475,7 +1516,7 @@ mod tests {
         let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
         let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
         assert!(!f.detected, "{f:?}");
-        let mut close = |q: CircleQuery| -> Result<Vec<[f64; 3]>, DetectError> { Ok(if q == CircleQuery::Close { vec![[hub[0], hub[1], r]] } else { vec![] }) };
+        let mut close = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(if q == CircleQuery::Close { vec![[hub[0], hub[1], r, 1.0]] } else { vec![] }) };
         let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut close, None, Expected::default()).unwrap();
         assert!(g.detected && g.circle.is_some() && geometry::dist(g.hub, hub) < 1e-9, "{g:?}");
     }

@@ -58,3 +58,38 @@ fn yaw_sign_follows_project_convention() {
     }
     }
 }
+
+/// A blade pointing straight down hangs in front of the tower and hides it: with a distance
+/// from the tracker inside `tower_blade_down_max_distance_m` no tower is measured (its band
+/// would be the blade), while the hub is still found; without a distance, or beyond that one,
+/// the band is measured as before.
+#[test]
+fn no_tower_measured_behind_a_blade_pointing_down() {
+    let cam = Camera::gopro_hero3();
+    let mut r = Renderer::new(cam);
+    let mut buf = vec![0u8; cam.frame_bytes()];
+    let hints = Hints { roll_rad: Some(0.0), hub_distance_m: Some(20.0), ..Hints::default() };
+    let mut detect = |rotor_angle_deg: f64, hints: &Hints, max_distance_m: f64| {
+        let mut config = DetectConfig::default();
+        config.default.tower_blade_down_max_distance_m = max_distance_m;
+        let scene = Scene { rotor_angle_deg, ..sunlit_sea() };
+        // 5 m below the hub (at hub height the horizon passed for a blade in this scene). Without
+        // the rule the blade-down frame measures a band 110 px wide (the tower: 82 px) with a
+        // hub–tower gap of -36 px where it is ~0.
+        let truth = r.render(&scene, &CameraPose::looking_at_hub(20.0, 0.0, -5.0), &mut buf).unwrap();
+        let mut det = Detector::new(config).unwrap();
+        let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
+        (det.detect(&view, hints).unwrap().detection, truth)
+    };
+    let (down, truth) = detect(60.0, &hints, 40.0);
+    let no_distance = Hints { hub_distance_m: None, ..hints };
+    let (unruled, _) = detect(60.0, &no_distance, 40.0);
+    assert!(unruled.tower_found, "without a distance the rule does not apply: {unruled:?}");
+    let hub = truth.hub_px.unwrap();
+    assert!(down.detected && ((down.hub_px[0] - hub[0]).powi(2) + (down.hub_px[1] - hub[1]).powi(2)).sqrt() <= 0.03 * 1080.0, "truth {hub:?} {down:?}");
+    assert!(!down.tower_found && down.tower_width_px == 0.0, "tower measured behind the blade: {down:?}");
+    // Beyond the configured distance the rule does not apply either.
+    let (beyond, _) = detect(60.0, &hints, 15.0);
+    assert!(beyond.tower_found && beyond.tower_width_px > 0.0, "{beyond:?}");
+}
+
