@@ -159,8 +159,8 @@ fn spinner_reuse_px(p: &DefaultParams, h: f64) -> f64 {
 }
 
 /// Spinner candidates around `c`: circles `[x, y, r, rim coverage]` (working px, best covered
-/// first) among the Canny
-/// edge pixels in a square of half side `spinner_search_frac · h`, see [`crate::spinner`].
+/// first) among the Canny edge pixels in a square of half side `spinner_search_frac · h`, see
+/// [`crate::spinner`].
 /// With an `expected` radius only the radii of the `spinner_hint_radius_*` window around it are
 /// searched, and only the edge pixels such circles can reach are collected.
 fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 4]> {
@@ -934,11 +934,11 @@ fn measure_tower(
     let near_down = |a: f64| geometry::ang_dist(a, down) <= p.tower_blade_down_tol_deg;
     let blade_down = b.blades.iter().any(|bl| near_down(bl.angle_deg))
         || b.blades.first().is_some_and(|bl| (0..3).any(|k| near_down(bl.angle_deg + 120.0 * k as f64)));
-    // Closer than a tower's distance from the rotor allows to see past it, that blade hides the
-    // tower wholly or but for one edge: any band below the hub is the blade, or the blade and
-    // the tower merged, and its width and gap mislead (see `tower_blade_down_max_distance_m`).
-    if blade_down && hub_distance_m.is_some_and(|d| d <= p.tower_blade_down_max_distance_m) {
-        log::trace!("a blade points down at {:.1} m: no tower measured", hub_distance_m.unwrap_or(f64::NAN));
+    // Until its tip is in view, that blade hides the tower wholly or but for one edge: a band
+    // below the hub is the blade, or the blade and one tower edge merged, and its width and gap
+    // mislead (see `tower_blade_down_max_distance_m`).
+    if let Some(d) = hub_distance_m.filter(|d| blade_down && *d <= p.tower_blade_down_max_distance_m) {
+        log::trace!("a blade points down at {d:.1} m: no tower measured");
         return None;
     }
     let is_blade = |f: &crate::tower::TowerFit| {
@@ -1008,7 +1008,7 @@ pub(crate) enum CircleQuery {
     Close,
 }
 
-/// A spinner circle search: circles `[x, y, r]` (working px, best first).
+/// A spinner circle search: circles `[x, y, r, rim coverage]` (working px, best covered first).
 pub(crate) type CircleFinder<'a> = dyn FnMut(CircleQuery) -> Result<Vec<[f64; 4]>, DetectError> + 'a;
 
 /// The first circle near `cand` (within `spinner_max_offset_frac · h`) that at least two blades
