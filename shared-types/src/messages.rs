@@ -179,6 +179,12 @@ pub struct Detection {
     pub circle_found: bool,
     /// Spinner circle `[x, y, radius]`, px.
     pub circle: [f64; 3],
+    /// The nacelle was seen sticking out beside the spinner on one side (needs the tracker's
+    /// distance; see `hubtrack-detect`'s nacelle step).
+    pub nacelle_found: bool,
+    /// Signed horizontal offset from the hub to the nacelle's far end, px (positive: to the
+    /// right; a camera on the turbine's left sees the nacelle to the right of the hub).
+    pub nacelle_end_dx_px: f64,
     /// Number of valid entries in `blade_angles_deg`.
     pub blade_count: u32,
     /// Blade angles in the image, degrees, 0 = up, clockwise.

@@ -18,6 +18,7 @@ pub mod params;
 mod blade;
 mod hough;
 mod image;
+mod nacelle;
 mod robust;
 mod spinner;
 mod thesis;
@@ -186,6 +187,8 @@ pub(crate) struct Found {
     pub line_count: u32,
     pub edge_count: u32,
     pub circle: Option<[f64; 3]>,
+    /// Signed offset from the hub to the nacelle's far end along the row (see `nacelle.rs`).
+    pub nacelle_end_dx: Option<f64>,
     pub lines: Vec<(Segment, LineKind)>,
     pub search_circle: Option<[f64; 3]>,
     pub edges_us: f64,
@@ -230,6 +233,7 @@ impl Detector {
         let expected = robust::Expected {
             tower_width: hints.hub_distance_m.and_then(|d| self.expected_tower_width_px(d, image.width)).map(|w| w / k),
             spinner_radius: hints.hub_distance_m.and_then(|d| self.expected_spinner_radius_px(d, image.width)).map(|r| r / k),
+            px_per_m: hints.hub_distance_m.filter(|d| *d > 0.0).map(|d| self.focal_px(image.width) / d / k),
         };
         let small = self.pyramid.build(image, levels)?;
         let pyramid_us = us_since(t0);
@@ -294,6 +298,10 @@ impl Detector {
         if let Some(c) = f.circle {
             d.circle_found = true;
             d.circle = [c[0] * k, c[1] * k, c[2] * k];
+        }
+        if let Some(dx) = f.nacelle_end_dx.filter(|_| f.detected) {
+            d.nacelle_found = true;
+            d.nacelle_end_dx_px = dx * k;
         }
         let mut distance_m = None;
         let mut yaw_deg = None;

@@ -83,6 +83,8 @@ pub(crate) struct Expected {
     pub tower_width: Option<f64>,
     /// Spinner radius.
     pub spinner_radius: Option<f64>,
+    /// Image scale at the hub's depth, px per metre.
+    pub px_per_m: Option<f64>,
 }
 
 /// Run the default pipeline on the working image, with the sizes `expected` from the tracker's
@@ -1023,6 +1025,7 @@ fn spinner_candidate(
     usable: &[bool],
     axes: &[BandAxis],
     cand: &Candidate,
+    others: &[Candidate],
     circles: &[[f64; 4]],
     h: f64,
     roll_deg: f64,
@@ -1033,7 +1036,24 @@ fn spinner_candidate(
         .filter(|k| geometry::dist([k[0], k[1]], cand.centre) <= p.spinner_max_offset_frac * h)
         .map(|k| (evaluate(p, segs, usable, axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]])), k[3]))
         .inspect(|(c, cov)| log::trace!("circle {:?} (rim {cov:.2}): conf {:.2} blades {:?}", c.spinner, c.confidence, c.blades.iter().map(|b| (b.angle_deg.round(), b.weight.round())).collect::<Vec<_>>()))
-        .filter(|(c, _)| c.blades.len() >= 2);
+        .filter(|(c, _)| c.blades.len() >= 2)
+        .filter(|(c, _)| {
+            // Measured against the strongest blade candidate near the circle (not only the one
+            // searched around: a weaker candidate between the blades finds the same circle).
+            let Some(k) = c.spinner.filter(|k| k[2] <= p.spinner_kept_support_max_radius_px) else { return true };
+            let centre = [k[0], k[1]];
+            let strongest = others
+                .iter()
+                .chain(std::iter::once(cand))
+                .filter(|o| o.blades.len() >= 2 && geometry::dist(o.centre, centre) <= p.spinner_max_offset_frac * h)
+                .max_by(|a, b| a.support.total_cmp(&b.support))
+                .unwrap_or(cand);
+            let kept = kept_support(p, strongest, c);
+            if kept < p.spinner_min_kept_support {
+                log::trace!("circle {:?} keeps {:.0} % of the blade support: not this rotor's spinner", c.spinner, 100.0 * kept);
+            }
+            kept >= p.spinner_min_kept_support
+        });
     let (first, first_cov) = with_blades.next()?;
     let inner = first.spinner?;
     // A circle round the best-covered one is the spinner's silhouette round a ring on its
@@ -1045,6 +1065,25 @@ fn spinner_candidate(
             && c.spinner.is_some_and(|k| k[2] > inner[2] && geometry::dist([k[0], k[1]], [inner[0], inner[1]]) + inner[2] <= k[2] + SPINNER_NEST_TOL_PX)
     };
     Some(with_blades.filter(encloses).map(|(c, _)| c).max_by(|a, b| a.spinner.map_or(0.0, |k| k[2]).total_cmp(&b.spinner.map_or(0.0, |k| k[2]))).unwrap_or(first))
+}
+
+/// The fraction of `cand`'s blade support (its blades' weights) that `circle`, evaluated at its
+/// own centre, keeps in the same directions (within `blade_group_tol_deg`); 1 for a candidate
+/// with fewer than two blades.
+fn kept_support(p: &DefaultParams, cand: &Candidate, circle: &Candidate) -> f64 {
+    let own: Vec<&Blade> = cand.blades.iter().take(ROTOR_BLADES).collect();
+    let total: f64 = own.iter().map(|b| b.weight).sum();
+    if own.len() < 2 || total <= 0.0 {
+        return 1.0;
+    }
+    let kept: f64 = own
+        .iter()
+        .map(|b| {
+            let seen: f64 = circle.blades.iter().filter(|c| geometry::ang_dist(c.angle_deg, b.angle_deg) <= p.blade_group_tol_deg).map(|c| c.weight).sum();
+            seen.min(b.weight)
+        })
+        .sum();
+    kept / total
 }
 
 /// Steps after the Hough transform, on plain data (working px) except for `search`, which
@@ -1144,7 +1183,7 @@ pub(crate) fn recognise(
             }
         };
         log::trace!("spinner search at {:?}: {:?}", cand.centre, circles);
-        if let Some(mut sc) = spinner_candidate(p, segs, &usable, &axes, cand, &circles, h, roll_deg, hints) {
+        if let Some(mut sc) = spinner_candidate(p, segs, &usable, &axes, cand, &cands, &circles, h, roll_deg, hints) {
             // A circle of the size the tracker's distance expects is the spinner with more
             // certainty than blade lines meeting somewhere near it: at close range under an
             // overcast sky the lines of two blades met at the tower top, 0.15 h below the
@@ -1207,6 +1246,9 @@ pub(crate) fn recognise(
                     // A width that was assumed is no measurement of the distance.
                     found.tower_width = if fit.one_edge { None } else { fit.width_at(row).map(|wd| (wd, row)) };
                 }
+                if found.detected {
+                    found.nacelle_end_dx = expected.px_per_m.and_then(|s| crate::nacelle::nacelle_end(p, &g.x, b.centre, s));
+                }
             }
             None if !b.tower.is_empty() => {
                 let top = b.tower.iter().flat_map(|&i| [segs[i].a, segs[i].b]).min_by(|x, y| x[1].total_cmp(&y[1])).unwrap_or(b.centre);
@@ -1247,6 +1289,28 @@ mod tests {
             v.push(ray(hub, a + 3.0, 6.0, 70.0));
         }
         v
+    }
+
+    #[test]
+    fn a_circle_keeps_the_blade_support_only_where_the_blades_radiate_from_it() {
+        let p = DefaultParams::default();
+        let blade = |angle_deg: f64, weight: f64| Blade { lines: Vec::new(), angle_deg, weight, axis: None };
+        let cand = |blades: Vec<Blade>| Candidate { support: blades.iter().map(|b| b.weight).sum(), blades, ..Candidate::default() };
+        // The rotor's line candidate (seed-4 frame at 40 m, working px): blades at 309° and 67°.
+        let rotor = cand(vec![blade(309.0, 325.0), blade(67.0, 198.0)]);
+        // The spinner keeps both; the nacelle's rear beside it sees the same blades pass by,
+        // half as long; a circle on the horizon gains a "blade" along it.
+        let spinner = cand(vec![blade(309.0, 325.0), blade(67.0, 198.0)]);
+        let nacelle = cand(vec![blade(312.0, 145.0), blade(64.0, 112.0)]);
+        let horizon = cand(vec![blade(88.0, 424.0), blade(312.0, 145.0)]);
+        assert!((kept_support(&p, &rotor, &spinner) - 1.0).abs() < 1e-9);
+        let k = kept_support(&p, &rotor, &nacelle);
+        assert!((k - 257.0 / 523.0).abs() < 1e-9, "{k}");
+        assert!(kept_support(&p, &rotor, &horizon) < 0.3);
+        // Longer blades from the circle count no more than the candidate's own.
+        assert!((kept_support(&p, &rotor, &cand(vec![blade(309.0, 900.0), blade(67.0, 198.0)])) - 1.0).abs() < 1e-9);
+        // A candidate with one blade (the tracker's prediction at close range) checks nothing.
+        assert_eq!(kept_support(&p, &cand(vec![blade(0.0, 100.0)]), &horizon), 1.0);
     }
 
     #[test]

@@ -1,5 +1,5 @@
 //! The detector's overlay as `foxglove.ImageAnnotations` (JSON encoding with a JSON schema), so
-//! Foxglove and Lichtblick draw lines, tower top, hub and spinner circle over `/frames`.
+//! Foxglove and Lichtblick draw lines, tower top, hub, spinner circle and nacelle end over `/frames`.
 
 use hubtrack_types::{DetectOverlay, OverlayKind};
 use serde_json::{json, Value};
@@ -48,6 +48,15 @@ pub fn to_json(overlay: &DetectOverlay, timestamp_ns: u64) -> Value {
         }
     }
     let d = &overlay.detection;
+    if d.detected && d.nacelle_found {
+        // The nacelle's far end: a vertical tick beside the hub, as long as the hub marker.
+        let x = d.hub_px[0] + d.nacelle_end_dx_px;
+        let pts = [json!({"x": x, "y": d.hub_px[1] - HUB_MARKER_PX}), json!({"x": x, "y": d.hub_px[1] + HUB_MARKER_PX})];
+        points.push(json!({
+            "timestamp": ts, "type": LINE_LIST, "points": pts, "outline_color": {"r": 1.0, "g": 0.5, "b": 0.0, "a": 1.0},
+            "outline_colors": [], "fill_color": {"r": 0, "g": 0, "b": 0, "a": 0}, "thickness": THICKNESS_PX
+        }));
+    }
     let mut circles = Vec::new();
     let circle = |x: f64, y: f64, diameter: f64, c: Value| {
         json!({"timestamp": ts, "position": {"x": x, "y": y}, "diameter": diameter, "thickness": THICKNESS_PX,

@@ -114,6 +114,59 @@ pub fn yaw_from_gap(
     Some(Estimate { value: psi, std: sigma_s / psi.cos() })
 }
 
+/// Image offset, in units of the focal length, of the nacelle's far rear corner from the hub at
+/// relative yaw `psi` ≥ 0 and hub distance `d`: the corner is `rear_m` behind the hub along the
+/// rotor axis and `half_width_m` to its side, so `(Lr·sin ψ + w·cos ψ) / (d + Lr·cos ψ − w·sin ψ)`.
+pub fn nacelle_end_offset(psi: f64, d: f64, rear_m: f64, half_width_m: f64) -> f64 {
+    (rear_m * psi.sin() + half_width_m * psi.cos()) / (d + rear_m * psi.cos() - half_width_m * psi.sin())
+}
+
+/// Bisection steps inverting [`nacelle_end_offset`] (the bracket halves each step).
+const NACELLE_BISECT_ITERS: usize = 50;
+
+/// Relative yaw from the nacelle's far end seen `dx_px` beside the hub (signed, px; positive to
+/// the right, where a camera on the turbine's left sees it): the yaw whose
+/// [`nacelle_end_offset`] matches `|dx| / f`, with the sign of `dx`, clipped to ±`max_abs_rad`
+/// (an offset below the front-view one gives 0). The std propagates the offset's and the
+/// distance's through the slope of the offset in ψ.
+pub fn yaw_from_nacelle(
+    dx_px: f64,
+    dx_std_px: f64,
+    distance: Estimate,
+    f_px: f64,
+    rear_m: f64,
+    half_width_m: f64,
+    max_abs_rad: f64,
+) -> Option<Estimate> {
+    let d = distance.value;
+    if !(dx_px.is_finite() && d.is_finite() && d > 0.0 && f_px > 0.0 && rear_m > 0.0 && max_abs_rad > 0.0) {
+        return None;
+    }
+    let target = dx_px.abs() / f_px;
+    let offset = |psi: f64, d: f64| nacelle_end_offset(psi, d, rear_m, half_width_m);
+    let (mut lo, mut hi) = (0.0, max_abs_rad);
+    if target <= offset(lo, d) {
+        hi = 0.0;
+    } else if target >= offset(hi, d) {
+        lo = hi;
+    } else {
+        for _ in 0..NACELLE_BISECT_ITERS {
+            let mid = 0.5 * (lo + hi);
+            if offset(mid, d) < target { lo = mid } else { hi = mid }
+        }
+    }
+    let psi = 0.5 * (lo + hi);
+    // Slopes of the offset in ψ and in d (central differences).
+    let h = 1e-4;
+    let slope_psi = (offset(psi + h, d) - offset((psi - h).max(0.0), d)) / (psi + h - (psi - h).max(0.0));
+    let slope_d = (offset(psi, d + h) - offset(psi, d - h)) / (2.0 * h);
+    if slope_psi <= 0.0 {
+        return None;
+    }
+    let var = (dx_std_px / f_px).powi(2) + (slope_d * distance.std).powi(2);
+    Some(Estimate { value: psi.copysign(dx_px), std: var.sqrt() / slope_psi })
+}
+
 /// Apparent image angle (clockwise from up) of a blade at true angle `theta` in a rotor plane
 /// seen at relative yaw `psi`: `atan2(sin θ·cos ψ, cos θ)`.
 pub fn apparent_blade_angle(theta: f64, psi: f64) -> f64 {
@@ -341,6 +394,26 @@ mod tests {
                 apparent_blade_angle(t, psi_deg.to_radians()).to_degrees().rem_euclid(360.0)
             })
             .collect()
+    }
+
+    #[test]
+    fn nacelle_yaw_inverts_the_pinhole_offset_of_the_rear_corner() {
+        // Hand case: 20 m, ψ = 20°, rear 11.2 m, half width 1.7 m, f = 1000 px:
+        // X = 11.2·0.3420 + 1.7·0.9397 = 5.4278 m, Z = 20 + 11.2·0.9397 − 1.7·0.3420 = 29.943 m,
+        // dx = 1000·X/Z = 181.27 px.
+        let d = Estimate { value: 20.0, std: 0.0 };
+        let e = yaw_from_nacelle(181.27, 2.0, d, 1000.0, 11.2, 1.7, 1.4).unwrap();
+        assert!((e.value.to_degrees() - 20.0).abs() < 0.01, "{e:?}");
+        let m = yaw_from_nacelle(-181.27, 2.0, d, 1000.0, 11.2, 1.7, 1.4).unwrap();
+        assert!((m.value + e.value).abs() < 1e-9 && (m.std - e.std).abs() < 1e-12);
+        // Slope d(dx)/dψ = f·(X'·Z − X·Z')/Z² = 1000·(9.94·29.943 + 5.4278·5.43)/29.943² ≈ 365 px
+        // per radian (6.4 px per degree): 2 px give 0.31°.
+        assert!((e.std.to_degrees() - 0.314).abs() < 0.01, "{e:?}");
+        // An offset inside the front-view one (1000·1.7/31.2 = 54.5 px) reads as 0; a distance
+        // uncertainty widens the std.
+        assert_eq!(yaw_from_nacelle(40.0, 2.0, d, 1000.0, 11.2, 1.7, 1.4).unwrap().value, 0.0);
+        let wide = yaw_from_nacelle(181.27, 2.0, Estimate { value: 20.0, std: 2.0 }, 1000.0, 11.2, 1.7, 1.4).unwrap();
+        assert!(wide.std > e.std);
     }
 
     #[test]

@@ -329,6 +329,31 @@ pub struct YawConfig {
     /// away from zero (about +10° in simulated approaches at 20–40 m), which drives T2 the
     /// wrong way; the hub–tower gap alone is unbiased.
     pub use_blade_skew: bool,
+    /// Also estimate the yaw from the nacelle's far end beside the spinner (the detector's
+    /// `nacelle_end_dx_px`), and drop a hub–tower gap beyond the yaw gate (`gate_chi2`) from
+    /// it: with a blade pointing down the tower hides behind that blade and its gap takes
+    /// either sign, while the nacelle sticks out on the tower's side only. Dropping every gap
+    /// of the other sign was tried and is not done: one persistent false nacelle reading then
+    /// owns the yaw (`fly` seed 37: a distance read 1.8× long shrank the detector's window
+    /// onto the spinner's own edge, and the vehicle came within 2.1 m of the rotor plane).
+    pub use_nacelle: bool,
+    /// Distance from the hub back to the nacelle's rear face along the rotor axis, m (modelled
+    /// turbine: 4.2 m overhang + 7 m of nacelle behind the tower axis).
+    pub nacelle_rear_m: f64,
+    /// Half the nacelle's width, m (modelled turbine: 3.4 m wide).
+    pub nacelle_half_width_m: f64,
+    /// Standard deviation of the nacelle end's image position, px at the reference width (the
+    /// detector finds it on its working image, about as wide: the edge column within ±1 px,
+    /// the rear corner's rounding and the chamfer a few px more).
+    pub nacelle_std_px: f64,
+    /// The nacelle is used only while the filtered distance is at least this, m. Closer, its
+    /// rear hides behind the spinner for the yaws left at the end of the approach (at 7 m up
+    /// to ~15°), and what the detector finds beside the spinner is a blade root or the tower
+    /// (`fly` seed 20: one such reading at 7 m turned a −1° approach into −13°).
+    pub nacelle_min_distance_m: f64,
+    /// Least standard deviation of a nacelle yaw, degrees: the nacelle's shape (rounded rear,
+    /// a cooler on the roof) is known roughly only.
+    pub nacelle_min_std_deg: f64,
     /// Fewest detected blades for a blade-skew estimate (2 fits exactly, 3 or more also checks
     /// the fit).
     pub min_blades: u32,
@@ -358,6 +383,12 @@ impl Default for YawConfig {
             blade_angle_std_deg: 2.0,
             rotor_blades: 3,
             use_blade_skew: false,
+            use_nacelle: true,
+            nacelle_rear_m: 11.2,
+            nacelle_half_width_m: 1.7,
+            nacelle_std_px: 3.0,
+            nacelle_min_distance_m: 12.0,
+            nacelle_min_std_deg: 2.0,
             min_blades: 3,
             blade_fit_chi2: 10.83,
             max_abs_deg: 85.0,
@@ -454,6 +485,11 @@ impl TrackConfig {
         c.count("rotor_blades", y.rotor_blades, 2, hubtrack_types::MAX_BLADES as u32)?;
         c.count("min_blades", y.min_blades, 2, y.rotor_blades)?;
         c.open_closed("blade_fit_chi2", y.blade_fit_chi2, 0.0, MAX_CHI2)?;
+        c.open_closed("nacelle_rear_m", y.nacelle_rear_m, 0.0, MAX_SIZE_M)?;
+        c.closed("nacelle_half_width_m", y.nacelle_half_width_m, 0.0, MAX_SIZE_M)?;
+        c.open_closed("nacelle_std_px", y.nacelle_std_px, 0.0, MAX_PX)?;
+        c.closed("nacelle_min_std_deg", y.nacelle_min_std_deg, 0.0, 90.0)?;
+        c.closed("nacelle_min_distance_m", y.nacelle_min_distance_m, 0.0, MAX_SIZE_M)?;
         c.open("max_abs_deg", y.max_abs_deg, 0.0, 90.0)?;
         c.open_closed("process_noise_deg2_s", y.process_noise_deg2_s, 0.0, MAX_NOISE)?;
         c.open_closed("gate_chi2", y.gate_chi2, 0.0, MAX_CHI2)?;

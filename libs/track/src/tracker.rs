@@ -6,7 +6,7 @@ use nalgebra::Rotation3;
 
 use crate::camera::{camera_pose_at, camera_to_body, dt_s, ego_motion, focal_length_px, CameraPose, Pinhole};
 use crate::estimate::{
-    blade_skew_yaw, distance_from_spinner, distance_from_tower_width, fuse, yaw_from_gap, Estimate,
+    blade_skew_yaw, distance_from_spinner, distance_from_tower_width, fuse, yaw_from_gap, yaw_from_nacelle, Estimate,
 };
 use crate::filter::{CvModel, HubFilter, ScalarFilter};
 use crate::params::{ParamError, TrackConfig};
@@ -474,6 +474,20 @@ impl Core {
         } else {
             None
         };
+        // The nacelle's far end: a yaw the tower hidden behind a blade cannot fake (see
+        // `use_nacelle`); a gap contradicting it is that blade.
+        let nacelle = if yc.use_nacelle && det.detected && det.nacelle_found {
+            self.distance.estimate().or(spinner).filter(|d| d.value >= yc.nacelle_min_distance_m).and_then(|d| {
+                let e = yaw_from_nacelle(det.nacelle_end_dx_px, yc.nacelle_std_px * s, d, f, yc.nacelle_rear_m, yc.nacelle_half_width_m, max_yaw)?;
+                Some(Estimate { value: e.value, std: e.std.max(yc.nacelle_min_std_deg.to_radians()) })
+            })
+        } else {
+            None
+        };
+        let gap = match (gap, nacelle) {
+            (Some(g), Some(n)) if (g.value - n.value).powi(2) / (g.var() + n.var()) > yc.gate_chi2 => None,
+            (g, _) => g,
+        };
         let n = (det.blade_count as usize).min(det.blade_angles_deg.len());
         let blade = if yc.use_blade_skew && n >= yc.min_blades as usize {
             blade_skew_yaw(&det.blade_angles_deg[..n], yc.rotor_blades, yc.blade_angle_std_deg.to_radians(), max_yaw, yc.blade_fit_chi2)
@@ -481,9 +495,9 @@ impl Core {
             None
         };
         // The blade skew gives |ψ|; its sign comes from the gap (and the filtered yaw).
-        let sign_ref = fuse(&[gap, yaw_prior].into_iter().flatten().collect::<Vec<_>>());
+        let sign_ref = fuse(&[gap, nacelle, yaw_prior].into_iter().flatten().collect::<Vec<_>>());
         let blade_signed = blade.zip(sign_ref).map(|(b, r)| Estimate { value: b.value.copysign(r.value), std: b.std });
-        if let Some(m) = fuse(&[gap, blade_signed].into_iter().flatten().collect::<Vec<_>>()) {
+        if let Some(m) = fuse(&[gap, nacelle, blade_signed].into_iter().flatten().collect::<Vec<_>>()) {
             self.yaw.update(m, yc.gate_chi2, yc.jump_accept_count, t);
         }
 

@@ -782,3 +782,44 @@ fn a_tower_band_inconsistent_with_the_spinner_is_dropped() {
     assert!((s.distance_m - d_hub).abs() < 0.5, "distance {} (the wide band would pull it toward {:.1})", s.distance_m, d_hub / 2.0);
     assert!((s.yaw_deg - psi_deg).abs() < 2.0, "yaw {} (the band's zero gap would pull it toward 0)", s.yaw_deg);
 }
+
+#[test]
+fn the_nacelle_sets_the_yaw_where_a_blade_hides_the_tower() {
+    // A blade pointing down hides the tower: the band measured is the blade or the blade and
+    // one tower edge, and its gap takes either sign (seed-4 flight at 40 m: −62 … +46 px). The
+    // nacelle's rear, sticking out on the tower's side, gives the yaw, and a gap beyond the
+    // yaw gate from it is dropped (the gaps' std is ~10° at 30 m, so some wrong ones stay and
+    // pull: −11.6° here). Without the nacelle the yaw follows the gaps' mean: +6.4°.
+    let cfg = pinhole_config();
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let (d_hub, psi_deg) = (30.0, -15.0);
+    let psi: f64 = f64::to_radians(psi_deg);
+    let (rear, half) = (cfg.yaw.nacelle_rear_m, cfg.yaw.nacelle_half_width_m);
+    let dx = -f * (rear * psi.abs().sin() + half * psi.cos()) / (d_hub + rear * psi.cos() - half * psi.abs().sin());
+    let run = |use_nacelle: bool| {
+        let mut c = cfg.clone();
+        c.yaw.use_nacelle = use_nacelle;
+        let mut tr = Tracker::new(c.clone()).unwrap();
+        let mut rng = Rng::new(21);
+        let mut s = TrackState::default();
+        for k in 0..150 {
+            let mut d = full_det(k, frame_t(k, 30.0), d_hub, psi_deg, &c, &mut rng, 0.5);
+            // The blade's band: about the hub, a third of the time the tower's true gap.
+            let true_gap = d.hub_tower_gap_px;
+            d.hub_tower_gap_px = match k % 3 {
+                0 => true_gap,
+                1 => -1.5 * true_gap,
+                _ => -0.8 * true_gap,
+            };
+            d.blade_count = 0;
+            d.nacelle_found = true;
+            d.nacelle_end_dx_px = dx + rng.normal();
+            s = tr.update(&d, None);
+        }
+        s
+    };
+    let with = run(true);
+    let without = run(false);
+    assert!(with.yaw_valid && (with.yaw_deg - psi_deg).abs() < 4.0, "with the nacelle: {} ± {}", with.yaw_deg, with.yaw_std_deg);
+    assert!((without.yaw_deg - psi_deg).abs() > 2.0 * (with.yaw_deg - psi_deg).abs(), "the gaps alone: {}", without.yaw_deg);
+}

@@ -160,6 +160,7 @@ pub fn result_json(path: &Path, width: u32, height: u32, out: &Output, ms: f64) 
         "tower_top": d.tower_found.then_some(d.tower_top_px),
         "tower_width_px": d.tower_found.then_some(d.tower_width_px),
         "circle": d.circle_found.then_some(d.circle),
+        "nacelle_end_dx_px": d.nacelle_found.then_some(d.nacelle_end_dx_px),
         "blade_angles_deg": &d.blade_angles_deg[..(d.blade_count as usize).min(d.blade_angles_deg.len())],
         "lines": d.line_count,
     })
@@ -197,6 +198,11 @@ pub fn draw_overlay(image: &Mat, out: &Output, truth: Option<[[f64; 2]; 2]>, pat
         imgproc::circle(&mut canvas, c, r, Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
         imgproc::line(&mut canvas, Point::new(c.x - 2 * r, c.y), Point::new(c.x + 2 * r, c.y), Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
         imgproc::line(&mut canvas, Point::new(c.x, c.y - 2 * r), Point::new(c.x, c.y + 2 * r), Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
+    }
+    if d.detected && d.nacelle_found {
+        // The nacelle's far end: an orange vertical tick beside the hub.
+        let (x, y, r) = ((d.hub_px[0] + d.nacelle_end_dx_px).round() as i32, d.hub_px[1].round() as i32, (14.0 * scale) as i32);
+        imgproc::line(&mut canvas, Point::new(x, y - r), Point::new(x, y + r), Scalar::new(0.0, 128.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
     }
     if let Some([a, b]) = truth {
         let red = Scalar::new(0.0, 0.0, 255.0, 0.0);
