@@ -725,12 +725,16 @@ impl Approach {
             // Weight ∝ 1/distance²: the hub–tower gap grows as 1/distance, so one metre of
             // gap error is worth far more yaw far away than close in.
             let w = if t.distance_valid && t.distance_m.is_finite() && t.distance_m > 0.0 { 1.0 / (t.distance_m * t.distance_m) } else { 0.0 };
+            // Close in, an established estimate drops what it would clip (see
+            // `turbine_heading_close_m`).
+            let close = w > 0.0 && t.distance_m < c.turbine_heading_close_m;
+            let beyond_clip = |h: &TurbineHeading| wrap_pi(meas - h.heading_rad).abs() > c.turbine_heading_clip_deg.to_radians();
             match self.turbine_heading.as_mut() {
                 None if w > 0.0 => {
                     self.turbine_heading = Some(TurbineHeading { heading_rad: meas, weight: w, samples: 1, last_ns: now })
                 }
                 None => {}
-                Some(h) if w > 0.0 => {
+                Some(h) if w > 0.0 && !(close && h.samples >= c.turbine_heading_min_samples && beyond_clip(h)) => {
                     h.samples = h.samples.saturating_add(1);
                     let dt = secs(h.last_ns.min(now), now).min(c.max_dt_s);
                     h.last_ns = now;

@@ -168,6 +168,13 @@ pub struct ApproachConfig {
     /// Each yaw measurement moves the turbine-heading estimate by at most this much error,
     /// degrees (outliers have bounded influence). Range (0, 90]; default 10.
     pub turbine_heading_clip_deg: f64,
+    /// Closer to the hub than this, m, a yaw measurement more than `turbine_heading_clip_deg`
+    /// from an established turbine-heading estimate is dropped instead of clipped (0 = always
+    /// clip). Close in, the tower often stands behind the blade pointing down and the band
+    /// taken for it gives a steady wrong yaw, while the estimate carries every farther
+    /// measurement; clipped, such a run still pulls it ~1° a second at 5 m (`fly` seed 78:
+    /// +28° measured for +4°, T2 then flew the vehicle to −18°). Range [0, 100]; default 10.
+    pub turbine_heading_close_m: f64,
     /// Yaw measurements needed before the turbine-heading estimate replaces the filtered
     /// tracker yaw. Range [1, 10000]; default 15.
     pub turbine_heading_min_samples: u32,
@@ -234,6 +241,7 @@ impl Default for ApproachConfig {
             close_range_m: 10.0,
             search_backoff_m_s: 0.3,
             turbine_heading_clip_deg: 10.0,
+            turbine_heading_close_m: 10.0,
             turbine_heading_min_samples: 15,
             distance_filter_s: 0.5,
             max_track_age_s: 1.0,
@@ -307,6 +315,7 @@ impl ApproachConfig {
         c.closed("close_range_m", self.close_range_m, 0.0, 100.0)?;
         c.open_closed("search_backoff_m_s", self.search_backoff_m_s, 0.0, 2.0)?;
         c.open_closed("turbine_heading_clip_deg", self.turbine_heading_clip_deg, 0.0, 90.0)?;
+        c.closed("turbine_heading_close_m", self.turbine_heading_close_m, 0.0, 100.0)?;
         c.count("turbine_heading_min_samples", self.turbine_heading_min_samples, 1, 10_000)?;
         c.closed("distance_filter_s", self.distance_filter_s, 0.0, 60.0)?;
 

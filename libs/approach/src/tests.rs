@@ -546,6 +546,28 @@ fn filters_smooth_yaw_and_distance() {
     assert!((rig.ap.dist_f.unwrap() - 20.0).abs() < 0.01);
 }
 
+/// The turbine-heading estimate carries the farther measurements; close in, a steady run of
+/// yaws far from it (a blade pointing down taken for the tower) is dropped, not clipped
+/// (`turbine_heading_close_m`).
+#[test]
+fn close_in_a_run_of_wrong_yaws_leaves_the_turbine_heading() {
+    let run = |close_m: f64| {
+        let c = ApproachConfig { turbine_heading_close_m: close_m, ..ApproachConfig::default() };
+        let mut rig = Rig::with(c);
+        rig.vehicle = Some(VehicleState { attitude_valid: true, yaw_rad: 0.3, ..vehicle(true) });
+        rig.run(Some(track(0.0, 0.0, Some(20.0), Some(3.0))), 15.0);
+        let far = rig.ap.heading_yaw(&track(0.0, 0.0, Some(20.0), Some(3.0)), rig.vehicle.as_ref(), false);
+        rig.run(Some(track(0.0, 0.0, Some(6.0), Some(28.0))), 10.0);
+        let t = track(0.0, 0.0, Some(6.0), Some(28.0));
+        (far.unwrap(), rig.ap.heading_yaw(&t, rig.vehicle.as_ref(), false).unwrap())
+    };
+    let (far, kept) = run(10.0);
+    assert!((far - 3.0).abs() < 0.1 && (kept - 3.0).abs() < 0.1, "dropped: {far} then {kept}");
+    // Clipped, the same run owns the estimate.
+    let (_, clipped) = run(0.0);
+    assert!(clipped > 20.0, "clipped: {clipped}");
+}
+
 // ---------------------------------------------------------------- abort
 
 #[test]

@@ -209,7 +209,7 @@ impl ScalarFilter {
             return true;
         }
         let consistent = self.last_reject.is_some_and(|p| (z.value - p.value).powi(2) <= gate_chi2 * (r + p.var()));
-        self.rejects = if consistent { self.rejects + 1 } else { 1 };
+        self.rejects = if consistent { self.rejects.saturating_add(1) } else { 1 };
         self.last_reject = Some(z);
         if self.rejects >= jump_count {
             log::debug!("scalar filter: persistent jump {} → {}, restarting", self.value, z.value);

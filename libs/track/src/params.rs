@@ -354,6 +354,13 @@ pub struct YawConfig {
     /// Least standard deviation of a nacelle yaw, degrees: the nacelle's shape (rounded rear,
     /// a cooler on the roof) is known roughly only.
     pub nacelle_min_std_deg: f64,
+    /// A nacelle yaw smaller than this, degrees, is not used (0 = all are). Near zero yaw both
+    /// sides of the nacelle stick out beside the spinner by about its half-width, and which
+    /// one the detector takes is a toss-up: in five recorded `fly` flights (seeds 31, 42, 78,
+    /// 82, 97; hub within 10 px, 12 m and farther) the sign was right for 71 % of the readings
+    /// of 3–6°, 93 % of 6–9° and all of 9° and more (seed 42 at 32 m: +27 px for −3.4°, the
+    /// yaw filter read +5.3°).
+    pub nacelle_min_abs_deg: f64,
     /// Fewest detected blades for a blade-skew estimate (2 fits exactly, 3 or more also checks
     /// the fit).
     pub min_blades: u32,
@@ -368,6 +375,28 @@ pub struct YawConfig {
     pub gate_chi2: f64,
     /// Consecutive consistent gated-out yaw measurements after which the filter restarts.
     pub jump_accept_count: u32,
+    /// A tower band dropped for its width (`distance.consistency_chi2` against the spinner)
+    /// still gives the hub–tower gap (at the depth of the filtered distance) when its width is
+    /// within this factor of the width the tower has at the spinner's distance (1 = a dropped
+    /// band gives no yaw). The chi-square test is strict close in, where the width's noise is a small
+    /// part of it, but the band's axis stays on the tower's when its width is a little off:
+    /// in a rendered flight at 8–10 m (`fly` seed 42) bands 1.1–1.3× the width expected had
+    /// gaps within 2 px of the truth, and no yaw was measured from 10 m to the end. A band
+    /// ~1.5× or more is the blade pointing down merged with the tower, whose axis is not the
+    /// tower's (1.35 let such bands in: seeds 85, 117, 119 ended 2–5° worse). Default 1 =
+    /// off: 1.2 brought seed 42 in (−5.9° → −2.4°) and lost 38 and 60 over `fly` seeds 1–120
+    /// (106 against 107 of 120, median |final yaw| 1.36° against 1.28°); the final yaws are
+    /// limited by the turbine-heading estimate far out more than by these gaps. Range [1, 3].
+    pub gap_max_width_ratio: f64,
+    /// The yaw filter restarts on a persistent jump only while the filtered distance is at
+    /// least this, m (0 = at any distance). The relative yaw cannot jump: the ego-motion
+    /// prediction carries it through the vehicle's own motion, so a persistent jump means
+    /// either a wrong start (far out, where the first gaps are a few pixels) or a wrong
+    /// tower. Close in, the tower is the blade pointing down in front of it often enough
+    /// (`fly` seed 31: three gaps of −121 px at 6.7 m restarted the yaw at +43° for −5°, and
+    /// T2 flew the vehicle to −16°); there the measurements are only gated, and the gate
+    /// widens with the prediction's growing variance until true ones are accepted again.
+    pub jump_min_distance_m: f64,
     /// The yaw is reported valid only while its standard deviation is at most this, degrees.
     pub max_std_deg: f64,
     /// The yaw is reported valid only within this many seconds of its last accepted measurement.
@@ -389,12 +418,15 @@ impl Default for YawConfig {
             nacelle_std_px: 3.0,
             nacelle_min_distance_m: 12.0,
             nacelle_min_std_deg: 2.0,
+            nacelle_min_abs_deg: 6.0,
             min_blades: 3,
             blade_fit_chi2: 10.83,
             max_abs_deg: 85.0,
             process_noise_deg2_s: 4.0,
             gate_chi2: 10.83,
             jump_accept_count: 3,
+            gap_max_width_ratio: 1.0,
+            jump_min_distance_m: 10.0,
             max_std_deg: 10.0,
             stale_after_s: 2.0,
         }
@@ -489,11 +521,14 @@ impl TrackConfig {
         c.closed("nacelle_half_width_m", y.nacelle_half_width_m, 0.0, MAX_SIZE_M)?;
         c.open_closed("nacelle_std_px", y.nacelle_std_px, 0.0, MAX_PX)?;
         c.closed("nacelle_min_std_deg", y.nacelle_min_std_deg, 0.0, 90.0)?;
+        c.closed("nacelle_min_abs_deg", y.nacelle_min_abs_deg, 0.0, 90.0)?;
         c.closed("nacelle_min_distance_m", y.nacelle_min_distance_m, 0.0, MAX_SIZE_M)?;
         c.open("max_abs_deg", y.max_abs_deg, 0.0, 90.0)?;
         c.open_closed("process_noise_deg2_s", y.process_noise_deg2_s, 0.0, MAX_NOISE)?;
         c.open_closed("gate_chi2", y.gate_chi2, 0.0, MAX_CHI2)?;
         c.count("jump_accept_count", y.jump_accept_count, 1, MAX_COUNT)?;
+        c.closed("jump_min_distance_m", y.jump_min_distance_m, 0.0, MAX_SIZE_M)?;
+        c.closed("gap_max_width_ratio", y.gap_max_width_ratio, 1.0, 3.0)?;
         c.open_closed("max_std_deg", y.max_std_deg, 0.0, 180.0)?;
         c.open_closed("stale_after_s", y.stale_after_s, 0.0, MAX_TIME_S)?;
         Ok(())

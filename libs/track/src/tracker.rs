@@ -439,8 +439,12 @@ impl Core {
         // the tower, tower and blade together): it gives neither distance nor yaw. Which of the
         // two is wrong? The one farther from the filtered distance; without one, both.
         let mut tower = self.tower_depth(det);
+        let spinner_seen = spinner;
         let mut spinner = spinner;
         let mut tower_rejected = false;
+        // The band's width over the width the tower has at the spinner's distance, when the
+        // band was dropped for its width (see `gap_max_width_ratio`).
+        let mut rejected_width_ratio = None;
         if let (Some(td), Some(sp)) = (tower, spinner) {
             let tower_hub = td.value - offset;
             let chi2 = (tower_hub - sp.value).powi(2) / (td.std.powi(2) + sp.std.powi(2)).max(1e-12);
@@ -451,6 +455,11 @@ impl Core {
                     None => (tower, spinner) = (None, None),
                 }
                 tower_rejected = tower.is_none();
+                if tower_rejected {
+                    let psi = self.yaw.estimate().map_or(0.0, |e| e.value);
+                    let expected_px = f * dc.tower_diameter_m / (sp.value + offset * psi.cos());
+                    rejected_width_ratio = Some(det.tower_width_px / expected_px);
+                }
                 log::debug!("tower {tower_hub:.1} m and spinner {:.1} m disagree (chi2 {chi2:.0}): kept {}", sp.value, match (tower, spinner) {
                     (Some(_), _) => "tower",
                     (_, Some(_)) => "spinner",
@@ -463,11 +472,13 @@ impl Core {
         // filtered hub distance plus the overhang.
         let yaw_prior = self.yaw.estimate();
         let tower_depth = tower.or_else(|| {
-            let d = self.distance.estimate()?;
+            let d = self.distance.estimate().or(spinner_seen)?;
             let psi = yaw_prior.map_or(0.0, |e| e.value);
             Some(Estimate { value: d.value + offset * psi.cos(), std: d.std })
         });
-        let gap = if det.tower_found && det.detected && !tower_rejected {
+        let band_on_tower = !tower_rejected
+            || rejected_width_ratio.is_some_and(|r| r <= yc.gap_max_width_ratio && r * yc.gap_max_width_ratio >= 1.0);
+        let gap = if det.tower_found && det.detected && band_on_tower {
             // How well the hub end of the gap is known depends on how the hub was found.
             let gap_std = if det.circle_found { yc.gap_std_spinner_px } else { yc.gap_std_lines_px };
             tower_depth.and_then(|td| yaw_from_gap(det.hub_tower_gap_px, gap_std * s, td, f, offset, max_yaw))
@@ -479,7 +490,9 @@ impl Core {
         let nacelle = if yc.use_nacelle && det.detected && det.nacelle_found {
             self.distance.estimate().or(spinner).filter(|d| d.value >= yc.nacelle_min_distance_m).and_then(|d| {
                 let e = yaw_from_nacelle(det.nacelle_end_dx_px, yc.nacelle_std_px * s, d, f, yc.nacelle_rear_m, yc.nacelle_half_width_m, max_yaw)?;
-                Some(Estimate { value: e.value, std: e.std.max(yc.nacelle_min_std_deg.to_radians()) })
+                // Near zero yaw the side is a toss-up (see `nacelle_min_abs_deg`).
+                (e.value.abs() >= yc.nacelle_min_abs_deg.to_radians())
+                    .then(|| Estimate { value: e.value, std: e.std.max(yc.nacelle_min_std_deg.to_radians()) })
             })
         } else {
             None
@@ -498,7 +511,10 @@ impl Core {
         let sign_ref = fuse(&[gap, nacelle, yaw_prior].into_iter().flatten().collect::<Vec<_>>());
         let blade_signed = blade.zip(sign_ref).map(|(b, r)| Estimate { value: b.value.copysign(r.value), std: b.std });
         if let Some(m) = fuse(&[gap, nacelle, blade_signed].into_iter().flatten().collect::<Vec<_>>()) {
-            self.yaw.update(m, yc.gate_chi2, yc.jump_accept_count, t);
+            // No jumps close in (see `jump_min_distance_m`): only gated updates.
+            let close = self.distance.estimate().is_some_and(|d| d.value < yc.jump_min_distance_m);
+            let jump_count = if close { u32::MAX } else { yc.jump_accept_count };
+            self.yaw.update(m, yc.gate_chi2, jump_count, t);
         }
 
         // Distance of the hub: tower depth minus the overhang, and the spinner.

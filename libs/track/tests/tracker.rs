@@ -573,6 +573,36 @@ fn full_det(seq: u64, t: f64, d_hub: f64, psi_deg: f64, cfg: &TrackConfig, rng: 
     d
 }
 
+/// The detector's nacelle end for a turbine at hub distance `d_hub` and relative yaw `psi_deg`:
+/// the rear corner on the tower's side, with the yaw's sign.
+fn nacelle_dx(cfg: &TrackConfig, d_hub: f64, psi_deg: f64) -> f64 {
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let (rear, half) = (cfg.yaw.nacelle_rear_m, cfg.yaw.nacelle_half_width_m);
+    let p = psi_deg.to_radians().abs();
+    psi_deg.signum() * f * (rear * p.sin() + half * p.cos()) / (d_hub + rear * p.cos() - half * p.sin())
+}
+
+/// Tracks `frames` detections at 30 fps of a turbine at `d_hub`, `psi_deg` (pixel noise 0.5),
+/// each changed by `edit(frame, detection, rng)`; returns the last state.
+fn track_turbine(
+    cfg: &TrackConfig,
+    seed: u64,
+    frames: u64,
+    d_hub: f64,
+    psi_deg: f64,
+    mut edit: impl FnMut(u64, &mut Detection, &mut Rng),
+) -> TrackState {
+    let mut tr = Tracker::new(cfg.clone()).unwrap();
+    let mut rng = Rng::new(seed);
+    let mut s = TrackState::default();
+    for k in 0..frames {
+        let mut d = full_det(k, frame_t(k, 30.0), d_hub, psi_deg, cfg, &mut rng, 0.5);
+        edit(k, &mut d, &mut rng);
+        s = tr.update(&d, None);
+    }
+    s
+}
+
 #[test]
 fn distance_and_yaw_are_fused_and_filtered() {
     let cfg = pinhole_config();
@@ -791,19 +821,12 @@ fn the_nacelle_sets_the_yaw_where_a_blade_hides_the_tower() {
     // yaw gate from it is dropped (the gaps' std is ~10° at 30 m, so some wrong ones stay and
     // pull: −11.6° here). Without the nacelle the yaw follows the gaps' mean: +6.4°.
     let cfg = pinhole_config();
-    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
     let (d_hub, psi_deg) = (30.0, -15.0);
-    let psi: f64 = f64::to_radians(psi_deg);
-    let (rear, half) = (cfg.yaw.nacelle_rear_m, cfg.yaw.nacelle_half_width_m);
-    let dx = -f * (rear * psi.abs().sin() + half * psi.cos()) / (d_hub + rear * psi.cos() - half * psi.abs().sin());
+    let dx = nacelle_dx(&cfg, d_hub, psi_deg);
     let run = |use_nacelle: bool| {
         let mut c = cfg.clone();
         c.yaw.use_nacelle = use_nacelle;
-        let mut tr = Tracker::new(c.clone()).unwrap();
-        let mut rng = Rng::new(21);
-        let mut s = TrackState::default();
-        for k in 0..150 {
-            let mut d = full_det(k, frame_t(k, 30.0), d_hub, psi_deg, &c, &mut rng, 0.5);
+        track_turbine(&c, 21, 150, d_hub, psi_deg, |k, d, rng| {
             // The blade's band: about the hub, a third of the time the tower's true gap.
             let true_gap = d.hub_tower_gap_px;
             d.hub_tower_gap_px = match k % 3 {
@@ -814,12 +837,84 @@ fn the_nacelle_sets_the_yaw_where_a_blade_hides_the_tower() {
             d.blade_count = 0;
             d.nacelle_found = true;
             d.nacelle_end_dx_px = dx + rng.normal();
-            s = tr.update(&d, None);
-        }
-        s
+        })
     };
     let with = run(true);
     let without = run(false);
     assert!(with.yaw_valid && (with.yaw_deg - psi_deg).abs() < 4.0, "with the nacelle: {} ± {}", with.yaw_deg, with.yaw_std_deg);
     assert!((without.yaw_deg - psi_deg).abs() > 2.0 * (with.yaw_deg - psi_deg).abs(), "the gaps alone: {}", without.yaw_deg);
+}
+
+/// Close in, a run of wrong tower bands (the blade pointing down in front of the tower) does
+/// not restart the yaw as a jump (`yaw.jump_min_distance_m`); farther out the same run does,
+/// as it must to leave a wrong start.
+#[test]
+fn a_persistent_wrong_gap_close_in_is_no_yaw_jump() {
+    let cfg = pinhole_config();
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let l = cfg.yaw.hub_tower_offset_m;
+    let psi_deg = -5.0;
+    let run = |d_hub: f64| {
+        track_turbine(&cfg, 31, 90, d_hub, psi_deg, |k, d, _| {
+            if k >= 60 {
+                // The band's gap says +40°: the tower 2.7 m beside the hub at the tower depth.
+                d.hub_tower_gap_px = -f * l * 40f64.to_radians().sin() / (d_hub + l);
+            }
+        })
+    };
+    assert!(cfg.yaw.jump_min_distance_m > 6.5 && cfg.yaw.jump_min_distance_m < 20.0);
+    let close = run(6.5);
+    assert!((close.yaw_deg - psi_deg).abs() < 3.0, "6.5 m: yaw {} ± {} (the bands say +40)", close.yaw_deg, close.yaw_std_deg);
+    let far = run(20.0);
+    assert!(far.yaw_deg > 30.0, "20 m: a persistent jump is accepted: {}", far.yaw_deg);
+}
+
+/// Close in, a band a little wider than the tower fails the width test against the spinner
+/// (its noise is a small part of the width there) but its axis is the tower's: with
+/// `yaw.gap_max_width_ratio` 1.2 (off by default) it still gives the yaw; a band twice as wide
+/// does not.
+#[test]
+fn a_slightly_wide_tower_band_close_in_still_gives_the_yaw() {
+    let cfg = pinhole_config();
+    let (d_hub, psi_deg) = (6.0, -7.0);
+    let run = |ratio: f64, widen: f64| {
+        let mut c = cfg.clone();
+        c.yaw.gap_max_width_ratio = ratio;
+        track_turbine(&c, 42, 60, d_hub, psi_deg, |k, d, _| {
+            d.tower_width_px *= widen;
+            // The spinner alone first (both are dropped while no distance tells which is wrong).
+            d.tower_found = k >= 10;
+        })
+    };
+    let kept = run(1.2, 1.15);
+    assert!(kept.yaw_valid && (kept.yaw_deg - psi_deg).abs() < 1.5, "1.15x band: yaw {} ± {}", kept.yaw_deg, kept.yaw_std_deg);
+    assert!(kept.distance_valid && (kept.distance_m - d_hub).abs() < 0.3, "the spinner's distance: {}", kept.distance_m);
+    assert!(!run(1.0, 1.15).yaw_valid, "ratio 1: a dropped band gives no yaw");
+    assert!(!run(1.2, 2.0).yaw_valid, "a 2x band gives no yaw");
+}
+
+/// Near zero yaw the nacelle sticks out on both sides by about its half-width and the detector
+/// may take the wrong one: a reading that implies less than `yaw.nacelle_min_abs_deg` is not
+/// used, so the gaps keep the yaw; used, the wrong side owns it (it drops the gaps that
+/// contradict it).
+#[test]
+fn a_small_nacelle_yaw_of_the_wrong_side_is_not_used() {
+    let cfg = pinhole_config();
+    let (d_hub, psi_deg) = (30.0, -3.0);
+    // The reading of the other side: what +5° would give.
+    let dx_wrong = nacelle_dx(&cfg, d_hub, 5.0);
+    let run = |min_abs_deg: f64| {
+        let mut c = cfg.clone();
+        c.yaw.nacelle_min_abs_deg = min_abs_deg;
+        track_turbine(&c, 5, 150, d_hub, psi_deg, |_, d, rng| {
+            d.blade_count = 0;
+            d.nacelle_found = true;
+            d.nacelle_end_dx_px = dx_wrong + 0.5 * rng.normal();
+        })
+    };
+    assert!(cfg.yaw.nacelle_min_abs_deg > 5.5);
+    let with_rule = run(cfg.yaw.nacelle_min_abs_deg);
+    assert!(with_rule.yaw_valid && (with_rule.yaw_deg - psi_deg).abs() < 2.0, "rule on: {}", with_rule.yaw_deg);
+    let without = run(0.0);
+    assert!(without.yaw_deg > 2.0, "rule off, the wrong side owns the yaw: {}", without.yaw_deg);
 }
