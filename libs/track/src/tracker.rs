@@ -320,6 +320,17 @@ impl Core {
             let robust = gating && g.robust_chi2 > 0.0 && d2 > g.robust_chi2 && nu.norm() > g.min_gate_px * scale;
             track.filter.update(z, if robust { r * d2 / g.robust_chi2 } else { r });
             track.consistent = track.consistent.saturating_add(1);
+            // The track before a jump is an alternative only while it is elsewhere: once its
+            // prediction lies inside this track's gate the two have merged, and with its wide,
+            // unupdated gate it would otherwise take the next false detection beside both
+            // (`eval --sequence` flight 8: a circle on the nacelle 110 px beside the hub
+            // restored it and held the track there for 60 frames).
+            if self.before_jump.is_some_and(|(old, _)| {
+                let (nu_old, _, d2_old) = track.filter.innovation(old.filter.position(), r);
+                in_gate(nu_old.norm(), d2_old)
+            }) {
+                self.before_jump = None;
+            }
             if !track.confirmed && track.consistent >= confirm {
                 track.confirmed = true;
                 self.ever_confirmed = true;
