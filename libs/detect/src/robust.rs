@@ -1030,8 +1030,9 @@ fn spinner_candidate(
     h: f64,
     roll_deg: f64,
     hints: &Hints,
+    expected_r: Option<f64>,
 ) -> Option<Candidate> {
-    let mut with_blades = circles
+    let with_blades = circles
         .iter()
         .filter(|k| geometry::dist([k[0], k[1]], cand.centre) <= p.spinner_max_offset_frac * h)
         .map(|k| (evaluate(p, segs, usable, axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]])), k[3]))
@@ -1054,7 +1055,20 @@ fn spinner_candidate(
             }
             kept >= p.spinner_min_kept_support
         });
-    let (first, first_cov) = with_blades.next()?;
+    let mut with_blades: Vec<(Candidate, f64)> = with_blades.collect();
+    // Circles are best covered first. A near tie goes to the size the tracker's distance
+    // expects, or without one to the predicted hub: the rim alone does not tell them apart.
+    let tie = p.spinner_tie_ratio * with_blades.first()?.1;
+    let off = |c: &Candidate| match (expected_r, hints.predicted_hub_px, c.spinner) {
+        (Some(e), _, Some(k)) if e > 0.0 => (k[2] / e).ln().abs(),
+        (_, Some(q), _) => geometry::dist(c.centre, q),
+        _ => 0.0,
+    };
+    let pick = (0..with_blades.len())
+        .filter(|&i| p.spinner_tie_ratio < 1.0 && with_blades[i].1 >= tie)
+        .min_by(|&i, &j| off(&with_blades[i].0).total_cmp(&off(&with_blades[j].0)).then(i.cmp(&j)))
+        .unwrap_or(0);
+    let (first, first_cov) = with_blades.remove(pick);
     let inner = first.spinner?;
     // A circle round the best-covered one is the spinner's silhouette round a ring on its
     // face, if its rim is about as well covered; a less covered one is drawn by blade edges
@@ -1064,7 +1078,7 @@ fn spinner_candidate(
         *cov >= p.spinner_nest_min_coverage_ratio * first_cov
             && c.spinner.is_some_and(|k| k[2] > inner[2] && geometry::dist([k[0], k[1]], [inner[0], inner[1]]) + inner[2] <= k[2] + SPINNER_NEST_TOL_PX)
     };
-    Some(with_blades.filter(encloses).map(|(c, _)| c).max_by(|a, b| a.spinner.map_or(0.0, |k| k[2]).total_cmp(&b.spinner.map_or(0.0, |k| k[2]))).unwrap_or(first))
+    Some(with_blades.into_iter().filter(encloses).map(|(c, _)| c).max_by(|a, b| a.spinner.map_or(0.0, |k| k[2]).total_cmp(&b.spinner.map_or(0.0, |k| k[2]))).unwrap_or(first))
 }
 
 /// The fraction of `cand`'s blade support (its blades' weights) that `circle`, evaluated at its
@@ -1183,7 +1197,7 @@ pub(crate) fn recognise(
             }
         };
         log::trace!("spinner search at {:?}: {:?}", cand.centre, circles);
-        if let Some(mut sc) = spinner_candidate(p, segs, &usable, &axes, cand, &cands, &circles, h, roll_deg, hints) {
+        if let Some(mut sc) = spinner_candidate(p, segs, &usable, &axes, cand, &cands, &circles, h, roll_deg, hints, expected.spinner_radius) {
             // A circle of the size the tracker's distance expects is the spinner with more
             // certainty than blade lines meeting somewhere near it: at close range under an
             // overcast sky the lines of two blades met at the tower top, 0.15 h below the
@@ -1568,6 +1582,42 @@ mod tests {
         assert!(ratio > 0.0 && ratio < 1.0);
         assert_eq!(circle(0.6 * ratio - 0.05), Some(inner), "a weakly covered outer circle is no silhouette");
         assert_eq!(circle(0.6 * ratio + 0.05), Some(outer), "the silhouette round a ring on the spinner's face");
+    }
+
+    #[test]
+    fn a_near_tie_between_spinner_circles_goes_to_the_expected_size_else_to_the_prediction() {
+        // Off by default (see the parameter); the value it was measured with.
+        let p = DefaultParams { spinner_tie_ratio: 0.8, ..DefaultParams::default() };
+        let hub = [240.0, 120.0];
+        let mut segs: Vec<Segment> = Vec::new();
+        for a in [20.0, 140.0, 260.0] {
+            segs.extend(blade_edges(hub, a, 30.0, 100.0, 6.0, 2.0));
+        }
+        // The spinner and a slightly better covered circle beside it (the nacelle's corner
+        // between two blade roots), both with blades at their rim.
+        let spinner = [hub[0], hub[1], 28.0];
+        let beside = [hub[0] + 10.0, hub[1] + 4.0, 20.0];
+        let circle_with = |p: &DefaultParams, beside_cov: f64, predicted: Option<P2>, expected_r: Option<f64>| {
+            let hints = Hints { roll_rad: Some(0.0), predicted_hub_px: predicted, ..Hints::default() };
+            let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
+                let mut v = vec![[spinner[0], spinner[1], spinner[2], 0.30], [beside[0], beside[1], beside[2], beside_cov]];
+                v.sort_by(|a, b| b[3].total_cmp(&a[3]));
+                Ok(v)
+            };
+            let expected = Expected { spinner_radius: expected_r, ..Expected::default() };
+            recognise(p, &segs, 480.0, 270.0, &hints, &mut circles, None, expected).unwrap().circle
+        };
+        let circle = |beside_cov: f64, predicted: Option<P2>, expected_r: Option<f64>| circle_with(&p, beside_cov, predicted, expected_r);
+        let tie = p.spinner_tie_ratio;
+        let (close_call, clear_win) = (0.30 / tie - 0.02, 0.30 / tie + 0.02);
+        let (at_spinner, at_beside) = ([hub[0] + 2.0, hub[1] - 3.0], [beside[0] - 1.0, beside[1]]);
+        assert_eq!(circle(close_call, None, None), Some(beside), "with no tracker the best covered circle");
+        assert_eq!(circle(close_call, Some(at_spinner), None), Some(spinner), "a near tie goes to the prediction");
+        assert_eq!(circle(close_call, Some(at_beside), Some(27.0)), Some(spinner), "... or to the expected size");
+        assert_eq!(circle(close_call, Some(at_spinner), Some(21.0)), Some(beside), "the size before the prediction");
+        assert_eq!(circle(clear_win, Some(at_spinner), Some(27.0)), Some(beside), "a clearly better rim wins anyway");
+        let off = DefaultParams { spinner_tie_ratio: 1.0, ..p.clone() };
+        assert_eq!(circle_with(&off, close_call, Some(at_spinner), Some(27.0)), Some(beside), "the rule off: the best covered");
     }
 
     #[test]
