@@ -146,6 +146,8 @@ pub struct Approach {
     search_exhausted: bool,
     /// Distance backed off in the current close-range search, m.
     backoff_m: f64,
+    /// Distance backed off in T3 since the distance last read at the target, m.
+    t3_backoff_m: f64,
     /// The newest filtered distance, kept through track losses (where the loss happened).
     last_distance_m: Option<f64>,
     /// The hub was last seen right of centre (search direction); `None` if never seen.
@@ -260,6 +262,7 @@ impl Approach {
             search_turned_deg: 0.0,
             search_exhausted: false,
             backoff_m: 0.0,
+            t3_backoff_m: 0.0,
             last_distance_m: None,
             last_seen_right: None,
             cue_missing_since_ns: None,
@@ -301,6 +304,7 @@ impl Approach {
         self.t3_active = true;
         self.done = false;
         self.at_target_since_ns = None;
+        self.t3_backoff_m = 0.0;
     }
 
     /// One controller step. Never panics; every output is finite and within the configured
@@ -490,6 +494,10 @@ impl Approach {
         self.update_filters(t);
         let yaw = self.heading_yaw(t, vehicle, new_track_state).or(self.yaw_f);
         let dist = self.dist_f;
+        // The distance reads at the target again: a fresh backing-off allowance.
+        if dist.is_some_and(|d| d >= c.target_distance_m - c.distance_tolerance_outer_m) {
+            self.t3_backoff_m = 0.0;
+        }
 
         // Hysteresis: unmet above the outer threshold, met below the inner one, else unchanged.
         if ex.abs() > c.box_x || ey.abs() > c.box_y {
@@ -602,6 +610,10 @@ impl Approach {
             Some(d) if d < c.target_distance_m - c.distance_tolerance_outer_m => t3_law(d).min(0.0),
             _ => 0.0,
         };
+        // Backing away must make the distance grow; after max_backoff_m it has not (see the
+        // parameter), so the reading is wrong: stop backing.
+        let backoff_spent = self.t3_backoff_m >= c.max_backoff_m;
+        let vx_t = if backoff_spent { vx_t.max(0.0) } else { vx_t };
         // Never forward without a valid distance in this very track state.
         let vx_t = if forward_ok { vx_t } else { vx_t.min(0.0) };
 
@@ -609,6 +621,9 @@ impl Approach {
         let a_xy = c.accel_xy_m_s2;
         let vx = slew_forward(self.cmd.vx, vx_t, a_xy, c.brake_x_m_s2, dt);
         let vx = if forward_ok { vx } else { vx.min(0.0) };
+        if vx < 0.0 && vx_t < 0.0 {
+            self.t3_backoff_m += -vx * dt;
+        }
         let vy = slew(self.cmd.vy, vy_t, a_xy, dt);
         if probing {
             self.probe_offset_m += vy * dt;
@@ -651,6 +666,10 @@ impl Approach {
                     "T3: at {d:.2} m, settling {:.1}/{:.1} s",
                     self.at_target_since_ns.map_or(0.0, |s| secs(s, now)),
                     c.done_hold_s
+                ),
+                (Some(d), true) if backoff_spent => format!(
+                    "T3: still {d:.1} m after backing {:.1} m: no further back",
+                    self.t3_backoff_m
                 ),
                 (Some(d), true) => format!("T3: {d:.1} m to hub, target {:.1} m", c.target_distance_m),
                 _ if probing => format!(

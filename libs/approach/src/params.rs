@@ -36,6 +36,14 @@ pub struct ApproachConfig {
     /// closer than `target_distance_m - distance_tolerance_outer_m` the vehicle backs away in
     /// every task. Range (0, target_distance_m); default 3.
     pub min_distance_m: f64,
+    /// Backing away from a hub that reads too close stops after this much backward travel
+    /// (commanded speed × time) without the distance reaching the target: a distance that does
+    /// not grow while the vehicle backs away is no measurement of it. In a simulated flight the
+    /// distance restarted at 3 m with the hub 37 m away, the detector kept finding a circle of
+    /// the size that expects, and the vehicle backed away to 57 m. The allowance restarts when
+    /// the distance reads at the target or a new track starts. Range (0, 1000]; default 6 (a
+    /// reading at `min_distance_m` needs 2 m).
+    pub max_backoff_m: f64,
     /// Relative yaw counted as "in front of the rotor", degrees: T2 is satisfied and Done may
     /// begin below it. Range (0, 45]; default 3.
     pub yaw_tolerance_deg: f64,
@@ -205,6 +213,7 @@ impl Default for ApproachConfig {
             distance_tolerance_m: 0.3,
             distance_tolerance_outer_m: 0.5,
             min_distance_m: 3.0,
+            max_backoff_m: 6.0,
             yaw_tolerance_deg: 3.0,
             yaw_tolerance_outer_deg: 5.0,
             box_x: 0.15,
@@ -272,6 +281,7 @@ impl ApproachConfig {
             self.distance_tolerance_outer_m,
         )?;
         c.open("min_distance_m", self.min_distance_m, 0.0, self.target_distance_m)?;
+        c.open_closed("max_backoff_m", self.max_backoff_m, 0.0, 1000.0)?;
         c.open_closed("yaw_tolerance_deg", self.yaw_tolerance_deg, 0.0, 45.0)?;
         c.open("yaw_tolerance_outer_deg", self.yaw_tolerance_outer_deg, 0.0, 90.0)?;
         c.less("yaw_tolerance_deg", self.yaw_tolerance_deg, "yaw_tolerance_outer_deg", self.yaw_tolerance_outer_deg)?;

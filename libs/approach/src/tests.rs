@@ -427,6 +427,35 @@ fn too_close_backs_away_in_any_task() {
 }
 
 #[test]
+fn backing_away_stops_when_the_distance_does_not_follow() {
+    let c = ApproachConfig::default();
+    // A distance stuck at 3 m (the vehicle backs away, the reading does not grow).
+    let mut rig = Rig::new();
+    let stuck = Some(track(0.0, 0.0, Some(3.0), Some(0.0)));
+    let out = rig.run(stuck, 2.0);
+    assert!(out.vx_m_s < -0.3, "backs away at first: {out:?}");
+    rig.run(stuck, 30.0);
+    let backed: f64 = rig.log.iter().map(|o| -o.vx_m_s.min(0.0) * FRAME_NS as f64 * 1e-9).sum();
+    assert!((backed - c.max_backoff_m).abs() < 0.5, "backed off {backed:.2} m, allowance {} m", c.max_backoff_m);
+    let out = rig.run(stuck, 1.0);
+    assert_eq!(out.vx_m_s, 0.0, "{out:?}");
+    assert!(out.reason.contains("no further back"), "{}", out.reason);
+    // A reading at the target restores the allowance: the next too-close reading backs away.
+    rig.run(Some(track(0.0, 0.0, Some(5.0), Some(0.0))), 6.0);
+    let out = rig.run(stuck, 2.0);
+    assert!(out.vx_m_s < -0.3, "{out:?}");
+
+    // A distance that grows as the vehicle backs away: back to the target, never stopped early.
+    let mut rig = Rig::new();
+    let mut d = 2.0;
+    for _ in 0..(20 * 15) {
+        let out = rig.step(Some(track(0.0, 0.0, Some(d), Some(0.0))));
+        d -= out.vx_m_s * FRAME_NS as f64 * 1e-9;
+    }
+    assert!((d - c.target_distance_m).abs() < c.distance_tolerance_outer_m, "ended at {d:.2} m");
+}
+
+#[test]
 fn forward_speed_slows_down_near_the_target() {
     let c = ApproachConfig::default();
     let mut last = f64::INFINITY;
