@@ -167,6 +167,22 @@ pub fn yaw_from_nacelle(
     Some(Estimate { value: psi.copysign(dx_px), std: var.sqrt() / slope_psi })
 }
 
+/// How far, in standard deviations, the nacelle's end seen `dx_px` beside the hub sticks out
+/// beyond the nacelle's front corners at zero yaw, `f·w / (d + front_m)`: the least offset the
+/// nacelle shows at any yaw (its front face is `front_m` behind the hub, closer than the rear,
+/// so head-on its corners peek out beside the spinner farther than the rear-corner model's
+/// `f·w / (d + rear)`). `dx_std_px` covers the end and the hub; the distance's std adds through
+/// the floor's slope. A reading near the floor says nothing about the yaw, not even its sign.
+pub fn nacelle_excess_sigma(dx_px: f64, dx_std_px: f64, distance: Estimate, f_px: f64, front_m: f64, half_width_m: f64) -> f64 {
+    let depth = distance.value + front_m;
+    if !(dx_px.is_finite() && depth > 0.0 && f_px > 0.0) {
+        return f64::NEG_INFINITY;
+    }
+    let floor = f_px * half_width_m / depth;
+    let sigma = dx_std_px.hypot(floor / depth * distance.std).max(1e-9);
+    (dx_px.abs() - floor) / sigma
+}
+
 /// Apparent image angle (clockwise from up) of a blade at true angle `theta` in a rotor plane
 /// seen at relative yaw `psi`: `atan2(sin θ·cos ψ, cos θ)`.
 pub fn apparent_blade_angle(theta: f64, psi: f64) -> f64 {
@@ -394,6 +410,24 @@ mod tests {
                 apparent_blade_angle(t, psi_deg.to_radians()).to_degrees().rem_euclid(360.0)
             })
             .collect()
+    }
+
+    #[test]
+    fn nacelle_excess_over_the_head_on_front_corners() {
+        // Hand case: f = 1000 px, half width 1.7 m, front face 1.2 m behind the hub, 30 m:
+        // head-on the front corners are 1000·1.7/31.2 = 54.487 px beside the hub.
+        let exact = Estimate { value: 30.0, std: 0.0 };
+        let floor = 1000.0 * 1.7 / 31.2;
+        let e = nacelle_excess_sigma(floor + 10.0, 5.0, exact, 1000.0, 1.2, 1.7);
+        assert!((e - 2.0).abs() < 1e-9, "{e}");
+        // Either side; a reading inside the floor is negative.
+        assert!((nacelle_excess_sigma(-(floor + 10.0), 5.0, exact, 1000.0, 1.2, 1.7) - 2.0).abs() < 1e-9);
+        assert!(nacelle_excess_sigma(floor - 5.0, 5.0, exact, 1000.0, 1.2, 1.7) < 0.0);
+        // A distance std of 3.12 m moves the floor by 54.487·3.12/31.2 = 5.449 px: σ = hypot(5, 5.449).
+        let loose = Estimate { value: 30.0, std: 3.12 };
+        let e = nacelle_excess_sigma(floor + 10.0, 5.0, loose, 1000.0, 1.2, 1.7);
+        assert!((e - 10.0 / 5f64.hypot(floor * 0.1)).abs() < 1e-9, "{e}");
+        assert_eq!(nacelle_excess_sigma(f64::NAN, 5.0, exact, 1000.0, 1.2, 1.7), f64::NEG_INFINITY);
     }
 
     #[test]

@@ -361,6 +361,22 @@ pub struct YawConfig {
     /// of 3–6°, 93 % of 6–9° and all of 9° and more (seed 42 at 32 m: +27 px for −3.4°, the
     /// yaw filter read +5.3°).
     pub nacelle_min_abs_deg: f64,
+    /// Distance from the hub back to the nacelle's front face along the rotor axis, m
+    /// (modelled turbine: 4.2 m overhang − 3 m of nacelle ahead of the tower axis).
+    pub nacelle_front_m: f64,
+    /// A nacelle end is used only when it sticks out at least this many standard deviations
+    /// beyond the front corners' head-on offset `f·nacelle_half_width_m / (d +
+    /// nacelle_front_m)` (the std: `nacelle_std_px` with the hub's `gap_std_spinner_px` or
+    /// `gap_std_lines_px`, and the distance's). Head-on, the front corners peek out beside
+    /// the spinner farther than the rear-corner model expects, and with the hub a few px off
+    /// and the distance 10–15 % long the reading maps to 6–8° of either sign (`fly` seeds 94
+    /// and 103 at 30–34 m: +7° and +8° for −1°, T2 flew them to −8°). 0 = off, the default:
+    /// at 2 it brought those two and 19, 47, 55, 154 in but lost 4, 11, 59, 77, 78, 110, 140
+    /// (`fly` seeds 1–160: 149 against 150, median |final yaw| 1.06° against 1.21°; seeds
+    /// 1–20: 18 against 19), and at 1 it lost 4 of the first 48 seeds that pass either way.
+    /// With the std scaled to 960 px (σ ≈ 8.5 px) 2σ also drops true readings below ~12° at
+    /// 30 m, where the nacelle is the main far-range cue.
+    pub nacelle_min_excess_sigma: f64,
     /// Fewest detected blades for a blade-skew estimate (2 fits exactly, 3 or more also checks
     /// the fit).
     pub min_blades: u32,
@@ -388,6 +404,14 @@ pub struct YawConfig {
     /// (106 against 107 of 120, median |final yaw| 1.36° against 1.28°); the final yaws are
     /// limited by the turbine-heading estimate far out more than by these gaps. Range [1, 3].
     pub gap_max_width_ratio: f64,
+    /// A tower band whose width the spinner disputes (`distance.consistency_chi2`) still gives
+    /// the hub–tower gap when the filtered distance sided with the band (the spinner was the one
+    /// dropped). Off by default: when the two disagree one of them is wrong, and a wrong band is
+    /// most often the blade pointing down merged with the tower, whose axis is not the tower's;
+    /// once the filtered distance has drifted toward such bands it keeps siding with them
+    /// (`fly` seed 119: one band 1.7× too wide, kept at 13.7 m, gave +17.7° ± 3.3° for −1.8°,
+    /// made the yaw valid at +16° and T2 flew the vehicle to −12°).
+    pub gap_from_disputed_tower: bool,
     /// The yaw filter restarts on a persistent jump only while the filtered distance is at
     /// least this, m (0 = at any distance). The relative yaw cannot jump: the ego-motion
     /// prediction carries it through the vehicle's own motion, so a persistent jump means
@@ -419,6 +443,8 @@ impl Default for YawConfig {
             nacelle_min_distance_m: 12.0,
             nacelle_min_std_deg: 2.0,
             nacelle_min_abs_deg: 6.0,
+            nacelle_front_m: 1.2,
+            nacelle_min_excess_sigma: 0.0,
             min_blades: 3,
             blade_fit_chi2: 10.83,
             max_abs_deg: 85.0,
@@ -426,6 +452,7 @@ impl Default for YawConfig {
             gate_chi2: 10.83,
             jump_accept_count: 3,
             gap_max_width_ratio: 1.0,
+            gap_from_disputed_tower: false,
             jump_min_distance_m: 10.0,
             max_std_deg: 10.0,
             stale_after_s: 2.0,
@@ -522,6 +549,8 @@ impl TrackConfig {
         c.open_closed("nacelle_std_px", y.nacelle_std_px, 0.0, MAX_PX)?;
         c.closed("nacelle_min_std_deg", y.nacelle_min_std_deg, 0.0, 90.0)?;
         c.closed("nacelle_min_abs_deg", y.nacelle_min_abs_deg, 0.0, 90.0)?;
+        c.closed("nacelle_front_m", y.nacelle_front_m, 0.0, 50.0)?;
+        c.closed("nacelle_min_excess_sigma", y.nacelle_min_excess_sigma, 0.0, 10.0)?;
         c.closed("nacelle_min_distance_m", y.nacelle_min_distance_m, 0.0, MAX_SIZE_M)?;
         c.open("max_abs_deg", y.max_abs_deg, 0.0, 90.0)?;
         c.open_closed("process_noise_deg2_s", y.process_noise_deg2_s, 0.0, MAX_NOISE)?;

@@ -6,7 +6,7 @@ use nalgebra::Rotation3;
 
 use crate::camera::{camera_pose_at, camera_to_body, dt_s, ego_motion, focal_length_px, CameraPose, Pinhole};
 use crate::estimate::{
-    blade_skew_yaw, distance_from_spinner, distance_from_tower_width, fuse, yaw_from_gap, yaw_from_nacelle, Estimate,
+    blade_skew_yaw, distance_from_spinner, distance_from_tower_width, fuse, nacelle_excess_sigma, yaw_from_gap, yaw_from_nacelle, Estimate,
 };
 use crate::filter::{CvModel, HubFilter, ScalarFilter};
 use crate::params::{ParamError, TrackConfig};
@@ -453,6 +453,7 @@ impl Core {
         let spinner_seen = spinner;
         let mut spinner = spinner;
         let mut tower_rejected = false;
+        let mut tower_disputed = false;
         // The band's width over the width the tower has at the spinner's distance, when the
         // band was dropped for its width (see `gap_max_width_ratio`).
         let mut rejected_width_ratio = None;
@@ -460,6 +461,7 @@ impl Core {
             let tower_hub = td.value - offset;
             let chi2 = (tower_hub - sp.value).powi(2) / (td.std.powi(2) + sp.std.powi(2)).max(1e-12);
             if chi2 > dc.consistency_chi2 {
+                tower_disputed = true;
                 match self.distance.estimate() {
                     Some(prior) if (sp.value - prior.value).abs() < (tower_hub - prior.value).abs() => tower = None,
                     Some(_) => spinner = None,
@@ -487,7 +489,8 @@ impl Core {
             let psi = yaw_prior.map_or(0.0, |e| e.value);
             Some(Estimate { value: d.value + offset * psi.cos(), std: d.std })
         });
-        let band_on_tower = !tower_rejected
+        let band_undisputed = if yc.gap_from_disputed_tower { !tower_rejected } else { !tower_disputed };
+        let band_on_tower = band_undisputed
             || rejected_width_ratio.is_some_and(|r| r <= yc.gap_max_width_ratio && r * yc.gap_max_width_ratio >= 1.0);
         let gap = if det.tower_found && det.detected && band_on_tower {
             // How well the hub end of the gap is known depends on how the hub was found.
@@ -500,6 +503,12 @@ impl Core {
         // `use_nacelle`); a gap contradicting it is that blade.
         let nacelle = if yc.use_nacelle && det.detected && det.nacelle_found {
             self.distance.estimate().or(spinner).filter(|d| d.value >= yc.nacelle_min_distance_m).and_then(|d| {
+                // Only an end well beyond the head-on front corners (see `nacelle_min_excess_sigma`).
+                let hub_std = if det.circle_found { yc.gap_std_spinner_px } else { yc.gap_std_lines_px };
+                let excess = nacelle_excess_sigma(det.nacelle_end_dx_px, yc.nacelle_std_px.hypot(hub_std) * s, d, f, yc.nacelle_front_m, yc.nacelle_half_width_m);
+                if excess < yc.nacelle_min_excess_sigma {
+                    return None;
+                }
                 let e = yaw_from_nacelle(det.nacelle_end_dx_px, yc.nacelle_std_px * s, d, f, yc.nacelle_rear_m, yc.nacelle_half_width_m, max_yaw)?;
                 // Near zero yaw the side is a toss-up (see `nacelle_min_abs_deg`).
                 (e.value.abs() >= yc.nacelle_min_abs_deg.to_radians())
@@ -521,6 +530,15 @@ impl Core {
         // The blade skew gives |ψ|; its sign comes from the gap (and the filtered yaw).
         let sign_ref = fuse(&[gap, nacelle, yaw_prior].into_iter().flatten().collect::<Vec<_>>());
         let blade_signed = blade.zip(sign_ref).map(|(b, r)| Estimate { value: b.value.copysign(r.value), std: b.std });
+        let show = |e: Option<Estimate>| e.map_or("-".to_string(), |e| format!("{:+.1}±{:.1}°", e.value.to_degrees(), e.std.to_degrees()));
+        log::debug!(
+            "yaw, frame {}: gap {} nacelle {} blades {} prior {}",
+            det.stamps.seq,
+            show(gap),
+            show(nacelle),
+            show(blade_signed),
+            show(yaw_prior)
+        );
         if let Some(m) = fuse(&[gap, nacelle, blade_signed].into_iter().flatten().collect::<Vec<_>>()) {
             // No jumps close in (see `jump_min_distance_m`): only gated updates.
             let close = self.distance.estimate().is_some_and(|d| d.value < yc.jump_min_distance_m);

@@ -906,6 +906,8 @@ fn a_small_nacelle_yaw_of_the_wrong_side_is_not_used() {
     let run = |min_abs_deg: f64| {
         let mut c = cfg.clone();
         c.yaw.nacelle_min_abs_deg = min_abs_deg;
+        // This rule alone (the front-corner rule would also drop this reading).
+        c.yaw.nacelle_min_excess_sigma = 0.0;
         track_turbine(&c, 5, 150, d_hub, psi_deg, |_, d, rng| {
             d.blade_count = 0;
             d.nacelle_found = true;
@@ -917,4 +919,58 @@ fn a_small_nacelle_yaw_of_the_wrong_side_is_not_used() {
     assert!(with_rule.yaw_valid && (with_rule.yaw_deg - psi_deg).abs() < 2.0, "rule on: {}", with_rule.yaw_deg);
     let without = run(0.0);
     assert!(without.yaw_deg > 2.0, "rule off, the wrong side owns the yaw: {}", without.yaw_deg);
+}
+
+/// When the tower band and the spinner disagree on the distance, one of them is wrong, and the
+/// band gives no hub–tower gap even when the filtered distance sides with it
+/// (`yaw.gap_from_disputed_tower`, off by default): a band widened by the blade pointing down
+/// in front of the tower has a gap that is not the tower's. Here, after a consistent start,
+/// the band reads 1.2× wide with the gap of +20° and the spinner 1.25× small: the filtered
+/// distance (14 m) is nearer the band's (11 m) than the spinner's (17.5 m).
+#[test]
+fn a_tower_band_the_spinner_disputes_gives_no_gap() {
+    let cfg = pinhole_config();
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let l = cfg.yaw.hub_tower_offset_m;
+    let (d_hub, psi_deg) = (14.0, -2.0);
+    let run = |from_disputed: bool| {
+        let mut c = cfg.clone();
+        c.yaw.gap_from_disputed_tower = from_disputed;
+        track_turbine(&c, 119, 90, d_hub, psi_deg, |k, d, _| {
+            if k >= 40 {
+                d.tower_width_px *= 1.2;
+                d.circle[2] /= 1.25;
+                d.hub_tower_gap_px = -f * l * 20f64.to_radians().sin() / (d_hub + l);
+            }
+        })
+    };
+    let off = run(false);
+    assert!(off.yaw_valid && (off.yaw_deg - psi_deg).abs() < 2.0, "rule on: yaw {} ± {}", off.yaw_deg, off.yaw_std_deg);
+    let on = run(true);
+    assert!(on.yaw_deg - psi_deg > 8.0, "disputed bands give the gap: yaw {} ± {}", on.yaw_deg, on.yaw_std_deg);
+}
+
+/// Head-on, the nacelle's front corners peek out beside the spinner farther than the rear
+/// corner would: with the hub a few px off, the detector's reading maps to +7° for −1°. An end
+/// within `yaw.nacelle_min_excess_sigma` (2 here; off by default) standard deviations of the
+/// front corners' offset is not used (it passes `nacelle_min_abs_deg`); used, it owns the yaw.
+#[test]
+fn a_nacelle_end_near_the_head_on_front_corners_is_not_used() {
+    let cfg = pinhole_config();
+    let (d_hub, psi_deg) = (30.0, -1.0);
+    let dx = nacelle_dx(&cfg, d_hub, 7.0);
+    let run = |min_excess: f64| {
+        let mut c = cfg.clone();
+        c.yaw.nacelle_min_excess_sigma = min_excess;
+        track_turbine(&c, 94, 150, d_hub, psi_deg, |_, d, rng| {
+            d.blade_count = 0;
+            d.nacelle_found = true;
+            d.nacelle_end_dx_px = dx + 0.5 * rng.normal();
+        })
+    };
+    assert!(7.0 > cfg.yaw.nacelle_min_abs_deg);
+    let with_rule = run(2.0);
+    assert!(with_rule.yaw_valid && (with_rule.yaw_deg - psi_deg).abs() < 2.0, "rule on: {} ± {}", with_rule.yaw_deg, with_rule.yaw_std_deg);
+    let without = run(0.0);
+    assert!(without.yaw_deg > 3.0, "rule off, the front corner owns the yaw: {}", without.yaw_deg);
 }
