@@ -299,7 +299,7 @@ impl Core {
 
     /// Handles one hub measurement at `t_ns`; returns whether it was accepted into the track,
     /// and whether it also lay within `gating.estimate_gate_px` of the prediction.
-    fn measure_hub(&mut self, z: [f64; 2], t_ns: u64) -> (bool, bool) {
+    fn measure_hub(&mut self, z: [f64; 2], t_ns: u64) -> (bool, Option<f64>) {
         let r = self.r();
         let gating = self.gating_enabled();
         let g = self.cfg.gating.clone();
@@ -309,13 +309,13 @@ impl Core {
             // No track, or it is lost: any detection starts a new one.
             self.start_track(z, 1);
             self.before_jump = None;
-            return (true, false);
+            return (true, None);
         };
         // Inside a filter's gate: a small Mahalanobis distance or a short innovation.
         let in_gate = |nu_norm: f64, d2: f64| d2 <= g.chi2_threshold || nu_norm <= g.min_gate_px * scale;
         let (nu, _, d2) = track.filter.innovation(z, r);
         let inside = !gating || in_gate(nu.norm(), d2);
-        let close = nu.norm() <= g.estimate_gate_px * scale;
+        let close = (nu.norm() <= g.estimate_gate_px * scale).then_some(nu.norm());
         if inside {
             let robust = gating && g.robust_chi2 > 0.0 && d2 > g.robust_chi2 && nu.norm() > g.min_gate_px * scale;
             track.filter.update(z, if robust { r * d2 / g.robust_chi2 } else { r });
@@ -341,7 +341,7 @@ impl Core {
         if !track.confirmed {
             // Acquiring: an inconsistent detection restarts the tentative track.
             self.start_track(z, 1);
-            return (true, false);
+            return (true, None);
         }
         // A confirmed track rejects the measurement. The track before a recent jump may take
         // it back, if it had more support than the new one has.
@@ -355,7 +355,7 @@ impl Core {
                 self.track = Some(old);
                 self.before_jump = None;
                 self.candidate = None;
-                return (true, false);
+                return (true, None);
             }
         }
         // Count it towards a persistent jump.
@@ -369,11 +369,11 @@ impl Core {
             let old = *track;
             self.start_track(z, count);
             self.before_jump = (self.cfg.gating.jump_fallback_s > 0.0).then_some((old, t_ns));
-            return (true, false);
+            return (true, None);
         }
         log::debug!("track: gated out ({:.1}, {:.1}), Mahalanobis² {d2:.1}", z[0], z[1]);
         self.candidate = Some(Candidate { px: z, count, t_ns });
-        (false, false)
+        (false, None)
     }
 
     fn update(&mut self, det: &Detection, vehicle: Option<&VehicleState>) -> TrackState {
@@ -386,7 +386,7 @@ impl Core {
         let usable = det.detected
             && det.confidence >= self.cfg.filter.min_confidence
             && det.hub_px.iter().all(|v| v.is_finite());
-        let (accepted, close) = if usable { self.measure_hub(det.hub_px, t) } else { (false, false) };
+        let (accepted, innovation_px) = if usable { self.measure_hub(det.hub_px, t) } else { (false, None) };
         if accepted {
             self.last_accept_ns = Some(t);
             self.missed_streak = 0;
@@ -397,8 +397,8 @@ impl Core {
         }
         if self.opts.raw_estimates {
             self.raw = if usable { self.raw_estimates(det) } else { (None, None) };
-        } else if close {
-            self.filtered_estimates(det, t);
+        } else if let Some(nu) = innovation_px {
+            self.filtered_estimates(det, t, nu);
         }
         self.apply_timeouts(t);
         self.last_seq = det.stamps.seq;
@@ -434,7 +434,8 @@ impl Core {
     }
 
     /// Yaw and distance measurements of an accepted detection into their filters.
-    fn filtered_estimates(&mut self, det: &Detection, t: u64) {
+    /// `innovation_px`: the hub's distance from the track's prediction.
+    fn filtered_estimates(&mut self, det: &Detection, t: u64, innovation_px: f64) {
         let s = self.scale();
         let f = self.camera().f_px;
         let (dc, yc) = (self.cfg.distance.clone(), self.cfg.yaw.clone());
@@ -501,7 +502,10 @@ impl Core {
         };
         // The nacelle's far end: a yaw the tower hidden behind a blade cannot fake (see
         // `use_nacelle`); a gap contradicting it is that blade.
-        let nacelle = if yc.use_nacelle && det.detected && det.nacelle_found {
+        // The nacelle end is measured from the detected hub, whose error it takes whole (see
+        // `nacelle_gate_px`).
+        let hub_settled = yc.nacelle_gate_px <= 0.0 || innovation_px <= yc.nacelle_gate_px * s;
+        let nacelle = if yc.use_nacelle && det.detected && det.nacelle_found && hub_settled {
             self.distance.estimate().or(spinner).filter(|d| d.value >= yc.nacelle_min_distance_m).and_then(|d| {
                 // Only an end well beyond the head-on front corners (see `nacelle_min_excess_sigma`).
                 let hub_std = if det.circle_found { yc.gap_std_spinner_px } else { yc.gap_std_lines_px };

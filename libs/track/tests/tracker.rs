@@ -974,3 +974,37 @@ fn a_nacelle_end_near_the_head_on_front_corners_is_not_used() {
     let without = run(0.0);
     assert!(without.yaw_deg > 3.0, "rule off, the front corner owns the yaw: {}", without.yaw_deg);
 }
+
+/// The nacelle end is measured from the detected hub and takes its error whole: with
+/// `yaw.nacelle_gate_px` a reading whose hub is farther from the track's prediction is not
+/// used. Here every fourth detection puts the hub 18 px (at 1920 px; 4.5 px at the reference
+/// width) aside, within the estimate gate, and the nacelle end measured from it reads +8° for a
+/// true −3°.
+#[test]
+fn a_nacelle_end_from_an_unsettled_hub_is_not_used() {
+    let cfg = pinhole_config();
+    let (d_hub, psi_deg) = (30.0, -3.0);
+    let dx_wrong = nacelle_dx(&cfg, d_hub, 8.0);
+    let run = |gate_px: f64| {
+        let mut c = cfg.clone();
+        c.yaw.nacelle_gate_px = gate_px;
+        c.yaw.nacelle_min_abs_deg = 0.0;
+        track_turbine(&c, 7, 150, d_hub, psi_deg, |k, d, rng| {
+            d.blade_count = 0;
+            d.nacelle_found = true;
+            if k % 4 == 3 {
+                d.hub_px[0] += 18.0;
+                d.circle[0] += 18.0;
+                d.nacelle_end_dx_px = dx_wrong + 0.5 * rng.normal();
+            } else {
+                // The hub-tower gaps give the yaw; no nacelle end.
+                d.nacelle_found = false;
+            }
+        })
+    };
+    assert!(18.0 / 4.0 < cfg.gating.estimate_gate_px);
+    let gated = run(3.0);
+    assert!(gated.yaw_valid && (gated.yaw_deg - psi_deg).abs() < 2.0, "gate 3 px: {} ± {}", gated.yaw_deg, gated.yaw_std_deg);
+    let open = run(0.0);
+    assert!(open.yaw_deg - psi_deg > 4.0, "no gate, the unsettled hub's reading owns the yaw: {}", open.yaw_deg);
+}
