@@ -113,6 +113,7 @@ pub(crate) fn partner_axis(g: &Gradients<'_>, edge: &Segment, c: P2, ps: &Partne
             }
         }
         if found.len() < need {
+            log::trace!("partner of {edge:?} on side {side}: found at {} of {} samples", found.len(), usable.len());
             continue;
         }
         let Some((mut alpha, mut beta, mut rms)) = fit_line(&found) else { continue };
@@ -132,6 +133,7 @@ pub(crate) fn partner_axis(g: &Gradients<'_>, edge: &Segment, c: P2, ps: &Partne
         }
         let (w0, w1) = (alpha, alpha + beta * len);
         if rms > ps.max_rms_px || beta.abs() > ps.max_taper || w0.min(w1) < ps.min_width - 1.0 || w0.max(w1) > ps.max_width + 1.0 {
+            log::trace!("partner of {edge:?} on side {side}: widths {w0:.1}..{w1:.1} px, taper {beta:.3}, rms {rms:.2} px at {found:?}: refused");
             continue;
         }
         let better = match best {

@@ -229,6 +229,14 @@ pub struct DefaultParams {
     pub blade_group_tol_deg: f64,
     /// Two blades closer than this in angle are merged / not counted apart, degrees.
     pub blade_min_separation_deg: f64,
+    /// Two "blades" at least this far apart (degrees) are the two halves of one straight line
+    /// through the candidate (a horizon, field border or mast hidden behind it), not blades:
+    /// both are dropped. Two of a rotor's blades, 120° apart on the rotor plane, are seen this
+    /// close to opposite only from nearly edge-on (at 60° yaw at most ~140° apart, at 78° ~160°).
+    /// 180 = off. At 170 `hubtrack eval` synthetic false positives 6.2 → 2.1 % (seed 77: 18.8 →
+    /// 14.6 %: masts whose top passes for a blade, field borders on both sides), real photos
+    /// 39.6 → 41.5 %, synthetic hits 67.2 → 66.2 %; at 165 the photos drop to 34 %.
+    pub blade_max_separation_deg: f64,
     /// Expected angle between blades, degrees.
     pub blade_target_deg: f64,
     /// Tolerance on the blade separation (larger than the thesis's to allow oblique views), degrees.
@@ -317,6 +325,12 @@ pub struct DefaultParams {
     /// Confidence added when at least two blades show both edges (a blade is a band with two
     /// edges on either side of its axis; field borders, wires and horizons give single lines).
     pub conf_paired: f64,
+    /// A blade seen by one edge counts as showing both when its partner edge is found in the
+    /// gradient image (`blade_partner_*`), as the hub refinement does. Off: on the development
+    /// photos it finds 4 more hubs (41.5 → 47.2 % hits: two blades and a tower at 0.70 pass
+    /// 0.75), but synthetic hits drop ~1 point (field strips and roads are bands too) and the
+    /// rendered sequences are mixed (seed 2026 filtered RMS 1.28 → 1.63 %, seed 7 4.22 → 3.87).
+    pub paired_by_partner: bool,
     /// Confidence removed per blade beyond three (clutter: textured ground, lattice masts).
     pub conf_extra_blade_penalty: f64,
     /// `detected` requires at least this confidence.
@@ -493,6 +507,25 @@ pub struct DefaultParams {
     /// 65.5 % (far 67.5 → 70 %); applied to all radii 59.5 %. Candidates with fewer than two
     /// blades (the tracker's predicted hub at close range) are not checked ...
     pub spinner_min_kept_support: f64,
+    /// A circle is a spinner only if the axes of its blades meet within this many radii of its
+    /// centre (plus `spinner_convergence_tol_px`): the blades are mounted on the hub behind
+    /// the spinner, so in any view where the spinner is seen their axes meet inside its
+    /// outline. A round patch of sky or ground between two blade roots, whose rim the blade
+    /// edges draw, is centred beside the point where the blades meet (a photo at 11 % of the
+    /// height off; the nacelle's front corner beside the spinner in rendered flights). Only
+    /// blade axes are used (an edge pair the blade holds an edge of, or the partner edge found:
+    /// one edge is half a chord, about a spinner radius at the root, off), and only circles
+    /// larger than `spinner_kept_support_max_radius_px` are tested (smaller ones have the
+    /// kept-support test; their axes do not place the meeting point to a fraction of the
+    /// radius). 0 = off (the default): at 1 synthetic hits 65.7 → 67.2 % (far 70.5 → 73.5 %),
+    /// false positives 6.2 → 4.2 %, photos 37.7 → 39.6 % (at 0.7 64.8 %: oblique spinners sit
+    /// off the centre of the blade-root plane), but with the two session-18 rules on, `hubtrack
+    /// fly` seeds 161–240 succeeded 71 times against 73 without it (75 for session 17's build):
+    /// removing a wrong circle at 30–40 m let another wrong candidate through at acquisition.
+    pub spinner_max_convergence_radii: f64,
+    /// Slack of `spinner_max_convergence_radii` in working px (a blade seen by one edge whose
+    /// partner is not found puts the meeting point half a chord off).
+    pub spinner_convergence_tol_px: f64,
     /// ... nor circles larger than this, working px (8 px: the modelled spinner from ~30 m
     /// with the wide-angle lens): a spinner a few pixels across is any round blob, a larger
     /// one shows its own outline.
@@ -512,6 +545,13 @@ pub struct DefaultParams {
     pub close_spinner_radius_frac: f64,
     /// Lowest confidence of a close-range spinner (see `close_spinner_radius_frac`).
     pub conf_close_spinner: f64,
+    /// Least rim coverage of a close-range spinner found by the whole-image search (see
+    /// `close_spinner_radius_frac`); `spinner_min_coverage` applies near blade candidates. At
+    /// 5–8 m the spinner's rim runs partly against blade roots and the nacelle of about its
+    /// own shade, where Canny marks no edge. 0.4 → 0.3: synthetic close hits 61 → 71 % (seed
+    /// 2026; seed 77 54.5 → 62 %) at one or two more false positives in 48 negatives (a
+    /// cloud's edge); 0.25 detects 10 of 48 negatives.
+    pub close_spinner_min_coverage: f64,
     /// A long line passing within this of a candidate, fraction of image height, and extending
     /// at least `through_margin_frac` beyond it on both sides, puts the candidate on a tower,
     /// mast or wire rather than at a hub (blades and the tower end at the hub).
@@ -583,6 +623,7 @@ impl Default for DefaultParams {
             support_end_dist_frac: 0.15,
             blade_group_tol_deg: 8.0,
             blade_min_separation_deg: 30.0,
+            blade_max_separation_deg: 170.0,
             blade_target_deg: 120.0,
             blade_sep_tol_deg: 45.0,
             tower_max_tilt_deg: 8.0,
@@ -610,6 +651,7 @@ impl Default for DefaultParams {
             conf_tower: 0.25,
             conf_geometry: 0.15,
             conf_paired: 0.1,
+            paired_by_partner: false,
             conf_extra_blade_penalty: 0.1,
             min_confidence: 0.75,
             tower_width_below_top_frac: 0.05,
@@ -662,12 +704,15 @@ impl Default for DefaultParams {
             spinner_nest_min_coverage_ratio: 0.8,
             spinner_tie_ratio: 1.0,
             spinner_min_kept_support: 0.7,
+            spinner_max_convergence_radii: 0.0,
+            spinner_convergence_tol_px: 2.0,
             spinner_kept_support_max_radius_px: 8.0,
             spinner_max_interior_density: 0.1,
             spinner_reach_radii: 2.0,
             conf_spinner: 0.2,
             close_spinner_radius_frac: 0.12,
             conf_close_spinner: 0.8,
+            close_spinner_min_coverage: 0.3,
             through_dist_frac: 0.01,
             through_margin_frac: 0.05,
             conf_through_penalty: 0.3,
@@ -764,6 +809,7 @@ impl DefaultParams {
         c.closed("support_end_dist_frac", self.support_end_dist_frac, 0.0, 2.0)?;
         c.closed("blade_group_tol_deg", self.blade_group_tol_deg, 0.0, 60.0)?;
         c.closed("blade_min_separation_deg", self.blade_min_separation_deg, 0.0, 120.0)?;
+        c.closed("blade_max_separation_deg", self.blade_max_separation_deg, 120.0, 180.0)?;
         c.closed("blade_target_deg", self.blade_target_deg, 0.0, 180.0)?;
         c.closed("blade_sep_tol_deg", self.blade_sep_tol_deg, 0.0, 180.0)?;
         c.closed("tower_max_tilt_deg", self.tower_max_tilt_deg, 0.0, 45.0)?;
@@ -846,6 +892,9 @@ impl DefaultParams {
         c.closed("spinner_hint_min_coverage", self.spinner_hint_min_coverage, 0.0, 1.0)?;
         c.closed("spinner_nest_min_coverage_ratio", self.spinner_nest_min_coverage_ratio, 0.0, 10.0)?;
         c.closed("spinner_tie_ratio", self.spinner_tie_ratio, 0.0, 1.0)?;
+        c.closed("close_spinner_min_coverage", self.close_spinner_min_coverage, 0.0, 1.0)?;
+        c.closed("spinner_max_convergence_radii", self.spinner_max_convergence_radii, 0.0, 100.0)?;
+        c.closed("spinner_convergence_tol_px", self.spinner_convergence_tol_px, 0.0, 100.0)?;
         c.closed("spinner_min_kept_support", self.spinner_min_kept_support, 0.0, 1.0)?;
         c.closed("spinner_kept_support_max_radius_px", self.spinner_kept_support_max_radius_px, 0.0, 1000.0)?;
         c.closed("spinner_max_interior_density", self.spinner_max_interior_density, 0.0, 1.0)?;

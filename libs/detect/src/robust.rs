@@ -233,7 +233,7 @@ fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected
         // Large circles need no fine centre cells; the rim fit refines the centre.
         cell: 2.0 * p.spinner_cell_px,
         radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
-        min_coverage: p.spinner_min_coverage,
+        min_coverage: p.close_spinner_min_coverage,
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: SPINNER_PEAKS,
     };
@@ -750,6 +750,7 @@ fn evaluate(
     roll_deg: f64,
     hints: &Hints,
     spinner: Option<[f64; 3]>,
+    partner: &dyn Fn(&Segment, P2) -> Option<Segment>,
 ) -> Candidate {
     let spinner_r = spinner.map_or(0.0, |k| k[2]);
     let mut lines = support_lines(p, segs, usable, c, h, spinner_r);
@@ -798,6 +799,21 @@ fn evaluate(
             rejected.extend(blades.remove(k).lines);
         }
     }
+    // Two blades nearly opposite are one straight line through the candidate; when one of them
+    // points down the tower, that one is the tower (a blade pointing up stands above it).
+    let points_down = |b: &Blade| geometry::ang_dist(b.angle_deg, down) <= p.tower_max_tilt_deg;
+    let opposite: Vec<usize> = (0..blades.len())
+        .filter(|&i| {
+            (0..blades.len()).any(|j| {
+                j != i
+                    && geometry::ang_dist(blades[i].angle_deg, blades[j].angle_deg) >= p.blade_max_separation_deg
+                    && (points_down(&blades[i]) || !points_down(&blades[j]))
+            })
+        })
+        .collect();
+    for &k in opposite.iter().rev() {
+        rejected.extend(blades.remove(k).lines);
+    }
     // Weak blades (total length below one minimum Hough segment) are noise.
     let min_weight = p.candidate_min_length_frac * h;
     blades.retain(|b| {
@@ -821,7 +837,8 @@ fn evaluate(
         if rotor_geometry_ok(p, &blades) {
             conf += p.conf_geometry;
         }
-        if blades.iter().filter(|b| b.axis.is_some() || is_paired(segs, b, c)).count() >= 2 {
+        let band = |b: &Blade| b.axis.is_some() || is_paired(segs, b, c) || (p.paired_by_partner && one_sided_axis(segs, b, c, partner).is_some());
+        if blades.iter().filter(|b| band(b)).count() >= 2 {
             conf += p.conf_paired;
         }
         conf -= p.conf_extra_blade_penalty * nb.saturating_sub(ROTOR_BLADES) as f64;
@@ -1031,11 +1048,12 @@ fn spinner_candidate(
     roll_deg: f64,
     hints: &Hints,
     expected_r: Option<f64>,
+    partner: &dyn Fn(&Segment, P2) -> Option<Segment>,
 ) -> Option<Candidate> {
     let with_blades = circles
         .iter()
         .filter(|k| geometry::dist([k[0], k[1]], cand.centre) <= p.spinner_max_offset_frac * h)
-        .map(|k| (evaluate(p, segs, usable, axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]])), k[3]))
+        .map(|k| (evaluate(p, segs, usable, axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]]), partner), k[3]))
         .inspect(|(c, cov)| log::trace!("circle {:?} (rim {cov:.2}): conf {:.2} blades {:?}", c.spinner, c.confidence, c.blades.iter().map(|b| (b.angle_deg.round(), b.weight.round())).collect::<Vec<_>>()))
         .filter(|(c, _)| c.blades.len() >= 2)
         .filter(|(c, _)| {
@@ -1054,6 +1072,26 @@ fn spinner_candidate(
                 log::trace!("circle {:?} keeps {:.0} % of the blade support: not this rotor's spinner", c.spinner, 100.0 * kept);
             }
             kept >= p.spinner_min_kept_support
+        })
+        .filter(|(c, _)| {
+            // Small circles have the kept-support test above; their blade axes, a pixel or two
+            // off each, do not place the meeting point to a fraction of their radius.
+            let Some(k) = c.spinner.filter(|k| p.spinner_max_convergence_radii > 0.0 && k[2] > p.spinner_kept_support_max_radius_px) else { return true };
+            let centre = [k[0], k[1]];
+            // Axes only: a blade seen by one edge is half a chord off its axis, about a spinner
+            // radius at the root, which is no test of a circle of that size.
+            // The axis of a band one of whose edges the blade holds, whether or not it points at
+            // this circle (that is the test).
+            let band_axis = |b: &Blade| axes.iter().find(|a| a.edges.iter().any(|e| b.lines.contains(e))).map(|a| a.axis);
+            let known: Vec<(Segment, f64)> =
+                c.blades.iter().take(ROTOR_BLADES).filter_map(|b| b.axis.or_else(|| band_axis(b)).or_else(|| one_sided_axis(segs, b, centre, partner)).map(|a| (a, 1.0))).collect();
+            let Some(meet) = (known.len() >= 2).then(|| geometry::lines_nearest_point(&known)).flatten() else { return true };
+            let off = geometry::dist(meet, centre);
+            let ok = off <= p.spinner_max_convergence_radii * k[2] + p.spinner_convergence_tol_px;
+            if !ok {
+                log::trace!("circle {k:?}: its blades meet {off:.1} px from its centre ({:.2} radii): not a spinner", off / k[2]);
+            }
+            ok
         });
     let mut with_blades: Vec<(Candidate, f64)> = with_blades.collect();
     // Circles are best covered first. A near tie goes to the size the tracker's distance
@@ -1150,12 +1188,13 @@ pub(crate) fn recognise(
         centres.push(pred);
     }
     for c in centres {
-        let mut cand = evaluate(p, segs, &usable, &axes, c, h, roll_deg, hints, None);
+        let mut cand = evaluate(p, segs, &usable, &axes, c, h, roll_deg, hints, None, &partner);
         if cand.blades.len() >= 2 {
             if let Some(r) = refine(segs, &cand.blades, c, &partner) {
                 if geometry::dist(r, c) <= p.cluster_radius_frac * h * 2.0 {
                     // Re-evaluate at the refined point so blades and tower match the output.
-                    let again = evaluate(p, segs, &usable, &axes, r, h, roll_deg, hints, None);
+                    let again = evaluate(p, segs, &usable, &axes, r, h, roll_deg, hints, None, &partner);
+                    log::trace!("candidate {c:?} refined to {r:?}: conf {:.2} -> {:.2}", cand.confidence, again.confidence);
                     if again.score >= cand.score {
                         cand = again;
                     }
@@ -1197,7 +1236,7 @@ pub(crate) fn recognise(
             }
         };
         log::trace!("spinner search at {:?}: {:?}", cand.centre, circles);
-        if let Some(mut sc) = spinner_candidate(p, segs, &usable, &axes, cand, &cands, &circles, h, roll_deg, hints, expected.spinner_radius) {
+        if let Some(mut sc) = spinner_candidate(p, segs, &usable, &axes, cand, &cands, &circles, h, roll_deg, hints, expected.spinner_radius, &partner) {
             // A circle of the size the tracker's distance expects is the spinner with more
             // certainty than blade lines meeting somewhere near it: at close range under an
             // overcast sky the lines of two blades met at the tower top, 0.15 h below the
@@ -1225,7 +1264,7 @@ pub(crate) fn recognise(
     if hints.predicted_hub_px.is_none() && best.as_ref().is_none_or(|b| b.confidence < p.min_confidence) {
         let min_r = p.close_spinner_radius_frac * h;
         for k in search(CircleQuery::Close)?.into_iter().filter(|k| k[2] >= min_r) {
-            let cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]]));
+            let cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]]), &partner);
             log::trace!("close spinner {k:?}: conf {:.2} blades {}", cand.confidence, cand.blades.len());
             if cand.blades.len() >= 2 && best.as_ref().is_none_or(|b| better(&cand, b)) {
                 best = Some(cand);
@@ -1412,6 +1451,38 @@ mod tests {
     }
 
     #[test]
+    fn two_blades_nearly_opposite_are_one_line_through_the_candidate() {
+        let c = [200.0, 120.0];
+        // A mast: its top above the candidate, two tower-like edges below, and a field border
+        // crossing behind it in two pieces 175° apart (not collinear enough to be caught as a
+        // line continuing behind the candidate).
+        let mut segs = vec![Segment::new([197.0, 269.0], [198.0, 128.0]), Segment::new([203.0, 269.0], [202.0, 128.0]), ray(c, 0.0, 6.0, 80.0)];
+        segs.push(ray(c, 70.0, 6.0, 150.0));
+        segs.push(ray(c, 245.0, 6.0, 150.0));
+        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+        let off = DefaultParams { blade_max_separation_deg: 180.0, ..DefaultParams::default() };
+        let f = recognise(&off, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
+        assert!(f.detected, "without the rule the three lines pass for a rotor: {f:?}");
+        let on = DefaultParams { blade_max_separation_deg: 170.0, ..off.clone() };
+        let f = recognise(&on, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
+        assert!(!f.detected, "{f:?}");
+        // A rotor seen at 60° yaw (blades 0°, 120°, 240° on the rotor plane, horizontal
+        // components halved): 139° apart at most, all kept.
+        let seen = |a: f64| {
+            let d = dir_from_up_cw(a);
+            (d[0] * 0.5).atan2(-d[1]).to_degrees().rem_euclid(360.0)
+        };
+        let mut segs = rotor(c, 0.0);
+        segs.truncate(2);
+        for a in [0.0, 120.0, 240.0] {
+            segs.push(ray(c, seen(a) - 3.0, 6.0, 70.0));
+            segs.push(ray(c, seen(a) + 3.0, 6.0, 70.0));
+        }
+        let f = recognise(&on, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
+        assert!(f.detected && geometry::dist(f.hub, c) < 3.0 && f.blade_angles.len() == 3, "{f:?}");
+    }
+
+    #[test]
     fn parallel_lines_alone_are_no_turbine() {
         let p = DefaultParams::default();
         // Power-line like: several long near-parallel sagging wires.
@@ -1556,6 +1627,33 @@ mod tests {
         assert!(base + p.spinner_size_match_bonus <= 1.0 + 1e-9, "room for the bonus: {base}");
         assert!((matched - base - p.spinner_size_match_bonus).abs() < 1e-9, "{matched} vs {base}");
         assert!((other - base).abs() < 1e-9, "{other} vs {base}");
+    }
+
+    #[test]
+    fn a_circle_beside_the_point_where_the_blade_axes_meet_is_no_spinner() {
+        let hub = [240.0, 120.0];
+        let r = 20.0;
+        // Three blades seen by both edges (their axes meet at the hub), starting at the rim.
+        let mut segs: Vec<Segment> = Vec::new();
+        for a in [0.0, 120.0, 240.0] {
+            segs.extend(blade_edges(hub, a, r, 100.0, 7.0, 3.0));
+        }
+        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+        // A round patch 1.2 radii beside the hub with a better covered rim than the spinner's
+        // (the nacelle's front corner between two blade roots in a rendered flight).
+        let beside = [hub[0] + 1.2 * r * 0.6, hub[1] + 1.2 * r * 0.8, r, 0.9];
+        let spinner = [hub[0], hub[1], r, 0.6];
+        let run = |p: &DefaultParams| {
+            let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(vec![beside, spinner]) };
+            recognise(p, &segs, 480.0, 270.0, &hints, &mut circles, None, Expected::default()).unwrap()
+        };
+        let off = DefaultParams { spinner_max_convergence_radii: 0.0, ..DefaultParams::default() };
+        let f = run(&off);
+        assert!(f.circle.is_some_and(|k| geometry::dist([k[0], k[1]], [beside[0], beside[1]]) < 1e-9), "without the rule the better rim wins: {f:?}");
+        let on = DefaultParams { spinner_max_convergence_radii: 1.0, ..off.clone() };
+        let f = run(&on);
+        assert!(f.detected && geometry::dist(f.hub, hub) < 1.0, "{f:?}");
+        assert!(f.circle.is_some_and(|k| geometry::dist([k[0], k[1]], hub) < 1e-9), "{f:?}");
     }
 
     #[test]

@@ -3,6 +3,7 @@
 //! filter side by side.
 
 use crate::score::point_segment_distance;
+use anyhow::Context;
 use hubtrack_detect::{Detector, Hints, ImageView};
 use hubtrack_render::dataset::{flight, FLIGHT_FPS};
 use hubtrack_render::{Camera, Renderer};
@@ -185,9 +186,10 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, outputs: Outpu
             let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &pixels };
             let capture_ns = (i as f64 / FLIGHT_FPS * 1e9).round() as u64;
             let hints = last.as_ref().map_or_else(Hints::default, |t| Hints::from_track(t, cam.width, cam.height, capture_ns));
-            let output = detector.detect(&view, &Hints { roll_rad: Some(fr.pose.roll_deg.to_radians()), ..hints })?;
+            let hints = Hints { roll_rad: Some(fr.pose.roll_deg.to_radians()), ..hints };
+            let output = detector.detect(&view, &hints)?;
             if outputs.misses.is_some() && !fr.dropout {
-                write_sequence_miss(outputs.misses, &format!("f{f}_{i:03}"), &pixels, &cam, &truth, &output)?;
+                write_sequence_miss(outputs.misses, &format!("f{f}_{i:03}"), &pixels, &cam, &truth, &output, &hints)?;
             }
             let mut det: Detection = output.detection;
             det.stamps.seq = i as u64;
@@ -265,6 +267,7 @@ fn write_sequence_miss(
     cam: &Camera,
     truth: &hubtrack_render::Truth,
     output: &hubtrack_detect::Output,
+    hints: &Hints,
 ) -> anyhow::Result<()> {
     use opencv::core::{Mat, MatTraitConst};
     let t = crate::score::Truth::of_rendered(truth);
@@ -279,6 +282,19 @@ fn write_sequence_miss(
         let input = dir.unwrap_or(std::path::Path::new(".")).join(format!("{name}_input.png"));
         let path = input.to_str().ok_or_else(|| anyhow::anyhow!("non-UTF-8 path {}", input.display()))?;
         anyhow::ensure!(opencv::imgcodecs::imwrite_def(path, &mat)?, "cannot write {path}");
+        // ... with the hints the tracker gave the detector, as `hubtrack detect` arguments.
+        let mut args = Vec::new();
+        if let Some([x, y]) = hints.predicted_hub_px {
+            args.push(format!("--hint-hub={x:.1},{y:.1}"));
+        }
+        if let Some(d) = hints.hub_distance_m {
+            args.push(format!("--hint-distance={d:.2}"));
+        }
+        if let Some(r) = hints.roll_rad {
+            args.push(format!("--hint-roll={:.2}", r.to_degrees()));
+        }
+        let hints_path = input.with_extension("hints");
+        std::fs::write(&hints_path, args.join(" ") + "\n").with_context(|| format!("writing {}", hints_path.display()))?;
     }
     Ok(())
 }
