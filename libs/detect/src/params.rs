@@ -327,9 +327,12 @@ pub struct DefaultParams {
     pub conf_paired: f64,
     /// A blade seen by one edge counts as showing both when its partner edge is found in the
     /// gradient image (`blade_partner_*`), as the hub refinement does. Off: on the development
-    /// photos it finds 4 more hubs (41.5 → 47.2 % hits: two blades and a tower at 0.70 pass
-    /// 0.75), but synthetic hits drop ~1 point (field strips and roads are bands too) and the
-    /// rendered sequences are mixed (seed 2026 filtered RMS 1.28 → 1.63 %, seed 7 4.22 → 3.87).
+    /// photos it finds 4 more hubs (41.5 → 49.1 % hits: two blades and a tower at 0.70 pass
+    /// 0.75) and `hubtrack fly` seeds 161–240 are unchanged (74 of 80 against 73), but
+    /// synthetic hits drop ~1 point (field strips and roads are bands too) and the rendered
+    /// sequences lock onto clutter: `eval --sequence` seeds 2026 / 7 / 100 / 500 filtered RMS
+    /// 1.16 / 3.06 / 1.66 / 1.79 → 1.16 / 5.74 / 2.32 / 2.01 %, false locks 0 / 2 / 1 / 0 →
+    /// 0 / 3 / 1 / 1.
     pub paired_by_partner: bool,
     /// Confidence removed per blade beyond three (clutter: textured ground, lattice masts).
     pub conf_extra_blade_penalty: f64,
