@@ -19,6 +19,7 @@ mod blade;
 mod hough;
 mod image;
 mod nacelle;
+pub mod ranker;
 mod robust;
 mod spinner;
 mod thesis;
@@ -142,6 +143,8 @@ pub struct Output {
     pub yaw_deg: Option<f64>,
     /// Lines and search area for display.
     pub overlay: Overlay,
+    /// Every hub candidate the default pipeline evaluated (for evaluation and ranker training).
+    pub candidates: Vec<Considered>,
 }
 
 /// Errors of the detector.
@@ -194,6 +197,19 @@ pub(crate) struct Found {
     pub edges_us: f64,
     pub hough_us: f64,
     pub geometry_us: f64,
+    /// Every hub candidate evaluated (default mode).
+    pub candidates: Vec<Considered>,
+}
+
+/// A hub candidate the default pipeline evaluated, whether chosen or not.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Considered {
+    /// Candidate hub (working px inside the pipeline, full-resolution px in an [`Output`]).
+    pub hub: P2,
+    /// Its rule confidence, capped at 1.
+    pub confidence: f64,
+    /// What the learned ranker sees of it.
+    pub features: ranker::Features,
 }
 
 /// Microseconds since `t`.
@@ -334,7 +350,8 @@ impl Detector {
             .map(|(s, kind)| OverlayLine { a: geometry::scale_point(s.a, k), b: geometry::scale_point(s.b, k), kind: *kind })
             .collect();
         let search_circle = f.search_circle.map(|c| [c[0] * k, c[1] * k, c[2] * k]);
-        Output { detection: d, distance_m, yaw_deg, overlay: Overlay { lines, search_circle } }
+        let candidates = f.candidates.iter().map(|c| Considered { hub: geometry::scale_point(c.hub, k), ..c.clone() }).collect();
+        Output { detection: d, distance_m, yaw_deg, overlay: Overlay { lines, search_circle }, candidates }
     }
 }
 

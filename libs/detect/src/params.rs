@@ -341,7 +341,7 @@ pub struct DefaultParams {
     pub paired_by_partner: bool,
     /// Confidence removed per blade beyond three (clutter: textured ground, lattice masts).
     pub conf_extra_blade_penalty: f64,
-    /// `detected` requires at least this confidence.
+    /// With `ranker.ranking = "rules"`: `detected` requires at least this confidence.
     pub min_confidence: f64,
     /// The tower width is measured this far below the tower top, fraction of image height.
     pub tower_width_below_top_frac: f64,
@@ -598,6 +598,193 @@ pub struct DefaultParams {
     pub blade_partner_max_rms_px: f64,
     /// ... whose slope (band width change per px along the blade) is at most this.
     pub blade_partner_max_taper: f64,
+    /// How the hub is picked among the candidates.
+    pub ranker: RankerParams,
+}
+
+/// How the default pipeline picks the hub among its candidates.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Ranking {
+    /// The hand-set confidence sums (`conf_*`, `prediction_bonus`, ...): the best candidate by
+    /// confidence, detected at `min_confidence`.
+    Rules,
+    /// The learned model (`ranker.rs`): the best candidate by `weights · features`, detected at
+    /// `min_score`; the reported confidence is the logistic of the score.
+    #[default]
+    Learned,
+}
+
+/// The learned candidate ranker (`ranker.rs`, trained by `scripts/train-ranker.sh` on the
+/// project's renderer, never on `../shared/data`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RankerParams {
+    /// `"learned"`: the candidate with the highest score `weights · features` wins and is the
+    /// hub when the score reaches `min_score`; the reported confidence is `1 / (1 + e^-score)`.
+    /// `"rules"`: the highest `conf_*` sum wins, detected at `min_confidence` (the rules'
+    /// confidence is also one of the learned features, `rule_score`). Session 19, `hubtrack
+    /// eval` learned / rules: real photos 39.6 / 37.7 % hits, synthetic 76.7 / 69.5 % with
+    /// 4.2 / 6.2 % false positives (seed 77: 73.7 / 66.0 % with 2.1 / 22.9 %).
+    pub ranking: Ranking,
+    /// With `"learned"`: the best candidate is the hub when its score (log-odds against "no
+    /// hub in this frame") reaches this. Held-out synthetic seeds 2026 / 77 / 500 (`scripts/
+    /// train-ranker.sh`): −1 (a probability of 0.27) 77.5 / 73.3 / 71.0 % hits with 4.2 / 2.1 /
+    /// 2.1 % false positives on 48 negatives each; −0.5 76.8 / 72.7 / 68.7 % with 2.1 / 2.1 / 0;
+    /// 0 74.7 / 70.3 / 66.0 % with none.
+    pub min_score: f64,
+    /// Log-odds per unit of each feature (`hubtrack train-ranker` prints a fitted section).
+    pub weights: FeatureWeights,
+}
+
+/// Weight of each candidate feature in the learned score (log-odds per unit of the feature).
+/// Lengths are fractions of the working image height. Fitted by `scripts/train-ranker.sh`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FeatureWeights {
+    /// Constant term.
+    pub bias: f64,
+    /// 1 when exactly two blade groups remain.
+    pub two_blades: f64,
+    /// 1 when exactly three remain.
+    pub three_blades: f64,
+    /// Blade groups beyond three (0..3).
+    pub extra_blades: f64,
+    /// 1 when tower lines run down from below the candidate.
+    pub tower: f64,
+    /// Number of such tower lines / 4 (at most 1).
+    pub tower_lines: f64,
+    /// 1 when two blades ~120° apart leave the third hidden straight down the tower.
+    pub hidden_blade_down: f64,
+    /// 1 when the strongest blades' separations fit a three-bladed rotor (`blade_sep_tol_deg`).
+    pub geometry_ok: f64,
+    /// Blades seen by both edges (or with a band axis) / 3 (at most 1).
+    pub paired: f64,
+    /// 1 when a spinner circle is centred on the candidate.
+    pub spinner: f64,
+    /// The spinner's radius.
+    pub spinner_radius: f64,
+    /// 1 when that radius is the one the tracker's distance expects (`spinner_size_match_tol`).
+    pub spinner_size_match: f64,
+    /// 1 when a long line passes through the candidate (tower, mast, wire).
+    pub passes_through: f64,
+    /// 1 when the candidate lies within `prediction_radius_frac` of the tracker's prediction.
+    pub near_prediction: f64,
+    /// Summed length of the (up to three) strongest blades.
+    pub support: f64,
+    /// Length of the weakest of them (0 with fewer than two).
+    pub weakest_blade: f64,
+    /// Length of the strongest.
+    pub strongest_blade: f64,
+    /// Mean distance of the blades' pairwise separations from 120° (or 240°), in units of 60°
+    /// (1 with fewer than two blades).
+    pub separation_error: f64,
+    /// Lines dropped as tower, opposite or weak blades / 10 (at most 1).
+    pub rejected_lines: f64,
+    /// The rules' confidence before capping (`conf_*` sums).
+    pub rule_score: f64,
+    /// Usable lines passing within the support reach that neither support the candidate nor
+    /// belong to its tower / 10 (at most 1): texture around a false candidate.
+    pub clutter: f64,
+    /// Blades whose two edges pair into a band with an axis / 3 (at most 1).
+    pub banded_blades: f64,
+    /// How far the tower's top lies below the candidate (±0.5; 0 without a tower).
+    pub tower_top_below: f64,
+    /// Usable lines in the whole image / 200 (at most 1): how textured the frame is.
+    pub image_lines: f64,
+    /// Rim coverage of the spinner circle (0..1; 0 without one).
+    pub spinner_coverage: f64,
+    /// Distance from the spinner circle's centre to where its blades' axes meet, in radii (at
+    /// most 2; 0 without a circle above `spinner_kept_support_max_radius_px` or without two
+    /// known axes): a round patch beside the hub has a rim drawn by blade edges but is centred
+    /// beside the point the blades radiate from.
+    pub spinner_axes_offset: f64,
+}
+
+impl FeatureWeights {
+    /// The weights in the order of [`crate::ranker::FEATURE_NAMES`].
+    pub fn to_array(&self) -> [f64; crate::ranker::FEATURES] {
+        [
+            self.bias,
+            self.two_blades,
+            self.three_blades,
+            self.extra_blades,
+            self.tower,
+            self.tower_lines,
+            self.hidden_blade_down,
+            self.geometry_ok,
+            self.paired,
+            self.spinner,
+            self.spinner_radius,
+            self.spinner_size_match,
+            self.passes_through,
+            self.near_prediction,
+            self.support,
+            self.weakest_blade,
+            self.strongest_blade,
+            self.separation_error,
+            self.rejected_lines,
+            self.rule_score,
+            self.clutter,
+            self.banded_blades,
+            self.tower_top_below,
+            self.image_lines,
+            self.spinner_coverage,
+            self.spinner_axes_offset,
+        ]
+    }
+}
+
+impl Default for RankerParams {
+    fn default() -> Self {
+        RankerParams { ranking: Ranking::Learned, min_score: -1.0, weights: FeatureWeights::default() }
+    }
+}
+
+impl Default for FeatureWeights {
+    /// Fitted by `scripts/train-ranker.sh` (see the README, "Learned ranking").
+    fn default() -> Self {
+        FeatureWeights {
+            bias: -1.182,
+            two_blades: -1.607,
+            three_blades: -0.200,
+            extra_blades: 0.093,
+            tower: 0.046,
+            tower_lines: 0.411,
+            hidden_blade_down: 0.538,
+            geometry_ok: 0.193,
+            paired: 2.808,
+            spinner: 0.953,
+            spinner_radius: 0.434,
+            spinner_size_match: 1.478,
+            passes_through: -0.331,
+            near_prediction: 0.508,
+            support: 0.587,
+            weakest_blade: 0.728,
+            strongest_blade: 0.022,
+            separation_error: -2.202,
+            rejected_lines: 1.117,
+            rule_score: 0.211,
+            clutter: -2.423,
+            banded_blades: -1.907,
+            tower_top_below: 0.322,
+            image_lines: -0.091,
+            spinner_coverage: 4.038,
+            spinner_axes_offset: -1.197,
+        }
+    }
+}
+
+impl RankerParams {
+    fn validate(&self) -> Result<(), ParamError> {
+        let c = Check::new("detect.default.ranker");
+        c.closed("min_score", self.min_score, -50.0, 50.0)?;
+        let w = Check::new("detect.default.ranker.weights");
+        for (name, v) in crate::ranker::FEATURE_NAMES.iter().zip(self.weights.to_array()) {
+            w.closed(name, v, -100.0, 100.0)?;
+        }
+        Ok(())
+    }
 }
 
 impl Default for DefaultParams {
@@ -728,6 +915,7 @@ impl Default for DefaultParams {
             occluded_offset_frac: 0.008,
             occluded_bend_deg: 3.0,
             occluded_bent_max_tilt_deg: 20.0,
+            ranker: RankerParams::default(),
         }
     }
 }
@@ -916,7 +1104,8 @@ impl DefaultParams {
         c.closed("occluded_angle_deg", self.occluded_angle_deg, 0.0, 45.0)?;
         c.closed("occluded_offset_frac", self.occluded_offset_frac, 0.0, 1.0)?;
         c.closed("occluded_bend_deg", self.occluded_bend_deg, 0.0, 45.0)?;
-        c.closed("occluded_bent_max_tilt_deg", self.occluded_bent_max_tilt_deg, 0.0, 90.0)
+        c.closed("occluded_bent_max_tilt_deg", self.occluded_bent_max_tilt_deg, 0.0, 90.0)?;
+        self.ranker.validate()
     }
 }
 
@@ -945,5 +1134,23 @@ mod tests {
         c.default.min_confidence = 2.0;
         assert_eq!(c.validate().unwrap_err().key, "detect.default.min_confidence");
         assert!(serde_json::from_str::<DetectConfig>(r#"{"thesis":{"nope":1}}"#).is_err());
+        let mut c = DetectConfig::default();
+        c.default.ranker.weights.paired = f64::NAN;
+        assert_eq!(c.validate().unwrap_err().key, "detect.default.ranker.weights.paired");
+    }
+
+    #[test]
+    fn ranker_weights_are_named_like_the_features() {
+        let v = serde_json::to_value(FeatureWeights::default()).unwrap();
+        let keys: Vec<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+        let mut names = crate::ranker::FEATURE_NAMES.to_vec();
+        names.sort_unstable();
+        let mut keys = keys;
+        keys.sort_unstable();
+        assert_eq!(keys, names);
+        let w = FeatureWeights::default();
+        for (name, x) in crate::ranker::FEATURE_NAMES.iter().zip(w.to_array()) {
+            assert_eq!(v[*name].as_f64().unwrap(), x, "{name}");
+        }
     }
 }

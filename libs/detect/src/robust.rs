@@ -41,12 +41,12 @@ use opencv::imgproc;
 use opencv::prelude::*;
 
 use crate::geometry::{self, Segment, P2};
-use crate::params::DefaultParams;
+use crate::params::{DefaultParams, Ranking};
 use crate::spinner::{find_circles, CircleSearch, EdgePoint};
 use crate::blade::{partner_axis, Gradients, PartnerSearch};
 use crate::tower::{fit_tower, fit_tower_one_edge, scan_tower_edges, GradPlane};
 use crate::hough::HoughSettings;
-use crate::{us_since, DetectError, Found, Hints, LineKind, Scratch};
+use crate::{us_since, Considered, DetectError, Found, Hints, LineKind, Scratch};
 
 /// Number of bins of the gradient-magnitude histogram: the Sobel 3×3 L1 magnitude of 8-bit
 /// images is at most 4·255·2 = 2040.
@@ -598,6 +598,8 @@ struct Candidate {
     score: f64,
     support: f64,
     spinner: Option<[f64; 3]>,
+    /// What the learned ranker sees ([`crate::ranker`]).
+    features: crate::ranker::Features,
 }
 
 /// Lines supporting a hub at `c`: near end within reach, line pointing at `c`.
@@ -624,6 +626,14 @@ fn support_lines(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h:
             s.line_distance(c) <= (tol0 + tan * d_end).max(spinner_r) && !continues_beyond(p, segs, usable, i, c, h)
         })
         .collect()
+}
+
+/// Usable lines passing within the support reach of `c` that are neither among its supporting
+/// `lines` nor its `tower`: texture, wires, field borders around a false candidate.
+#[allow(clippy::too_many_arguments)]
+fn clutter_lines(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64, spinner_r: f64, lines: &[usize], tower: &[usize]) -> usize {
+    let reach = (p.support_end_dist_frac * h).max(p.spinner_reach_radii * spinner_r);
+    (0..segs.len()).filter(|i| usable[*i] && !lines.contains(i) && !tower.contains(i) && segs[*i].segment_distance(c) <= reach).count()
 }
 
 /// Line `i` continues, nearly collinear, on the far side of `c`: it passes behind the hub.
@@ -824,6 +834,7 @@ fn evaluate(
         keep
     });
     let nb = blades.len();
+    let through = nb >= 2 && passes_through(p, segs, usable, c, h);
     let mut conf = match nb {
         0 | 1 => 0.0,
         2 if !tower.is_empty() && hidden_blade_down(p, &blades, down) => p.conf_three_blades,
@@ -845,7 +856,7 @@ fn evaluate(
         if spinner.is_some() {
             conf += p.conf_spinner;
         }
-        if passes_through(p, segs, usable, c, h) {
+        if through {
             conf -= p.conf_through_penalty;
         }
         if let Some(pred) = hints.predicted_hub_px {
@@ -858,7 +869,27 @@ fn evaluate(
         conf = conf.max(p.conf_close_spinner);
     }
     let support = blades.iter().take(ROTOR_BLADES).map(|b| b.weight).sum();
-    Candidate { centre: c, blades, rejected, tower, confidence: conf.min(1.0), score: conf, support, spinner }
+    let cues = crate::ranker::Cues {
+        blades: nb,
+        tower_lines: tower.len(),
+        hidden_blade_down: nb == 2 && !tower.is_empty() && hidden_blade_down(p, &blades, down),
+        geometry_ok: nb >= 2 && rotor_geometry_ok(p, &blades),
+        paired: blades.iter().filter(|b| b.axis.is_some() || is_paired(segs, b, c)).count(),
+        spinner_radius: spinner_r,
+        passes_through: through,
+        near_prediction: hints.predicted_hub_px.is_some_and(|q| geometry::dist(q, c) <= p.prediction_radius_frac * h),
+        blade_weights: blades.iter().take(ROTOR_BLADES).map(|b| b.weight).collect(),
+        blade_angles: blades.iter().take(ROTOR_BLADES).map(|b| b.angle_deg).collect(),
+        rejected_lines: rejected.len(),
+        rule_score: conf,
+        clutter_lines: clutter_lines(p, segs, usable, c, h, spinner_r, &lines, &tower),
+        banded_blades: blades.iter().filter(|b| b.axis.is_some()).count(),
+        tower_top_below: tower.iter().flat_map(|&i| [segs[i].a[1], segs[i].b[1]]).min_by(f64::total_cmp).map(|top| top - c[1]),
+        image_lines: usable.iter().filter(|&&u| u).count(),
+        image_height: h,
+    };
+    let features = crate::ranker::features(&cues);
+    Candidate { centre: c, blades, rejected, tower, confidence: conf.min(1.0), score: conf, support, spinner, features }
 }
 
 /// The rotor's third blade, not seen, would point straight down (`down`, degrees from up
@@ -1018,6 +1049,34 @@ fn better(a: &Candidate, b: &Candidate) -> bool {
     a.score > b.score + 1e-9 || (a.score >= b.score - 1e-9 && a.support > b.support)
 }
 
+/// The learned ranker's score of `c`: log-odds that it is the hub rather than no hub at all.
+fn learned_score(p: &DefaultParams, c: &Candidate) -> f64 {
+    crate::ranker::score(&p.ranker.weights.to_array(), &c.features)
+}
+
+/// Final ordering of candidates by the configured ranking (`ranker.ranking`); ties go to more
+/// blade support.
+fn preferred(p: &DefaultParams, a: &Candidate, b: &Candidate) -> bool {
+    match p.ranker.ranking {
+        Ranking::Rules => better(a, b),
+        Ranking::Learned => {
+            let (x, y) = (learned_score(p, a), learned_score(p, b));
+            x > y + 1e-9 || (x >= y - 1e-9 && a.support > b.support)
+        }
+    }
+}
+
+/// Whether `c` is reported as the hub, and with what confidence (0..1).
+fn decision(p: &DefaultParams, c: &Candidate) -> (bool, f64) {
+    match p.ranker.ranking {
+        Ranking::Rules => (c.confidence >= p.min_confidence, c.confidence),
+        Ranking::Learned => {
+            let s = learned_score(p, c);
+            (s >= p.ranker.min_score, crate::ranker::logistic(s))
+        }
+    }
+}
+
 /// Where a spinner circle search looks.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum CircleQuery {
@@ -1077,16 +1136,7 @@ fn spinner_candidate(
             // Small circles have the kept-support test above; their blade axes, a pixel or two
             // off each, do not place the meeting point to a fraction of their radius.
             let Some(k) = c.spinner.filter(|k| p.spinner_max_convergence_radii > 0.0 && k[2] > p.spinner_kept_support_max_radius_px) else { return true };
-            let centre = [k[0], k[1]];
-            // Axes only: a blade seen by one edge is half a chord off its axis, about a spinner
-            // radius at the root, which is no test of a circle of that size.
-            // The axis of a band one of whose edges the blade holds, whether or not it points at
-            // this circle (that is the test).
-            let band_axis = |b: &Blade| axes.iter().find(|a| a.edges.iter().any(|e| b.lines.contains(e))).map(|a| a.axis);
-            let known: Vec<(Segment, f64)> =
-                c.blades.iter().take(ROTOR_BLADES).filter_map(|b| b.axis.or_else(|| band_axis(b)).or_else(|| one_sided_axis(segs, b, centre, partner)).map(|a| (a, 1.0))).collect();
-            let Some(meet) = (known.len() >= 2).then(|| geometry::lines_nearest_point(&known)).flatten() else { return true };
-            let off = geometry::dist(meet, centre);
+            let Some(off) = axes_meet_offset(segs, axes, c, partner) else { return true };
             let ok = off <= p.spinner_max_convergence_radii * k[2] + p.spinner_convergence_tol_px;
             if !ok {
                 log::trace!("circle {k:?}: its blades meet {off:.1} px from its centre ({:.2} radii): not a spinner", off / k[2]);
@@ -1094,6 +1144,13 @@ fn spinner_candidate(
             ok
         });
     let mut with_blades: Vec<(Candidate, f64)> = with_blades.collect();
+    // What the learned ranker sees of each circle: its rim, and where its blades' axes meet.
+    for (c, cov) in with_blades.iter_mut() {
+        c.features[crate::ranker::SPINNER_COVERAGE] = *cov;
+        if let Some(k) = c.spinner.filter(|k| k[2] > p.spinner_kept_support_max_radius_px) {
+            c.features[crate::ranker::SPINNER_AXES_OFFSET] = axes_meet_offset(segs, axes, c, partner).map_or(0.0, |off| (off / k[2]).min(2.0));
+        }
+    }
     // Circles are best covered first. A near tie goes to the size the tracker's distance
     // expects, or without one to the predicted hub: the rim alone does not tell them apart.
     let tie = p.spinner_tie_ratio * with_blades.first()?.1;
@@ -1117,6 +1174,22 @@ fn spinner_candidate(
             && c.spinner.is_some_and(|k| k[2] > inner[2] && geometry::dist([k[0], k[1]], [inner[0], inner[1]]) + inner[2] <= k[2] + SPINNER_NEST_TOL_PX)
     };
     Some(with_blades.into_iter().filter(encloses).map(|(c, _)| c).max_by(|a, b| a.spinner.map_or(0.0, |k| k[2]).total_cmp(&b.spinner.map_or(0.0, |k| k[2]))).unwrap_or(first))
+}
+
+/// How far from the centre of `c`'s spinner circle the axes of its (up to three) strongest
+/// blades meet, px; `None` without a circle or with fewer than two known axes. Axes only: a
+/// blade seen by one edge is half a chord off its axis, about a spinner radius at the root,
+/// which is no test of a circle of that size; a blade's axis is its band's (one of whose edges
+/// it holds, whether or not the band points at this circle: that is the test) or its partner
+/// edge's.
+fn axes_meet_offset(segs: &[Segment], axes: &[BandAxis], c: &Candidate, partner: &dyn Fn(&Segment, P2) -> Option<Segment>) -> Option<f64> {
+    let k = c.spinner?;
+    let centre = [k[0], k[1]];
+    let band_axis = |b: &Blade| axes.iter().find(|a| a.edges.iter().any(|e| b.lines.contains(e))).map(|a| a.axis);
+    let known: Vec<(Segment, f64)> =
+        c.blades.iter().take(ROTOR_BLADES).filter_map(|b| b.axis.or_else(|| band_axis(b)).or_else(|| one_sided_axis(segs, b, centre, partner)).map(|a| (a, 1.0))).collect();
+    let meet = (known.len() >= 2).then(|| geometry::lines_nearest_point(&known)).flatten()?;
+    Some(geometry::dist(meet, centre))
 }
 
 /// The fraction of `cand`'s blade support (its blades' weights) that `circle`, evaluated at its
@@ -1245,6 +1318,7 @@ pub(crate) fn recognise(
             if let (Some(e), Some(k)) = (expected.spinner_radius, sc.spinner) {
                 if k[2] >= e / p.spinner_size_match_tol && k[2] <= e * p.spinner_size_match_tol {
                     sc.score += p.spinner_size_match_bonus;
+                    sc.features[crate::ranker::SPINNER_SIZE_MATCH] = 1.0;
                     sc.confidence = (sc.confidence + p.spinner_size_match_bonus).min(1.0);
                 }
             }
@@ -1254,19 +1328,23 @@ pub(crate) fn recognise(
     }
     let mut best: Option<Candidate> = None;
     for cand in cands.into_iter().chain(extra) {
-        if best.as_ref().is_none_or(|b| better(&cand, b)) {
+        found.candidates.push(Considered { hub: cand.centre, confidence: cand.confidence, features: cand.features });
+        if best.as_ref().is_none_or(|b| preferred(p, &cand, b)) {
             best = Some(cand);
         }
     }
     // Nothing detected: a close spinner anywhere in the image with two blades at its rim. Not
     // with a tracker's prediction: its neighbourhood was searched already, and a frame missed
     // while tracking would pay for the whole-image search.
-    if hints.predicted_hub_px.is_none() && best.as_ref().is_none_or(|b| b.confidence < p.min_confidence) {
+    if hints.predicted_hub_px.is_none() && best.as_ref().is_none_or(|b| !decision(p, b).0) {
         let min_r = p.close_spinner_radius_frac * h;
         for k in search(CircleQuery::Close)?.into_iter().filter(|k| k[2] >= min_r) {
-            let cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]]), &partner);
+            let mut cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]]), &partner);
+            cand.features[crate::ranker::SPINNER_COVERAGE] = k[3];
+            cand.features[crate::ranker::SPINNER_AXES_OFFSET] = axes_meet_offset(segs, &axes, &cand, &partner).map_or(0.0, |off| (off / k[2]).min(2.0));
             log::trace!("close spinner {k:?}: conf {:.2} blades {}", cand.confidence, cand.blades.len());
-            if cand.blades.len() >= 2 && best.as_ref().is_none_or(|b| better(&cand, b)) {
+            found.candidates.push(Considered { hub: cand.centre, confidence: cand.confidence, features: cand.features });
+            if cand.blades.len() >= 2 && best.as_ref().is_none_or(|b| preferred(p, &cand, b)) {
                 best = Some(cand);
                 break;
             }
@@ -1286,8 +1364,7 @@ pub(crate) fn recognise(
             }
         }
         found.blade_angles = b.blades.iter().map(|x| x.angle_deg).collect();
-        found.confidence = b.confidence;
-        found.detected = b.confidence >= p.min_confidence;
+        (found.detected, found.confidence) = decision(p, &b);
         found.hub = b.centre;
         found.search_circle = Some([b.centre[0], b.centre[1], p.support_end_dist_frac * h]);
         match grad {
@@ -1322,6 +1399,14 @@ pub(crate) fn recognise(
 mod tests {
     use super::*;
     use crate::geometry::dir_from_up_cw;
+
+    /// The default parameters with the rules' ranking: for tests of a rule's effect on the
+    /// rules' confidence (the learned ranking weighs the same cues differently).
+    fn rules() -> DefaultParams {
+        let mut p = DefaultParams::default();
+        p.ranker.ranking = Ranking::Rules;
+        p
+    }
 
     fn no_circles(_: CircleQuery) -> Result<Vec<[f64; 4]>, DetectError> {
         Ok(Vec::new())
@@ -1451,6 +1536,25 @@ mod tests {
     }
 
     #[test]
+    fn the_learned_ranking_takes_the_rotor_over_longer_single_lines_meeting_elsewhere() {
+        let hub = [150.0, 100.0];
+        let mut segs = rotor(hub, 10.0);
+        // Three field borders, each longer than a blade, ending at one point 120° apart.
+        let clutter = [360.0, 160.0];
+        for a in [30.0, 150.0, 270.0] {
+            segs.push(ray(clutter, a, 6.0, 100.0));
+        }
+        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+        let p = DefaultParams::default();
+        assert_eq!(p.ranker.ranking, Ranking::Learned);
+        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
+        assert!(f.detected && geometry::dist(f.hub, hub) < 3.0, "{f:?}");
+        assert!(f.candidates.iter().any(|c| geometry::dist(c.hub, clutter) < 5.0), "the crossing was a candidate: {:?}", f.candidates);
+        // Reported as a probability, above the one the threshold stands for.
+        assert!(f.confidence > crate::ranker::logistic(p.ranker.min_score) && f.confidence < 1.0, "{}", f.confidence);
+    }
+
+    #[test]
     fn two_blades_nearly_opposite_are_one_line_through_the_candidate() {
         let c = [200.0, 120.0];
         // A mast: its top above the candidate, two tower-like edges below, and a field border
@@ -1460,9 +1564,13 @@ mod tests {
         segs.push(ray(c, 70.0, 6.0, 150.0));
         segs.push(ray(c, 245.0, 6.0, 150.0));
         let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
-        let off = DefaultParams { blade_max_separation_deg: 180.0, ..DefaultParams::default() };
+        let off = DefaultParams { blade_max_separation_deg: 180.0, ..rules() };
         let f = recognise(&off, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
         assert!(f.detected, "without the rule the three lines pass for a rotor: {f:?}");
+        // The learned ranking refuses them without the rule: single edges far from 120° apart.
+        let learned = DefaultParams { blade_max_separation_deg: 180.0, ..DefaultParams::default() };
+        let f = recognise(&learned, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
+        assert!(!f.detected, "{f:?}");
         let on = DefaultParams { blade_max_separation_deg: 170.0, ..off.clone() };
         let f = recognise(&on, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
         assert!(!f.detected, "{f:?}");
@@ -1597,7 +1705,7 @@ mod tests {
 
     #[test]
     fn spinner_circle_accepted_only_near_the_candidate_with_blades_at_its_rim() {
-        let p = DefaultParams::default();
+        let p = rules();
         let hub = [240.0, 120.0];
         // Single-edge blades that stop at a spinner rim of radius 30 (one edge each, so the
         // edge lines pass 6 px off the centre).
@@ -1647,7 +1755,7 @@ mod tests {
             let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(vec![beside, spinner]) };
             recognise(p, &segs, 480.0, 270.0, &hints, &mut circles, None, Expected::default()).unwrap()
         };
-        let off = DefaultParams { spinner_max_convergence_radii: 0.0, ..DefaultParams::default() };
+        let off = DefaultParams { spinner_max_convergence_radii: 0.0, ..rules() };
         let f = run(&off);
         assert!(f.circle.is_some_and(|k| geometry::dist([k[0], k[1]], [beside[0], beside[1]]) < 1e-9), "without the rule the better rim wins: {f:?}");
         let on = DefaultParams { spinner_max_convergence_radii: 1.0, ..off.clone() };

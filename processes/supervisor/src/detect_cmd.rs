@@ -44,13 +44,14 @@ pub struct DetectArgs {
     pub annotate: Option<PathBuf>,
     /// What the detect stage gets from the tracker, for looking at one frame as the pipeline
     /// saw it: the predicted hub, full-resolution px.
-    #[arg(long, value_name = "X,Y", value_parser = parse_point)]
+    #[arg(long, value_name = "X,Y", value_parser = parse_point, allow_negative_numbers = true)]
     pub hint_hub: Option<[f64; 2]>,
     /// ... and the tracker's distance to the hub, metres.
     #[arg(long, value_name = "M")]
     pub hint_distance: Option<f64>,
-    /// ... and the camera roll from the IMU, degrees (clockwise positive).
-    #[arg(long, value_name = "DEG")]
+    /// ... and the camera roll from the IMU, degrees (clockwise positive; `--hint-roll -1.6`
+    /// is a negative roll, not a flag).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub hint_roll: Option<f64>,
     /// Image files or folders of images (taken in file-name order).
     #[arg(required = true, value_name = "PATH")]

@@ -49,6 +49,10 @@ pub struct EvalArgs {
     /// trackers' outputs) to this file, to see where a flight's errors come from.
     #[arg(long, value_name = "FILE", requires = "sequence")]
     pub trace: Option<PathBuf>,
+    /// Write every hub candidate the `default` mode evaluated, with its features and whether it
+    /// lies on the truth, one JSON line per image, to this file (the data `train-ranker` fits).
+    #[arg(long, value_name = "FILE")]
+    pub candidates: Option<PathBuf>,
 }
 
 /// Runs the command.
@@ -59,10 +63,14 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         std::fs::write(dir.join("misses.jsonl"), "").with_context(|| format!("writing {}", dir.display()))?;
     }
     if args.sequence {
-        let out = crate::eval_seq::Outputs { trace: args.trace.as_deref(), misses: args.misses.as_deref() };
+        let out = crate::eval_seq::Outputs { trace: args.trace.as_deref(), misses: args.misses.as_deref(), candidates: args.candidates.as_deref() };
         return crate::eval_seq::run(&config, args.flights, args.frames, args.seed, out);
     }
     let misses = args.misses.as_deref();
+    let mut cand_out = match &args.candidates {
+        Some(p) => Some(std::io::BufWriter::new(std::fs::File::create(p).with_context(|| format!("creating {}", p.display()))?)),
+        None => None,
+    };
     let mut detectors = MODES.iter().map(|(m, _)| detector(&config.detect, Some(*m))).collect::<anyhow::Result<Vec<_>>>()?;
     let names: Vec<&str> = MODES.iter().map(|(_, n)| *n).collect();
     let mut truths = args.truth.clone();
@@ -75,12 +83,15 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         }
     }
     for truth in &truths {
-        let table = eval_truth_file(truth, &mut detectors, misses)?;
+        let table = eval_truth_file(truth, &mut detectors, misses, cand_out.as_mut())?;
         print_table(&format!("real photos: {}", truth.display()), &names, &table);
     }
     if args.synthetic > 0 {
-        let table = eval_synthetic(args.synthetic, args.seed, &mut detectors, misses)?;
+        let table = eval_synthetic(args.synthetic, args.seed, &mut detectors, misses, cand_out.as_mut())?;
         print_table(&format!("synthetic frames: {} per distance class, seed {}", args.synthetic, args.seed), &names, &table);
+    }
+    if let Some(w) = cand_out.as_mut() {
+        w.flush().context("writing the candidates file")?;
     }
     Ok(())
 }
@@ -128,7 +139,31 @@ pub(crate) fn write_miss(dir: Option<&Path>, name: &str, image: &Mat, truth: &Tr
     Ok(true)
 }
 
-fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>) -> anyhow::Result<Table> {
+/// Where `--candidates` lines go.
+pub(crate) type CandidateSink = std::io::BufWriter<std::fs::File>;
+
+/// Writes the `default` mode's candidates of one image as a JSON line (see `--candidates`).
+pub(crate) fn write_candidates(out: Option<&mut CandidateSink>, name: &str, truth: &Truth, output: &Output, height: u32) -> anyhow::Result<()> {
+    let Some(out) = out else { return Ok(()) };
+    let kind = match truth {
+        Truth::Visible { .. } => "visible",
+        Truth::Hidden => "hidden",
+        Truth::Negative => "negative",
+    };
+    let cands: Vec<serde_json::Value> = output
+        .candidates
+        .iter()
+        .map(|c| {
+            let hit = score(truth, Some(c.hub), height as f64).hit;
+            serde_json::json!({"hub": c.hub, "confidence": c.confidence, "hit": hit, "features": c.features.to_vec()})
+        })
+        .collect();
+    let line = serde_json::json!({"name": name, "truth": kind, "height": height, "detected": output.detection.detected, "candidates": cands});
+    writeln!(out, "{line}")?;
+    Ok(())
+}
+
+fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>, mut cand_out: Option<&mut CandidateSink>) -> anyhow::Result<Table> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let mut table = Table::new();
@@ -156,6 +191,9 @@ fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], mis
         let outcomes = score_all(&outputs, &truth, view.height);
         let id = v["id"].as_str().map_or_else(|| format!("line{}", n + 1), |s| s.replace('/', "_"));
         write_miss(misses, &id, &mat, &truth, &outputs, &outcomes)?;
+        if let Some(out) = outputs.last() {
+            write_candidates(cand_out.as_deref_mut(), &id, &truth, out, view.height)?;
+        }
         let mut cats = vec!["all".to_string()];
         for key in ["distance_class", "view", "env"] {
             if let Some(c) = v[key].as_str() {
@@ -167,7 +205,7 @@ fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], mis
     Ok(table)
 }
 
-fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>) -> anyhow::Result<Table> {
+fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>, mut cand_out: Option<&mut CandidateSink>) -> anyhow::Result<Table> {
     let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
     let mut buffers: Vec<Vec<u8>> = renderers.iter().map(|r| vec![0u8; r.camera().frame_bytes()]).collect();
     let mut table = Table::new();
@@ -183,6 +221,9 @@ fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::D
             let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() };
             let outputs = detect_all(detectors, &view, &hints)?;
             let outcomes = score_all(&outputs, &t, view.height);
+            if let Some(out) = outputs.last() {
+                write_candidates(cand_out.as_deref_mut(), &format!("{}_{i:04}", class_def.0), &t, out, view.height)?;
+            }
             if misses.is_some() {
                 let mat = Mat::from_slice(&buffers[k])?.reshape(3, cam.height as i32)?.try_clone()?;
                 let name = format!("{}_{i:04}", class_def.0);

@@ -145,6 +145,8 @@ pub struct Outputs<'a> {
     pub trace: Option<&'a std::path::Path>,
     /// An overlay PNG of every frame whose detection misses the truth, in this folder.
     pub misses: Option<&'a std::path::Path>,
+    /// Every hub candidate of every frame (see `hubtrack eval --candidates`) to this file.
+    pub candidates: Option<&'a std::path::Path>,
 }
 
 /// Runs `flights` flights of `frames` frames and prints the tables, writing the optional
@@ -152,6 +154,10 @@ pub struct Outputs<'a> {
 pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, outputs: Outputs<'_>) -> anyhow::Result<()> {
     use std::io::Write as _;
     let mut trace = match outputs.trace {
+        Some(p) => Some(std::io::BufWriter::new(std::fs::File::create(p).map_err(|e| anyhow::anyhow!("creating {}: {e}", p.display()))?)),
+        None => None,
+    };
+    let mut cand_out = match outputs.candidates {
         Some(p) => Some(std::io::BufWriter::new(std::fs::File::create(p).map_err(|e| anyhow::anyhow!("creating {}: {e}", p.display()))?)),
         None => None,
     };
@@ -190,6 +196,10 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, outputs: Outpu
             let output = detector.detect(&view, &hints)?;
             if outputs.misses.is_some() && !fr.dropout {
                 write_sequence_miss(outputs.misses, &format!("f{f}_{i:03}"), &pixels, &cam, &truth, &output, &hints)?;
+            }
+            if !fr.dropout {
+                let t = crate::score::Truth::of_rendered(&truth);
+                crate::eval::write_candidates(cand_out.as_mut(), &format!("f{f}_{i:03}"), &t, &output, cam.height)?;
             }
             let mut det: Detection = output.detection;
             det.stamps.seq = i as u64;
@@ -255,6 +265,9 @@ distance error median {:.1} % p90 {:.1} % (8-30 m), yaw error median {:.1} deg p
         pct(&t.dist_err_pct, 0.5), pct(&t.dist_err_pct, 0.9), pct(&t.yaw_err_deg, 0.5), pct(&t.yaw_err_deg, 0.9), t.false_locks
     );
     println!("RMS in % of image height over frames with a valid estimate after first lock; gap = frames without one.");
+    if let Some(w) = cand_out.as_mut() {
+        w.flush().map_err(|e| anyhow::anyhow!("writing the candidates file: {e}"))?;
+    }
     Ok(())
 }
 

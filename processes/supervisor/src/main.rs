@@ -10,6 +10,7 @@ mod replay;
 mod score;
 mod supervise;
 mod track_cmd;
+mod train_ranker;
 
 use anyhow::{bail, Context};
 use clap::{Parser, Subcommand};
@@ -58,6 +59,8 @@ enum Command {
     Track(track_cmd::TrackArgs),
     /// Evaluate the detector on photos with truth and on synthetic frames, all modes side by side.
     Eval(eval::EvalArgs),
+    /// Fit the learned candidate ranker to `eval --candidates` files; prints the weights as TOML.
+    TrainRanker(train_ranker::TrainRankerArgs),
     /// Latency per stage and per hop, and end to end, from the stamps in a recording.
     Latency {
         /// The recording (live or replayed; a cut file is read as far as it goes).
@@ -170,6 +173,7 @@ fn main() {
         Command::Bench(BenchCommand::Pipeline(a)) => bench::pipeline(a),
         Command::Detect(a) => detect_cmd::run(a),
         Command::Eval(a) => eval::run(a),
+        Command::TrainRanker(a) => train_ranker::run(a),
         Command::Track(a) => track_cmd::run(a),
         Command::Config { config, print } => check_config(&config, print),
         Command::Status { json, listen } => status(json, listen),
