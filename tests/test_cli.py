@@ -17,8 +17,9 @@ REGRESSION_SET = ["wta_envA_07t.jpg", "wta_envA_21.jpg", "wta_envA_29.jpg", "wta
                   "wta_envA_41.jpg", "wta_envA_45.jpg", "wta_envB_30.jpg", "wta_envB_39.jpg"]
 REGRESSION_MIN_HITS = 7
 # Over the whole development set (3 % hits among photos with a visible hub; detections on the
-# negatives), measured when accepted: 16 of 53 and 0 of 8.
-ALL_MIN_HITS = 14
+# negatives), measured when accepted: 21 of 53 and 0 of 8 (session 19, learned ranking; 20 with
+# the rules before it).
+ALL_MIN_HITS = 19
 ALL_MAX_FALSE = 1
 
 
