@@ -9,8 +9,6 @@ from conftest import read_mcap_messages
 # The detection quality targets of issue 3 are not met yet (see the closing notes): these checks
 # stay in the suite, marked strict-xfail, so they turn into failures (and must be un-marked) the
 # day the detector reaches them.
-QUALITY_PENDING = pytest.mark.xfail(strict=True, reason="issue 3 open: default detector below its hit-rate targets")
-
 HIT = 0.03  # of image height, as in ../shared/data/README.md
 
 
@@ -72,10 +70,11 @@ def test_detect_stage_processes_every_frame_with_stamps_and_overlay(detect_run):
     assert hits >= 1, "the detector finds the rendered hub at least sometimes"
 
 
-@QUALITY_PENDING
 def test_detections_follow_renderer_truth(detect_run):
+    # An expected failure (below 80 %) until the learned ranking of session 19: 50 of 59 since.
     _, _, t = detect_run
     hits, dets, _ = detection_hits(t)
+    print(f"[detections_follow_renderer_truth] {hits} of {len(dets)} detections on the truth")
     assert hits >= 0.8 * len(dets), f"{hits} of {len(dets)} detections within 3 % of height of truth"
 
 
