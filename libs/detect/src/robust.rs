@@ -27,12 +27,16 @@
 //! 9. Spinner step: around the best few candidates, circles in the Canny edges (gradient vote,
 //!    rim coverage, circle fit; `spinner.rs`); a circle with two blades starting at its rim
 //!    becomes a candidate centred on it, with a confidence bonus. Around the tracker's predicted
-//!    hub the search runs on a second thread from step 2 on. When nothing is detected, large
-//!    (close-range) circles are searched over the whole image; a circle whose inside is full
-//!    of edges is clutter, not a spinner.
+//!    hub the search runs on a second thread from step 2 on. Without a tracker's prediction,
+//!    large (close-range) circles are searched over the whole image (every frame, or only when
+//!    nothing is detected: `close_spinner_always`); a circle whose inside is full of edges is
+//!    clutter, not a spinner.
 //! 10. Penalties: a long line passing through a candidate (tower, mast) lowers its confidence;
 //!     a supporting line that continues collinearly beyond the candidate (horizon or field border
-//!     hidden by the turbine) is no blade. Best candidate by confidence, then support.
+//!     hidden by the turbine) is no blade.
+//! 11. Ranking (`ranker.rs`): the best candidate by the learned score of its features, reported
+//!     at `ranker.min_score`; with `ranker.ranking = "rules"`, by the confidence of steps 6–10,
+//!     then support, reported at `min_confidence`.
 
 use std::time::Instant;
 
@@ -1333,10 +1337,12 @@ pub(crate) fn recognise(
             best = Some(cand);
         }
     }
-    // Nothing detected: a close spinner anywhere in the image with two blades at its rim. Not
-    // with a tracker's prediction: its neighbourhood was searched already, and a frame missed
-    // while tracking would pay for the whole-image search.
-    if hints.predicted_hub_px.is_none() && best.as_ref().is_none_or(|b| !decision(p, b).0) {
+    // A close spinner anywhere in the image with two blades at its rim: when nothing is
+    // detected, or always (`close_spinner_always`), then every such circle being a candidate.
+    // Not with a tracker's prediction: its neighbourhood was searched already, and a frame
+    // missed while tracking would pay for the whole-image search.
+    let always = p.close_spinner_always;
+    if hints.predicted_hub_px.is_none() && (always || best.as_ref().is_none_or(|b| !decision(p, b).0)) {
         let min_r = p.close_spinner_radius_frac * h;
         for k in search(CircleQuery::Close)?.into_iter().filter(|k| k[2] >= min_r) {
             let mut cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]]), &partner);
@@ -1346,7 +1352,9 @@ pub(crate) fn recognise(
             found.candidates.push(Considered { hub: cand.centre, confidence: cand.confidence, features: cand.features });
             if cand.blades.len() >= 2 && best.as_ref().is_none_or(|b| preferred(p, &cand, b)) {
                 best = Some(cand);
-                break;
+                if !always {
+                    break;
+                }
             }
         }
     }
@@ -1839,6 +1847,39 @@ mod tests {
         let mut close = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(if q == CircleQuery::Close { vec![[hub[0], hub[1], r, 1.0]] } else { vec![] }) };
         let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut close, None, Expected::default()).unwrap();
         assert!(g.detected && g.circle.is_some() && geometry::dist(g.hub, hub) < 1e-9, "{g:?}");
+    }
+
+    #[test]
+    fn close_spinners_are_candidates_in_every_frame_without_a_tracker_when_always() {
+        let (spinner_hub, r) = ([360.0, 150.0], 40.0);
+        // A rotor detected from its lines, and a close spinner with two one-edge blades elsewhere.
+        let mut segs = rotor([120.0, 100.0], 10.0);
+        segs.extend([30.0, 150.0].iter().map(|&a| blade_edges(spinner_hub, a, r, 100.0, 12.0, 6.0)[0]));
+        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+        let run = |p: &DefaultParams, hints: &Hints| {
+            let asked = std::cell::Cell::new(0);
+            let mut close = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
+                if q == CircleQuery::Close {
+                    asked.set(asked.get() + 1);
+                    return Ok(vec![[spinner_hub[0], spinner_hub[1], r, 1.0]]);
+                }
+                Ok(vec![])
+            };
+            let f = recognise(p, &segs, 480.0, 270.0, hints, &mut close, None, Expected::default()).unwrap();
+            (f, asked.get())
+        };
+        let always = DefaultParams::default();
+        assert!(always.close_spinner_always);
+        let (f, asked) = run(&always, &hints);
+        assert!(f.detected && asked == 1, "{asked} {f:?}");
+        assert!(f.candidates.iter().any(|c| geometry::dist(c.hub, spinner_hub) < 1e-9), "{:?}", f.candidates);
+        // Only as a fallback: something was detected, so no whole-image search.
+        let fallback = DefaultParams { close_spinner_always: false, ..always.clone() };
+        let (f, asked) = run(&fallback, &hints);
+        assert!(f.detected && asked == 0, "{asked} {f:?}");
+        // With a tracker's prediction never (its neighbourhood is searched instead).
+        let tracked = Hints { predicted_hub_px: Some([120.0, 100.0]), ..hints };
+        assert_eq!(run(&always, &tracked).1, 0);
     }
 
     #[test]
