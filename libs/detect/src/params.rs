@@ -748,7 +748,9 @@ impl Default for RankerParams {
 }
 
 impl Default for FeatureWeights {
-    /// Fitted by `scripts/train-ranker.sh` (see the README, "Learned ranking").
+    /// Fitted by `scripts/train-ranker.sh` (see the README, "Learned ranking") at commit
+    /// c4f830c, before `close_spinner_always` was on: a fit today sees more close-spinner
+    /// candidates and gives slightly different numbers.
     fn default() -> Self {
         FeatureWeights {
             bias: -1.182,
