@@ -28,7 +28,7 @@ rules=(--set detect.default.ranker.ranking=rules)
 train=()
 for seed in 11 12 13 14 15 16 17 18; do
   echo "[train-ranker] rendering single frames, seed $seed" >&2
-  "$bin" eval "${rules[@]}" --synthetic 300 --seed "$seed" --truth /dev/null --candidates "$out/frames$seed.jsonl" >/dev/null
+  "$bin" eval "${rules[@]}" --synthetic 300 --seed "$seed" --no-photos --candidates "$out/frames$seed.jsonl" >/dev/null
   train+=("$out/frames$seed.jsonl")
 done
 echo "[train-ranker] rendering flights, seed 3000" >&2
@@ -37,7 +37,7 @@ train+=("$out/flights3000.jsonl")
 holdout=()
 for seed in 2026 77 500; do
   echo "[train-ranker] held-out single frames, seed $seed" >&2
-  "$bin" eval "${rules[@]}" --synthetic 200 --seed "$seed" --truth /dev/null --candidates "$out/holdout$seed.jsonl" >/dev/null
+  "$bin" eval "${rules[@]}" --synthetic 200 --seed "$seed" --no-photos --candidates "$out/holdout$seed.jsonl" >/dev/null
   holdout+=(--holdout "$out/holdout$seed.jsonl")
 done
 echo "[train-ranker] held-out flights, seed 4000" >&2

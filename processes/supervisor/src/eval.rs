@@ -25,6 +25,9 @@ pub struct EvalArgs {
     /// Truth file(s) in the format of ../shared/data/*/truth.jsonl (default: ../shared/data/real-dev/truth.jsonl if present).
     #[arg(long, value_name = "FILE")]
     pub truth: Vec<PathBuf>,
+    /// Rendered frames only: no photos, neither the default set nor --truth files.
+    #[arg(long, conflicts_with = "truth")]
+    pub no_photos: bool,
     /// Synthetic frames per distance class (0: none), plus as many negatives (no turbine) / 4.
     #[arg(long, default_value_t = 200)]
     pub synthetic: u64,
@@ -74,7 +77,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let mut detectors = MODES.iter().map(|(m, _)| detector(&config.detect, Some(*m))).collect::<anyhow::Result<Vec<_>>>()?;
     let names: Vec<&str> = MODES.iter().map(|(_, n)| *n).collect();
     let mut truths = args.truth.clone();
-    if truths.is_empty() {
+    if truths.is_empty() && !args.no_photos {
         let default = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/real-dev/truth.jsonl");
         if default.is_file() {
             truths.push(default);
