@@ -394,6 +394,18 @@ pub struct DefaultParams {
     /// When a detected blade, or the strongest blade at 120° steps, is within this of straight
     /// down, degrees, that blade hides the tower ...
     pub tower_blade_down_tol_deg: f64,
+    /// A tower band whose axis, halfway down, lies on the ray of a blade (detected, or placed
+    /// 120° or 240° from a detected one) within this of straight down, degrees, is that blade,
+    /// or that blade merged with one tower edge (within `tower_blade_axis_tol_frac` of the
+    /// ray). `fly` seed 279: a blade at 168° (detected blades 268°, 48°, 90°) read as the tower
+    /// at 16–24 m with the gap's sign wrong. 0 = only the check at the hub's row. Range [0, 60].
+    pub tower_blade_ray_tol_deg: f64,
+    /// ... but not rays within this of straight down, degrees. Such a blade's band misleads
+    /// too (rendered at 19 m: gaps 40–60 px off), but it covers the tower, so without it no
+    /// tower and no distance is measured while that blade hangs in front (`fly` seed 340: no
+    /// distance at 37 m for 120 s). Fresh `fly` seeds 241–400: 145 of 160 with 5, 143 with 0,
+    /// 136 without the ray rule. Range [0, 60].
+    pub tower_blade_ray_min_deg: f64,
     /// With a blade pointing down (see `tower_blade_down_tol_deg`) and the tracker's hub
     /// distance at most this, m, no tower is measured. The blade hangs in front of the tower
     /// (the hub overhang, ~4 m) and is about as wide near the hub: from the front, for yaws the
@@ -869,6 +881,8 @@ impl Default for DefaultParams {
             tower_max_width_ratio: 1.15,
             tower_taper: 0.03,
             tower_blade_down_tol_deg: 12.0,
+            tower_blade_ray_tol_deg: 25.0,
+            tower_blade_ray_min_deg: 5.0,
             tower_blade_down_max_distance_m: 0.0,
             tower_blade_axis_tol_frac: 0.025,
             nacelle_band_half_m: 1.0,
@@ -1058,6 +1072,8 @@ impl DefaultParams {
         c.closed("tower_taper", self.tower_taper, 0.0, 1.0)?;
         c.less("tower_min_width_ratio", self.tower_min_width_ratio, "tower_max_width_ratio", self.tower_max_width_ratio)?;
         c.closed("tower_blade_down_tol_deg", self.tower_blade_down_tol_deg, 0.0, 60.0)?;
+        c.closed("tower_blade_ray_tol_deg", self.tower_blade_ray_tol_deg, 0.0, 60.0)?;
+        c.closed("tower_blade_ray_min_deg", self.tower_blade_ray_min_deg, 0.0, 60.0)?;
         c.closed("tower_blade_down_max_distance_m", self.tower_blade_down_max_distance_m, 0.0, 1000.0)?;
         c.closed("tower_blade_axis_tol_frac", self.tower_blade_axis_tol_frac, 0.0, 1.0)?;
         c.closed("nacelle_band_half_m", self.nacelle_band_half_m, 0.0, 20.0)?;

@@ -966,6 +966,19 @@ fn one_sided_axis(segs: &[Segment], b: &Blade, centre: P2, partner: &dyn Fn(&Seg
     partner(&segs[*longest], centre)
 }
 
+/// Whether a band's `axis` (from its top down) lies, halfway down, within `tol` px of one of
+/// the `rays` (blade angles, degrees clockwise from up) from `hub`: that band is a blade (or a
+/// blade merged with a tower edge), not the tower.
+fn axis_along_a_ray(axis: &Segment, hub: P2, rays: &[f64], tol: f64) -> bool {
+    let mid = (axis.a[1] + axis.b[1]) / 2.0;
+    let Some(x) = axis.x_at_y(mid) else { return false };
+    mid > hub[1]
+        && rays.iter().any(|&a| {
+            let d = geometry::dir_from_up_cw(a);
+            d[1] > 0.0 && (x - (hub[0] + (mid - hub[1]) * d[0] / d[1])).abs() <= tol
+        })
+}
+
 /// The tower of candidate `b` from both edges (see `tower.rs`), and the row of its top
 /// (working px). Seeds are the Hough tower lines, longest first; without a fit from them (and
 /// for a detected hub only) the gradient is scanned for edges below the hub. `tower_width`:
@@ -988,6 +1001,15 @@ fn measure_tower(
     let near_down = |a: f64| geometry::ang_dist(a, down) <= p.tower_blade_down_tol_deg;
     let blade_down = b.blades.iter().any(|bl| near_down(bl.angle_deg))
         || b.blades.first().is_some_and(|bl| (0..3).any(|k| near_down(bl.angle_deg + 120.0 * k as f64)));
+    // Rays of blades `tower_blade_ray_min_deg`..`tower_blade_ray_tol_deg` from down: detected, or placed at 120°
+    // steps from any detected blade (the first may be a stray line: `fly` seed 279 at 19 m,
+    // blades 268°, 48°, 90° for a rotor at 288°, 48°, 168°).
+    let down_rays: Vec<f64> = b
+        .blades
+        .iter()
+        .flat_map(|bl| (0..3).map(move |k| bl.angle_deg + 120.0 * k as f64))
+        .filter(|&a| (p.tower_blade_ray_min_deg..=p.tower_blade_ray_tol_deg).contains(&geometry::ang_dist(a, down)))
+        .collect();
     // Until its tip is in view, that blade hides the tower wholly or but for one edge: a band
     // below the hub is the blade, or the blade and one tower edge merged, and its width and gap
     // mislead (see `tower_blade_down_max_distance_m`).
@@ -995,8 +1017,13 @@ fn measure_tower(
         log::trace!("a blade points down at {d:.1} m: no tower measured");
         return None;
     }
+    // A band is that blade when its axis passes the hub, or (for a blade a few degrees off
+    // vertical, whose band the edge fit straightens, or which merged with one tower edge) runs
+    // along a blade's ray halfway down (see `tower_blade_ray_tol_deg`).
+    let tol = p.tower_blade_axis_tol_frac * h;
     let is_blade = |f: &crate::tower::TowerFit| {
-        blade_down && f.axis.x_at_y(b.centre[1]).is_some_and(|x| (x - b.centre[0]).abs() <= p.tower_blade_axis_tol_frac * h)
+        let through_hub = f.axis.x_at_y(b.centre[1]).is_some_and(|x| (x - b.centre[0]).abs() <= tol);
+        (blade_down && through_hub) || axis_along_a_ray(&f.axis, b.centre, &down_rays, tol)
     };
     // Widths a tower band may have: about the expected one, and about the spinner's radius
     // (the tower top is 2.2 m wide, the spinner 3.2 m).
@@ -1489,6 +1516,24 @@ mod tests {
         angles.sort_by(f64::total_cmp);
         assert_eq!(angles.len(), 3, "three blades, the tower is no blade: {angles:?}");
         assert!(angles.iter().all(|a| geometry::ang_dist(*a, 180.0) > 30.0), "{angles:?}");
+    }
+
+    #[test]
+    fn a_band_along_a_blade_ray_is_that_blade_not_the_tower() {
+        // `fly` seed 279 at 19 m (working px): hub (244, 126.5), a blade at 167.6°; the band
+        // the partner search found runs from (254.8, 148) to (269.3, 269), along the blade.
+        let hub = [244.0, 126.5];
+        let band = Segment::new([254.8, 148.0], [269.3, 269.0]);
+        let tol = 0.025 * 270.0;
+        assert!(axis_along_a_ray(&band, hub, &[167.6], tol));
+        // The tower itself, upright 3.5 px left of the hub, is no blade ...
+        let tower = Segment::new([240.5, 139.0], [240.5, 269.0]);
+        assert!(!axis_along_a_ray(&tower, hub, &[167.6], tol));
+        // ... nor is the band without a ray, or with rays pointing elsewhere.
+        assert!(!axis_along_a_ray(&band, hub, &[], tol));
+        assert!(!axis_along_a_ray(&band, hub, &[192.4, 48.0], tol));
+        // A ray pointing up never reaches a band below the hub.
+        assert!(!axis_along_a_ray(&band, hub, &[347.6], tol));
     }
 
     #[test]
