@@ -3,12 +3,26 @@
 use hubtrack_detect::params::{DetectConfig, Mode};
 use hubtrack_detect::{Detector, Hints, ImageView};
 use hubtrack_render::{Camera, CameraPose, Ground, Renderer, Scene};
-use hubtrack_types::PixelFormat;
+use hubtrack_types::{Detection, PixelFormat};
 
 /// Sunlit turbine over a dark sea, sun behind the camera: the high-contrast situation the
 /// thesis's fixed Canny thresholds (300/400) were tuned for.
 fn sunlit_sea() -> Scene {
     Scene { ground: Ground::Sea, sun_azimuth_deg: 0.0, sun_elevation_deg: 20.0, ..Scene::default_clear() }
+}
+
+/// A renderer for the GoPro camera and a frame buffer for it.
+fn gopro_renderer() -> (Renderer, Vec<u8>) {
+    let cam = Camera::gopro_hero3();
+    (Renderer::new(cam), vec![0u8; cam.frame_bytes()])
+}
+
+/// Renders `scene` from `pose` (GoPro camera) and detects in it with `config` and `hints`.
+fn render_and_detect(r: &mut Renderer, buf: &mut [u8], scene: &Scene, pose: &CameraPose, config: DetectConfig, hints: &Hints) -> (Detection, hubtrack_render::Truth) {
+    let cam = Camera::gopro_hero3();
+    let truth = r.render(scene, pose, buf).unwrap();
+    let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: buf };
+    (Detector::new(config).unwrap().detect(&view, hints).unwrap().detection, truth)
 }
 
 fn run(mode: Mode, pose: CameraPose) -> (hubtrack_detect::Output, hubtrack_render::Truth) {
@@ -65,9 +79,7 @@ fn yaw_sign_follows_project_convention() {
 /// the band is measured as before.
 #[test]
 fn no_tower_measured_behind_a_blade_pointing_down() {
-    let cam = Camera::gopro_hero3();
-    let mut r = Renderer::new(cam);
-    let mut buf = vec![0u8; cam.frame_bytes()];
+    let (mut r, mut buf) = gopro_renderer();
     let hints = Hints { roll_rad: Some(0.0), hub_distance_m: Some(20.0), ..Hints::default() };
     let mut detect = |rotor_angle_deg: f64, hints: &Hints, max_distance_m: f64| {
         let mut config = DetectConfig::default();
@@ -76,10 +88,7 @@ fn no_tower_measured_behind_a_blade_pointing_down() {
         // 5 m below the hub (at hub height the horizon passed for a blade in this scene). Without
         // the rule the blade-down frame measures a band 110 px wide (the tower: 82 px) with a
         // hub–tower gap of -36 px where it is ~0.
-        let truth = r.render(&scene, &CameraPose::looking_at_hub(20.0, 0.0, -5.0), &mut buf).unwrap();
-        let mut det = Detector::new(config).unwrap();
-        let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
-        (det.detect(&view, hints).unwrap().detection, truth)
+        render_and_detect(&mut r, &mut buf, &scene, &CameraPose::looking_at_hub(20.0, 0.0, -5.0), config, hints)
     };
     let (down, truth) = detect(60.0, &hints, 40.0);
     let no_distance = Hints { hub_distance_m: None, ..hints };
@@ -93,7 +102,6 @@ fn no_tower_measured_behind_a_blade_pointing_down() {
     assert!(beyond.tower_found && beyond.tower_width_px > 0.0, "{beyond:?}");
 }
 
-
 /// A blade 8–16° from straight down crosses the tower below the hub; a band from one tower
 /// edge to that blade's edge, or the blade alone, reads a hub–tower gap tens of pixels off
 /// (`fly` seed 279: its sign wrong at 16–24 m, the approach ended 7.7° off). With the ray rule
@@ -101,9 +109,7 @@ fn no_tower_measured_behind_a_blade_pointing_down() {
 /// without the rule some are.
 #[test]
 fn a_band_along_a_tilted_blade_is_no_tower() {
-    let cam = Camera::gopro_hero3();
-    let mut r = Renderer::new(cam);
-    let mut buf = vec![0u8; cam.frame_bytes()];
+    let (mut r, mut buf) = gopro_renderer();
     let hints = Hints { roll_rad: Some(0.0), hub_distance_m: Some(19.0), ..Hints::default() };
     let mut with_rule = DetectConfig::default();
     assert!(with_rule.default.tower_blade_ray_tol_deg >= 16.0);
@@ -115,11 +121,10 @@ fn a_band_along_a_tilted_blade_is_no_tower() {
     for rotor_angle_deg in [44.0, 48.0, 52.0, 68.0, 72.0] {
         for lateral_m in [-3.0, -1.7, 0.0, 1.7, 3.0] {
             let scene = Scene { rotor_angle_deg, ground: Ground::Grass, ..sunlit_sea() };
-            let truth = r.render(&scene, &CameraPose::looking_at_hub(19.0, lateral_m, 0.0), &mut buf).unwrap();
-            let true_gap = truth.hub_px.unwrap()[0] - truth.tower_top_px.unwrap()[0];
-            let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
+            let pose = CameraPose::looking_at_hub(19.0, lateral_m, 0.0);
             for (config, misleading) in [(&with_rule, &mut misleading_with), (&without, &mut misleading_without)] {
-                let d = Detector::new(config.clone()).unwrap().detect(&view, &hints).unwrap().detection;
+                let (d, truth) = render_and_detect(&mut r, &mut buf, &scene, &pose, config.clone(), &hints);
+                let true_gap = truth.hub_px.unwrap()[0] - truth.tower_top_px.unwrap()[0];
                 if d.tower_found && d.tower_width_px > 0.0 {
                     if std::ptr::eq(config, &with_rule) {
                         measured_with += 1;
