@@ -250,6 +250,12 @@ impl Detector {
             tower_width: hints.hub_distance_m.and_then(|d| self.expected_tower_width_px(d, image.width)).map(|w| w / k),
             spinner_radius: hints.hub_distance_m.and_then(|d| self.expected_spinner_radius_px(d, image.width)).map(|r| r / k),
             px_per_m: hints.hub_distance_m.filter(|d| *d > 0.0).map(|d| self.focal_px(image.width) / d / k),
+            optics: Some(robust::Optics {
+                focal_px: self.focal_px(image.width) / k,
+                spinner_radius_m: self.config.camera.spinner_diameter_m / 2.0,
+                tower_top_diameter_m: self.config.camera.tower_top_diameter_m,
+                hub_tower_gap_m: self.config.camera.hub_tower_gap_m,
+            }),
         };
         let small = self.pyramid.build(image, levels)?;
         let pyramid_us = us_since(t0);

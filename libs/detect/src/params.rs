@@ -277,6 +277,13 @@ pub struct DefaultParams {
     pub tower_width_min_radii: f64,
     /// ... and at most this many r wide. Range [0, 10].
     pub tower_width_max_radii: f64,
+    /// ... and at most this factor narrower or wider than the width the spinner's radius
+    /// implies: the spinner gives the hub's distance f·R/r, the tower top is
+    /// `tower_top_diameter_m` wide `hub_tower_gap_m` farther (1.24 r at 38 m, 0.75 r at 5 m).
+    /// Without it the shading ramp of a side-lit tower passed for its far edge at 38 m (0.6 r):
+    /// the distance read 64–71 m and the tracker's width window then kept the true band out
+    /// (`fly` seed 335). 0 = off. Range 0 or [1, 10].
+    pub tower_width_spinner_tol: f64,
     /// With a blade pointing down and a tracker's distance, one tower edge (the other hidden
     /// behind the blade) places the tower at the expected width on the hub's side of it, tried
     /// after every two-edge band. Only edges within this of vertical after roll qualify,
@@ -850,6 +857,7 @@ impl Default for DefaultParams {
             tower_width_hint_tol: 1.5,
             tower_width_min_radii: 0.5,
             tower_width_max_radii: 1.6,
+            tower_width_spinner_tol: 1.5,
             tower_one_edge_max_tilt_deg: 4.0,
             tower_one_edge_max_distance_m: 0.0,
             tower_scan_start_frac: 0.06,
@@ -1040,6 +1048,10 @@ impl DefaultParams {
         c.closed("tower_width_hint_tol", self.tower_width_hint_tol, 1.0, 10.0)?;
         c.closed("tower_width_min_radii", self.tower_width_min_radii, 0.0, 10.0)?;
         c.closed("tower_width_max_radii", self.tower_width_max_radii, 0.0, 10.0)?;
+        c.closed("tower_width_spinner_tol", self.tower_width_spinner_tol, 0.0, 10.0)?;
+        if self.tower_width_spinner_tol > 0.0 && self.tower_width_spinner_tol < 1.0 {
+            c.closed("tower_width_spinner_tol", self.tower_width_spinner_tol, 1.0, 10.0)?;
+        }
         c.closed("tower_one_edge_max_tilt_deg", self.tower_one_edge_max_tilt_deg, 0.0, 45.0)?;
         c.closed("tower_one_edge_max_distance_m", self.tower_one_edge_max_distance_m, 0.0, 1000.0)?;
         c.closed("tower_scan_start_frac", self.tower_scan_start_frac, 0.0, 1.0)?;

@@ -89,6 +89,29 @@ pub(crate) struct Expected {
     pub spinner_radius: Option<f64>,
     /// Image scale at the hub's depth, px per metre.
     pub px_per_m: Option<f64>,
+    /// The camera and turbine sizes that turn a spinner's radius into a tower width.
+    pub optics: Option<Optics>,
+}
+
+/// Focal length (working px) and the turbine's known sizes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Optics {
+    /// Focal length, working px.
+    pub focal_px: f64,
+    /// Spinner radius, m.
+    pub spinner_radius_m: f64,
+    /// Tower diameter just under the nacelle, m.
+    pub tower_top_diameter_m: f64,
+    /// Horizontal distance from the hub back to the tower axis, m.
+    pub hub_tower_gap_m: f64,
+}
+
+impl Optics {
+    /// The tower width (working px) a spinner of radius `r` px implies: the spinner gives the
+    /// hub's distance `f·R/r`, the tower stands `hub_tower_gap_m` farther. `None` for r ≤ 0.
+    pub fn tower_width_for_spinner(&self, r: f64) -> Option<f64> {
+        (r > 0.0).then(|| self.focal_px * self.tower_top_diameter_m / (self.focal_px * self.spinner_radius_m / r + self.hub_tower_gap_m))
+    }
 }
 
 /// Run the default pipeline on the working image, with the sizes `expected` from the tracker's
@@ -990,6 +1013,7 @@ fn measure_tower(
     b: &Candidate,
     g: &GradPlane<'_>,
     tower_width: Option<f64>,
+    optics: Option<&Optics>,
     hub_distance_m: Option<f64>,
     roll_deg: f64,
     h: f64,
@@ -1034,6 +1058,11 @@ fn measure_tower(
     let spinner_r = b.spinner.map_or(0.0, |k| k[2]);
     if spinner_r > 0.0 {
         window = (window.0.max(p.tower_width_min_radii * spinner_r), window.1.min(p.tower_width_max_radii * spinner_r));
+        // ... and about the width the spinner's own distance implies (see
+        // `tower_width_spinner_tol`).
+        if let Some(e) = optics.and_then(|o| o.tower_width_for_spinner(spinner_r)).filter(|_| p.tower_width_spinner_tol > 0.0) {
+            window = (window.0.max(e / p.tower_width_spinner_tol), window.1.min(e * p.tower_width_spinner_tol));
+        }
     }
     let both = |seeds: &[Segment]| seeds.iter().take(TOWER_SEEDS).filter_map(|s| fit_tower(p, g, s, window)).find(|f| !is_blade(f));
     // Only one edge in sight (the other behind a blade pointing down): with the width expected
@@ -1404,7 +1433,7 @@ pub(crate) fn recognise(
         found.search_circle = Some([b.centre[0], b.centre[1], p.support_end_dist_frac * h]);
         match grad {
             Some(g) => {
-                if let Some((fit, top_y)) = measure_tower(p, segs, &b, &g.x, tower_width, hints.hub_distance_m, roll_deg, h, found.detected) {
+                if let Some((fit, top_y)) = measure_tower(p, segs, &b, &g.x, tower_width, expected.optics.as_ref(), hints.hub_distance_m, roll_deg, h, found.detected) {
                     let row = top_y + p.tower_width_below_top_frac * h;
                     found.tower_top = fit.axis.x_at_y(top_y).map(|x| [x, top_y]);
                     found.tower_axis = Some(fit.axis);
@@ -1534,6 +1563,23 @@ mod tests {
         assert!(!axis_along_a_ray(&band, hub, &[192.4, 48.0], tol));
         // A ray pointing up never reaches a band below the hub.
         assert!(!axis_along_a_ray(&band, hub, &[347.6], tol));
+    }
+
+    #[test]
+    fn a_spinner_implies_the_tower_width_from_its_own_distance() {
+        // GoPro at 960 px wide (f = 417 px), the renderer's turbine.
+        let o = Optics { focal_px: 0.4343 * 960.0, spinner_radius_m: 1.6, tower_top_diameter_m: 2.2, hub_tower_gap_m: 4.2 };
+        let r_at = |d: f64| o.focal_px * 1.6 / d;
+        // 38 m: the tower top, 42.2 m away, is 1.24 spinner radii wide; 5 m: 0.75.
+        let far = o.tower_width_for_spinner(r_at(38.0)).unwrap() / r_at(38.0);
+        let close = o.tower_width_for_spinner(r_at(5.0)).unwrap() / r_at(5.0);
+        assert!((far - 2.2 / 1.6 * 38.0 / 42.2).abs() < 1e-9, "{far}");
+        assert!((close - 2.2 / 1.6 * 5.0 / 9.2).abs() < 1e-9, "{close}");
+        // Seed 335 of `hubtrack fly` at 38 m: a band 0.6 r wide (the shading ramp) is outside
+        // the default tolerance, the true 1.25 r inside.
+        let tol = DefaultParams::default().tower_width_spinner_tol;
+        assert!(0.6 < far / tol && far / tol < 1.25 && 1.25 < far * tol, "{far} {tol}");
+        assert!(o.tower_width_for_spinner(0.0).is_none());
     }
 
     #[test]
