@@ -62,6 +62,15 @@ impl<'a> Check<'a> {
         }
     }
 
+    /// `v == 0` (the feature off) or `lo <= v <= hi`, finite.
+    pub fn zero_or_closed(&self, key: &str, v: f64, lo: f64, hi: f64) -> Result<(), ParamError> {
+        if v == 0.0 || (v.is_finite() && v >= lo && v <= hi) {
+            Ok(())
+        } else {
+            Err(self.err(key, v.to_string(), format!("0 (off) or [{lo}, {hi}]")))
+        }
+    }
+
     /// Integer in `[lo, hi]`.
     pub fn count(&self, key: &str, v: u32, lo: u32, hi: u32) -> Result<(), ParamError> {
         if v >= lo && v <= hi {
@@ -92,5 +101,9 @@ mod tests {
         assert_eq!(e.to_string(), "config key `track.filter.damping` = 3 is out of range: allowed (0, 1]");
         assert!(c.closed("x", f64::NAN, 0.0, 1.0).is_err());
         assert!(c.less("lo", 2.0, "hi", 1.0).unwrap_err().allowed.contains("track.filter.hi"));
+        let e = c.zero_or_closed("tol", 0.5, 1.0, 10.0).unwrap_err();
+        assert_eq!(e.to_string(), "config key `track.filter.tol` = 0.5 is out of range: allowed 0 (off) or [1, 10]");
+        assert!(c.zero_or_closed("tol", 0.0, 1.0, 10.0).is_ok() && c.zero_or_closed("tol", 1.5, 1.0, 10.0).is_ok());
+        assert!(c.zero_or_closed("tol", f64::NAN, 1.0, 10.0).is_err());
     }
 }

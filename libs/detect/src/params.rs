@@ -1048,10 +1048,7 @@ impl DefaultParams {
         c.closed("tower_width_hint_tol", self.tower_width_hint_tol, 1.0, 10.0)?;
         c.closed("tower_width_min_radii", self.tower_width_min_radii, 0.0, 10.0)?;
         c.closed("tower_width_max_radii", self.tower_width_max_radii, 0.0, 10.0)?;
-        c.closed("tower_width_spinner_tol", self.tower_width_spinner_tol, 0.0, 10.0)?;
-        if self.tower_width_spinner_tol > 0.0 && self.tower_width_spinner_tol < 1.0 {
-            c.closed("tower_width_spinner_tol", self.tower_width_spinner_tol, 1.0, 10.0)?;
-        }
+        c.zero_or_closed("tower_width_spinner_tol", self.tower_width_spinner_tol, 1.0, 10.0)?;
         c.closed("tower_one_edge_max_tilt_deg", self.tower_one_edge_max_tilt_deg, 0.0, 45.0)?;
         c.closed("tower_one_edge_max_distance_m", self.tower_one_edge_max_distance_m, 0.0, 1000.0)?;
         c.closed("tower_scan_start_frac", self.tower_scan_start_frac, 0.0, 1.0)?;
