@@ -7,8 +7,10 @@ safety margin and the recording, and take a few minutes.
 """
 
 import json
+import os
+import signal
 
-from conftest import read_mcap_messages
+from conftest import wait_until, read_mcap_messages
 
 KEYS = {"seed": int, "success": bool, "final_distance_m": float, "final_yaw_deg": float,
         "final_lateral_m": float, "time_s": float, "min_rotor_plane_m": float}
@@ -65,3 +67,39 @@ def test_a_recorded_flight_has_every_channel_and_the_loop_is_closed(runner, tmp_
     assert vehicle and vehicle[-1]["link_ok"] and vehicle[-1]["armed"] and vehicle[-1]["custom_mode"] == 4
     # The recorded truth agrees with the outcome: the final frame is where the flight ended.
     assert abs(headers[-1]["truth"]["distance_m"] - run["final_distance_m"]) < 1.0
+
+
+def children(pid):
+    """Pids of the live processes whose parent is `pid` (from /proc)."""
+    kids = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                stat = open(f"/proc/{entry}/stat").read()
+            except OSError:
+                continue
+            fields = stat[stat.rindex(")") + 2:].split()
+            if int(fields[1]) == pid and fields[0] != "Z":
+                kids.append(int(entry))
+    return kids
+
+
+def alive(pid):
+    try:
+        stat = open(f"/proc/{pid}/stat").read()
+    except OSError:
+        return False
+    return stat[stat.rindex(")") + 2:].split()[0] != "Z"
+
+
+def test_a_killed_fly_leaves_no_stage_running(runner):
+    # `kill -9` of `hubtrack fly` (a CI timeout, a closed terminal): the kernel's parent-death
+    # signal (`run.stop_with_supervisor`, which fly sets) stops every stage, instead of leaving
+    # a simulated flight running against nobody.
+    fly = runner.start("hubtrack", "fly", "--json", "--seeds", "5", "--first-seed", "5", label="fly")
+    wait_until(lambda: len(children(fly.pid)) >= 4, timeout=60, what="fly's four stages running")
+    stages = children(fly.pid)
+    fly.signal(signal.SIGKILL)
+    fly.wait(10)
+    wait_until(lambda: not any(alive(p) for p in stages), timeout=10,
+               what=f"stages {stages} to stop after their supervisor was killed")

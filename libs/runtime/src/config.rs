@@ -138,6 +138,11 @@ pub struct RunConfig {
     pub startup_timeout_ms: u64,
     /// Interval of each stage's status heartbeat, ms.
     pub status_interval_ms: u64,
+    /// The stages get SIGTERM when the supervisor process dies (`kill -9`, a crash), so none
+    /// is left running unsupervised. Off for `hubtrack run` by default: in flight a supervisor
+    /// crash then leaves the pipeline flying rather than turning into the autopilot's guided
+    /// timeout. `hubtrack fly` always sets it (simulated flights must not leave stages behind).
+    pub stop_with_supervisor: bool,
     /// What the supervisor does when a stage dies or hangs.
     pub restart: RestartConfig,
     /// Scheduling niceness per stage, added to the niceness `hubtrack run` itself runs at (a
@@ -220,6 +225,7 @@ impl Default for RunConfig {
             stop_timeout_ms: 3000,
             startup_timeout_ms: 5000,
             status_interval_ms: 250,
+            stop_with_supervisor: false,
             restart: RestartConfig::default(),
             nice: DEFAULT_NICE.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
         }

@@ -137,7 +137,7 @@ fn iceoryx2_hop(args: &FramesBenchArgs, camera: SyntheticCamera) -> anyhow::Resu
     if args.record {
         let mut a = common.clone();
         a.extend(["--output".to_string(), rec_path.display().to_string()]);
-        recorder = Some(Stage::spawn("recorder", &stage_binary("recorder")?, &a, false, 0)?);
+        recorder = Some(Stage::spawn("recorder", &stage_binary("recorder")?, &a, false, 0, true)?);
         std::thread::sleep(Duration::from_millis(300));
     }
     let exe = std::env::current_exe()?;
@@ -151,7 +151,7 @@ fn iceoryx2_hop(args: &FramesBenchArgs, camera: SyntheticCamera) -> anyhow::Resu
     let tap_out = tap.stdout.take().expect("piped");
     let lines = std::thread::spawn(move || BufReader::new(tap_out).lines().map_while(Result::ok).collect::<Vec<_>>());
     std::thread::sleep(Duration::from_millis(300));
-    let mut capture = Stage::spawn("capture", &stage_binary("capture")?, &common, false, 0)?;
+    let mut capture = Stage::spawn("capture", &stage_binary("capture")?, &common, false, 0, true)?;
     std::thread::sleep(Duration::from_secs_f64(args.seconds));
     capture.stop(Duration::from_secs(3));
     let mut latency_us = Vec::new();

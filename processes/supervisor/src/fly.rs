@@ -87,6 +87,8 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
         overrides.extend([
             format!("run.stages={stages:?}"),
             format!("sim.seed={seed}"),
+            // A killed `hubtrack fly` must not leave simulated flights running.
+            "run.stop_with_supervisor=true".to_string(),
             format!("sim.pace=\"{}\"", if args.realtime { "realtime" } else { "lockstep" }),
             "control.clock=\"sim\"".to_string(),
             format!("control.link=\"udpin:127.0.0.1:{port}\""),

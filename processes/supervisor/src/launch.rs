@@ -50,22 +50,35 @@ pub struct Stage {
 impl Stage {
     /// Starts `binary args...` at niceness `nice` relative to our own (so a systemd `Nice=`
     /// sets the base), forwarding its stdout and stderr line by line to ours (its stdout to our
-    /// stderr when `stdout_to_stderr`, to keep our stdout machine-readable).
-    pub fn spawn(name: &str, binary: &Path, args: &[String], stdout_to_stderr: bool, nice: i32) -> anyhow::Result<Stage> {
+    /// stderr when `stdout_to_stderr`, to keep our stdout machine-readable). With
+    /// `stop_with_us`, the kernel sends it SIGTERM when we die (`run.stop_with_supervisor`).
+    ///
+    /// Call it from the thread that lives as long as the stage should: the kernel's parent-death
+    /// signal fires when the *thread* that forked exits.
+    pub fn spawn(name: &str, binary: &Path, args: &[String], stdout_to_stderr: bool, nice: i32, stop_with_us: bool) -> anyhow::Result<Stage> {
         let mut cmd = Command::new(binary);
         cmd.args(args).stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
         let target = (own_nice()? + nice).clamp(-20, 19);
-        if nice != 0 {
-            // SAFETY: setpriority(2) is a plain system call, safe between fork and exec. Set
-            // before exec, so every thread the stage starts inherits it.
-            unsafe {
-                cmd.pre_exec(move || {
-                    if libc::setpriority(libc::PRIO_PROCESS, 0, target) != 0 {
+        // SAFETY: getpid(2) cannot fail.
+        let parent = unsafe { libc::getpid() };
+        // SAFETY: setpriority(2), prctl(2), getppid(2) and raise(3) are plain system calls, safe
+        // between fork and exec. Set before exec, so every thread the stage starts inherits them.
+        unsafe {
+            cmd.pre_exec(move || {
+                if nice != 0 && libc::setpriority(libc::PRIO_PROCESS, 0, target) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                if stop_with_us {
+                    if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM as libc::c_ulong, 0, 0, 0) != 0 {
                         return Err(std::io::Error::last_os_error());
                     }
-                    Ok(())
-                });
-            }
+                    // We may have died between fork and prctl: then nobody would signal it.
+                    if libc::getppid() != parent {
+                        libc::raise(libc::SIGTERM);
+                    }
+                }
+                Ok(())
+            });
         }
         let mut child = cmd
             .spawn()

@@ -114,7 +114,7 @@ impl Supervisor {
         let args = self.args_for(&self.stages[i]);
         let s = &mut self.stages[i];
         let nice = self.config.run.nice_of(s.name);
-        let stage = Stage::spawn(s.name, &s.binary, &args, self.stage_stdout_to_stderr, nice)?;
+        let stage = Stage::spawn(s.name, &s.binary, &args, self.stage_stdout_to_stderr, nice, self.config.run.stop_with_supervisor)?;
         log::info!("started {} (pid {}, nice {nice})", s.name, stage.pid());
         s.process = Some(stage);
         s.state = StageState::Starting;

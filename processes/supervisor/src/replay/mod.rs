@@ -202,7 +202,7 @@ fn start_stages(
         a
     };
     for (name, a) in std::iter::once(("recorder", rec_args)).chain(stages.iter().map(|s| (*s, with_mode(s)))) {
-        let stage = Stage::spawn(name, &stage_binary(name)?, &a, false, 0)?;
+        let stage = Stage::spawn(name, &stage_binary(name)?, &a, false, 0, true)?;
         let pid = stage.pid();
         processes.push(stage);
         let t0 = Instant::now();
