@@ -128,6 +128,22 @@ pub fn camera_pose_at(
     Some(CameraPose { r_wc: r_wb * r_bc, v_w })
 }
 
+/// Camera position at `t_ns`, world frame (NED), m: the vehicle's local position carried on
+/// with its velocity from the sample time (the camera's offset from the vehicle's centre is a
+/// few centimetres and ignored). `None` without a valid position or when the sample is further
+/// than `max_age_s` from `t`.
+pub fn camera_position_at(v: &VehicleState, t_ns: u64, max_age_s: f64) -> Option<Vector3<f64>> {
+    if !v.position_valid {
+        return None;
+    }
+    let age = sample_time_ns(v).map_or(0.0, |ts| dt_s(t_ns, ts));
+    if !age.is_finite() || age.abs() > max_age_s {
+        return None;
+    }
+    let p = Vector3::from(v.position_ned_m) + Vector3::from(v.velocity_ned_m_s) * age;
+    p.iter().all(|x| x.is_finite()).then_some(p)
+}
+
 /// Result of moving an image point with the camera's motion.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EgoMotion {

@@ -58,6 +58,7 @@
 pub mod camera;
 pub mod estimate;
 pub mod filter;
+pub mod parallax;
 pub mod params;
 mod tracker;
 

@@ -42,6 +42,8 @@ pub struct TrackConfig {
     pub distance: DistanceConfig,
     /// Relative yaw estimation (thesis section 7.4).
     pub yaw: YawConfig,
+    /// Distance from motion parallax (the hub triangulated from the vehicle's positions).
+    pub parallax: ParallaxConfig,
 }
 
 /// Centre focal length of the GoPro HERO3+ wide lens divided by the image width (833.9 / 1920).
@@ -304,6 +306,67 @@ impl Default for DistanceConfig {
     }
 }
 
+/// `[track.parallax]`: distance from motion parallax (`crate::parallax`). The detected hub
+/// seen from the vehicle's positions (the autopilot's local position, the attitude and the
+/// camera model give a world ray per frame) is triangulated over a sliding window; the distance
+/// to that point is a measurement of its own, and tower-width or spinner distances that
+/// disagree with it are dropped (a tower band half hidden by a blade and a spinner circle on
+/// part of the spinner read twice the distance together, so they cannot catch each other).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ParallaxConfig {
+    /// Use it (needs a valid vehicle position and attitude).
+    pub enabled: bool,
+    /// Sightings older than this are forgotten, s (the baseline is what the vehicle flew in
+    /// this time; a longer window also spans more of the autopilot's position drift).
+    pub window_s: f64,
+    /// Standard deviation of the direction to the detected hub, degrees (hub placement and
+    /// attitude error: 0.5° is ~4 px at 960 px wide with the GoPro lens).
+    pub bearing_std_deg: f64,
+    /// Standard deviation of where on the rotor the detector puts the hub, m (the spinner is
+    /// 3.2 m across; the crossing of blade lines wanders over it): close in it outweighs
+    /// `bearing_std_deg`, and rays from a few metres that cross within it say nothing.
+    pub hub_placement_std_m: f64,
+    /// Successive frames share their hub-placement error: the covariance of a triangulation
+    /// over more sightings than this is inflated by `sightings / independent_sightings`.
+    pub independent_sightings: u32,
+    /// Fewest sightings triangulated.
+    pub min_sightings: u32,
+    /// The parallax distance is used only when its standard deviation is at most this fraction
+    /// of it (enough baseline across the line of sight: hovering or flying straight at the hub
+    /// gives none).
+    pub max_relative_std: f64,
+    /// ... and when the rays pass the triangulated point within this many of their standard
+    /// deviations (RMS; from `bearing_std_deg` and `hub_placement_std_m`): more means the
+    /// sightings are not of one point (the track moved to another feature).
+    pub max_residual_sigmas: f64,
+    /// ... and when the triangulated hub is at least this many times the spread of the camera
+    /// positions across the line of sight away: rays of two different points fan out from
+    /// where the cameras were and cross among them.
+    pub min_distance_baselines: f64,
+    /// Chi-square threshold (1 degree of freedom) between a frame's tower-width or spinner
+    /// distance and the parallax distance: above it that measurement is dropped (a dropped tower
+    /// band gives no yaw either).
+    pub consistency_chi2: f64,
+}
+
+impl Default for ParallaxConfig {
+    fn default() -> Self {
+        ParallaxConfig {
+            enabled: true,
+            window_s: 10.0,
+            bearing_std_deg: 0.5,
+            hub_placement_std_m: 0.5,
+            independent_sightings: 10,
+            min_sightings: 10,
+            max_relative_std: 0.2,
+            max_residual_sigmas: 3.0,
+            min_distance_baselines: 2.0,
+            consistency_chi2: 9.0,
+        }
+    }
+}
+
 /// `[track.yaw]`: relative yaw from the hub–tower gap and the blade skew, fused and filtered.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -346,10 +409,16 @@ pub struct YawConfig {
     /// detector finds it on its working image, about as wide: the edge column within ±1 px,
     /// the rear corner's rounding and the chamfer a few px more).
     pub nacelle_std_px: f64,
-    /// The nacelle is used only while the filtered distance is at least this, m. Closer, its
-    /// rear hides behind the spinner for the yaws left at the end of the approach (at 7 m up
-    /// to ~15°), and what the detector finds beside the spinner is a blade root or the tower
-    /// (`fly` seed 20: one such reading at 7 m turned a −1° approach into −13°).
+    /// The nacelle is used only while the filtered distance is at least this, m. Closer, the
+    /// rear corner of a small yaw lies inside the band the detector skips beside the spinner
+    /// (`detect.default.nacelle_min_offset_m`, 2 m: at 23 m the end of a 6° yaw is 1.9 m out),
+    /// so what it finds there is the spinner's own rim (with the circle a few px off its
+    /// centre), a blade root or the tower (`fly` seed 20: one such reading at 7 m turned a −1°
+    /// approach into −13°; seed 412 at 23 m: −7.7° read for +19°, on the spinner's far rim).
+    /// In 14 recorded session-21 flights the readings the tracker used at 10–25 m (truth) had
+    /// the right sign for 5–34 % of those with |yaw| ≥ 3° (mean error 16–34°); at 25–40 m
+    /// 63–76 %. 12 → 25 (session 21, with the parallax distance): `fly` seeds 161–480 296
+    /// against 292 of 320, |final yaw| p90 4.2° either way (4.6° for session 20's build).
     pub nacelle_min_distance_m: f64,
     /// Least standard deviation of a nacelle yaw, degrees: the nacelle's shape (rounded rear,
     /// a cooler on the roof) is known roughly only.
@@ -448,7 +517,7 @@ impl Default for YawConfig {
             nacelle_rear_m: 11.2,
             nacelle_half_width_m: 1.7,
             nacelle_std_px: 3.0,
-            nacelle_min_distance_m: 12.0,
+            nacelle_min_distance_m: 25.0,
             nacelle_min_std_deg: 2.0,
             nacelle_min_abs_deg: 6.0,
             nacelle_gate_px: 3.0,
@@ -543,6 +612,18 @@ impl TrackConfig {
         c.count("jump_accept_count", d.jump_accept_count, 1, MAX_COUNT)?;
         c.open_closed("max_std_m", d.max_std_m, 0.0, 1e4)?;
         c.open_closed("stale_after_s", d.stale_after_s, 0.0, MAX_TIME_S)?;
+
+        let c = Check::new("track.parallax");
+        let p = &self.parallax;
+        c.open_closed("window_s", p.window_s, 0.0, MAX_TIME_S)?;
+        c.open_closed("bearing_std_deg", p.bearing_std_deg, 0.0, 90.0)?;
+        c.closed("hub_placement_std_m", p.hub_placement_std_m, 0.0, MAX_SIZE_M)?;
+        c.count("independent_sightings", p.independent_sightings, 1, MAX_COUNT)?;
+        c.count("min_sightings", p.min_sightings, 2, MAX_COUNT)?;
+        c.open_closed("max_relative_std", p.max_relative_std, 0.0, 10.0)?;
+        c.open_closed("max_residual_sigmas", p.max_residual_sigmas, 0.0, 100.0)?;
+        c.closed("min_distance_baselines", p.min_distance_baselines, 0.0, 100.0)?;
+        c.open_closed("consistency_chi2", p.consistency_chi2, 0.0, MAX_CHI2)?;
 
         let c = Check::new("track.yaw");
         let y = &self.yaw;

@@ -4,11 +4,12 @@
 use hubtrack_types::{Detection, TrackMode, TrackState, VehicleState};
 use nalgebra::Rotation3;
 
-use crate::camera::{camera_pose_at, camera_to_body, dt_s, ego_motion, focal_length_px, CameraPose, Pinhole};
+use crate::camera::{camera_pose_at, camera_position_at, camera_to_body, dt_s, ego_motion, focal_length_px, CameraPose, Pinhole};
 use crate::estimate::{
     blade_skew_yaw, distance_from_spinner, distance_from_tower_width, fuse, nacelle_excess_sigma, yaw_from_gap, yaw_from_nacelle, Estimate,
 };
 use crate::filter::{CvModel, HubFilter, ScalarFilter};
+use crate::parallax::{ParallaxRanger, Sighting};
 use crate::params::{ParamError, TrackConfig};
 
 /// Variance of a uniform distribution over a unit interval (`w²/12` for width `w`).
@@ -77,6 +78,8 @@ struct Core {
     pose: Option<CameraPose>,
     distance: ScalarFilter,
     yaw: ScalarFilter,
+    /// The current track's sightings, for the parallax distance.
+    parallax: ParallaxRanger,
     /// Raw per-frame (distance, yaw) of the baseline.
     raw: (Option<Estimate>, Option<Estimate>),
     last_seq: u64,
@@ -104,6 +107,7 @@ impl Core {
             pose: None,
             distance: ScalarFilter::default(),
             yaw: ScalarFilter::default(),
+            parallax: ParallaxRanger::default(),
             raw: (None, None),
             last_seq: 0,
         })
@@ -295,6 +299,8 @@ impl Core {
             lost: false,
         });
         self.candidate = None;
+        // Another hub, or the same after a loss: rays of the old one would not meet these.
+        self.parallax.clear();
     }
 
     /// Handles one hub measurement at `t_ns`; returns whether it was accepted into the track,
@@ -405,6 +411,24 @@ impl Core {
         self.output(t, det.stamps.seq, det.stamps.capture_ns)
     }
 
+    /// Adds this frame's sighting of the detected hub (the camera's position and the world ray
+    /// through the hub pixel) and returns the distance the current track's sightings give.
+    fn parallax_distance(&mut self, det: &Detection, t: u64) -> Option<Estimate> {
+        let cfg = &self.cfg.parallax;
+        if !cfg.enabled {
+            return None;
+        }
+        let v = self.vehicle.as_ref()?;
+        let max_age = self.cfg.ego_motion.max_state_age_s;
+        let camera_m = camera_position_at(v, t, max_age)?;
+        let pose = camera_pose_at(v, t, max_age, &self.r_bc, false)?;
+        let ray = pose.r_wc * self.camera().ray(det.hub_px).normalize();
+        self.parallax.push(Sighting { t_ns: t, camera_m, ray }, cfg);
+        let d = self.parallax.distance_from(&camera_m, &ray, cfg)?;
+        log::trace!("parallax distance {:.1}±{:.1} m from {} sightings", d.value, d.std, self.parallax.len());
+        Some(d)
+    }
+
     /// Tower-depth measurement of a detection.
     fn tower_depth(&self, det: &Detection) -> Option<Estimate> {
         let d = &self.cfg.distance;
@@ -479,6 +503,24 @@ impl Core {
                     (_, Some(_)) => "spinner",
                     _ => "neither",
                 });
+            }
+        }
+
+        // Motion parallax: a size-free distance. A tower or spinner distance it contradicts is
+        // dropped, the tower's gap with it (see `[track.parallax]`).
+        let parallax = self.parallax_distance(det, t);
+        if let Some(p) = parallax {
+            let disagrees = |m: Estimate| (m.value - p.value).powi(2) / (m.var() + p.var()).max(1e-12) > self.cfg.parallax.consistency_chi2;
+            if tower.is_some_and(|td| disagrees(Estimate { value: td.value - offset, std: td.std })) {
+                log::debug!("tower {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped", tower.map_or(0.0, |td| td.value - offset), p.value, p.std);
+                tower = None;
+                tower_disputed = true;
+                tower_rejected = true;
+                rejected_width_ratio = None;
+            }
+            if spinner.is_some_and(disagrees) {
+                log::debug!("spinner {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped", spinner.map_or(0.0, |sp| sp.value), p.value, p.std);
+                spinner = None;
             }
         }
 
@@ -557,7 +599,7 @@ impl Core {
             let value = td.value - offset * psi.cos();
             (value > 0.0).then(|| Estimate { value, std: td.std.hypot(offset * psi.sin() * sig) })
         });
-        if let Some(m) = fuse(&[tower_hub, spinner].into_iter().flatten().collect::<Vec<_>>()) {
+        if let Some(m) = fuse(&[tower_hub, spinner, parallax].into_iter().flatten().collect::<Vec<_>>()) {
             self.distance.update(m, dc.gate_chi2, dc.jump_accept_count, t);
         }
     }

@@ -1008,3 +1008,52 @@ fn a_nacelle_end_from_an_unsettled_hub_is_not_used() {
     let open = run(0.0);
     assert!(open.yaw_deg - psi_deg > 4.0, "no gate, the unsettled hub's reading owns the yaw: {}", open.yaw_deg);
 }
+
+/// A sideways pass 33 m in front of the hub (east at 1 m/s, the nose kept on the hub) with a
+/// tower band and a spinner circle that both read half their size (a band half hidden by a
+/// blade, a circle on part of the spinner: `fly` seed 412): the two agree with each other at
+/// 66 m, and only the rays from the vehicle's positions can tell. Returns the last state.
+fn sideways_pass_with_half_size_cues(cfg: &TrackConfig) -> TrackState {
+    use hubtrack_track::camera::{camera_pose_at, camera_to_body, Pinhole};
+    use nalgebra::Vector3;
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let cam = Pinhole::with_focal(W, H, f);
+    let r_bc = camera_to_body(cfg.camera.mount_pitch_deg.to_radians());
+    let hub = Vector3::new(33.0, 0.0, -80.0);
+    let mut tr = Tracker::new(cfg.clone()).unwrap();
+    let mut rng = Rng::new(412);
+    let mut s = TrackState::default();
+    let fps = 15.0;
+    for k in 0..(20.0 * fps) as u64 {
+        let t = frame_t(k, fps);
+        let pos = Vector3::new(0.0, -10.0 + (t - 1.0), -80.0);
+        let to_hub = hub - pos;
+        let mut v = vehicle(t, 0.0, 0.0, to_hub.y.atan2(to_hub.x), [0.0; 3]);
+        v.position_valid = true;
+        v.position_ned_m = pos.into();
+        v.velocity_ned_m_s = [0.0, 1.0, 0.0];
+        let pose = camera_pose_at(&v, ns(t), 1.0, &r_bc, false).unwrap();
+        let px = cam.project(&(pose.r_wc.inverse() * to_hub)).unwrap();
+        let d_hub = to_hub.norm();
+        let mut d = det(k, t, Some([px[0] + 2.0 * rng.normal(), px[1] + 2.0 * rng.normal()]));
+        d.tower_found = true;
+        d.tower_width_px = 0.5 * f * cfg.distance.tower_diameter_m / (d_hub + cfg.yaw.hub_tower_offset_m) + 0.3 * rng.normal();
+        d.hub_tower_gap_px = 0.0;
+        d.circle_found = true;
+        d.circle = [px[0], px[1], 0.5 * f * cfg.distance.spinner_diameter_m / (2.0 * d_hub) + 0.2 * rng.normal()];
+        s = tr.update(&d, Some(&v));
+    }
+    s
+}
+
+#[test]
+fn motion_parallax_corrects_a_tower_and_spinner_that_agree_on_twice_the_distance() {
+    let mut off = pinhole_config();
+    off.parallax.enabled = false;
+    let fooled = sideways_pass_with_half_size_cues(&off);
+    assert!(fooled.distance_valid && fooled.distance_m > 55.0, "without parallax: {} m", fooled.distance_m);
+    let s = sideways_pass_with_half_size_cues(&pinhole_config());
+    // At the end of the pass the hub is hypot(33, 9) = 34.2 m away.
+    let truth = 33.0_f64.hypot(9.0);
+    assert!(s.distance_valid && (s.distance_m - truth).abs() < 0.15 * truth, "with parallax: {} ± {} m for {truth:.1}", s.distance_m, s.distance_std_m);
+}
