@@ -68,6 +68,28 @@ def test_a_recorded_flight_has_every_channel_and_the_loop_is_closed(runner, tmp_
     # The recorded truth agrees with the outcome: the final frame is where the flight ended.
     assert abs(headers[-1]["truth"]["distance_m"] - run["final_distance_m"]) < 1.0
 
+    # `hubtrack diagnose` compares the estimates with the truth; its numbers match what this
+    # independent reader computes from the same messages.
+    r = runner.run("hubtrack", "diagnose", "--json", str(path), timeout=120)
+    assert r.returncode == 0, r.stderr[-3000:]
+    report = json.loads(r.stdout)
+    everything = report["bands"][-1]
+    assert everything["name"] == "all"
+    in_view = {h["seq"]: h for h in headers if h["truth"]["turbine_in_view"]}
+    dets = {d["stamps"]["seq"]: d for t, m in msgs if t == "/detections" for d in [json.loads(m.data)]}
+    assert everything["frames"] == len(in_view)
+    detected = sum(1 for s in in_view if dets.get(s, {}).get("detected"))
+    assert abs(everything["detected_pct"] - 100.0 * detected / len(in_view)) < 1e-6
+    tracks = {t["stamps"]["seq"]: t for tp, m in msgs if tp == "/track" for t in [json.loads(m.data)]}
+    ratios = sorted(tracks[s]["distance_m"] / h["truth"]["distance_m"] for s, h in in_view.items()
+                    if s in tracks and tracks[s]["distance_valid"])
+    assert abs(everything["distance_ratio"][1] - ratios[int((len(ratios) - 1) * 0.5 + 0.5)]) < 1e-9
+    assert sum(report["task_frames"].values()) == len(setpoints)
+    assert report["last"]["seq"] == max(in_view)
+    # A recording without truth is refused with the cause named.
+    bad = runner.run("hubtrack", "diagnose", str(path.parent / "missing.mcap"), timeout=60)
+    assert bad.returncode != 0 and "missing.mcap" in bad.stderr
+
 
 def children(pid):
     """Pids of the live processes whose parent is `pid` (from /proc)."""

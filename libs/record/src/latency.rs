@@ -5,13 +5,10 @@
 //! `recv_ns` − producer `publish_ns` for the same seq; end to end = setpoint `publish_ns` −
 //! `capture_ns`. Frames a stage never produced a result for count as dropped at that stage.
 
-use crate::writer::ChannelKind;
-use crate::RecordError;
-use hubtrack_types::{Detection, FrameHeader, Setpoint, Stamps, TrackState};
-use mcap::sans_io::LinearReaderOptions;
+use crate::channels::{self, Channels};
+use hubtrack_types::{Detection, Stamps};
 use serde::Serialize;
 use std::collections::BTreeMap;
-use std::io::BufReader;
 use std::path::Path;
 
 /// Percentiles of one latency, microseconds.
@@ -53,29 +50,8 @@ pub struct Report {
     pub read_error: Option<String>,
 }
 
-/// Why no report could be made.
-#[derive(Debug, thiserror::Error)]
-pub enum LatencyError {
-    /// Reading failed before any message.
-    #[error(transparent)]
-    Record(#[from] RecordError),
-    /// The file is not MCAP.
-    #[error("{path} is not an MCAP file (bad magic)")]
-    NotMcap {
-        /// The file.
-        path: std::path::PathBuf,
-    },
-    /// The file holds no stamped hubtrack message.
-    #[error("{path} holds no stamped hubtrack messages ({messages} messages read{detail})")]
-    NoStamps {
-        /// The file.
-        path: std::path::PathBuf,
-        /// Messages read.
-        messages: u64,
-        /// More detail.
-        detail: String,
-    },
-}
+/// Why no report could be made (the recording could not be read).
+pub use crate::channels::ReadError as LatencyError;
 
 fn stat(name: &str, mut v: Vec<f64>, dropped: u64) -> Stat {
     v.sort_by(|a, b| a.total_cmp(b));
@@ -95,81 +71,11 @@ fn us(later: u64, earlier: u64) -> Option<f64> {
     (later >= earlier && earlier > 0).then(|| (later - earlier) as f64 / 1e3)
 }
 
-fn stamped(s: &Stamps) -> bool {
-    s.capture_ns > 0 && s.recv_ns > 0 && s.publish_ns > 0
-}
-
 /// Reads `path` (complete, cut or damaged: whatever is readable) and computes the report.
 pub fn analyze(path: &Path) -> Result<Report, LatencyError> {
-    let io = |source| RecordError::Io { path: path.into(), source };
-    let mut file = std::fs::File::open(path).map_err(io)?;
-    let mut magic = [0u8; 8];
-    use std::io::Read;
-    if file.read_exact(&mut magic).is_err() || &magic != crate::reader::MCAP_MAGIC {
-        return Err(LatencyError::NotMcap { path: path.into() });
-    }
-    let file = std::fs::File::open(path).map_err(io)?;
-    let mut frames: BTreeMap<u64, FrameHeader> = BTreeMap::new();
-    let mut dets: BTreeMap<u64, Detection> = BTreeMap::new();
-    let mut tracks: BTreeMap<u64, TrackState> = BTreeMap::new();
-    let mut sps: BTreeMap<u64, Setpoint> = BTreeMap::new();
-    let mut report = Report::default();
-    let mut messages = 0u64;
-    let options = LinearReaderOptions::default().with_skip_end_magic(true);
-    for m in mcap::io::MessageReader::new_with_options(BufReader::new(file), options) {
-        let m = match m {
-            Ok(m) => m,
-            Err(e) => {
-                report.read_error = Some(e.to_string());
-                break;
-            }
-        };
-        messages += 1;
-        let topic = m.channel.topic.as_str();
-        let unstamped = |r: &mut Report| *r.unstamped.entry(topic.to_string()).or_insert(0) += 1;
-        match ChannelKind::from_topic(topic) {
-            Some(ChannelKind::FrameHeader) => match serde_json::from_slice::<FrameHeader>(&m.data) {
-                Ok(h) if h.capture_ns > 0 && h.publish_ns > 0 => {
-                    frames.insert(h.seq, h);
-                }
-                _ => unstamped(&mut report),
-            },
-            Some(ChannelKind::Detection) => match serde_json::from_slice::<Detection>(&m.data) {
-                Ok(d) if stamped(&d.stamps) => {
-                    dets.insert(d.stamps.seq, d);
-                }
-                _ => unstamped(&mut report),
-            },
-            Some(ChannelKind::Track) => match serde_json::from_slice::<TrackState>(&m.data) {
-                Ok(t) if stamped(&t.stamps) => {
-                    tracks.insert(t.stamps.seq, t);
-                }
-                _ => unstamped(&mut report),
-            },
-            Some(ChannelKind::Setpoint) => match serde_json::from_slice::<Setpoint>(&m.data) {
-                Ok(s) if stamped(&s.stamps) => {
-                    sps.insert(s.stamps.seq, s);
-                }
-                _ => unstamped(&mut report),
-            },
-            Some(_) => {}
-            None if topic == "/frames" || topic == crate::writer::OVERLAY_TOPIC => {}
-            None => *report.unknown_topics.entry(topic.to_string()).or_insert(0) += 1,
-        }
-    }
-    if frames.is_empty() && dets.is_empty() && tracks.is_empty() && sps.is_empty() {
-        let mut detail = String::new();
-        if let Some(e) = &report.read_error {
-            detail += &format!("; reading stopped: {e}");
-        }
-        if !report.unstamped.is_empty() {
-            detail += &format!("; unstamped: {:?}", report.unstamped);
-        }
-        if !report.unknown_topics.is_empty() {
-            detail += &format!("; unknown topics: {:?}", report.unknown_topics.keys().collect::<Vec<_>>());
-        }
-        return Err(LatencyError::NoStamps { path: path.into(), messages, detail });
-    }
+    let Channels { frames, detections: dets, tracks, setpoints: sps, unstamped, unknown_topics, read_error, .. } =
+        channels::read(path)?;
+    let mut report = Report { unstamped, unknown_topics, read_error, ..Default::default() };
     // Frames are only counted as expected for a stage within the seq range that stage covered
     // (a stage started later, or a recording cut early, is not "dropping").
     let missing = |have: &BTreeMap<u64, Stamps>, upstream: &BTreeMap<u64, u64>| -> u64 {
@@ -254,7 +160,8 @@ pub fn print(report: &Report) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::writer::{Recording, RecordingOptions};
+    use crate::writer::{ChannelKind, Recording, RecordingOptions};
+    use hubtrack_types::FrameHeader;
 
     fn stamps(seq: u64, base: u64) -> Stamps {
         Stamps { seq, capture_ns: base, recv_ns: base + 2_000_000, publish_ns: base + 5_000_000 }

@@ -13,6 +13,8 @@
 //! `publish_time` the wall-clock time the publishing stage sent it.
 
 pub mod annotations;
+pub mod channels;
+pub mod flight;
 pub mod latency;
 pub mod raw_image;
 pub mod reader;

@@ -69,6 +69,14 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Compare a simulated flight's detections and track with its truth, per band of distance.
+    Diagnose {
+        /// A recording with truth (`hubtrack fly --record FILE`, or its replay).
+        file: PathBuf,
+        /// One JSON object with `bands`, `task_frames` and `last`.
+        #[arg(long)]
+        json: bool,
+    },
     /// Fly seeded simulated approaches through the real processes; a table (or JSON lines) of outcomes.
     Fly(fly::FlyArgs),
     /// Replay a recording's inputs through chosen stages and record their new outputs.
@@ -180,6 +188,7 @@ fn main() {
         Command::Replay(a) => replay::run(a),
         Command::Fly(a) => fly::run(a),
         Command::Latency { file, json } => latency(&file, json),
+        Command::Diagnose { file, json } => diagnose(&file, json),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
@@ -381,6 +390,17 @@ fn latency(file: &Path, json: bool) -> anyhow::Result<()> {
     } else {
         println!("latency from the stamps in {}", file.display());
         hubtrack_record::latency::print(&report);
+    }
+    Ok(())
+}
+
+fn diagnose(file: &Path, json: bool) -> anyhow::Result<()> {
+    let report = hubtrack_record::flight::analyze(file)?;
+    if json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        println!("{} against its truth, per band of true distance", file.display());
+        hubtrack_record::flight::print(&report);
     }
     Ok(())
 }

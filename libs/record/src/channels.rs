@@ -1,0 +1,127 @@
+//! The pipeline's messages of one recording, by frame `seq`: what the analysis tools
+//! ([`crate::latency`], [`crate::flight`]) read.
+
+use crate::writer::ChannelKind;
+use crate::RecordError;
+use hubtrack_types::{Detection, FrameHeader, Setpoint, Stamps, TrackState};
+use mcap::sans_io::LinearReaderOptions;
+use std::collections::BTreeMap;
+use std::io::{BufReader, Read};
+use std::path::{Path, PathBuf};
+
+/// The stamped messages of a recording, keyed by frame `seq` (the last one wins).
+#[derive(Debug, Clone, Default)]
+pub struct Channels {
+    /// `/frames/header`: stamps and, from the simulator, the truth.
+    pub frames: BTreeMap<u64, FrameHeader>,
+    /// `/detections`.
+    pub detections: BTreeMap<u64, Detection>,
+    /// `/track`.
+    pub tracks: BTreeMap<u64, TrackState>,
+    /// `/setpoints`.
+    pub setpoints: BTreeMap<u64, Setpoint>,
+    /// Messages without usable stamps (all zero) or that did not decode, per topic.
+    pub unstamped: BTreeMap<String, u64>,
+    /// Messages on topics not read here (neither the above nor the images), per topic.
+    pub unknown_topics: BTreeMap<String, u64>,
+    /// Why reading stopped early, if the file is cut or damaged.
+    pub read_error: Option<String>,
+    /// Messages read.
+    pub messages: u64,
+}
+
+/// Why a recording could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    /// Opening or reading the file failed.
+    #[error(transparent)]
+    Record(#[from] RecordError),
+    /// The file is not MCAP.
+    #[error("{path} is not an MCAP file (bad magic)")]
+    NotMcap {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file holds no stamped hubtrack message.
+    #[error("{path} holds no stamped hubtrack messages ({messages} messages read{detail})")]
+    NoStamps {
+        /// The file.
+        path: PathBuf,
+        /// Messages read.
+        messages: u64,
+        /// More detail.
+        detail: String,
+    },
+}
+
+fn stamped(s: &Stamps) -> bool {
+    s.capture_ns > 0 && s.recv_ns > 0 && s.publish_ns > 0
+}
+
+/// Reads `path` (complete, cut or damaged: whatever is readable).
+pub fn read(path: &Path) -> Result<Channels, ReadError> {
+    let io = |source| RecordError::Io { path: path.into(), source };
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut magic = [0u8; 8];
+    if file.read_exact(&mut magic).is_err() || &magic != crate::reader::MCAP_MAGIC {
+        return Err(ReadError::NotMcap { path: path.into() });
+    }
+    let file = std::fs::File::open(path).map_err(io)?;
+    let mut c = Channels::default();
+    let options = LinearReaderOptions::default().with_skip_end_magic(true);
+    for m in mcap::io::MessageReader::new_with_options(BufReader::new(file), options) {
+        let m = match m {
+            Ok(m) => m,
+            Err(e) => {
+                c.read_error = Some(e.to_string());
+                break;
+            }
+        };
+        c.messages += 1;
+        let topic = m.channel.topic.as_str();
+        let mut unstamped = || *c.unstamped.entry(topic.to_string()).or_insert(0) += 1;
+        match ChannelKind::from_topic(topic) {
+            Some(ChannelKind::FrameHeader) => match serde_json::from_slice::<FrameHeader>(&m.data) {
+                Ok(h) if h.capture_ns > 0 && h.publish_ns > 0 => {
+                    c.frames.insert(h.seq, h);
+                }
+                _ => unstamped(),
+            },
+            Some(ChannelKind::Detection) => match serde_json::from_slice::<Detection>(&m.data) {
+                Ok(d) if stamped(&d.stamps) => {
+                    c.detections.insert(d.stamps.seq, d);
+                }
+                _ => unstamped(),
+            },
+            Some(ChannelKind::Track) => match serde_json::from_slice::<TrackState>(&m.data) {
+                Ok(t) if stamped(&t.stamps) => {
+                    c.tracks.insert(t.stamps.seq, t);
+                }
+                _ => unstamped(),
+            },
+            Some(ChannelKind::Setpoint) => match serde_json::from_slice::<Setpoint>(&m.data) {
+                Ok(s) if stamped(&s.stamps) => {
+                    c.setpoints.insert(s.stamps.seq, s);
+                }
+                _ => unstamped(),
+            },
+            Some(_) => {}
+            None if topic == "/frames" || topic == crate::writer::OVERLAY_TOPIC => {}
+            None => *c.unknown_topics.entry(topic.to_string()).or_insert(0) += 1,
+        }
+    }
+    if c.frames.is_empty() && c.detections.is_empty() && c.tracks.is_empty() && c.setpoints.is_empty() {
+        let mut detail = String::new();
+        if let Some(e) = &c.read_error {
+            detail += &format!("; reading stopped: {e}");
+        }
+        if !c.unstamped.is_empty() {
+            detail += &format!("; unstamped: {:?}", c.unstamped);
+        }
+        if !c.unknown_topics.is_empty() {
+            detail += &format!("; unknown topics: {:?}", c.unknown_topics.keys().collect::<Vec<_>>());
+        }
+        return Err(ReadError::NoStamps { path: path.into(), messages: c.messages, detail });
+    }
+    Ok(c)
+}

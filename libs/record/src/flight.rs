@@ -1,0 +1,352 @@
+//! How a simulated flight's estimates compared with its truth, band by band of distance: where
+//! the detector lost the hub, where the distance read long or short, where the yaw took the wrong
+//! sign, and which cues were there. `hubtrack diagnose FILE` prints it; it needs frames with
+//! truth (`hubtrack fly --record`, or a replay of such a recording, which keeps the headers).
+//!
+//! Truth comes from `/frames/header`; the estimates from `/detections` and `/track` of the same
+//! `seq`. A yaw "has the wrong sign" when both the truth and the estimate are valid, the truth is
+//! at least [`SIGN_MIN_DEG`] from zero, and the signs differ: the failure that makes T2 fly the
+//! wrong way.
+
+use crate::channels::{self, ReadError};
+use hubtrack_types::{ApproachTask, Detection, FrameHeader, TrackState};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// A yaw's sign is judged only when the truth is at least this far from zero, degrees (closer,
+/// either sign is a fraction of a degree from the truth).
+pub const SIGN_MIN_DEG: f64 = 3.0;
+
+/// Bands of truth distance reported, metres `[lo, hi)`, far to near.
+pub const BANDS_M: [(f64, f64); 5] = [(30.0, f64::INFINITY), (20.0, 30.0), (10.0, 20.0), (5.0, 10.0), (0.0, 5.0)];
+
+/// Median and 90th percentile.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Spread {
+    /// Median.
+    pub p50: f64,
+    /// 90th percentile.
+    pub p90: f64,
+}
+
+/// One band of truth distance.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Band {
+    /// `"30+ m"`, `"20-30 m"`, ... or `"all"`.
+    pub name: String,
+    /// Frames with truth in the band (hub in view).
+    pub frames: u64,
+    /// Share of those with a detected hub, %.
+    pub detected_pct: f64,
+    /// Distance of the detected hub from the true hub, % of the image height.
+    pub hub_error_pct: Option<Spread>,
+    /// Share of the frames with a tower band / a spinner circle / a nacelle end, %.
+    pub tower_pct: f64,
+    /// See `tower_pct`.
+    pub circle_pct: f64,
+    /// See `tower_pct`.
+    pub nacelle_pct: f64,
+    /// Of the nacelle ends at a truth yaw beyond [`SIGN_MIN_DEG`], the share on the side the yaw
+    /// puts the nacelle, %.
+    pub nacelle_side_ok_pct: Option<f64>,
+    /// Share of the frames with a valid tracked distance, %.
+    pub distance_valid_pct: f64,
+    /// Tracked distance over the true one (10th percentile, median, 90th percentile).
+    pub distance_ratio: Option<[f64; 3]>,
+    /// Share of the frames with a valid tracked yaw, %.
+    pub yaw_valid_pct: f64,
+    /// |tracked − true| yaw, degrees.
+    pub yaw_error_deg: Option<Spread>,
+    /// Of the valid yaws at a truth beyond [`SIGN_MIN_DEG`], the share with the wrong sign, %.
+    pub yaw_wrong_sign_pct: Option<f64>,
+}
+
+/// The truth and the track at the last frame with truth.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LastFrame {
+    /// Frame `seq`.
+    pub seq: u64,
+    /// True distance to the hub, m.
+    pub distance_m: f64,
+    /// True relative yaw, degrees.
+    pub yaw_deg: f64,
+    /// Tracked distance, m (when valid).
+    pub track_distance_m: Option<f64>,
+    /// Tracked yaw, degrees (when valid).
+    pub track_yaw_deg: Option<f64>,
+}
+
+/// The report of one recording.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FlightReport {
+    /// The recording.
+    pub path: PathBuf,
+    /// The bands of [`BANDS_M`] that had frames, then `"all"`.
+    pub bands: Vec<Band>,
+    /// Frames per controller task (from `/setpoints`), by task name.
+    pub task_frames: BTreeMap<String, u64>,
+    /// The last frame with truth.
+    pub last: Option<LastFrame>,
+    /// Why reading stopped early, if the file is cut or damaged.
+    pub read_error: Option<String>,
+}
+
+/// Why no report could be made.
+#[derive(Debug, thiserror::Error)]
+pub enum FlightError {
+    /// The recording could not be read.
+    #[error(transparent)]
+    Read(#[from] ReadError),
+    /// No frame header carries truth.
+    #[error("{path} has no frames with truth: record a simulated flight (`hubtrack fly --record FILE`)")]
+    NoTruth {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+fn pct(n: usize, of: usize) -> f64 {
+    if of == 0 {
+        0.0
+    } else {
+        100.0 * n as f64 / of as f64
+    }
+}
+
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    sorted[((sorted.len() - 1) as f64 * q).round() as usize]
+}
+
+fn spread(mut v: Vec<f64>) -> Option<Spread> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(Spread { p50: quantile(&v, 0.5), p90: quantile(&v, 0.9) })
+}
+
+/// One frame's truth with what the pipeline made of it.
+struct Sample<'a> {
+    header: &'a FrameHeader,
+    detection: Option<&'a Detection>,
+    track: Option<&'a TrackState>,
+}
+
+fn band(name: String, samples: &[&Sample<'_>]) -> Band {
+    let n = samples.len();
+    let dets: Vec<&Detection> = samples.iter().filter_map(|s| s.detection).filter(|d| d.detected).collect();
+    let hub_error = samples
+        .iter()
+        .filter_map(|s| {
+            let d = s.detection.filter(|d| d.detected)?;
+            let (t, h) = (&s.header.truth, f64::from(s.header.height.max(1)));
+            Some(100.0 * (d.hub_px[0] - t.hub_px[0]).hypot(d.hub_px[1] - t.hub_px[1]) / h)
+        })
+        .collect();
+    let nacelle_sides: Vec<bool> = samples
+        .iter()
+        .filter_map(|s| {
+            let d = s.detection.filter(|d| d.detected && d.nacelle_found)?;
+            let y = s.header.truth.relative_yaw_deg;
+            // A camera on the turbine's left (yaw > 0) sees the nacelle to the right of the hub.
+            (y.abs() >= SIGN_MIN_DEG).then_some((d.nacelle_end_dx_px > 0.0) == (y > 0.0))
+        })
+        .collect();
+    let tracks: Vec<(&FrameHeader, &TrackState)> = samples.iter().filter_map(|s| Some((s.header, s.track?))).collect();
+    let mut ratios: Vec<f64> = tracks
+        .iter()
+        .filter(|(h, t)| t.distance_valid && h.truth.distance_m > 0.0)
+        .map(|(h, t)| t.distance_m / h.truth.distance_m)
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    let yaws: Vec<(f64, f64)> = tracks.iter().filter(|(_, t)| t.yaw_valid).map(|(h, t)| (h.truth.relative_yaw_deg, t.yaw_deg)).collect();
+    let signed: Vec<&(f64, f64)> = yaws.iter().filter(|(truth, _)| truth.abs() >= SIGN_MIN_DEG).collect();
+    Band {
+        name,
+        frames: n as u64,
+        detected_pct: pct(dets.len(), n),
+        hub_error_pct: spread(hub_error),
+        tower_pct: pct(dets.iter().filter(|d| d.tower_found).count(), n),
+        circle_pct: pct(dets.iter().filter(|d| d.circle_found).count(), n),
+        nacelle_pct: pct(nacelle_sides.len(), n),
+        nacelle_side_ok_pct: (!nacelle_sides.is_empty()).then(|| pct(nacelle_sides.iter().filter(|ok| **ok).count(), nacelle_sides.len())),
+        distance_valid_pct: pct(ratios.len(), n),
+        distance_ratio: (!ratios.is_empty()).then(|| [quantile(&ratios, 0.1), quantile(&ratios, 0.5), quantile(&ratios, 0.9)]),
+        yaw_valid_pct: pct(yaws.len(), n),
+        yaw_error_deg: spread(yaws.iter().map(|(truth, est)| (est - truth).abs()).collect()),
+        yaw_wrong_sign_pct: (!signed.is_empty()).then(|| pct(signed.iter().filter(|(truth, est)| truth * est < 0.0).count(), signed.len())),
+    }
+}
+
+fn task_name(t: ApproachTask) -> &'static str {
+    match t {
+        ApproachTask::Hold => "hold",
+        ApproachTask::CentreHub => "centre_hub",
+        ApproachTask::ReduceYaw => "reduce_yaw",
+        ApproachTask::Approach => "approach",
+        ApproachTask::Search => "search",
+        ApproachTask::Done => "done",
+        ApproachTask::Abort => "abort",
+    }
+}
+
+/// Reads `path` (a cut file as far as it goes) and compares the estimates with the truth.
+pub fn analyze(path: &Path) -> Result<FlightReport, FlightError> {
+    let c = channels::read(path)?;
+    let samples: Vec<Sample<'_>> = c
+        .frames
+        .iter()
+        .filter(|(_, h)| h.truth.valid && h.truth.turbine_in_view)
+        .map(|(seq, header)| Sample { header, detection: c.detections.get(seq), track: c.tracks.get(seq) })
+        .collect();
+    if samples.is_empty() {
+        return Err(FlightError::NoTruth { path: path.into() });
+    }
+    let mut bands = Vec::new();
+    for (lo, hi) in BANDS_M {
+        let inside: Vec<&Sample<'_>> = samples.iter().filter(|s| (lo..hi).contains(&s.header.truth.distance_m)).collect();
+        if !inside.is_empty() {
+            let name = if hi.is_finite() { format!("{lo:.0}-{hi:.0} m") } else { format!("{lo:.0}+ m") };
+            bands.push(band(name, &inside));
+        }
+    }
+    bands.push(band("all".into(), &samples.iter().collect::<Vec<_>>()));
+    let mut task_frames = BTreeMap::new();
+    for s in c.setpoints.values() {
+        *task_frames.entry(task_name(s.task).to_string()).or_insert(0) += 1;
+    }
+    let last = samples.last().map(|s| LastFrame {
+        seq: s.header.seq,
+        distance_m: s.header.truth.distance_m,
+        yaw_deg: s.header.truth.relative_yaw_deg,
+        track_distance_m: s.track.filter(|t| t.distance_valid).map(|t| t.distance_m),
+        track_yaw_deg: s.track.filter(|t| t.yaw_valid).map(|t| t.yaw_deg),
+    });
+    Ok(FlightReport { path: path.into(), bands, task_frames, last, read_error: c.read_error })
+}
+
+/// Prints the report as a table.
+pub fn print(r: &FlightReport) {
+    let opt = |v: Option<f64>, w: usize| v.map_or(format!("{:>w$}", "-"), |v| format!("{v:>w$.1}"));
+    let sp = |v: Option<Spread>| v.map_or(format!("{:>11}", "-"), |s| format!("{:>5.1} {:>5.1}", s.p50, s.p90));
+    println!(
+        "{:<9}{:>7}{:>6} {:>11}{:>6}{:>6}{:>6}{:>6} | {:>6} {:>17} | {:>6} {:>11} {:>6}",
+        "truth", "frames", "det%", "hub err %h", "tow%", "circ%", "nac%", "side%", "dist%", "dist/truth", "yaw%", "|yaw err|°", "wrong%"
+    );
+    println!("{:<9}{:>7}{:>6} {:>11}{:>6}{:>6}{:>6}{:>6} | {:>6} {:>17} | {:>6} {:>11} {:>6}", "", "", "", "p50   p90", "", "", "", "", "", "p10   p50   p90", "", "p50   p90", "");
+    for b in &r.bands {
+        let ratio = b.distance_ratio.map_or(format!("{:>17}", "-"), |q| format!("{:>5.2} {:>5.2} {:>5.2}", q[0], q[1], q[2]));
+        println!(
+            "{:<9}{:>7}{:>6.1} {}{:>6.1}{:>6.1}{:>6.1}{} | {:>6.1} {} | {:>6.1} {} {}",
+            b.name,
+            b.frames,
+            b.detected_pct,
+            sp(b.hub_error_pct),
+            b.tower_pct,
+            b.circle_pct,
+            b.nacelle_pct,
+            opt(b.nacelle_side_ok_pct, 6),
+            b.distance_valid_pct,
+            ratio,
+            b.yaw_valid_pct,
+            sp(b.yaw_error_deg),
+            opt(b.yaw_wrong_sign_pct, 6)
+        );
+    }
+    println!(
+        "side% = nacelle ends on the side the true yaw puts the nacelle; wrong% = valid yaws of the wrong sign; both where the true |yaw| >= {SIGN_MIN_DEG:.0}°"
+    );
+    if !r.task_frames.is_empty() {
+        let tasks: Vec<String> = r.task_frames.iter().map(|(t, n)| format!("{t} {n}")).collect();
+        println!("frames per task: {}", tasks.join(", "));
+    }
+    if let Some(l) = r.last {
+        let est = |v: Option<f64>, unit: &str| v.map_or("invalid".to_string(), |v| format!("{v:+.1}{unit}"));
+        println!(
+            "last frame {}: truth {:.2} m, yaw {:+.1}°; track {}, yaw {}",
+            l.seq,
+            l.distance_m,
+            l.yaw_deg,
+            est(l.track_distance_m, " m").trim_start_matches('+'),
+            est(l.track_yaw_deg, "°")
+        );
+    }
+    if let Some(e) = &r.read_error {
+        println!("note: the file is cut or damaged; read up to: {e}");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::writer::{ChannelKind, Recording, RecordingOptions};
+    use hubtrack_types::{Stamps, TrackMode};
+
+    fn stamps(seq: u64) -> Stamps {
+        let base = 1_000_000_000 + seq * 50_000_000;
+        Stamps { seq, capture_ns: base, recv_ns: base + 1_000_000, publish_ns: base + 2_000_000 }
+    }
+
+    #[test]
+    fn bands_compare_the_estimates_with_the_truth() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("f.mcap");
+        let mut rec = Recording::create(&path, &RecordingOptions::default()).unwrap();
+        // 20 frames at 35 m, yaw +10°: the tracker reads 70 m and −8° in the first ten (the
+        // wrong sign), 35 m and +9° after; the detector's hub is 10 px off in a 1000 px image,
+        // its nacelle end on the left (the wrong side) in every frame.
+        for seq in 0..20u64 {
+            let mut h = FrameHeader { seq, capture_ns: stamps(seq).capture_ns, publish_ns: stamps(seq).publish_ns, height: 1000, ..Default::default() };
+            h.truth.valid = true;
+            h.truth.turbine_in_view = true;
+            h.truth.hub_px = [500.0, 500.0];
+            h.truth.distance_m = 35.0;
+            h.truth.relative_yaw_deg = 10.0;
+            rec.write_frame(&h, None, 1).unwrap();
+            let mut d = Detection { stamps: stamps(seq), detected: true, hub_px: [510.0, 500.0], ..Default::default() };
+            d.nacelle_found = true;
+            d.nacelle_end_dx_px = -30.0;
+            rec.write_json(ChannelKind::Detection, seq, 1, 1, &d).unwrap();
+            let early = seq < 10;
+            let t = TrackState {
+                stamps: stamps(seq),
+                mode: TrackMode::Tracking,
+                distance_valid: true,
+                distance_m: if early { 70.0 } else { 35.0 },
+                yaw_valid: true,
+                yaw_deg: if early { -8.0 } else { 9.0 },
+                ..Default::default()
+            };
+            rec.write_json(ChannelKind::Track, seq, 1, 1, &t).unwrap();
+        }
+        rec.finish().unwrap();
+        let r = analyze(&path).unwrap();
+        assert_eq!(r.bands.len(), 2, "{:?}", r.bands.iter().map(|b| &b.name).collect::<Vec<_>>());
+        let b = &r.bands[0];
+        assert_eq!((b.name.as_str(), b.frames), ("30+ m", 20));
+        assert_eq!(b.detected_pct, 100.0);
+        assert_eq!(b.hub_error_pct.unwrap().p50, 1.0);
+        assert_eq!(b.nacelle_side_ok_pct, Some(0.0));
+        let q = b.distance_ratio.unwrap();
+        assert_eq!((q[0], q[2]), (1.0, 2.0));
+        assert_eq!(b.yaw_wrong_sign_pct, Some(50.0));
+        assert_eq!(b.yaw_error_deg.unwrap().p90, 18.0);
+        assert_eq!(r.bands[1], Band { name: "all".into(), ..b.clone() });
+        let last = r.last.unwrap();
+        assert_eq!((last.seq, last.track_distance_m, last.track_yaw_deg), (19, Some(35.0), Some(9.0)));
+    }
+
+    #[test]
+    fn a_recording_without_truth_names_the_cause() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("camera.mcap");
+        let mut rec = Recording::create(&path, &RecordingOptions::default()).unwrap();
+        let h = FrameHeader { seq: 0, capture_ns: 5, publish_ns: 6, ..Default::default() };
+        rec.write_frame(&h, None, 1).unwrap();
+        rec.finish().unwrap();
+        let e = analyze(&path).unwrap_err();
+        assert!(matches!(e, FlightError::NoTruth { .. }), "{e}");
+        assert!(e.to_string().contains("hubtrack fly --record"), "{e}");
+    }
+}
