@@ -127,30 +127,31 @@ pub enum LinkError {
         reason: String,
     },
     /// The UDP socket could not be bound.
-    #[error("udp bind {addr}: {source}")]
+    #[error("udp bind {addr}: {cause}")]
     Bind {
         /// The address we tried to bind.
         addr: SocketAddr,
-        /// The OS error.
-        source: std::io::Error,
+        /// The OS error (in the message, so not a chained `source`).
+        cause: std::io::Error,
     },
     /// The serial port could not be opened or configured.
-    #[error("serial port {path}: {source}")]
+    #[error("serial port {path}: {cause}")]
     Serial {
         /// Device path.
         path: String,
-        /// The error from the serial port library.
-        source: serialport::Error,
+        /// The error from the serial port library (in the message, so not a chained `source`).
+        cause: serialport::Error,
     },
     /// Sending or receiving failed on an open link.
-    #[error("{endpoint}: {op}: {source}")]
+    #[error("{endpoint}: {op}: {cause}")]
     Io {
         /// The link's endpoint.
         endpoint: Endpoint,
         /// What we were doing (`send`, `receive`, ...).
         op: &'static str,
-        /// The OS error.
-        source: std::io::Error,
+        /// The OS error (not a `source`: the message already says it, and error chains would
+        /// print it twice).
+        cause: std::io::Error,
     },
 }
 
@@ -195,9 +196,9 @@ impl Link {
     pub fn open(endpoint: &Endpoint) -> Result<Link, LinkError> {
         let transport = match endpoint {
             Endpoint::UdpIn(addr) => Transport::Udp {
-                socket: UdpSocket::bind(addr).map_err(|source| LinkError::Bind {
+                socket: UdpSocket::bind(addr).map_err(|cause| LinkError::Bind {
                     addr: *addr,
-                    source,
+                    cause,
                 })?,
                 peer: None,
                 follow_peer: true,
@@ -212,7 +213,7 @@ impl Link {
                 };
                 Transport::Udp {
                     socket: UdpSocket::bind(any)
-                        .map_err(|source| LinkError::Bind { addr: any, source })?,
+                        .map_err(|cause| LinkError::Bind { addr: any, cause })?,
                     peer: Some(*target),
                     follow_peer: false,
                 }
@@ -224,9 +225,9 @@ impl Link {
                     .stop_bits(serialport::StopBits::One)
                     .flow_control(serialport::FlowControl::None)
                     .open()
-                    .map_err(|source| LinkError::Serial {
+                    .map_err(|cause| LinkError::Serial {
                         path: path.clone(),
-                        source,
+                        cause,
                     })?;
                 Transport::Serial(port)
             }
@@ -242,11 +243,11 @@ impl Link {
         })
     }
 
-    fn io_error(&self, op: &'static str, source: std::io::Error) -> LinkError {
+    fn io_error(&self, op: &'static str, cause: std::io::Error) -> LinkError {
         LinkError::Io {
             endpoint: self.endpoint.clone(),
             op,
-            source,
+            cause,
         }
     }
 

@@ -60,7 +60,7 @@ fn stamped(s: &Stamps) -> bool {
 
 /// Reads `path` (complete, cut or damaged: whatever is readable).
 pub fn read(path: &Path) -> Result<Channels, ReadError> {
-    let io = |source| RecordError::Io { path: path.into(), source };
+    let io = |cause| RecordError::Io { path: path.into(), cause };
     let mut file = std::fs::File::open(path).map_err(io)?;
     let mut magic = [0u8; 8];
     if file.read_exact(&mut magic).is_err() || &magic != crate::reader::MCAP_MAGIC {

@@ -27,12 +27,13 @@ pub use writer::{ChannelKind, Recording, RecordingOptions};
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
     /// File system error.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: std::path::PathBuf,
-        /// The OS error.
-        source: std::io::Error,
+        /// The OS error (not a `source`: the message already says it, and error chains would
+        /// print it twice).
+        cause: std::io::Error,
     },
     /// The MCAP library refused the data.
     #[error("MCAP {path}: {message}")]

@@ -36,8 +36,8 @@ pub fn is_finished(path: &Path) -> std::io::Result<bool> {
 /// disk) into a new, complete and indexed `output`. Reading goes through the file linearly without
 /// needing its footer and stops at the first record it cannot parse; everything before is kept.
 pub fn recover(input: &Path, output: &Path) -> Result<RecoverReport, RecordError> {
-    let file = std::fs::File::open(input).map_err(|source| RecordError::Io { path: input.into(), source })?;
-    let out_file = std::fs::File::create(output).map_err(|source| RecordError::Io { path: output.into(), source })?;
+    let file = std::fs::File::open(input).map_err(|cause| RecordError::Io { path: input.into(), cause })?;
+    let out_file = std::fs::File::create(output).map_err(|cause| RecordError::Io { path: output.into(), cause })?;
     let mut out = mcap::Writer::new(BufWriter::new(out_file))
         .map_err(|e| RecordError::Mcap { path: output.into(), message: e.to_string() })?;
     let mut messages = 0;
@@ -56,7 +56,7 @@ pub fn recover(input: &Path, output: &Path) -> Result<RecoverReport, RecordError
         }
     }
     out.finish().map_err(|e| RecordError::Mcap { path: output.into(), message: e.to_string() })?;
-    let input_complete = is_finished(input).map_err(|source| RecordError::Io { path: input.into(), source })?;
+    let input_complete = is_finished(input).map_err(|cause| RecordError::Io { path: input.into(), cause })?;
     Ok(RecoverReport { messages, input_complete, stopped_by })
 }
 
@@ -118,7 +118,7 @@ pub struct FileInfo {
 /// Counts the messages of every topic. A finished file is read through its summary; a cut one
 /// linearly, as far as it is readable.
 pub fn inspect(path: &Path) -> Result<FileInfo, RecordError> {
-    let io = |source| RecordError::Io { path: path.into(), source };
+    let io = |cause| RecordError::Io { path: path.into(), cause };
     let size_bytes = std::fs::metadata(path).map_err(io)?.len();
     let finished = is_finished(path).map_err(io)?;
     let mut topic_counts = std::collections::BTreeMap::new();

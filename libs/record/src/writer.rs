@@ -165,9 +165,9 @@ impl Recording {
     /// Creates the file (its folder too) and registers every channel with its schema.
     pub fn create(path: &Path, options: &RecordingOptions) -> Result<Recording, RecordError> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|source| RecordError::Io { path: dir.into(), source })?;
+            std::fs::create_dir_all(dir).map_err(|cause| RecordError::Io { path: dir.into(), cause })?;
         }
-        let file = File::create(path).map_err(|source| RecordError::Io { path: path.into(), source })?;
+        let file = File::create(path).map_err(|cause| RecordError::Io { path: path.into(), cause })?;
         let mut writer = WriteOptions::new()
             .profile(PROFILE)
             .library(concat!("hubtrack-record ", env!("CARGO_PKG_VERSION")))

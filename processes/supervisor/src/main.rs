@@ -383,26 +383,25 @@ fn check_config(args: &ConfigArgs, print: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn latency(file: &Path, json: bool) -> anyhow::Result<()> {
-    let report = hubtrack_record::latency::analyze(file)?;
+/// Prints a recording's report: one JSON object, or a title line and the table.
+fn show<R: serde::Serialize>(report: &R, json: bool, title: String, table: fn(&R)) -> anyhow::Result<()> {
     if json {
-        println!("{}", serde_json::to_string(&report)?);
+        println!("{}", serde_json::to_string(report)?);
     } else {
-        println!("latency from the stamps in {}", file.display());
-        hubtrack_record::latency::print(&report);
+        println!("{title}");
+        table(report);
     }
     Ok(())
 }
 
+fn latency(file: &Path, json: bool) -> anyhow::Result<()> {
+    let report = hubtrack_record::latency::analyze(file)?;
+    show(&report, json, format!("latency from the stamps in {}", file.display()), hubtrack_record::latency::print)
+}
+
 fn diagnose(file: &Path, json: bool) -> anyhow::Result<()> {
     let report = hubtrack_record::flight::analyze(file)?;
-    if json {
-        println!("{}", serde_json::to_string(&report)?);
-    } else {
-        println!("{} against its truth, per band of true distance", file.display());
-        hubtrack_record::flight::print(&report);
-    }
-    Ok(())
+    show(&report, json, format!("{} against its truth, per band of true distance", file.display()), hubtrack_record::flight::print)
 }
 
 fn tap(args: TapArgs) -> anyhow::Result<()> {
