@@ -195,6 +195,18 @@ def test_config_file_unknown_key_stops_run_before_start(runner, tmp_path):
     assert "started" not in res.stderr
 
 
+@pytest.mark.parametrize("args", [
+    ["config", "--config", "/nonexistent/hubtrack.toml"],
+    ["latency", "/nonexistent/run.mcap"],
+    ["diagnose", "/nonexistent/flight.mcap"],
+])
+def test_a_missing_file_is_named_once_with_its_cause(runner, args):
+    res = runner.run("hubtrack", *args, timeout=30)
+    assert res.returncode != 0
+    assert args[-1] in res.stderr, res.stderr
+    assert res.stderr.count("No such file or directory") == 1, res.stderr
+
+
 def test_sample_recording_opens_with_independent_reader():
     from conftest import ROOT
     from mcap.reader import make_reader
