@@ -549,17 +549,22 @@ impl Approach {
                 ex,
                 ey
             );
-            // Hover, but hold the station sideways: at 5 m a gust that pushes the vehicle 1 m
-            // aside turns into ~11° of relative yaw, which zero velocity would leave until an
-            // outer threshold trips. Only T2's lateral law runs (slowly, through the rate
-            // limit); distance and image errors are noisier than the drift and wait for their
-            // outer thresholds.
+            // Hover, but hold the station sideways and at the distance: at 5 m a gust that
+            // pushes the vehicle 1 m aside turns into ~11° of relative yaw, and one that pushes
+            // it back takes it out of 5 ± 0.5 m, which zero velocity would leave until an outer
+            // threshold trips. T2's lateral law and a gentle distance law run (slowly, through
+            // the rate limit); the image errors are noisier than the drift and wait for their
+            // outer thresholds. No forward motion without a distance, as everywhere.
             let vy_t = yaw.map_or(0.0, |y| {
                 let lateral_m = dist.unwrap_or(c.nominal_distance_m) * y.to_radians().sin();
                 limit_abs(-c.done_lateral_gain_per_s * lateral_m, c.max_lateral_m_s)
             });
+            let vx_t = dist.map_or(0.0, |d| {
+                limit(c.done_distance_gain_per_s * (d - c.target_distance_m), -c.max_backward_m_s, c.max_forward_m_s)
+            });
             let vy = slew(self.cmd.vy, vy_t, c.accel_xy_m_s2, dt);
-            return (ApproachTask::Done, Command { vy, ..Command::default() }, reason);
+            let vx = slew(self.cmd.vx, vx_t, c.accel_xy_m_s2, dt);
+            return (ApproachTask::Done, Command { vx, vy, ..Command::default() }, reason);
         }
 
         // --- targets of each axis ---

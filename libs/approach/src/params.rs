@@ -85,10 +85,16 @@ pub struct ApproachConfig {
     /// (distance x sin(relative yaw)), i.e. 1/s. Range (0, 10]; default 0.15.
     pub lateral_gain_per_s: f64,
     /// In Done, the lateral gain that holds the station sideways against drift, m/s per metre
-    /// off the rotor axis (the other axes hover until an outer threshold trips: the distance
-    /// and image errors are noisier than the drift). 0 = hover without correction. Range
-    /// [0, 10]; default 0.8.
+    /// off the rotor axis (the image errors are noisier than the drift and wait for their
+    /// outer thresholds). 0 = hover without correction. Range [0, 10]; default 0.8.
     pub done_lateral_gain_per_s: f64,
+    /// In Done, the gain that holds the distance against drift, m/s per metre of distance error
+    /// (0 = hover, and only the outer threshold `distance_tolerance_outer_m` restarts T3). At
+    /// 5 m the filtered distance is good to a few centimetres, and a gust that pushes the
+    /// vehicle back is otherwise left until it is 0.5 m out: `fly` seed 492 reported done at
+    /// 5.07 m and ended 3 s later at 5.58 m, a failure. Range [0, 10]; default 0.3 (T3's own
+    /// gain).
+    pub done_distance_gain_per_s: f64,
     /// T3 forward-speed gain, m/s per metre of distance error, i.e. 1/s. Range (0, 10];
     /// default 0.3.
     pub forward_gain_per_s: f64,
@@ -227,6 +233,7 @@ impl Default for ApproachConfig {
             climb_gain_m_s: 2.0,
             lateral_gain_per_s: 0.15,
             done_lateral_gain_per_s: 0.8,
+            done_distance_gain_per_s: 0.3,
             forward_gain_per_s: 0.3,
             slowdown_gain_per_s: 0.5,
             arc_feedforward: 1.0,
@@ -300,6 +307,7 @@ impl ApproachConfig {
         c.open_closed("climb_gain_m_s", self.climb_gain_m_s, 0.0, 100.0)?;
         c.open_closed("lateral_gain_per_s", self.lateral_gain_per_s, 0.0, 10.0)?;
         c.closed("done_lateral_gain_per_s", self.done_lateral_gain_per_s, 0.0, 10.0)?;
+        c.closed("done_distance_gain_per_s", self.done_distance_gain_per_s, 0.0, 10.0)?;
         c.open_closed("forward_gain_per_s", self.forward_gain_per_s, 0.0, 10.0)?;
         c.open_closed("slowdown_gain_per_s", self.slowdown_gain_per_s, 0.0, 10.0)?;
         c.closed("arc_feedforward", self.arc_feedforward, 0.0, 1.0)?;

@@ -50,8 +50,10 @@ fn check_output(out: &ApproachOutput, c: &ApproachConfig) {
         assert_eq!((out.vx_m_s, out.vy_m_s, out.vz_m_s, out.yaw_rate_rad_s), (0.0, 0.0, 0.0, 0.0), "{out:?}");
     }
     if out.task == ApproachTask::Done {
-        // Hovering, holding the station sideways only.
-        assert_eq!((out.vx_m_s, out.vz_m_s, out.yaw_rate_rad_s), (0.0, 0.0, 0.0), "{out:?}");
+        // Hovering, holding the station sideways and the distance (gently: Done is left beyond
+        // the outer distance tolerance).
+        assert_eq!((out.vz_m_s, out.yaw_rate_rad_s), (0.0, 0.0), "{out:?}");
+        assert!(out.vx_m_s.abs() <= c.done_distance_gain_per_s * c.distance_tolerance_outer_m + EPS, "{out:?}");
     }
     if let Some(t) = &out.transition {
         assert_eq!(t.to, out.task);
@@ -712,19 +714,31 @@ fn done_after_hold_time_and_left_on_a_disturbance() {
     assert!(held >= c.done_hold_s && held < c.done_hold_s + 0.1, "{held}");
 
     // Small disturbances inside the outer thresholds: still Done, still hovering; a residual
-    // yaw (drift aside) is held against sideways, toward the rotor axis.
+    // yaw (drift aside) is held against sideways, toward the rotor axis, and a distance off the
+    // target (a gust pushed the vehicle back or forth) forward or back, toward the target.
     for t in [
         track(0.08, 0.0, Some(5.1), Some(1.0)),
         track(0.0, -0.09, Some(5.1), Some(1.0)),
         track(0.0, 0.0, Some(5.45), Some(1.0)),
         track(0.0, 0.0, Some(5.1), Some(-4.5)),
+        track(0.0, 0.0, Some(4.6), Some(1.0)),
     ] {
         let out = rig.run(Some(t), 0.5);
         assert_eq!(out.task, ApproachTask::Done);
         // Toward the axis, ramping (rate limit) to about the gain times the offset.
         let target = -c.done_lateral_gain_per_s * 5.1 * t.yaw_deg.to_radians().sin();
         assert!(out.vy_m_s * target > 0.0 && out.vy_m_s.abs() <= 1.25 * target.abs(), "vy {} for yaw {}, target {target}", out.vy_m_s, t.yaw_deg);
+        let toward = c.done_distance_gain_per_s * (t.distance_m - c.target_distance_m);
+        assert!(out.vx_m_s * toward > 0.0 && out.vx_m_s.abs() <= 1.01 * toward.abs(), "vx {} at {} m, target {toward}", out.vx_m_s, t.distance_m);
     }
+    // Losing the distance leaves Done for T3, which does not move forward without one: the
+    // backward hold of the last Done command (4.6 m) only ramps down.
+    let before = rig.log.last().unwrap().vx_m_s;
+    let mut no_distance = track(0.0, 0.0, Some(5.1), Some(1.0));
+    no_distance.distance_valid = false;
+    let out = rig.step(Some(no_distance));
+    assert_eq!((out.task, out.reason.as_str()), (ApproachTask::Approach, "T3: no valid distance, not moving forward"));
+    assert!(before < 0.0 && out.vx_m_s <= 0.0 && out.vx_m_s > before, "{before} -> {out:?}");
     // Each outer threshold leaves Done for its task; coming back needs the hold again.
     for (t, task) in [
         (track(0.0, 0.0, Some(5.6), Some(1.0)), ApproachTask::Approach),
