@@ -158,6 +158,39 @@ pub struct Approach {
     probe_offset_m: f64,
     /// Direction of the probe's sweep (+1 right, −1 left).
     probe_dir: f64,
+    /// Where the last confirmed track put the hub (see `reacquire_memory_s`).
+    hub_fix: Option<HubFix>,
+    /// When the current track was re-acquired after a loss, while the remembered hub still
+    /// bounds its distance.
+    reacquired_ns: Option<u64>,
+}
+
+/// The hub's horizontal position in the autopilot's local frame, from one track state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct HubFix {
+    /// North and east, m.
+    north_east: [f64; 2],
+    /// When it was fixed.
+    at_ns: u64,
+}
+
+impl HubFix {
+    /// The hub `distance_m` along the bearing `t.hub_bearing_deg[0]` from the vehicle; `None`
+    /// without a valid position and attitude.
+    fn from(t: &TrackState, v: &VehicleState, distance_m: f64, now: u64) -> Option<HubFix> {
+        let v = Some(v).filter(|v| v.position_valid && v.attitude_valid)?;
+        let heading = v.yaw_rad + t.hub_bearing_deg[0].to_radians();
+        let [n, e, _] = v.position_ned_m;
+        let fix = HubFix { north_east: [n + distance_m * heading.cos(), e + distance_m * heading.sin()], at_ns: now };
+        fix.north_east.iter().all(|x| x.is_finite()).then_some(fix)
+    }
+
+    /// Horizontal distance from the vehicle, m; `None` without a valid position.
+    fn distance_from(&self, v: &VehicleState) -> Option<f64> {
+        let [n, e, _] = v.position_ned_m;
+        let d = (self.north_east[0] - n).hypot(self.north_east[1] - e);
+        (v.position_valid && d.is_finite()).then_some(d)
+    }
 }
 
 /// Cuts a reason to [`MAX_REASON_BYTES`] at a char boundary.
@@ -268,6 +301,8 @@ impl Approach {
             cue_missing_since_ns: None,
             probe_offset_m: 0.0,
             probe_dir: 1.0,
+            hub_fix: None,
+            reacquired_ns: None,
         })
     }
 
@@ -482,6 +517,10 @@ impl Approach {
             self.search_turned_deg = 0.0;
             self.search_exhausted = false;
             self.backoff_m = 0.0;
+            // ... which may be something else: the remembered hub bounds its distance.
+            if self.hub_fix.is_some_and(|f| secs(f.at_ns, now) <= c.reacquire_memory_s) {
+                self.reacquired_ns = Some(now);
+            }
         }
 
         // Normalised image errors (checked non-zero size and finite position in check_inputs).
@@ -493,7 +532,7 @@ impl Approach {
         let new_track_state = self.filter_capture_ns != Some(t.stamps.capture_ns);
         self.update_filters(t);
         let yaw = self.heading_yaw(t, vehicle, new_track_state).or(self.yaw_f);
-        let dist = self.dist_f;
+        let (dist, remembered) = self.bounded_distance(now, t, vehicle);
         // The distance reads at the target again: a fresh backing-off allowance.
         if dist.is_some_and(|d| d >= c.target_distance_m - c.distance_tolerance_outer_m) {
             self.t3_backoff_m = 0.0;
@@ -676,6 +715,9 @@ impl Approach {
                     "T3: still {d:.1} m after backing {:.1} m: no further back",
                     self.t3_backoff_m
                 ),
+                (Some(d), true) if remembered.is_some() => {
+                    format!("T3: {d:.1} m to the remembered hub (track {:.1} m)", remembered.unwrap_or(d))
+                }
                 (Some(d), true) => format!("T3: {d:.1} m to hub, target {:.1} m", c.target_distance_m),
                 _ if probing => format!(
                     "T3: no valid distance for {missing_s:.0} s, not moving forward, probing sideways {:+.1}/{:.1} m",
@@ -686,6 +728,41 @@ impl Approach {
             (ApproachTask::Approach, reason)
         };
         (task, cmd, reason)
+    }
+
+    /// The filtered distance to act on, and the track's own reading when it is not that:
+    /// after a re-acquisition, until the track's distance agrees with the hub remembered from
+    /// the last confirmed track (or `reacquire_check_s` has passed), the smaller of the two
+    /// (see `reacquire_memory_s`). A confirmed track's distance fixes the hub anew.
+    fn bounded_distance(&mut self, now: u64, t: &TrackState, vehicle: Option<&VehicleState>) -> (Option<f64>, Option<f64>) {
+        let c = &self.config;
+        let dist = self.dist_f;
+        if c.reacquire_memory_s <= 0.0 {
+            return (dist, None);
+        }
+        if let Some(since) = self.reacquired_ns {
+            let remembered = self.hub_fix.zip(vehicle).and_then(|(f, v)| f.distance_from(v));
+            match (remembered, dist) {
+                // Checked long enough, or nothing to check against: the new track stands alone.
+                _ if secs(since, now) > c.reacquire_check_s => self.reacquired_ns = None,
+                (None, _) => self.reacquired_ns = None,
+                (Some(m), Some(d)) if (d - m).abs() <= c.reacquire_margin_m + c.reacquire_margin_frac * m => {
+                    self.reacquired_ns = None
+                }
+                (Some(m), Some(d)) => {
+                    let bounded = d.min(m);
+                    self.last_distance_m = Some(bounded);
+                    return (Some(bounded), (d > m).then_some(d));
+                }
+                (Some(_), None) => return (None, None),
+            }
+        }
+        if let (Some(d), Some(v), true) = (dist, vehicle, t.distance_valid) {
+            if let Some(fix) = HubFix::from(t, v, d, now) {
+                self.hub_fix = Some(fix);
+            }
+        }
+        (dist, None)
     }
 
     /// Feeds a new track state to the low-pass filters; invalid estimates empty their filter so
@@ -752,6 +829,9 @@ impl Approach {
             // Close in, an established estimate drops what it would clip (see
             // `turbine_heading_close_m`).
             let close = w > 0.0 && t.distance_m < c.turbine_heading_close_m;
+            // Closer still, an established estimate holds (see `turbine_heading_hold_m`).
+            let established = self.turbine_heading.as_ref().is_some_and(|h| h.samples >= c.turbine_heading_min_samples);
+            let w = if established && w > 0.0 && t.distance_m < c.turbine_heading_hold_m { 0.0 } else { w };
             let beyond_clip = |h: &TurbineHeading| wrap_pi(meas - h.heading_rad).abs() > c.turbine_heading_clip_deg.to_radians();
             match self.turbine_heading.as_mut() {
                 None if w > 0.0 => {

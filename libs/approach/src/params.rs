@@ -189,6 +189,30 @@ pub struct ApproachConfig {
     /// measurement; clipped, such a run still pulls it ~1° a second at 5 m (`fly` seed 78:
     /// +28° measured for +4°, T2 then flew the vehicle to −18°). Range [0, 100]; default 10.
     pub turbine_heading_close_m: f64,
+    /// Closer to the hub than this, m, an established turbine-heading estimate takes no more
+    /// yaw measurements at all: it holds what the farther views gave (0 = never hold). Close
+    /// in the tower stands behind a blade or the spinner, the band taken for it is often a
+    /// blade root, and one such frame at 7 m weighs as much as ten at 25 m (`fly` seed 224:
+    /// +9.9° measured at 7.8 m for −1.7°, T2 then moved the vehicle to −6°). Range [0, 100];
+    /// default 0.
+    pub turbine_heading_hold_m: f64,
+    /// How long the hub's position, fixed from the last confirmed track (autopilot position plus
+    /// distance along the bearing), bounds the distance of a track that follows a loss, s
+    /// (0 = no bound). A track re-acquired after a loss can be something else: lost at 3.5 m,
+    /// `fly` seed 176 (with `turbine_heading_hold_m` 10) re-acquired a blade tip 200 px aside
+    /// that read 22 m, and T3 flew into the rotor. Until the new track's distance agrees with the remembered hub (within
+    /// `reacquire_margin_m`) or `reacquire_check_s` has passed, the controller takes the
+    /// smaller of the two. Range [0, 3600]; default 60.
+    pub reacquire_memory_s: f64,
+    /// Longest the remembered hub bounds a re-acquired track's distance, s. Range [0, 600];
+    /// default 15.
+    pub reacquire_check_s: f64,
+    /// A re-acquired track's distance within this of the remembered hub's, m, plus
+    /// `reacquire_margin_frac` of it, agrees with it. Range [0, 100]; default 2.
+    pub reacquire_margin_m: f64,
+    /// The part of the margin that grows with the remembered distance (its own error).
+    /// Range [0, 1]; default 0.2.
+    pub reacquire_margin_frac: f64,
     /// Yaw measurements needed before the turbine-heading estimate replaces the filtered
     /// tracker yaw. Range [1, 10000]; default 15.
     pub turbine_heading_min_samples: u32,
@@ -258,7 +282,12 @@ impl Default for ApproachConfig {
             search_backoff_m_s: 0.3,
             turbine_heading_clip_deg: 10.0,
             turbine_heading_close_m: 10.0,
+            turbine_heading_hold_m: 0.0,
             turbine_heading_min_samples: 15,
+            reacquire_memory_s: 60.0,
+            reacquire_check_s: 15.0,
+            reacquire_margin_m: 2.0,
+            reacquire_margin_frac: 0.2,
             distance_filter_s: 0.5,
             max_track_age_s: 1.0,
             search_after_s: 5.0,
@@ -334,7 +363,12 @@ impl ApproachConfig {
         c.open_closed("search_backoff_m_s", self.search_backoff_m_s, 0.0, 2.0)?;
         c.open_closed("turbine_heading_clip_deg", self.turbine_heading_clip_deg, 0.0, 90.0)?;
         c.closed("turbine_heading_close_m", self.turbine_heading_close_m, 0.0, 100.0)?;
+        c.closed("turbine_heading_hold_m", self.turbine_heading_hold_m, 0.0, 100.0)?;
         c.count("turbine_heading_min_samples", self.turbine_heading_min_samples, 1, 10_000)?;
+        c.closed("reacquire_memory_s", self.reacquire_memory_s, 0.0, MAX_TIME_S)?;
+        c.closed("reacquire_check_s", self.reacquire_check_s, 0.0, 600.0)?;
+        c.closed("reacquire_margin_m", self.reacquire_margin_m, 0.0, 100.0)?;
+        c.closed("reacquire_margin_frac", self.reacquire_margin_frac, 0.0, 1.0)?;
         c.closed("distance_filter_s", self.distance_filter_s, 0.0, 60.0)?;
 
         c.open_closed("max_track_age_s", self.max_track_age_s, 0.0, 60.0)?;

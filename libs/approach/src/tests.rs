@@ -599,6 +599,70 @@ fn close_in_a_run_of_wrong_yaws_leaves_the_turbine_heading() {
     assert!(clipped > 20.0, "clipped: {clipped}");
 }
 
+/// Close in, an established turbine-heading estimate holds (`turbine_heading_hold_m`): a run
+/// of yaws within the clip (which `turbine_heading_close_m` lets through) no longer moves it.
+#[test]
+fn closer_than_the_hold_distance_the_turbine_heading_holds() {
+    let run = |hold_m: f64| {
+        let c = ApproachConfig { turbine_heading_hold_m: hold_m, ..ApproachConfig::default() };
+        let mut rig = Rig::with(c);
+        rig.vehicle = Some(VehicleState { attitude_valid: true, yaw_rad: 0.3, ..vehicle(true) });
+        rig.run(Some(track(0.0, 0.0, Some(20.0), Some(2.0))), 15.0);
+        rig.run(Some(track(0.0, 0.0, Some(7.0), Some(9.0))), 10.0);
+        rig.ap.heading_yaw(&track(0.0, 0.0, Some(7.0), Some(9.0)), rig.vehicle.as_ref(), false).unwrap()
+    };
+    let held = run(10.0);
+    assert!((held - 2.0).abs() < 0.1, "held: {held}");
+    let followed = run(0.0);
+    assert!(followed > 7.0, "without the hold: {followed}");
+}
+
+/// A vehicle at `north` m on the local frame's north axis, facing north, with position and
+/// attitude.
+fn vehicle_at(north: f64) -> VehicleState {
+    VehicleState { attitude_valid: true, position_valid: true, position_ned_m: [north, 0.0, 0.0], ..vehicle(true) }
+}
+
+/// Lost at 5 m, a track re-acquired on something that reads 22 m does not fly the vehicle
+/// forward: the hub remembered from the last confirmed track bounds its distance until the
+/// two agree or `reacquire_check_s` passes (`fly` seed 176 flew into the rotor that way).
+#[test]
+fn a_reacquired_track_that_reads_too_far_is_bounded_by_the_remembered_hub() {
+    let c = ApproachConfig::default();
+    let mut rig = Rig::new();
+    rig.vehicle = Some(vehicle_at(0.0));
+    rig.run(Some(track(0.0, 0.0, Some(3.5), Some(0.0))), 3.0);
+    rig.run(Some(track_mode(TrackMode::Lost, 2.0)), 1.0);
+    assert_eq!(rig.ap.task(), ApproachTask::Hold);
+    // Re-acquired, reading 22 m, while the vehicle is still 3.5 m from the remembered hub.
+    let far = track(0.0, 0.0, Some(22.0), Some(0.0));
+    let mark = rig.log.len();
+    rig.run(Some(far), 3.0);
+    assert!(rig.log[mark..].iter().all(|o| o.vx_m_s <= EPS), "no forward motion toward the remembered hub");
+    let bounded = rig.log[mark..].iter().filter(|o| o.reason.contains("3.5 m to the remembered hub (track 22.0 m)")).count();
+    assert!(bounded > 10, "{:?}", rig.log.last());
+    // Past the check time the new track stands alone.
+    let out = rig.run(Some(far), c.reacquire_check_s);
+    assert!(out.vx_m_s > 0.1 && out.reason.starts_with("T3: 22.0 m"), "{out:?}");
+
+    // A re-acquired track that agrees with the remembered hub is not bounded.
+    let mut rig = Rig::new();
+    rig.vehicle = Some(vehicle_at(0.0));
+    rig.run(Some(track(0.0, 0.0, Some(20.0), Some(0.0))), 3.0);
+    rig.run(Some(track_mode(TrackMode::Lost, 2.0)), 1.0);
+    rig.vehicle = Some(vehicle_at(2.0));
+    let out = rig.run(Some(track(0.0, 0.0, Some(18.5), Some(0.0))), 3.0);
+    assert!(out.vx_m_s > 0.1 && out.reason.starts_with("T3: 18.5 m"), "{out:?}");
+
+    // Without the memory the first re-acquired track flies forward at once.
+    let mut rig = Rig::with(ApproachConfig { reacquire_memory_s: 0.0, ..c });
+    rig.vehicle = Some(vehicle_at(0.0));
+    rig.run(Some(track(0.0, 0.0, Some(3.5), Some(0.0))), 3.0);
+    rig.run(Some(track_mode(TrackMode::Lost, 2.0)), 1.0);
+    let out = rig.run(Some(far), 3.0);
+    assert!(out.vx_m_s > 0.1, "{out:?}");
+}
+
 // ---------------------------------------------------------------- abort
 
 #[test]

@@ -98,6 +98,20 @@ impl Pyramid {
         self.finish(1, levels)
     }
 
+    /// The full-resolution grey image of the last [`Pyramid::build`] of `image` (the converted
+    /// copy for colour input, the caller's own pixels for grey); `None` if it is not at hand.
+    pub fn full_grey<'a>(&'a self, image: &ImageView<'a>) -> Option<crate::spinner::GreyPlane<'a>> {
+        let (width, height) = (image.width as usize, image.height as usize);
+        match image.format {
+            PixelFormat::Gray8 => Some(crate::spinner::GreyPlane { data: image.data, width, height, stride: image.stride }),
+            PixelFormat::Bgr8 => {
+                let ok = self.gray.cols() as usize == width && self.gray.rows() as usize == height && self.gray.is_continuous();
+                let data = self.gray.data_bytes().ok().filter(|_| ok)?;
+                Some(crate::spinner::GreyPlane { data, width, height, stride: width })
+            }
+        }
+    }
+
     fn finish(&mut self, done: usize, levels: usize) -> Result<&Mat, DetectError> {
         while self.levels.len() < levels {
             self.levels.push(Mat::default());

@@ -265,14 +265,42 @@ impl Detector {
             predicted_hub_px: hints.predicted_hub_px.map(|p| [p[0] / k, p[1] / k]),
             hub_distance_m: hints.hub_distance_m,
         };
-        let found = match self.config.mode {
+        let mut found = match self.config.mode {
             Mode::Thesis => thesis::run(&self.config.thesis, small, &mut self.scratch, &hints_small)?,
             Mode::Default => robust::run(&self.config.default, small, &mut self.scratch, &hints_small, expected)?,
         };
+        if self.config.mode == Mode::Default {
+            self.refine_spinner(&mut found, image, k);
+        }
         let mut out = self.to_output(&found, k, image.width, image.height);
         out.detection.timings.pyramid_us = pyramid_us;
         out.detection.timings.total_us = us_since(t0);
         Ok(out)
+    }
+
+    /// The chosen spinner circle refined on the full-resolution image (see
+    /// `spinner_refine_rays`), and the hub with it when the hub is the circle's centre.
+    fn refine_spinner(&self, found: &mut Found, image: &ImageView<'_>, k: f64) {
+        let p = &self.config.default;
+        let (Some(c), true) = (found.circle, found.detected && p.spinner_refine_rays > 0) else { return };
+        let Some(plane) = self.pyramid.full_grey(image) else { return };
+        let rf = spinner::Refinement {
+            rays: p.spinner_refine_rays as usize,
+            band: p.spinner_refine_band,
+            band_max_px: p.spinner_refine_band_max_px,
+            inlier_px: p.spinner_refine_inlier_px,
+            min_inliers: p.spinner_refine_min_inliers,
+            max_change: p.spinner_refine_max_change,
+        };
+        let Some(r) = spinner::refine_circle(&plane, [c[0] * k, c[1] * k, c[2] * k], &rf) else { return };
+        let refined = [r[0] / k, r[1] / k, r[2] / k];
+        if geometry::dist(found.hub, [c[0], c[1]]) < 1e-9 {
+            // The nacelle's end was measured from the old hub.
+            let dx = refined[0] - found.hub[0];
+            found.nacelle_end_dx = found.nacelle_end_dx.map(|d| d - dx);
+            found.hub = [refined[0], refined[1]];
+        }
+        found.circle = Some(refined);
     }
 
     /// The tower's width just under the nacelle seen from `hub_distance_m` in front of the hub,

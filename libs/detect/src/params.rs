@@ -560,6 +560,29 @@ pub struct DefaultParams {
     /// Spinner step: a circle whose inner 70 % holds more Canny edge pixels than this per px² is
     /// clutter (textured ground, a tower with blades and horizon), not the smooth spinner.
     pub spinner_max_interior_density: f64,
+    /// Spinner refinement: rays cast from the chosen spinner circle's centre on the
+    /// full-resolution image, along which the rim is found to a fraction of a pixel before a
+    /// robust circle fit (0 = off). The circle vote works on whole pixels of the pyramid's
+    /// Canny edges: at 25–30 m (a spinner ~20 px across at 960 px) its centre was 3–6 px off in
+    /// rendered flights, and each pixel of the hub–tower gap is ~1° of relative yaw there.
+    /// Range 0 or [8, 720]; default 48.
+    pub spinner_refine_rays: u32,
+    /// The rim is searched within band·r of the circle along each ray (at most
+    /// `spinner_refine_band_max_px`). Range (0, 0.9]; default 0.35.
+    pub spinner_refine_band: f64,
+    /// ... and within this many full-resolution px: the vote's error is a few pyramid pixels
+    /// whatever the size, and a wider search on a large spinner reaches the blade roots, the
+    /// nacelle and the shading inside. Range (0, 1000]; default 6.
+    pub spinner_refine_band_max_px: f64,
+    /// Rim points within this of the refined circle are kept, full-resolution px (at least; a
+    /// wider robust spread of the residuals widens it). Range (0, 20]; default 1.
+    pub spinner_refine_inlier_px: f64,
+    /// Smallest fraction of the rays whose rim point fits the refined circle (blade roots and
+    /// the nacelle behind break up to half the rim). Range (0, 1]; default 0.4.
+    pub spinner_refine_min_inliers: f64,
+    /// Largest move of the centre, and change of the radius, by the refinement, fraction of
+    /// the radius; beyond it the vote's circle stays. Range (0, 1]; default 0.3.
+    pub spinner_refine_max_change: f64,
     /// Spinner step: with a circle of radius r, blade lines and axes may end up to this many r
     /// from its centre (blades start at the spinner rim).
     pub spinner_reach_radii: f64,
@@ -933,6 +956,12 @@ impl Default for DefaultParams {
             spinner_convergence_tol_px: 2.0,
             spinner_kept_support_max_radius_px: 8.0,
             spinner_max_interior_density: 0.1,
+            spinner_refine_rays: 48,
+            spinner_refine_band: 0.35,
+            spinner_refine_band_max_px: 6.0,
+            spinner_refine_inlier_px: 1.0,
+            spinner_refine_min_inliers: 0.4,
+            spinner_refine_max_change: 0.3,
             spinner_reach_radii: 2.0,
             conf_spinner: 0.2,
             close_spinner_radius_frac: 0.12,
@@ -1128,6 +1157,14 @@ impl DefaultParams {
         c.closed("spinner_min_kept_support", self.spinner_min_kept_support, 0.0, 1.0)?;
         c.closed("spinner_kept_support_max_radius_px", self.spinner_kept_support_max_radius_px, 0.0, 1000.0)?;
         c.closed("spinner_max_interior_density", self.spinner_max_interior_density, 0.0, 1.0)?;
+        if self.spinner_refine_rays != 0 {
+            c.count("spinner_refine_rays", self.spinner_refine_rays, 8, 720)?;
+        }
+        c.open_closed("spinner_refine_band", self.spinner_refine_band, 0.0, 0.9)?;
+        c.open_closed("spinner_refine_band_max_px", self.spinner_refine_band_max_px, 0.0, 1000.0)?;
+        c.open_closed("spinner_refine_inlier_px", self.spinner_refine_inlier_px, 0.0, 20.0)?;
+        c.open_closed("spinner_refine_min_inliers", self.spinner_refine_min_inliers, 0.0, 1.0)?;
+        c.open_closed("spinner_refine_max_change", self.spinner_refine_max_change, 0.0, 1.0)?;
         c.closed("spinner_reach_radii", self.spinner_reach_radii, 0.0, 10.0)?;
         c.closed("conf_spinner", self.conf_spinner, 0.0, 1.0)?;
         c.closed("close_spinner_radius_frac", self.close_spinner_radius_frac, 0.0, 1.0)?;
