@@ -248,7 +248,7 @@ pub(crate) fn refine_circle(img: &GreyPlane<'_>, c: [f64; 3], rf: &Refinement) -
 /// One pass of [`refine_circle`].
 fn refine_once(img: &GreyPlane<'_>, c: [f64; 3], rf: &Refinement) -> Option<[f64; 3]> {
     let [cx, cy, r] = c;
-    if rf.rays < 8 || !(r > 2.0) {
+    if rf.rays < 8 || r.is_nan() || r <= 2.0 {
         return None;
     }
     let half = (rf.band * r).min(rf.band_max_px);
