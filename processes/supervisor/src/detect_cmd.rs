@@ -141,7 +141,7 @@ fn detect_one(det: &mut Detector, path: &Path, annotate: Option<&Path>, hints: &
     let mat = read_image(path)?;
     let view = view_of(&mat)?;
     let t = Instant::now();
-    let out = det.detect(&view, hints)?;
+    let out = det.detect_still(&view, hints)?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     if let Some(dir) = annotate {
         let stem = path.file_stem().map_or("image".into(), |s| s.to_string_lossy().into_owned());

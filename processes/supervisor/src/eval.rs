@@ -108,8 +108,10 @@ fn add(table: &mut Table, categories: &[String], truth: &Truth, outcomes: &[Outc
     }
 }
 
-fn detect_all(detectors: &mut [hubtrack_detect::Detector], view: &ImageView<'_>, hints: &Hints) -> anyhow::Result<Vec<Output>> {
-    detectors.iter_mut().map(|d| Ok(d.detect(view, hints)?)).collect()
+/// Every mode's output: as on a still photo (`hubtrack detect`) or as on a video frame (the
+/// detect stage).
+fn detect_all(detectors: &mut [hubtrack_detect::Detector], view: &ImageView<'_>, hints: &Hints, still: bool) -> anyhow::Result<Vec<Output>> {
+    detectors.iter_mut().map(|d| Ok(if still { d.detect_still(view, hints)? } else { d.detect(view, hints)? })).collect()
 }
 
 /// Scores every mode's output against the truth.
@@ -190,7 +192,7 @@ fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], mis
             }
         };
         let view = view_of(&mat)?;
-        let outputs = detect_all(detectors, &view, &Hints::default())?;
+        let outputs = detect_all(detectors, &view, &Hints::default(), true)?;
         let outcomes = score_all(&outputs, &truth, view.height);
         let id = v["id"].as_str().map_or_else(|| format!("line{}", n + 1), |s| s.replace('/', "_"));
         write_miss(misses, &id, &mat, &truth, &outputs, &outcomes)?;
@@ -222,7 +224,7 @@ fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::D
             let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buffers[k] };
             let t = if negative { Truth::Negative } else { Truth::of_rendered(&truth) };
             let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() };
-            let outputs = detect_all(detectors, &view, &hints)?;
+            let outputs = detect_all(detectors, &view, &hints, false)?;
             let outcomes = score_all(&outputs, &t, view.height);
             if let Some(out) = outputs.last() {
                 write_candidates(cand_out.as_deref_mut(), &format!("{}_{i:04}", class_def.0), &t, out, view.height)?;
