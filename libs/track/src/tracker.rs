@@ -547,7 +547,8 @@ impl Core {
         // The nacelle end is measured from the detected hub, whose error it takes whole (see
         // `nacelle_gate_px`).
         let hub_settled = yc.nacelle_gate_px <= 0.0 || innovation_px <= yc.nacelle_gate_px * s;
-        let nacelle = if yc.use_nacelle && det.detected && det.nacelle_found && hub_settled {
+        let on_spinner = det.circle_found || !yc.nacelle_needs_spinner;
+        let nacelle = if yc.use_nacelle && det.detected && det.nacelle_found && hub_settled && on_spinner {
             self.distance.estimate().or(spinner).filter(|d| d.value >= yc.nacelle_min_distance_m).and_then(|d| {
                 // Only an end well beyond the head-on front corners (see `nacelle_min_excess_sigma`).
                 let hub_std = if det.circle_found { yc.gap_std_spinner_px } else { yc.gap_std_lines_px };

@@ -845,6 +845,34 @@ fn the_nacelle_sets_the_yaw_where_a_blade_hides_the_tower() {
     assert!((without.yaw_deg - psi_deg).abs() > 2.0 * (with.yaw_deg - psi_deg).abs(), "the gaps alone: {}", without.yaw_deg);
 }
 
+/// A nacelle end measured from a hub the detector placed by blade lines alone (no spinner
+/// circle) is not used (`yaw.nacelle_needs_spinner`): such a hub may sit half a chord off, and
+/// the "end" found is then the spinner's own rim, as often on the wrong side as the right one.
+#[test]
+fn a_nacelle_end_without_a_spinner_circle_is_not_used() {
+    let cfg = pinhole_config();
+    let (d_hub, psi_deg) = (30.0, -15.0);
+    // The end on the wrong side, as from a hub 15 px to the true one's left.
+    let dx_wrong = -nacelle_dx(&cfg, d_hub, psi_deg);
+    let run = |needs_spinner: bool| {
+        let mut c = cfg.clone();
+        c.yaw.nacelle_needs_spinner = needs_spinner;
+        // Two seconds of the whole turbine, then the hub from blade lines only.
+        track_turbine(&c, 23, 120, d_hub, psi_deg, |k, d, rng| {
+            if k >= 60 {
+                d.circle_found = false;
+                d.tower_found = false;
+                d.blade_count = 0;
+                d.nacelle_found = true;
+                d.nacelle_end_dx_px = dx_wrong + rng.normal();
+            }
+        })
+    };
+    let (kept, used) = (run(true), run(false));
+    assert!(used.yaw_valid && used.yaw_deg > 5.0, "the wrong end, used, gives the wrong sign: {}", used.yaw_deg);
+    assert!((kept.yaw_deg - psi_deg).abs() < 3.0, "the last yaw stays ({})", kept.yaw_deg);
+}
+
 /// Close in, a run of wrong tower bands (the blade pointing down in front of the tower) does
 /// not restart the yaw as a jump (`yaw.jump_min_distance_m`); farther out the same run does,
 /// as it must to leave a wrong start.
