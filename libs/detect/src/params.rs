@@ -565,7 +565,11 @@ pub struct DefaultParams {
     /// robust circle fit (0 = off). The circle vote works on whole pixels of the pyramid's
     /// Canny edges: at 25–30 m (a spinner ~20 px across at 960 px) its centre was 3–6 px off in
     /// rendered flights, and each pixel of the hub–tower gap is ~1° of relative yaw there.
-    /// Range 0 or [8, 720]; default 48.
+    /// Off by default: at 48 the hub got closer to the truth (synthetic median error 0.73 →
+    /// 0.63 % of the height, rendered-flight RMS better in 3 of 4 sequences) but the relative
+    /// yaw's tails grew and `hubtrack fly` seeds 161–560 ended 365 against 371 successes
+    /// (session 22); the nacelle window and gap weights were set with the old centres. Range 0
+    /// or [8, 720]; default 0.
     pub spinner_refine_rays: u32,
     /// Still photos only (`hubtrack detect`, `hubtrack eval` on photos; never the detect
     /// stage, which keeps its frame budget): detect also one pyramid level finer and keep the
@@ -962,7 +966,7 @@ impl Default for DefaultParams {
             spinner_convergence_tol_px: 2.0,
             spinner_kept_support_max_radius_px: 8.0,
             spinner_max_interior_density: 0.1,
-            spinner_refine_rays: 48,
+            spinner_refine_rays: 0,
             still_finer_level: true,
             spinner_refine_band: 0.35,
             spinner_refine_band_max_px: 6.0,

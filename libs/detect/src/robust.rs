@@ -1566,6 +1566,8 @@ mod tests {
     }
 
     #[test]
+    // 0.4343 is the GoPro's focal length per width, not log10(e).
+    #[allow(clippy::approx_constant)]
     fn a_spinner_implies_the_tower_width_from_its_own_distance() {
         // GoPro at 960 px wide (f = 417 px), the renderer's turbine.
         let o = Optics { focal_px: 0.4343 * 960.0, spinner_radius_m: 1.6, tower_top_diameter_m: 2.2, hub_tower_gap_m: 4.2 };
