@@ -852,7 +852,18 @@ impl Approach {
             }
         }
         let h = self.turbine_heading.as_ref().filter(|h| h.samples >= c.turbine_heading_min_samples)?;
-        Some(wrap_pi(h.heading_rad - to_hub).to_degrees())
+        let yaw = wrap_pi(h.heading_rad - to_hub).to_degrees();
+        if new {
+            log::debug!(
+                "turbine heading, frame {}: relative yaw {yaw:+.1} deg from {} samples (weight {:.2e}); track yaw {} at {}",
+                t.stamps.seq,
+                h.samples,
+                h.weight,
+                if yaw_usable(t) { format!("{:+.1}", t.yaw_deg) } else { "-".into() },
+                if t.distance_valid { format!("{:.1} m", t.distance_m) } else { "-".into() },
+            );
+        }
+        Some(yaw)
     }
 }
 

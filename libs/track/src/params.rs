@@ -504,6 +504,15 @@ pub struct YawConfig {
     /// (`fly` seed 31: three gaps of −121 px at 6.7 m restarted the yaw at +43° for −5°, and
     /// T2 flew the vehicle to −16°); there the measurements are only gated, and the gate
     /// widens with the prediction's growing variance until true ones are accepted again.
+    /// 10 → 20 (session 23): in the recorded failures of `fly` seeds 161–560 most restarts at
+    /// 10–20 m went to a wrong band (+28° to +47° for −7° to −1°: the blade pointing down
+    /// beside the tower), while successful flights restarted only farther out; seeds 161–560
+    /// 375 against 371 of 400 (in: 207, 269, 279, 326; none lost). 25 lost 279 again in the
+    /// first 97 seeds and gained none. Also tried: restarting close in after 10 consecutive
+    /// gaps whose band agreed in width with the frame's spinner circle (seed 344 at 13.5 m
+    /// measured −25° from such bands while the filter held +39°); replayed over the recorded
+    /// failures it made 7 right and 2 wrong restarts (a band exactly as wide as the tower, 78 px
+    /// beside it), but flown over 329 seeds it gained none and lost 279. Default 20.
     pub jump_min_distance_m: f64,
     /// The yaw is reported valid only while its standard deviation is at most this, degrees.
     pub max_std_deg: f64,
@@ -539,7 +548,7 @@ impl Default for YawConfig {
             jump_accept_count: 3,
             gap_max_width_ratio: 1.0,
             gap_from_disputed_tower: false,
-            jump_min_distance_m: 10.0,
+            jump_min_distance_m: 20.0,
             max_std_deg: 10.0,
             stale_after_s: 2.0,
         }
