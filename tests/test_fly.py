@@ -10,10 +10,12 @@ import json
 import os
 import signal
 
+import pytest
+
 from conftest import wait_until, read_mcap_messages
 
 KEYS = {"seed": int, "success": bool, "final_distance_m": float, "final_yaw_deg": float,
-        "final_lateral_m": float, "time_s": float, "min_rotor_plane_m": float}
+        "final_lateral_m": float, "time_s": float, "min_rotor_plane_m": float, "lockstep_misses": int}
 
 
 def fly(runner, *args, timeout=900):
@@ -39,6 +41,11 @@ def test_fly_prints_one_json_object_per_seed_and_a_seed_flies_the_same_flight_ag
         # The approach got somewhere: from 25–40 m to within a few metres of the target.
         assert r["final_distance_m"] < 15.0, r
     again = fly(runner, "--seeds", "1", "--first-seed", "5", "--record", str(tmp_path / "again.mcap"))[0]
+    if again["lockstep_misses"] or runs[0]["lockstep_misses"]:
+        # A lockstep wait timed out (the machine was overloaded): the simulator went on without
+        # an answer, so this run is not the seed's deterministic flight.
+        pytest.skip(f"lockstep waits timed out ({runs[0]['lockstep_misses']}, {again['lockstep_misses']}): "
+                    "no determinism to compare on this loaded machine")
     for key in ("success", "final_distance_m", "final_yaw_deg", "final_lateral_m", "time_s", "path_length_m",
                 "min_rotor_plane_m"):
         assert again[key] == runs[0][key], (key, again[key], runs[0][key])

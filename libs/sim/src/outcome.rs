@@ -51,6 +51,11 @@ pub struct Outcome {
     pub end_reason: String,
     /// Why it is not a success, in words (`None` on success).
     pub failure: Option<String>,
+    /// Lockstep waits that timed out (`sim.lockstep_timeout_ms`): the simulator went on without
+    /// the pipeline's vehicle state or setpoint of that frame. Only a flight without misses is
+    /// reproducible from its seed; misses mean the machine was too loaded for lockstep.
+    #[serde(default)]
+    pub lockstep_misses: u64,
 }
 
 /// Accumulates a flight: path length, closest approaches, recent speeds, time at the target.
@@ -189,6 +194,7 @@ impl FlightRecorder {
             min_distance_m: rec.min_distance_m,
             end_reason: end_reason.to_string(),
             failure: if why.is_empty() { None } else { Some(why.join("; ")) },
+            lockstep_misses: 0,
         }
     }
 }

@@ -128,7 +128,7 @@ fn run() -> anyhow::Result<()> {
             let got = wait_for(&vehicle_states, lockstep_timeout, &shutdown, |v| v.recv_ns >= now_ns)?;
             if got.is_none() {
                 lockstep_misses += 1;
-                log::debug!("t={t:.2}s: control did not publish the vehicle state in time");
+                log::warn!("t={t:.2}s: control did not publish the vehicle state within {} ms; going on", lockstep_timeout.as_millis());
             }
         }
 
@@ -185,7 +185,8 @@ fn run() -> anyhow::Result<()> {
         }
     }
 
-    let outcome = flight.finish(t, &vehicle, &geometry(&scenario, &vehicle), end_reason);
+    let mut outcome = flight.finish(t, &vehicle, &geometry(&scenario, &vehicle), end_reason);
+    outcome.lockstep_misses = lockstep_misses;
     let stats = autopilot.stats();
     log::info!(
         "seed {} {}: {} after {:.1} s, distance {:.2} m, relative yaw {:+.1}°, lateral {:+.2} m, path {:.1} m, closest to rotor plane {:.2} m{}",

@@ -118,6 +118,12 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             wall_s: report.elapsed.as_secs_f64(),
             recording: record.as_ref().map(|r| r.display().to_string()),
         };
+        if outcome.lockstep_misses > 0 {
+            log::warn!(
+                "seed {seed}: {} lockstep wait(s) timed out (machine too loaded?): this flight is not reproducible from its seed",
+                outcome.lockstep_misses
+            );
+        }
         if args.json {
             println!("{}", serde_json::to_string(&line)?);
         } else {
@@ -167,6 +173,13 @@ fn summary(outcomes: &[Outcome], record: Option<&Path>, seeds: u64) {
         outcomes.len(),
         times.get(times.len() / 2).map(|t| format!("; median time {t:.1} s")).unwrap_or_default()
     );
+    let perturbed: Vec<String> = outcomes.iter().filter(|o| o.lockstep_misses > 0).map(|o| o.seed.to_string()).collect();
+    if !perturbed.is_empty() {
+        println!(
+            "lockstep waits timed out in seed(s) {}: those flights are not reproducible from their seeds (the machine was too loaded)",
+            perturbed.join(", ")
+        );
+    }
     if let Some(r) = record {
         let first = recording_path(r, outcomes[0].seed, seeds);
         println!("recordings: {} (open in Foxglove, or `hubtrack latency {}`)", if seeds == 1 { r.display().to_string() } else { format!("{}-seed*.mcap", r.with_extension("").display()) }, first.display());
