@@ -16,6 +16,7 @@ pub mod geometry;
 pub mod params;
 
 mod blade;
+pub mod heat;
 mod hough;
 mod image;
 mod nacelle;
@@ -222,13 +223,16 @@ pub struct Detector {
     config: DetectConfig,
     pyramid: image::Pyramid,
     scratch: Scratch,
+    /// The learned hub heatmap (`default.hub_heat`, default mode only).
+    hubnet: Option<heat::HubNet>,
 }
 
 impl Detector {
     /// Validate `config` and allocate the (empty) buffers.
     pub fn new(config: DetectConfig) -> Result<Detector, DetectError> {
         config.validate()?;
-        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default() })
+        let hubnet = (config.mode == Mode::Default && config.default.hub_heat).then(heat::HubNet::new).transpose()?;
+        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet })
     }
 
     /// The configuration in use.
@@ -264,6 +268,17 @@ impl Detector {
         Ok(best)
     }
 
+    /// The learned hub heatmap's input for `image` (see [`heat::network_input`]): the working
+    /// pyramid level of the configured mode, grey, at the network's size.
+    pub fn network_input(&mut self, image: &ImageView<'_>) -> Result<Mat, DetectError> {
+        image::check_view(image)?;
+        let levels = self.levels_for(image);
+        let small = self.pyramid.build(image, levels)?;
+        let mut out = Mat::default();
+        heat::network_input(small, &mut out)?;
+        Ok(out)
+    }
+
     /// Pyramid steps down to the working size of the configured mode.
     fn levels_for(&self, image: &ImageView<'_>) -> usize {
         let (min_side, max_side) = match self.config.mode {
@@ -287,6 +302,7 @@ impl Detector {
                 tower_top_diameter_m: self.config.camera.tower_top_diameter_m,
                 hub_tower_gap_m: self.config.camera.hub_tower_gap_m,
             }),
+            heat: None,
         };
         let small = self.pyramid.build(image, levels)?;
         let pyramid_us = us_since(t0);
@@ -296,10 +312,19 @@ impl Detector {
             predicted_hub_px: hints.predicted_hub_px.map(|p| [p[0] / k, p[1] / k]),
             hub_distance_m: hints.hub_distance_m,
         };
+        let t = Instant::now();
+        let heatmap = match (&mut self.hubnet, self.config.mode) {
+            (Some(net), Mode::Default) => Some(net.run(small)?),
+            _ => None,
+        };
+        let heat_us = us_since(t);
+        let expected = robust::Expected { heat: heatmap.as_ref(), ..expected };
         let mut found = match self.config.mode {
             Mode::Thesis => thesis::run(&self.config.thesis, small, &mut self.scratch, &hints_small)?,
             Mode::Default => robust::run(&self.config.default, small, &mut self.scratch, &hints_small, expected)?,
         };
+        // The heatmap is part of recognising the hub among the lines' candidates.
+        found.geometry_us += heat_us;
         if self.config.mode == Mode::Default {
             self.refine_spinner(&mut found, image, k);
         }

@@ -656,6 +656,18 @@ pub struct DefaultParams {
     pub blade_partner_max_rms_px: f64,
     /// ... whose slope (band width change per px along the blade) is at most this.
     pub blade_partner_max_taper: f64,
+    /// Run the learned hub heatmap (`libs/detect/src/heat.rs`, trained on the project's
+    /// renderer by `scripts/train-hubnet.sh`) on every frame: it feeds the ranker's `hub_heat`
+    /// feature and proposes candidates of its own (`hub_heat_candidate_min`). About 0.8 ms per
+    /// frame single-threaded here.
+    pub hub_heat: bool,
+    /// The `hub_heat` feature of a candidate is the heatmap's largest probability within this
+    /// many cells (8 network px, ~1/24 of the width) of it. Range [0, 4]; default 1.
+    pub hub_heat_radius_cells: f64,
+    /// A heatmap peak at least this probable with no candidate within
+    /// `hub_heat_radius_cells` of it becomes a candidate itself (refined to its blades'
+    /// crossing like any other). Range [0, 1]; default 0.5 (1 = never).
+    pub hub_heat_candidate_min: f64,
     /// How the hub is picked among the candidates.
     pub ranker: RankerParams,
 }
@@ -686,10 +698,12 @@ pub struct RankerParams {
     /// 4.2 / 6.2 % false positives (seed 77: 74.2 / 66.0 % with 2.1 / 22.9 %).
     pub ranking: Ranking,
     /// With `"learned"`: the best candidate is the hub when its score (log-odds against "no
-    /// hub in this frame") reaches this. Held-out synthetic seeds 2026 / 77 / 500 (`scripts/
-    /// train-ranker.sh`): −1 (a probability of 0.27) 77.5 / 73.3 / 71.0 % hits with 4.2 / 2.1 /
-    /// 2.1 % false positives on 48 negatives each; −0.5 76.8 / 72.7 / 68.7 % with 2.1 / 2.1 / 0;
-    /// 0 74.7 / 70.3 / 66.0 % with none.
+    /// hub in this frame") reaches this. Chosen on the training seeds (11–18, 600 negatives)
+    /// with the `hub_heat` model of session 24: −1 (a probability of 0.27) 77.8 % hits with
+    /// 6.8 % false positives, −0.5 76.3 % with 4.0 %, −0.25 75.8 % with 2.5 %, 0 75.2 % with
+    /// 1.5 %. Held out (`hubtrack eval`, seeds 2026 / 77 / 500): −1 83.7 / 78.8 / 78.5 % hits
+    /// with 4.2 / 12.5 / 2.1 % false positives; −0.5 81.0 / 77.7 / 76.5 % with 0 / 2.1 / 0.
+    /// Before the heatmap (session 19) the default was −1.
     pub min_score: f64,
     /// Log-odds per unit of each feature (`hubtrack train-ranker` prints a fitted section).
     pub weights: FeatureWeights,
@@ -757,6 +771,9 @@ pub struct FeatureWeights {
     /// known axes): a round patch beside the hub has a rim drawn by blade edges but is centred
     /// beside the point the blades radiate from.
     pub spinner_axes_offset: f64,
+    /// The learned hub heatmap's probability at the candidate (0..1; 0 with `hub_heat` off):
+    /// whether the frame around it looks like a hub to a network that saw the whole image.
+    pub hub_heat: f64,
 }
 
 impl FeatureWeights {
@@ -789,48 +806,51 @@ impl FeatureWeights {
             self.image_lines,
             self.spinner_coverage,
             self.spinner_axes_offset,
+            self.hub_heat,
         ]
     }
 }
 
 impl Default for RankerParams {
     fn default() -> Self {
-        RankerParams { ranking: Ranking::Learned, min_score: -1.0, weights: FeatureWeights::default() }
+        RankerParams { ranking: Ranking::Learned, min_score: -0.5, weights: FeatureWeights::default() }
     }
 }
 
 impl Default for FeatureWeights {
-    /// Fitted by `scripts/train-ranker.sh` (see the README, "Learned ranking") at commit
-    /// c4f830c, before `close_spinner_always` was on: a fit today sees more close-spinner
-    /// candidates and gives slightly different numbers.
+    /// Fitted by `scripts/train-ranker.sh -- --also-without hub_heat` (see the README,
+    /// "Learned ranking" and "Learned hub heatmap") in session 24, with the shipped
+    /// `models/hubnet.onnx`: every training frame also counts once with `hub_heat` zeroed, so
+    /// the ranker does not depend on a network that has seen renders only.
     fn default() -> Self {
         FeatureWeights {
-            bias: -1.182,
-            two_blades: -1.607,
-            three_blades: -0.200,
-            extra_blades: 0.093,
-            tower: 0.046,
-            tower_lines: 0.411,
-            hidden_blade_down: 0.538,
-            geometry_ok: 0.193,
-            paired: 2.808,
-            spinner: 0.953,
-            spinner_radius: 0.434,
-            spinner_size_match: 1.478,
-            passes_through: -0.331,
-            near_prediction: 0.508,
-            support: 0.587,
-            weakest_blade: 0.728,
-            strongest_blade: 0.022,
-            separation_error: -2.202,
-            rejected_lines: 1.117,
-            rule_score: 0.211,
-            clutter: -2.423,
-            banded_blades: -1.907,
-            tower_top_below: 0.322,
-            image_lines: -0.091,
-            spinner_coverage: 4.038,
-            spinner_axes_offset: -1.197,
+            bias: -0.501,
+            two_blades: -1.966,
+            three_blades: -0.480,
+            extra_blades: -0.113,
+            tower: 0.062,
+            tower_lines: 0.361,
+            hidden_blade_down: 0.640,
+            geometry_ok: 0.447,
+            paired: 2.998,
+            spinner: 0.741,
+            spinner_radius: 0.322,
+            spinner_size_match: 1.614,
+            passes_through: -0.446,
+            near_prediction: 0.345,
+            support: 0.434,
+            weakest_blade: 0.916,
+            strongest_blade: -0.298,
+            separation_error: -1.734,
+            rejected_lines: 1.020,
+            rule_score: -0.347,
+            clutter: -2.942,
+            banded_blades: -1.906,
+            tower_top_below: 0.397,
+            image_lines: -0.173,
+            spinner_coverage: 4.675,
+            spinner_axes_offset: -1.136,
+            hub_heat: 2.110,
         }
     }
 }
@@ -986,6 +1006,9 @@ impl Default for DefaultParams {
             occluded_offset_frac: 0.008,
             occluded_bend_deg: 3.0,
             occluded_bent_max_tilt_deg: 20.0,
+            hub_heat: true,
+            hub_heat_radius_cells: 1.0,
+            hub_heat_candidate_min: 0.5,
             ranker: RankerParams::default(),
         }
     }
@@ -1163,6 +1186,8 @@ impl DefaultParams {
         c.closed("spinner_nest_min_coverage_ratio", self.spinner_nest_min_coverage_ratio, 0.0, 10.0)?;
         c.closed("spinner_tie_ratio", self.spinner_tie_ratio, 0.0, 1.0)?;
         c.closed("close_spinner_min_coverage", self.close_spinner_min_coverage, 0.0, 1.0)?;
+        c.closed("hub_heat_radius_cells", self.hub_heat_radius_cells, 0.0, 4.0)?;
+        c.closed("hub_heat_candidate_min", self.hub_heat_candidate_min, 0.0, 1.0)?;
         c.closed("spinner_max_convergence_radii", self.spinner_max_convergence_radii, 0.0, 100.0)?;
         c.closed("spinner_convergence_tol_px", self.spinner_convergence_tol_px, 0.0, 100.0)?;
         c.closed("spinner_min_kept_support", self.spinner_min_kept_support, 0.0, 1.0)?;

@@ -38,10 +38,11 @@ pub const FEATURE_NAMES: [&str; FEATURES] = [
     "image_lines",
     "spinner_coverage",
     "spinner_axes_offset",
+    "hub_heat",
 ];
 
 /// Number of features.
-pub const FEATURES: usize = 26;
+pub const FEATURES: usize = 27;
 
 /// Index of the feature set after evaluation, when the spinner's size matches the tracker's
 /// distance.
@@ -52,6 +53,8 @@ pub(crate) const SPINNER_COVERAGE: usize = 24;
 /// blades' axes meet, set by the spinner step for circles above
 /// `spinner_kept_support_max_radius_px` (0 otherwise).
 pub(crate) const SPINNER_AXES_OFFSET: usize = 25;
+/// Index of the learned heatmap's probability at the candidate, set by `recognise`.
+pub(crate) const HUB_HEAT: usize = 26;
 
 /// One candidate's feature vector.
 pub type Features = [f64; FEATURES];

@@ -82,7 +82,7 @@ const SUPPORT_ANGLE_DEG: f64 = 12.0;
 
 /// Sizes a tracker's distance lets the detector expect, working px.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub(crate) struct Expected {
+pub(crate) struct Expected<'a> {
     /// Tower width just under the nacelle.
     pub tower_width: Option<f64>,
     /// Spinner radius.
@@ -91,6 +91,8 @@ pub(crate) struct Expected {
     pub px_per_m: Option<f64>,
     /// The camera and turbine sizes that turn a spinner's radius into a tower width.
     pub optics: Option<Optics>,
+    /// The learned hub heatmap of the frame (`hub_heat`).
+    pub heat: Option<&'a crate::heat::Heatmap>,
 }
 
 /// Focal length (working px) and the turbine's known sizes.
@@ -116,7 +118,7 @@ impl Optics {
 
 /// Run the default pipeline on the working image, with the sizes `expected` from the tracker's
 /// distance (if any).
-pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints, expected: Expected) -> Result<Found, DetectError> {
+pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints, expected: Expected<'_>) -> Result<Found, DetectError> {
     let t = Instant::now();
     imgproc::spatial_gradient(small, &mut s.dx, &mut s.dy, 3, core::BORDER_DEFAULT)?;
     let high = adaptive_high(p, &s.dx, &s.dy, &mut s.hist)?;
@@ -1103,6 +1105,12 @@ fn measure_tower(
         .or_else(|| one(&scanned).map(|fit| (fit, top)))
 }
 
+/// How near a candidate must lie to the heatmap's peak to stand for it, working px: the
+/// `hub_heat_radius_cells` neighbourhood in the larger of the cell's two sides.
+fn heat_reach_px(p: &DefaultParams, heat: Option<&crate::heat::Heatmap>, w: f64, h: f64) -> f64 {
+    heat.filter(|m| m.cols > 0 && m.rows > 0).map_or(0.0, |m| p.hub_heat_radius_cells * (w / m.cols as f64).max(h / m.rows as f64))
+}
+
 /// Steps after the Hough transform, on plain data (working px).
 /// Ordering of candidates: higher uncapped confidence, then more blade support.
 fn better(a: &Candidate, b: &Candidate) -> bool {
@@ -1285,7 +1293,7 @@ pub(crate) fn recognise(
     hints: &Hints,
     search: &mut CircleFinder<'_>,
     grad: Option<&Gradients<'_>>,
-    expected: Expected,
+    expected: Expected<'_>,
 ) -> Result<Found, DetectError> {
     let tower_width = expected.tower_width;
     let partner_search = PartnerSearch {
@@ -1320,6 +1328,16 @@ pub(crate) fn recognise(
     if let Some(pred) = hints.predicted_hub_px {
         centres.push(pred);
     }
+    // The heatmap's peak, where no line crossing or band axis proposed anything near it.
+    let heat_reach = heat_reach_px(p, expected.heat, w, h);
+    if let Some((peak, prob)) = expected.heat.and_then(|m| m.peak()) {
+        let c = [peak[0] * w, peak[1] * h];
+        if prob >= p.hub_heat_candidate_min && !centres.iter().any(|q| geometry::dist(*q, c) <= heat_reach) {
+            log::trace!("heatmap peak {c:?} ({prob:.2}) is a candidate");
+            centres.push(c);
+        }
+    }
+    let heat_at = |c: P2| expected.heat.map_or(0.0, |m| m.near(c[0] / w, c[1] / h, p.hub_heat_radius_cells));
     for c in centres {
         let mut cand = evaluate(p, segs, &usable, &axes, c, h, roll_deg, hints, None, &partner);
         if cand.blades.len() >= 2 {
@@ -1387,7 +1405,8 @@ pub(crate) fn recognise(
         }
     }
     let mut best: Option<Candidate> = None;
-    for cand in cands.into_iter().chain(extra) {
+    for mut cand in cands.into_iter().chain(extra) {
+        cand.features[crate::ranker::HUB_HEAT] = heat_at(cand.centre);
         found.candidates.push(Considered { hub: cand.centre, confidence: cand.confidence, features: cand.features });
         if best.as_ref().is_none_or(|b| preferred(p, &cand, b)) {
             best = Some(cand);
@@ -1404,6 +1423,7 @@ pub(crate) fn recognise(
             let mut cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]]), &partner);
             cand.features[crate::ranker::SPINNER_COVERAGE] = k[3];
             cand.features[crate::ranker::SPINNER_AXES_OFFSET] = axes_meet_offset(segs, &axes, &cand, &partner).map_or(0.0, |off| (off / k[2]).min(2.0));
+            cand.features[crate::ranker::HUB_HEAT] = heat_at(cand.centre);
             log::trace!("close spinner {k:?}: conf {:.2} blades {}", cand.confidence, cand.blades.len());
             found.candidates.push(Considered { hub: cand.centre, confidence: cand.confidence, features: cand.features });
             if cand.blades.len() >= 2 && best.as_ref().is_none_or(|b| preferred(p, &cand, b)) {

@@ -50,10 +50,20 @@ pub struct SynthCase {
     pub categories: Vec<String>,
 }
 
+/// Distances of the far views that only the learned heatmap's training set holds (`hubtrack
+/// dataset --beyond`), metres: photos show turbines well beyond the approach's 45 m.
+pub const BEYOND_M: (f64, f64) = (45.0, 250.0);
+
 /// The `index`-th case of a distance class (deterministic in `seed`).
 pub fn synth_case(seed: u64, class: usize, index: u64, negative: bool) -> SynthCase {
-    let mut r = Rng(seed ^ (class as u64) << 40 ^ index.wrapping_mul(0x9E37));
     let (name, lo, hi) = CLASSES[class];
+    synth_case_between(seed, class, index, negative, name, lo, hi)
+}
+
+/// As [`synth_case`], at a distance drawn from `[lo, hi)` metres, counted under the distance
+/// category `name`.
+pub fn synth_case_between(seed: u64, class: usize, index: u64, negative: bool, name: &str, lo: f64, hi: f64) -> SynthCase {
+    let mut r = Rng(seed ^ (class as u64) << 40 ^ index.wrapping_mul(0x9E37));
     let mut scene = Scene::random(r.next_u64());
     scene.turbine_present = !negative;
     if negative && scene.distractor == Distractor::None {

@@ -1,6 +1,7 @@
 //! `hubtrack`: launches and supervises the stage processes, and hosts the operator tools.
 
 mod bench;
+mod dataset;
 mod detect_cmd;
 mod eval;
 mod eval_seq;
@@ -55,6 +56,8 @@ enum Command {
     Render(RenderArgs),
     /// Detect the hub in photos: one JSON object per image on stdout.
     Detect(detect_cmd::DetectArgs),
+    /// Write rendered frames with hub truth as the learned heatmap's training set.
+    Dataset(dataset::DatasetArgs),
     /// Detect and track over an image sequence offline: one JSON object per frame on stdout.
     Track(track_cmd::TrackArgs),
     /// Evaluate the detector on photos with truth and on synthetic frames, all modes side by side.
@@ -180,6 +183,7 @@ fn main() {
         Command::Bench(BenchCommand::Frames(a)) => bench::frames(a),
         Command::Bench(BenchCommand::Pipeline(a)) => bench::pipeline(a),
         Command::Detect(a) => detect_cmd::run(a),
+        Command::Dataset(a) => dataset::run(a),
         Command::Eval(a) => eval::run(a),
         Command::TrainRanker(a) => train_ranker::run(a),
         Command::Track(a) => track_cmd::run(a),

@@ -28,6 +28,11 @@ pub struct TrainRankerArgs {
     /// Detection threshold on the score, for the report.
     #[arg(long, default_value_t = -1.0, allow_negative_numbers = true)]
     pub min_score: f64,
+    /// Also fit every frame once more with this feature zeroed in all its candidates (repeat
+    /// for several), so that the ranker still works where the feature says nothing: for the
+    /// learned heatmap's `hub_heat`, trained on renders only and weaker on real photos.
+    #[arg(long, value_name = "FEATURE")]
+    pub also_without: Vec<String>,
 }
 
 /// Frames of one candidate file: (frame, is negative). Frames whose hub is hidden or cut count
@@ -77,6 +82,21 @@ pub fn run(args: TrainRankerArgs) -> anyhow::Result<()> {
         negative.extend(b);
     }
     anyhow::ensure!(!frames.is_empty(), "no frames with a visible or no turbine in the training files");
+    let original = frames.len();
+    for name in &args.also_without {
+        let k = FEATURE_NAMES.iter().position(|n| n == name).with_context(|| format!("--also-without {name}: no such feature (one of {})", FEATURE_NAMES.join(", ")))?;
+        let copies: Vec<TrainingFrame> = frames[..original]
+            .iter()
+            .map(|fr| {
+                let mut c = fr.clone();
+                c.features.iter_mut().for_each(|f| f[k] = 0.0);
+                c
+            })
+            .collect();
+        eprintln!("[train-ranker] {} more frames without `{name}`", copies.len());
+        negative.extend_from_within(..original);
+        frames.extend(copies);
+    }
     let settings = FitSettings { l2: args.l2, iterations: args.iterations, step: args.step };
     let w = fit(&frames, &settings);
     report("training frames", &assess(&frames, &negative, &w, args.min_score));

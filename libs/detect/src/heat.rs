@@ -1,0 +1,184 @@
+//! The learned hub heatmap: a small convolutional network, trained on the project's renderer
+//! (`scripts/train-hubnet.sh`), that maps a downscaled grey frame to the probability, per cell,
+//! that the rotor's hub lies there. The geometric pipeline stays in charge of *where exactly*
+//! the hub is (blade crossings, spinner rim); the heatmap says *which* of its candidates looks
+//! like a hub at all, as one more ranker feature (`FeatureWeights::hub_heat`).
+//!
+//! The network input is the working pyramid level resized to [`NET_WIDTH`]×[`NET_HEIGHT`]
+//! (area interpolation, aspect not kept): the same function makes the training set
+//! (`hubtrack dataset`) and the detector's input, so the two cannot drift apart.
+
+use opencv::core::{Mat, Size, Vector};
+use opencv::prelude::*;
+use opencv::{dnn, imgproc};
+
+use crate::DetectError;
+
+/// Network input width, px.
+pub const NET_WIDTH: i32 = 192;
+/// Network input height, px.
+pub const NET_HEIGHT: i32 = 128;
+/// Input pixels per heatmap cell.
+pub const NET_STRIDE: i32 = 8;
+
+/// The model the build ships: written by `scripts/train-hubnet.sh` (ONNX, opset ≤ 13, input
+/// `1×1×128×192` grey scaled to [0, 1], output `1×1×16×24` logits).
+const MODEL: &[u8] = include_bytes!("../models/hubnet.onnx");
+
+/// The network input of one working pyramid level: grey, resized to `NET_WIDTH`×`NET_HEIGHT`.
+pub fn network_input(working: &Mat, out: &mut Mat) -> Result<(), DetectError> {
+    imgproc::resize(working, out, Size::new(NET_WIDTH, NET_HEIGHT), 0.0, 0.0, imgproc::INTER_AREA)?;
+    Ok(())
+}
+
+/// Hub probabilities on a grid of cells over the whole frame.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Heatmap {
+    /// Cells per row.
+    pub cols: usize,
+    /// Rows of cells.
+    pub rows: usize,
+    /// Probability per cell, row-major.
+    pub p: Vec<f32>,
+}
+
+impl Heatmap {
+    /// The largest probability among the cells within `radius` cells of the point at
+    /// fractions `(fx, fy)` of the frame's width and height (0 outside the frame). The hub may
+    /// sit on a cell border, and the network's peak may be a cell off.
+    pub fn near(&self, fx: f64, fy: f64, radius: f64) -> f64 {
+        if self.p.is_empty() || !(0.0..=1.0).contains(&fx) || !(0.0..=1.0).contains(&fy) {
+            return 0.0;
+        }
+        // Cell centres are at (i + 0.5) / cols.
+        let (cx, cy) = (fx * self.cols as f64 - 0.5, fy * self.rows as f64 - 0.5);
+        let (x0, x1) = (((cx - radius).ceil().max(0.0)) as usize, ((cx + radius).floor().min(self.cols as f64 - 1.0)).max(0.0) as usize);
+        let (y0, y1) = (((cy - radius).ceil().max(0.0)) as usize, ((cy + radius).floor().min(self.rows as f64 - 1.0)).max(0.0) as usize);
+        let mut best = 0.0f32;
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let (dx, dy) = (x as f64 - cx, y as f64 - cy);
+                if dx * dx + dy * dy <= radius * radius + 1e-9 {
+                    best = best.max(self.p[y * self.cols + x]);
+                }
+            }
+        }
+        best as f64
+    }
+
+    /// Where the most probable cell's hub lies, as fractions of the frame, and the cell's
+    /// probability. The position is the probability-weighted mean of the cell centres in its
+    /// 3×3 neighbourhood: the network was trained to a bump about a cell wide around the hub,
+    /// so the neighbours' share says where in the cell the hub is.
+    pub fn peak(&self) -> Option<([f64; 2], f64)> {
+        let (i, p) = self.p.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+        let (x, y) = (i % self.cols, i / self.cols);
+        let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
+        for ny in y.saturating_sub(1)..=(y + 1).min(self.rows - 1) {
+            for nx in x.saturating_sub(1)..=(x + 1).min(self.cols - 1) {
+                let w = self.p[ny * self.cols + nx] as f64;
+                sx += w * (nx as f64 + 0.5);
+                sy += w * (ny as f64 + 0.5);
+                sw += w;
+            }
+        }
+        let (cx, cy) = if sw > 0.0 { (sx / sw, sy / sw) } else { (x as f64 + 0.5, y as f64 + 0.5) };
+        Some(([cx / self.cols as f64, cy / self.rows as f64], *p as f64))
+    }
+}
+
+/// The loaded network and its buffers.
+pub struct HubNet {
+    net: dnn::Net,
+    input: Mat,
+    blob: Mat,
+}
+
+impl HubNet {
+    /// Load the shipped model.
+    pub fn new() -> Result<HubNet, DetectError> {
+        let bytes = Vector::<u8>::from_slice(MODEL);
+        let net = dnn::read_net_from_onnx_buffer(&bytes)?;
+        Ok(HubNet { net, input: Mat::default(), blob: Mat::default() })
+    }
+
+    /// The heatmap of one working pyramid level (grey).
+    pub fn run(&mut self, working: &Mat) -> Result<Heatmap, DetectError> {
+        network_input(working, &mut self.input)?;
+        dnn::blob_from_image_to(
+            &self.input,
+            &mut self.blob,
+            1.0 / 255.0,
+            Size::new(NET_WIDTH, NET_HEIGHT),
+            opencv::core::Scalar::default(),
+            false,
+            false,
+            opencv::core::CV_32F,
+        )?;
+        self.net.set_input(&self.blob, "", 1.0, opencv::core::Scalar::default())?;
+        let out = self.net.forward_single("")?;
+        let (rows, cols) = ((NET_HEIGHT / NET_STRIDE) as usize, (NET_WIDTH / NET_STRIDE) as usize);
+        let logits = out.data_typed::<f32>()?;
+        if logits.len() != rows * cols {
+            return Err(DetectError::BadImage(format!("hub network gave {} values for {rows}x{cols} cells", logits.len())));
+        }
+        let p = logits.iter().map(|l| 1.0 / (1.0 + (-l).exp())).collect();
+        Ok(Heatmap { cols, rows, p })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn map(cols: usize, rows: usize, hot: &[(usize, usize, f32)]) -> Heatmap {
+        let mut p = vec![0.01; cols * rows];
+        for &(x, y, v) in hot {
+            p[y * cols + x] = v;
+        }
+        Heatmap { cols, rows, p }
+    }
+
+    #[test]
+    fn near_takes_the_largest_cell_within_the_radius() {
+        let m = map(24, 16, &[(10, 5, 0.9), (13, 5, 0.7)]);
+        // Cell (10, 5) has its centre at (10.5 / 24, 5.5 / 16).
+        let (fx, fy) = (10.5 / 24.0, 5.5 / 16.0);
+        assert_eq!(m.near(fx, fy, 0.0), 0.9f32 as f64);
+        // One cell to the right of (10, 5): both neighbours within 1 cell? (10,5) yes, (13,5) no.
+        assert_eq!(m.near(11.5 / 24.0, fy, 1.0), 0.9f32 as f64);
+        assert_eq!(m.near(12.5 / 24.0, fy, 1.0), 0.7f32 as f64);
+        assert!((m.near(12.5 / 24.0, 12.5 / 16.0, 1.0) - 0.01).abs() < 1e-6);
+        // Outside the frame: nothing.
+        assert_eq!(m.near(-0.1, fy, 1.0), 0.0);
+        assert_eq!(m.near(fx, 1.2, 1.0), 0.0);
+        // The frame's corners clamp to the grid.
+        assert!(m.near(0.0, 0.0, 1.0) > 0.0 && m.near(1.0, 1.0, 1.0) > 0.0);
+    }
+
+    #[test]
+    fn the_peak_is_the_most_probable_cell_centre() {
+        let m = map(24, 16, &[(3, 12, 0.4), (20, 2, 0.8)]);
+        let (c, p) = m.peak().unwrap();
+        assert!((c[0] - 20.5 / 24.0).abs() < 1e-12 && (c[1] - 2.5 / 16.0).abs() < 1e-12);
+        assert!((p - 0.8).abs() < 1e-6);
+        assert!(Heatmap::default().peak().is_none());
+        // A strong right-hand neighbour moves the hub toward it, within the cell.
+        let m = map(24, 16, &[(20, 2, 0.8), (21, 2, 0.6)]);
+        let (c, p) = m.peak().unwrap();
+        assert!((p - 0.8).abs() < 1e-6);
+        assert!(c[0] > 20.5 / 24.0 && c[0] < 21.0 / 24.0, "{c:?}");
+        assert!((c[1] - 2.5 / 16.0).abs() < 1e-9, "{c:?}");
+    }
+
+    #[test]
+    fn the_shipped_model_loads_and_maps_the_whole_frame() {
+        let mut net = HubNet::new().expect("the shipped model loads");
+        let img = Mat::new_rows_cols_with_default(270, 480, opencv::core::CV_8UC1, opencv::core::Scalar::all(100.0)).unwrap();
+        let h = net.run(&img).unwrap();
+        assert_eq!((h.cols, h.rows), ((NET_WIDTH / NET_STRIDE) as usize, (NET_HEIGHT / NET_STRIDE) as usize));
+        assert!(h.p.iter().all(|p| p.is_finite() && (0.0..=1.0).contains(p)));
+        // A blank frame holds no hub.
+        assert!(h.peak().unwrap().1 < 0.5, "{:?}", h.peak());
+    }
+}

@@ -1,0 +1,100 @@
+//! `hubtrack dataset`: rendered frames with their hub truth, as the learned hub heatmap's input
+//! (the detector's own preprocessing, `Detector::network_input`), for `scripts/train-hubnet.py`.
+
+use anyhow::Context;
+use hubtrack_detect::heat::{NET_HEIGHT, NET_WIDTH};
+use hubtrack_detect::ImageView;
+use hubtrack_render::dataset::{flight, synth_case, synth_case_between, BEYOND_M, CLASSES};
+use hubtrack_render::{Camera, CameraPose, Renderer, Scene};
+use hubtrack_runtime::config::ConfigArgs;
+use hubtrack_types::PixelFormat;
+use std::io::Write;
+use std::path::PathBuf;
+
+/// Arguments of `hubtrack dataset`.
+#[derive(clap::Args)]
+pub struct DatasetArgs {
+    #[command(flatten)]
+    pub config: ConfigArgs,
+    /// Output folder (created): one grey PNG per frame and `labels.jsonl`.
+    #[arg(long, short = 'o')]
+    pub out: PathBuf,
+    /// Seed of the scenes (keep the evaluation seeds, 2026, 77 and 500, out of training).
+    #[arg(long, default_value_t = 101)]
+    pub seed: u64,
+    /// Single frames per distance class, plus a quarter as many negatives (no turbine).
+    #[arg(long, default_value_t = 1000)]
+    pub per_class: u64,
+    /// Rendered approach flights (30 → 6 m), of which every `--flight-step`-th frame is kept.
+    #[arg(long, default_value_t = 10)]
+    pub flights: u64,
+    /// Frames per flight.
+    #[arg(long, default_value_t = 300)]
+    pub flight_frames: u64,
+    /// Keep every n-th flight frame.
+    #[arg(long, default_value_t = 5)]
+    pub flight_step: u64,
+    /// Single frames from beyond the far class (45–250 m, as photos show turbines), plus a
+    /// quarter as many negatives.
+    #[arg(long, default_value_t = 0)]
+    pub beyond: u64,
+}
+
+/// Writes the set.
+pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
+    let config = a.config.load()?;
+    let mut det = crate::detect_cmd::detector(&config.detect, None)?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let labels_path = a.out.join("labels.jsonl");
+    let mut labels = std::io::BufWriter::new(std::fs::File::create(&labels_path).with_context(|| format!("creating {}", labels_path.display()))?);
+    let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
+    let mut buffers: Vec<Vec<u8>> = renderers.iter().map(|r| vec![0u8; r.camera().frame_bytes()]).collect();
+    let mut written = 0u64;
+    let mut one = |name: String, scene: &Scene, pose: &CameraPose, wide: bool| -> anyhow::Result<()> {
+        let k = if wide { 0 } else { 1 };
+        let truth = renderers[k].render(scene, pose, &mut buffers[k]).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let cam = renderers[k].camera();
+        let (w, h) = (cam.width as f64, cam.height as f64);
+        let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buffers[k] };
+        let input = det.network_input(&view)?;
+        let file = format!("{name}.png");
+        let path = a.out.join(&file);
+        let p = path.to_str().context("non-UTF-8 path")?;
+        anyhow::ensure!(opencv::imgcodecs::imwrite_def(p, &input)?, "cannot write {p}");
+        let frac = |q: Option<[f64; 2]>| q.filter(|_| truth.turbine_in_view).map(|q| [q[0] / w, q[1] / h]);
+        let line = serde_json::json!({
+            "file": file,
+            "hub": frac(truth.hub_px),
+            "nose": frac(truth.nose_px),
+            "distance_m": truth.distance_m,
+            "image_height": cam.height,
+        });
+        writeln!(labels, "{line}")?;
+        written += 1;
+        if written.is_multiple_of(500) {
+            eprintln!("[dataset] {written} frames");
+        }
+        Ok(())
+    };
+    for (class, def) in CLASSES.iter().enumerate() {
+        for i in 0..a.per_class + a.per_class / 4 {
+            let negative = i >= a.per_class;
+            let case = synth_case(a.seed, class, i, negative);
+            one(format!("{}_{}_{i:05}", a.seed, def.0), &case.scene, &case.pose, case.wide)?;
+        }
+    }
+    for i in 0..a.beyond + a.beyond / 4 {
+        // Class index 3: a scene stream of its own, apart from the three classes'.
+        let case = synth_case_between(a.seed, CLASSES.len(), i, i >= a.beyond, "beyond", BEYOND_M.0, BEYOND_M.1);
+        one(format!("{}_beyond_{i:05}", a.seed), &case.scene, &case.pose, case.wide)?;
+    }
+    for f in 0..a.flights {
+        let seed = a.seed.wrapping_mul(1000).wrapping_add(f);
+        for (i, fr) in flight(seed, a.flight_frames).iter().enumerate().step_by(a.flight_step.max(1) as usize) {
+            one(format!("{}_flight{f:02}_{i:04}", a.seed), &fr.scene, &fr.pose, true)?;
+        }
+    }
+    labels.flush()?;
+    eprintln!("[dataset] {written} frames ({NET_WIDTH}x{NET_HEIGHT} grey) and labels.jsonl in {}", a.out.display());
+    Ok(())
+}

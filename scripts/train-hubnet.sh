@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Trains the learned hub heatmap (libs/detect/src/heat.rs) on the project's own renderer and
+# writes libs/detect/models/hubnet.onnx. Rendered frames only: never ../shared/data (it is for
+# evaluation).
+#
+# Data (`hubtrack dataset`): seeds 101, 103, 104 for training and 102 held out, each 1,500
+# single frames per distance class with a quarter as many negatives and 20 rendered approach
+# flights (every 5th frame): 6,825 frames; and seeds 105, 106 with 3,000 frames each from
+# 45–250 m (`--beyond`, photos show turbines that far) and 750 negatives. The evaluation seeds
+# of `hubtrack eval` and the README (2026, 77, 500; flights 2026, 7, 100, 500, 3000, 4000) are
+# not used.
+# Training: `scripts/train-hubnet.py` (JAX on the CPU, in its own virtual environment under
+# target/; 20 epochs). About 5 minutes of rendering and 17 of training on 2 cores; the held-out
+# score is printed every 3 epochs (session 24: the peak within one cell of the hub in 97.6 %).
+# Usage: scripts/train-hubnet.sh [OUT.onnx] [-- train-hubnet.py options]
+# Then rebuild (the model is compiled in) and refit the ranker (scripts/train-ranker.sh): the
+# ranker's `hub_heat` weight belongs to the model it was fitted with.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-libs/detect/models/hubnet.onnx}
+shift || true
+[ "${1:-}" = "--" ] && shift
+data=target/hubnet-data
+venv=target/hubnet-venv
+bin=target/release/hubtrack
+[ -x "$bin" ] || cargo build --release -p hubtrack
+if [ ! -x "$venv/bin/python" ]; then
+  echo "[train-hubnet] creating $venv (jax, optax, onnx, pillow)" >&2
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install -q "jax[cpu]==0.10.2" "optax==0.2.8" "onnx==1.23.2" "pillow==13.0.0" "numpy==2.4.6"
+fi
+mkdir -p "$data"
+for seed in 101 103 104 102; do
+  if [ ! -s "$data/s$seed/labels.jsonl" ]; then
+    echo "[train-hubnet] rendering seed $seed" >&2
+    "$bin" dataset -o "$data/s$seed" --seed "$seed" --per-class 1500 --flights 20
+  fi
+done
+for seed in 105 106; do
+  if [ ! -s "$data/b$seed/labels.jsonl" ]; then
+    echo "[train-hubnet] rendering seed $seed beyond 45 m" >&2
+    "$bin" dataset -o "$data/b$seed" --seed "$seed" --per-class 0 --flights 0 --beyond 3000
+  fi
+done
+# The last folder is held out.
+"$venv/bin/python" scripts/train-hubnet.py --out "$out" "$@" \
+  "$data/s101" "$data/s103" "$data/s104" "$data/b105" "$data/b106" "$data/s102"
