@@ -115,6 +115,7 @@ fn run() -> anyhow::Result<()> {
         }
         clock.publish(SimClock { now_ns, step, publish_ns: monotonic_ns() })?;
         let sent_any = !outgoing.is_empty();
+        let reflected = ReflectedState::of(&outgoing);
         for msg in outgoing.drain(..) {
             header.sequence = header.sequence.wrapping_add(1);
             if let Err(e) = link.send(header, &msg) {
@@ -123,9 +124,14 @@ fn run() -> anyhow::Result<()> {
             }
         }
         // Lockstep: detect and track must see the attitude of this instant, so wait until
-        // control has published it (it stamps it with this clock).
+        // control has published it (it stamps it with this clock). Control publishes a state
+        // after each batch it reads, and the batch can end between two of these messages (a
+        // HEARTBEAT alone, then the ATTITUDE): the state must show everything sent, or a replay
+        // of the recording could see another attitude than the live run did.
         if cfg.pace == SimPace::Lockstep && sent_any {
-            let got = wait_for(&vehicle_states, lockstep_timeout, &shutdown, |v| v.recv_ns >= now_ns)?;
+            let got = wait_for(&vehicle_states, lockstep_timeout, &shutdown, |v| {
+                v.recv_ns >= now_ns && reflected.is_shown_by(v)
+            })?;
             if got.is_none() {
                 lockstep_misses += 1;
                 log::warn!("t={t:.2}s: control did not publish the vehicle state within {} ms; going on", lockstep_timeout.as_millis());
@@ -232,6 +238,35 @@ fn receive_commands(link: &mut Link, autopilot: &mut Autopilot, t: f64, vehicle:
 
 /// Waits until a message satisfying `ok` arrives on `sub` (the newest such is returned), or the
 /// timeout passes, or shutdown.
+/// What a vehicle state published by control must show once it has read a batch of the
+/// autopilot's messages: the newest ATTITUDE's angles and LOCAL_POSITION_NED's position, compared
+/// exactly (control widens the `f32` fields to `f64`, which is exact).
+#[derive(Debug, Clone, Copy, Default)]
+struct ReflectedState {
+    attitude: Option<[f32; 3]>,
+    position: Option<[f32; 3]>,
+}
+
+impl ReflectedState {
+    fn of(messages: &[MavMessage]) -> Self {
+        let mut out = Self::default();
+        for msg in messages {
+            match msg {
+                MavMessage::ATTITUDE(a) => out.attitude = Some([a.roll, a.pitch, a.yaw]),
+                MavMessage::LOCAL_POSITION_NED(p) => out.position = Some([p.x, p.y, p.z]),
+                _ => {}
+            }
+        }
+        out
+    }
+
+    fn is_shown_by(&self, v: &VehicleState) -> bool {
+        let same = |sent: [f32; 3], seen: [f64; 3]| sent.iter().zip(seen).all(|(&a, b)| f64::from(a) == b);
+        self.attitude.is_none_or(|a| v.attitude_valid && same(a, [v.roll_rad, v.pitch_rad, v.yaw_rad]))
+            && self.position.is_none_or(|p| v.position_valid && same(p, v.position_ned_m))
+    }
+}
+
 fn wait_for<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend + 'static>(
     sub: &MsgSubscriber<T>,
     timeout: Duration,
