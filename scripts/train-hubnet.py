@@ -8,7 +8,12 @@ turbine's shade, the sky's brightness, sharpness, framing): brightness inversion
 contrast, noise, blur, zoom and mirror. The result is written as ONNX (opset 11, plain
 Conv/Relu, which OpenCV 4.6's dnn module reads) for `include_bytes!` in the detector.
 
-Usage: train-hubnet.py --out libs/detect/models/hubnet.onnx [--epochs N] DATASET_DIR...
+With `--model crop` it trains the hub crop network instead (`HubCropNet` in the same file): a
+64x64 crop of the working pyramid level around a candidate hub (side `CROP_FRAC` of the frame
+height) to one logit per 4x4-pixel cell, which places the hub to a fraction of a spinner radius
+where the blade-edge crossings are biased (frames from `hubtrack dataset --working`).
+
+Usage: train-hubnet.py --out libs/detect/models/hubnet.onnx [--model frame|crop] [--epochs N] DATASET_DIR...
 (the last directory is held out and reported). `scripts/train-hubnet.sh` is the whole recipe.
 """
 import argparse
@@ -25,38 +30,104 @@ GW, GH = W // STRIDE, H // STRIDE
 LAYERS = [(1, 8, 2, 1), (8, 16, 2, 1), (16, 16, 1, 1), (16, 32, 2, 1), (32, 32, 1, 2), (32, 32, 1, 4)]
 SIGMA_CELLS = 0.6
 
+# The crop network (keep in step with `heat.rs`: CROP_SIDE, CROP_STRIDE, CROP_FRAC).
+CROP_SIDE, CROP_STRIDE = 64, 4
+CROP_GRID = CROP_SIDE // CROP_STRIDE
+CROP_FRAC = 0.3
+CROP_LAYERS = [(1, 8, 2, 1), (8, 16, 1, 1), (16, 32, 2, 1), (32, 32, 1, 2), (32, 32, 1, 4)]
+# Training crops are centred this far from the hub at most (fraction of the frame height: the
+# candidates the detector refines are a spinner radius or two off), and a quarter of them lie
+# elsewhere (no hub in them, or only at the crop's rim) ...
+CROP_OFFSET_FRAC = 0.12
+CROP_NEGATIVE_SHARE = 0.25
+# ... and their side varies by this factor either way (the spinner's size in the crop varies
+# with range anyway; this covers lenses and pyramid levels).
+CROP_SCALE_JITTER = 0.15
 
-def load(dirs):
+
+def load(dirs, any_size=False):
+    """Frames and hubs (fractions of the frame; -1 without a hub in view). Frames of the frame
+    model are stacked (all 192x128); working levels (`any_size`) stay a list."""
     from PIL import Image
     xs, ys = [], []
     for d in dirs:
         for line in open(os.path.join(d, "labels.jsonl")):
             r = json.loads(line)
             img = np.asarray(Image.open(os.path.join(d, r["file"])).convert("L"), dtype=np.uint8)
-            assert img.shape == (H, W), (r["file"], img.shape)
+            assert any_size or img.shape == (H, W), (r["file"], img.shape)
             xs.append(img)
             hub = r["hub"]
             ys.append(hub if hub is not None and 0 <= hub[0] <= 1 and 0 <= hub[1] <= 1 else [-1.0, -1.0])
-    return np.stack(xs), np.asarray(ys, dtype=np.float32)
+    return (xs if any_size else np.stack(xs)), np.asarray(ys, dtype=np.float32)
 
 
-def targets(hubs):
+def targets(hubs, gw=GW, gh=GH):
     """Gaussian bumps (peak 1) on the cell grid around each hub; all zero without one."""
-    gx = (np.arange(GW) + 0.5) / GW
-    gy = (np.arange(GH) + 0.5) / GH
-    dx = (gx[None, None, :] - hubs[:, 0, None, None]) * GW
-    dy = (gy[None, :, None] - hubs[:, 1, None, None]) * GH
+    gx = (np.arange(gw) + 0.5) / gw
+    gy = (np.arange(gh) + 0.5) / gh
+    dx = (gx[None, None, :] - hubs[:, 0, None, None]) * gw
+    dy = (gy[None, :, None] - hubs[:, 1, None, None]) * gh
     t = np.exp(-(dx**2 + dy**2) / (2 * SIGMA_CELLS**2))
     t[hubs[:, 0] < 0] = 0.0
     return t.astype(np.float32)
 
 
-def augment(x, hubs, rng):
+def crop(img, cx, cy, side):
+    """The `CROP_SIDE`-square crop of side `side` (px) centred on (cx, cy) px, bilinear, the
+    border replicated: what `HubCropNet` cuts with OpenCV's warpAffine (pixel centres mapped as
+    x_in = x0 + (u + 0.5)·s - 0.5)."""
+    h, w = img.shape
+    s = side / CROP_SIDE
+    u = cx - side / 2 + (np.arange(CROP_SIDE) + 0.5) * s - 0.5
+    v = cy - side / 2 + (np.arange(CROP_SIDE) + 0.5) * s - 0.5
+    u, v = np.clip(u, 0, w - 1), np.clip(v, 0, h - 1)
+    u0, v0 = np.minimum(u.astype(int), w - 2), np.minimum(v.astype(int), h - 2)
+    fu, fv = (u - u0)[None, :], (v - v0)[:, None]
+    f = img.astype(np.float32)
+    a, b = f[v0][:, u0], f[v0][:, u0 + 1]
+    c, d = f[v0 + 1][:, u0], f[v0 + 1][:, u0 + 1]
+    return (a * (1 - fu) + b * fu) * (1 - fv) + (c * (1 - fu) + d * fu) * fv
+
+
+def sample_crops(frames, hubs, idx, rng, negative_share=CROP_NEGATIVE_SHARE):
+    """Crops of frames `idx` (uint8 0..255 as float) with the hub as a fraction of the crop
+    (-1 when outside it), and per crop (frame height px per crop px, x0, y0) to map back."""
+    xs, ys, geo = [], [], []
+    for i in idx:
+        img = frames[i]
+        h, w = img.shape
+        side = h * CROP_FRAC * np.exp(rng.uniform(-CROP_SCALE_JITTER, CROP_SCALE_JITTER))
+        hub = hubs[i] * [w, h] if hubs[i, 0] >= 0 else None
+        if hub is not None and rng.random() >= negative_share:
+            r = CROP_OFFSET_FRAC * h * np.sqrt(rng.random())
+            a = rng.uniform(0, 2 * np.pi)
+            cx, cy = hub[0] + r * np.cos(a), hub[1] + r * np.sin(a)
+        else:
+            cx, cy = rng.uniform(0, w), rng.uniform(0, h)
+        xs.append(crop(img, cx, cy, side))
+        x0, y0 = cx - side / 2, cy - side / 2
+        if hub is not None:
+            fx, fy = (hub[0] - x0) / side, (hub[1] - y0) / side
+            ys.append([fx, fy] if 0 <= fx <= 1 and 0 <= fy <= 1 else [-1.0, -1.0])
+        else:
+            ys.append([-1.0, -1.0])
+        geo.append((side, x0, y0, h))
+    return np.stack(xs), np.asarray(ys, dtype=np.float32), geo
+
+
+def augment(x, hubs, rng, zoom=True):
     """Random photometric and geometric changes; returns float images in [0, 1] and hubs."""
-    n = len(x)
+    n, H, W = x.shape
     x = x.astype(np.float32) / 255.0
     hubs = hubs.copy()
-    # Zoom in (crop and scale back) on part of the batch, nearest-neighbour.
+    if zoom:
+        x, hubs = zoom_in(x, hubs, rng)
+    return photometric(x, hubs, rng)
+
+
+def zoom_in(x, hubs, rng):
+    """Zoom in (crop and scale back) on part of the batch, nearest-neighbour."""
+    n, H, W = x.shape
     out = np.empty_like(x)
     for i in range(n):
         s = rng.uniform(0.7, 1.0) if rng.random() < 0.5 else 1.0
@@ -68,7 +139,12 @@ def augment(x, hubs, rng):
         if hubs[i, 0] >= 0:
             hx, hy = (hubs[i, 0] * W - x0) / cw, (hubs[i, 1] * H - y0) / ch
             hubs[i] = [hx, hy] if 0 <= hx <= 1 and 0 <= hy <= 1 else [-1, -1]
-    x = out
+    return out, hubs
+
+
+def photometric(x, hubs, rng):
+    """Mirror, brightness inversion, gamma, contrast, blur, noise and quantisation."""
+    n = len(x)
     flip = rng.random(n) < 0.5
     x[flip] = x[flip][:, :, ::-1]
     hubs[flip & (hubs[:, 0] >= 0), 0] = 1.0 - hubs[flip & (hubs[:, 0] >= 0), 0]
@@ -92,21 +168,21 @@ def augment(x, hubs, rng):
     return x.astype(np.float32), hubs
 
 
-def init(rng):
+def init(rng, layers=LAYERS):
     params = []
-    for cin, cout, _, _ in LAYERS:
+    for cin, cout, _, _ in layers:
         w = rng.normal(0, np.sqrt(2.0 / (cin * 9)), (cout, cin, 3, 3)).astype(np.float32)
         params.append((w, np.zeros(cout, np.float32)))
-    cin = LAYERS[-1][1]
+    cin = layers[-1][1]
     params.append((rng.normal(0, np.sqrt(1.0 / cin), (1, cin, 1, 1)).astype(np.float32), np.full(1, -4.0, np.float32)))
     return params
 
 
-def forward(params, x):
+def forward(params, x, layers=LAYERS):
     import jax
     from jax import lax
     h = x[:, None]
-    for (w, b), (_, _, s, d) in zip(params[:-1], LAYERS):
+    for (w, b), (_, _, s, d) in zip(params[:-1], layers):
         h = lax.conv_general_dilated(h, w, (s, s), [(d, d), (d, d)], rhs_dilation=(d, d), dimension_numbers=("NCHW", "OIHW", "NCHW"))
         h = jax.nn.relu(h + b[None, :, None, None])
     w, b = params[-1]
@@ -114,9 +190,9 @@ def forward(params, x):
     return h[:, 0] + b[0]
 
 
-def loss_fn(params, x, t):
+def loss_fn(params, x, t, layers=LAYERS):
     import jax.numpy as jnp
-    z = forward(params, x)
+    z = forward(params, x, layers)
     # Binary cross-entropy on soft targets; the few hub cells weigh like the many others.
     bce = jnp.maximum(z, 0) - z * t + jnp.log1p(jnp.exp(-jnp.abs(z)))
     return jnp.mean(bce * (1.0 + 40.0 * t))
@@ -144,12 +220,50 @@ def evaluate(params, x, hubs, fwd):
     }
 
 
-def export(params, path):
+def crop_peak(p):
+    """Per crop map (n, g, g): the most probable cell's probability and the hub as a fraction of
+    the crop, the probability-weighted mean of the cell centres in its 3x3 neighbourhood (as
+    `Heatmap::peak` in heat.rs)."""
+    n, g, _ = p.shape
+    flat = p.reshape(n, -1)
+    k = flat.argmax(1)
+    ky, kx = k // g, k % g
+    pos = np.zeros((n, 2))
+    for i in range(n):
+        y0, y1, x0, x1 = max(ky[i] - 1, 0), min(ky[i] + 2, g), max(kx[i] - 1, 0), min(kx[i] + 2, g)
+        w = p[i, y0:y1, x0:x1]
+        yy, xx = np.mgrid[y0:y1, x0:x1]
+        pos[i] = [((xx + 0.5) * w).sum() / w.sum() / g, ((yy + 0.5) * w).sum() / w.sum() / g]
+    return flat.max(1), pos
+
+
+def evaluate_crops(params, frames, hubs, fwd):
+    """Held-out crops (a fixed draw): how often the peak lies within 3 % of the frame height of
+    the hub, and the peak probabilities with and without a hub in the crop."""
+    rng = np.random.default_rng(12345)
+    idx = rng.integers(0, len(frames), 4000)
+    x, ys, geo = sample_crops(frames, hubs, idx, rng)
+    z = np.concatenate([np.asarray(fwd(params, x[i:i + 256] / 255.0)) for i in range(0, len(x), 256)])
+    peak, pos = crop_peak(1 / (1 + np.exp(-z)))
+    has = ys[:, 0] >= 0
+    err = np.array([np.hypot(*(pos[i] - ys[i])) * geo[i][0] / geo[i][3] * 100 for i in range(len(x))])
+    near = has & (err <= 3.0)
+    return {
+        "crops_with_hub": int(has.sum()),
+        "peak_within_3%h_%": round(100 * float(near[has].mean()), 1),
+        "median_error_%h": round(float(np.median(err[has])), 2),
+        "peak_p_median_hub": round(float(np.median(peak[has])), 3),
+        "peak_p_median_no_hub": round(float(np.median(peak[~has])), 3),
+        "no_hub_peak_over_0.5_%": round(100 * float((peak[~has] > 0.5).mean()), 1),
+    }
+
+
+def export(params, path, layers=LAYERS, size=(H, W), grid=(GH, GW), name="hubnet"):
     import onnx
     from onnx import TensorProto, helper, numpy_helper
     nodes, inits = [], []
     prev = "input"
-    for i, ((w, b), (_, _, s, d)) in enumerate(zip(params[:-1], LAYERS)):
+    for i, ((w, b), (_, _, s, d)) in enumerate(zip(params[:-1], layers)):
         inits += [numpy_helper.from_array(np.asarray(w, np.float32), f"w{i}"), numpy_helper.from_array(np.asarray(b, np.float32), f"b{i}")]
         nodes.append(helper.make_node("Conv", [prev, f"w{i}", f"b{i}"], [f"c{i}"], kernel_shape=[3, 3], strides=[s, s], pads=[d, d, d, d], dilations=[d, d]))
         nodes.append(helper.make_node("Relu", [f"c{i}"], [f"r{i}"]))
@@ -159,9 +273,9 @@ def export(params, path):
     nodes.append(helper.make_node("Conv", [prev, "wout", "bout"], ["logits"], kernel_shape=[1, 1]))
     graph = helper.make_graph(
         nodes,
-        "hubnet",
-        [helper.make_tensor_value_info("input", TensorProto.FLOAT, [1, 1, H, W])],
-        [helper.make_tensor_value_info("logits", TensorProto.FLOAT, [1, 1, GH, GW])],
+        name,
+        [helper.make_tensor_value_info("input", TensorProto.FLOAT, [1, 1, size[0], size[1]])],
+        [helper.make_tensor_value_info("logits", TensorProto.FLOAT, [1, 1, grid[0], grid[1]])],
         inits,
     )
     model = helper.make_model(graph, producer_name="hubtrack train-hubnet", opset_imports=[helper.make_opsetid("", 11)])
@@ -174,7 +288,10 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("data", nargs="+", help="dataset folders (hubtrack dataset); the last is held out")
     ap.add_argument("--out", required=True, help="ONNX file to write")
+    ap.add_argument("--model", choices=["frame", "crop"], default="frame",
+                    help="frame: the whole-frame heatmap (hubnet.onnx); crop: the hub crop network (hubcrop.onnx)")
     ap.add_argument("--epochs", type=int, default=20)
+    ap.add_argument("--crops-per-epoch", type=int, default=20000, help="crop model: crops drawn per epoch")
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--lr", type=float, default=2e-3)
     ap.add_argument("--seed", type=int, default=1)
@@ -183,38 +300,54 @@ def main():
     import jax.numpy as jnp
     import optax
 
+    crop_model = a.model == "crop"
+    layers = CROP_LAYERS if crop_model else LAYERS
+    tag = "[train-hubnet" + (" crop]" if crop_model else "]")
     train_dirs, hold_dirs = (a.data[:-1], a.data[-1:]) if len(a.data) > 1 else (a.data, [])
-    x, hubs = load(train_dirs)
-    print(f"[train-hubnet] {len(x)} training frames ({int((hubs[:, 0] >= 0).sum())} with a hub in view) from {', '.join(train_dirs)}", flush=True)
-    hold = load(hold_dirs) if hold_dirs else None
+    x, hubs = load(train_dirs, any_size=crop_model)
+    print(f"{tag} {len(x)} training frames ({int((hubs[:, 0] >= 0).sum())} with a hub in view) from {', '.join(train_dirs)}", flush=True)
+    hold = load(hold_dirs, any_size=crop_model) if hold_dirs else None
     rng = np.random.default_rng(a.seed)
-    params = [tuple(jnp.asarray(p) for p in layer) for layer in init(rng)]
-    steps = a.epochs * (len(x) // a.batch)
+    params = [tuple(jnp.asarray(p) for p in layer) for layer in init(rng, layers)]
+    per_epoch = a.crops_per_epoch if crop_model else len(x)
+    steps = a.epochs * (per_epoch // a.batch)
     opt = optax.adamw(optax.cosine_decay_schedule(a.lr, steps), weight_decay=1e-4)
     state = opt.init(params)
-    fwd = jax.jit(forward)
+    fwd = jax.jit(lambda p, xb: forward(p, xb, layers))
 
     @jax.jit
     def step(params, state, xb, tb):
-        loss, g = jax.value_and_grad(loss_fn)(params, xb, tb)
+        loss, g = jax.value_and_grad(lambda p: loss_fn(p, xb, tb, layers))(params)
         upd, state = opt.update(g, state, params)
         return optax.apply_updates(params, upd), state, loss
 
     t0 = time.time()
     for epoch in range(a.epochs):
-        order = rng.permutation(len(x))
         losses = []
-        for i in range(0, len(order) - a.batch + 1, a.batch):
-            idx = order[i:i + a.batch]
-            xb, hb = augment(x[idx], hubs[idx], rng)
-            params, state, loss = step(params, state, xb, targets(hb))
-            losses.append(float(loss))
-        msg = f"[train-hubnet] epoch {epoch + 1}/{a.epochs} loss {np.mean(losses):.4f} ({time.time() - t0:.0f} s)"
+        if crop_model:
+            for _ in range(per_epoch // a.batch):
+                xb, hb, _ = sample_crops(x, hubs, rng.integers(0, len(x), a.batch), rng)
+                xb, hb = augment(xb, hb, rng, zoom=False)
+                params, state, loss = step(params, state, xb, targets(hb, CROP_GRID, CROP_GRID))
+                losses.append(float(loss))
+        else:
+            order = rng.permutation(len(x))
+            for i in range(0, len(order) - a.batch + 1, a.batch):
+                idx = order[i:i + a.batch]
+                xb, hb = augment(x[idx], hubs[idx], rng)
+                params, state, loss = step(params, state, xb, targets(hb))
+                losses.append(float(loss))
+        msg = f"{tag} epoch {epoch + 1}/{a.epochs} loss {np.mean(losses):.4f} ({time.time() - t0:.0f} s)"
         if hold is not None and (epoch + 1 == a.epochs or epoch % 3 == 2):
-            msg += f" held out: {evaluate(params, hold[0], hold[1], fwd)}"
+            score = evaluate_crops(params, hold[0], hold[1], fwd) if crop_model else evaluate(params, hold[0], hold[1], fwd)
+            msg += f" held out: {score}"
         print(msg, flush=True)
-    export([tuple(np.asarray(p) for p in layer) for layer in params], a.out)
-    print(f"[train-hubnet] wrote {a.out}")
+    params = [tuple(np.asarray(p) for p in layer) for layer in params]
+    if crop_model:
+        export(params, a.out, CROP_LAYERS, (CROP_SIDE, CROP_SIDE), (CROP_GRID, CROP_GRID), "hubcrop")
+    else:
+        export(params, a.out)
+    print(f"{tag} wrote {a.out}")
 
 
 if __name__ == "__main__":

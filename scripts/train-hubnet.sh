@@ -15,9 +15,21 @@
 # Usage: scripts/train-hubnet.sh [OUT.onnx] [-- train-hubnet.py options]
 # Then rebuild (the model is compiled in) and refit the ranker (scripts/train-ranker.sh): the
 # ranker's `hub_heat` weight belongs to the model it was fitted with.
+#
+# The hub crop network (`HubCropNet`, libs/detect/models/hubcrop.onnx):
+#   scripts/train-hubnet.sh crop [OUT.onnx] [-- train-hubnet.py options]
+# Data: whole working levels (`hubtrack dataset --working`) of seeds 101 and 103 (1,000 frames
+# per class, a quarter as many negatives, 10 flights), 105 (2,000 frames from 45–250 m) and 102
+# held out; crops are cut at random offsets from the hub while training (15 epochs of 20,000
+# crops). About 20 minutes of rendering and 10 of training on 2 cores. It only places the hub
+# (no ranker feature), so the ranker needs no refit.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-out=${1:-libs/detect/models/hubnet.onnx}
+model=frame
+if [ "${1:-}" = "crop" ]; then model=crop; shift; fi
+default_out=libs/detect/models/hubnet.onnx
+[ "$model" = crop ] && default_out=libs/detect/models/hubcrop.onnx
+out=${1:-$default_out}
 shift || true
 [ "${1:-}" = "--" ] && shift
 data=target/hubnet-data
@@ -28,6 +40,22 @@ if [ ! -x "$venv/bin/python" ]; then
   echo "[train-hubnet] creating $venv (jax, optax, onnx, pillow)" >&2
   python3 -m venv "$venv"
   "$venv/bin/pip" install -q "jax[cpu]==0.10.2" "optax==0.2.8" "onnx==1.23.2" "pillow==13.0.0" "numpy==2.4.6"
+fi
+if [ "$model" = crop ]; then
+  data=target/hubcrop-data
+  mkdir -p "$data"
+  for seed in 101 103 102; do
+    if [ ! -s "$data/s$seed/labels.jsonl" ]; then
+      echo "[train-hubnet] rendering working levels, seed $seed" >&2
+      "$bin" dataset --working -o "$data/s$seed" --seed "$seed" --per-class 1000 --flights 10
+    fi
+  done
+  if [ ! -s "$data/b105/labels.jsonl" ]; then
+    echo "[train-hubnet] rendering working levels, seed 105 beyond 45 m" >&2
+    "$bin" dataset --working -o "$data/b105" --seed 105 --per-class 0 --flights 0 --beyond 2000
+  fi
+  exec "$venv/bin/python" scripts/train-hubnet.py --model crop --epochs 15 --out "$out" "$@" \
+    "$data/s101" "$data/s103" "$data/b105" "$data/s102"
 fi
 mkdir -p "$data"
 for seed in 101 103 104 102; do

@@ -201,3 +201,15 @@ def test_dataset_writes_the_heatmap_training_set(runner, tmp_path):
     assert len(negatives) == 2 and all(l["hub"] is None for l in negatives), negatives
     res = runner.run("hubtrack", "dataset", "-o", tmp_path / "x", "--set", "detect.default.pyramid_max_side_px=-1")
     assert res.returncode != 0 and "pyramid_max_side_px" in res.stderr
+    # --working (the hub crop network's set): the whole working level (the default pyramid's
+    # 200-500 px), the same labels.
+    work = tmp_path / "work"
+    res = runner.run("hubtrack", "dataset", "-o", work, "--seed", 9, "--per-class", 4, "--flights", 0, "--working")
+    assert res.returncode == 0, res.stderr
+    work_labels = [json.loads(l) for l in (work / "labels.jsonl").read_text().splitlines()]
+    assert [l["hub"] for l in work_labels] == [l["hub"] for l in labels[:15]]
+    for l in work_labels:
+        png = (work / l["file"]).read_bytes()
+        width, height, depth, colour = struct.unpack(">IIBB", png[16:26])
+        assert depth == 8 and colour == 0, l["file"]
+        assert 200 <= max(width, height) <= 500 and (width, height) != (192, 128), (l["file"], width, height)

@@ -35,10 +35,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let default_threads = opencv::core::get_num_threads()?;
     println!("{FRAMES} rendered 1920x1080 BGR frames x {REPEATS} repeats; times in ms (wall clock of detect(), per-step medians from Detection.timings)");
     println!("{:<8} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}", "mode", "threads", "median", "p99", "pyramid", "edges", "hough", "geometry");
-    for mode in [Mode::Thesis, Mode::Default] {
+    // The default mode also without the hub crop (`default.hub_crop`), its cost compared in one run.
+    let no_crop = {
+        let mut c = DetectConfig { mode: Mode::Default, ..DetectConfig::default() };
+        c.default.hub_crop = false;
+        c
+    };
+    let variants = [
+        ("thesis", DetectConfig { mode: Mode::Thesis, ..DetectConfig::default() }),
+        ("default", DetectConfig { mode: Mode::Default, ..DetectConfig::default() }),
+        ("no-crop", no_crop),
+    ];
+    for (name, config) in variants {
         for threads in [1, default_threads] {
             opencv::core::set_num_threads(threads)?;
-            let mut det = Detector::new(DetectConfig { mode, ..DetectConfig::default() })?;
+            let mut det = Detector::new(config.clone())?;
             let (mut tot, mut py, mut ed, mut ho, mut ge) = (vec![], vec![], vec![], vec![], vec![]);
             for rep in 0..=REPEATS {
                 for (buf, roll) in &frames {
@@ -57,7 +68,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     ge.push(tm.geometry_us / 1e3);
                 }
             }
-            let name = if mode == Mode::Thesis { "thesis" } else { "default" };
             println!(
                 "{:<8} {:>7} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
                 name,

@@ -4,6 +4,10 @@
 //! the hub is (blade crossings, spinner rim); the heatmap says *which* of its candidates looks
 //! like a hub at all, as one more ranker feature (`FeatureWeights::hub_heat`).
 //!
+//! A second network, [`HubCropNet`], places the chosen hub: it sees a crop of the working level
+//! around the candidate at four times the heatmap's resolution, where the blades' edge crossings
+//! sit a spinner radius or two beside an obliquely seen hub (`detect.default.hub_crop`).
+//!
 //! The network input is the working pyramid level resized to [`NET_WIDTH`]×[`NET_HEIGHT`]
 //! (area interpolation, aspect not kept): the same function makes the training set
 //! (`hubtrack dataset`) and the detector's input, so the two cannot drift apart.
@@ -87,6 +91,88 @@ impl Heatmap {
     }
 }
 
+/// Side of the hub crop network's square input, px.
+pub const CROP_SIDE: i32 = 64;
+/// Crop pixels per cell of the crop network's output.
+pub const CROP_STRIDE: i32 = 4;
+/// The crop's side as a fraction of the working frame's height: a spinner seen from 12 m or
+/// farther fits with its blade roots, and the candidates it refines (a spinner radius or two
+/// off) leave the hub well inside. Fixed by training (`CROP_FRAC` in train-hubnet.py).
+pub const CROP_FRAC: f64 = 0.3;
+/// The crop model the build ships (`scripts/train-hubnet.sh`; ONNX, input `1×1×64×64` grey in
+/// [0, 1], output `1×1×16×16` logits).
+const CROP_MODEL: &[u8] = include_bytes!("../models/hubcrop.onnx");
+
+/// Where the crop network puts the hub near a candidate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CropPeak {
+    /// The hub, working px.
+    pub hub: [f64; 2],
+    /// The peak cell's probability.
+    pub p: f64,
+    /// The largest probability within one cell of the crop's centre (the candidate).
+    pub at_centre: f64,
+}
+
+/// The hub crop network: a `CROP_FRAC`-of-the-height square of the working level around a
+/// candidate, scaled to `CROP_SIDE`², to a probability per `CROP_STRIDE`² cell that the hub
+/// lies there. Trained on the renderer (`train-hubnet.py --model crop`).
+pub struct HubCropNet {
+    net: dnn::Net,
+    crop: Mat,
+    blob: Mat,
+}
+
+impl HubCropNet {
+    /// Load the shipped model.
+    pub fn new() -> Result<HubCropNet, DetectError> {
+        Ok(HubCropNet { net: load(CROP_MODEL)?, crop: Mat::default(), blob: Mat::default() })
+    }
+
+    /// The hub near `centre` (working px) of the working level `working` (grey).
+    pub fn run(&mut self, working: &Mat, centre: [f64; 2]) -> Result<CropPeak, DetectError> {
+        let side = CROP_FRAC * working.rows() as f64;
+        let s = side / CROP_SIDE as f64;
+        let (x0, y0) = (centre[0] - side / 2.0, centre[1] - side / 2.0);
+        // Crop pixel u samples the working level at x0 + (u + 0.5)·s − 0.5 (pixel centres), as
+        // the training crops do; outside the frame the border repeats.
+        let m = Mat::from_slice_2d(&[[s, 0.0, x0 + 0.5 * s - 0.5], [0.0, s, y0 + 0.5 * s - 0.5]])?;
+        imgproc::warp_affine(
+            working,
+            &mut self.crop,
+            &m,
+            Size::new(CROP_SIDE, CROP_SIDE),
+            imgproc::INTER_LINEAR | imgproc::WARP_INVERSE_MAP,
+            opencv::core::BORDER_REPLICATE,
+            opencv::core::Scalar::default(),
+        )?;
+        let g = (CROP_SIDE / CROP_STRIDE) as usize;
+        let map = probabilities(&mut self.net, &self.crop, &mut self.blob, (g, g), "hub crop network")?;
+        let Some(([fx, fy], p)) = map.peak() else { unreachable!("a non-empty map has a peak") };
+        Ok(CropPeak { hub: [x0 + fx * side, y0 + fy * side], p, at_centre: map.near(0.5, 0.5, 1.0) })
+    }
+}
+
+/// An ONNX model compiled into the detector, loaded by OpenCV's dnn module.
+fn load(model: &[u8]) -> Result<dnn::Net, DetectError> {
+    Ok(dnn::read_net_from_onnx_buffer(&Vector::<u8>::from_slice(model))?)
+}
+
+/// Runs `net` on the grey image `input` (scaled to [0, 1]) and returns its `cols`×`rows` logits
+/// as probabilities; `what` names the network in the error when the model's output has another
+/// size.
+fn probabilities(net: &mut dnn::Net, input: &Mat, blob: &mut Mat, (cols, rows): (usize, usize), what: &str) -> Result<Heatmap, DetectError> {
+    let size = input.size()?;
+    dnn::blob_from_image_to(input, blob, 1.0 / 255.0, size, opencv::core::Scalar::default(), false, false, opencv::core::CV_32F)?;
+    net.set_input(blob, "", 1.0, opencv::core::Scalar::default())?;
+    let out = net.forward_single("")?;
+    let logits = out.data_typed::<f32>()?;
+    if logits.len() != rows * cols {
+        return Err(DetectError::BadImage(format!("{what} gave {} values for {cols}x{rows} cells", logits.len())));
+    }
+    Ok(Heatmap { cols, rows, p: logits.iter().map(|l| 1.0 / (1.0 + (-l).exp())).collect() })
+}
+
 /// The loaded network and its buffers.
 pub struct HubNet {
     net: dnn::Net,
@@ -97,33 +183,14 @@ pub struct HubNet {
 impl HubNet {
     /// Load the shipped model.
     pub fn new() -> Result<HubNet, DetectError> {
-        let bytes = Vector::<u8>::from_slice(MODEL);
-        let net = dnn::read_net_from_onnx_buffer(&bytes)?;
-        Ok(HubNet { net, input: Mat::default(), blob: Mat::default() })
+        Ok(HubNet { net: load(MODEL)?, input: Mat::default(), blob: Mat::default() })
     }
 
     /// The heatmap of one working pyramid level (grey).
     pub fn run(&mut self, working: &Mat) -> Result<Heatmap, DetectError> {
         network_input(working, &mut self.input)?;
-        dnn::blob_from_image_to(
-            &self.input,
-            &mut self.blob,
-            1.0 / 255.0,
-            Size::new(NET_WIDTH, NET_HEIGHT),
-            opencv::core::Scalar::default(),
-            false,
-            false,
-            opencv::core::CV_32F,
-        )?;
-        self.net.set_input(&self.blob, "", 1.0, opencv::core::Scalar::default())?;
-        let out = self.net.forward_single("")?;
         let (rows, cols) = ((NET_HEIGHT / NET_STRIDE) as usize, (NET_WIDTH / NET_STRIDE) as usize);
-        let logits = out.data_typed::<f32>()?;
-        if logits.len() != rows * cols {
-            return Err(DetectError::BadImage(format!("hub network gave {} values for {rows}x{cols} cells", logits.len())));
-        }
-        let p = logits.iter().map(|l| 1.0 / (1.0 + (-l).exp())).collect();
-        Ok(Heatmap { cols, rows, p })
+        probabilities(&mut self.net, &self.input, &mut self.blob, (cols, rows), "hub network")
     }
 }
 

@@ -218,6 +218,29 @@ pub(crate) fn us_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e6
 }
 
+/// Moves a detected hub to the hub crop network's peak around it (`default.hub_crop`), the
+/// nacelle's end measured from the old hub moved along.
+fn place_hub_by_crop(p: &params::DefaultParams, net: &mut heat::HubCropNet, small: &Mat, found: &mut Found) -> Result<(), DetectError> {
+    if !found.detected {
+        return Ok(());
+    }
+    let on_circle = found.circle.is_some_and(|c| geometry::dist(found.hub, [c[0], c[1]]) < 1e-9);
+    if on_circle && p.hub_crop_keep_spinner {
+        return Ok(());
+    }
+    let peak = net.run(small, found.hub)?;
+    let h = opencv::prelude::MatTraitConst::rows(small) as f64;
+    let shift = geometry::dist(peak.hub, found.hub);
+    if peak.p < p.hub_crop_min || shift > p.hub_crop_max_shift_frac * h || shift < p.hub_crop_min_shift_frac * h {
+        return Ok(());
+    }
+    log::trace!("hub crop: {:?} -> {:?} ({:.2}, at the candidate {:.2})", found.hub, peak.hub, peak.p, peak.at_centre);
+    let dx = peak.hub[0] - found.hub[0];
+    found.nacelle_end_dx = found.nacelle_end_dx.map(|d| d - dx);
+    found.hub = peak.hub;
+    Ok(())
+}
+
 /// The hub detector; owns all reusable buffers.
 pub struct Detector {
     config: DetectConfig,
@@ -225,6 +248,8 @@ pub struct Detector {
     scratch: Scratch,
     /// The learned hub heatmap (`default.hub_heat`, default mode only).
     hubnet: Option<heat::HubNet>,
+    /// The learned hub crop network (`default.hub_crop`, default mode only).
+    hubcrop: Option<heat::HubCropNet>,
 }
 
 impl Detector {
@@ -232,7 +257,8 @@ impl Detector {
     pub fn new(config: DetectConfig) -> Result<Detector, DetectError> {
         config.validate()?;
         let hubnet = (config.mode == Mode::Default && config.default.hub_heat).then(heat::HubNet::new).transpose()?;
-        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet })
+        let hubcrop = (config.mode == Mode::Default && config.default.hub_crop).then(heat::HubCropNet::new).transpose()?;
+        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet, hubcrop })
     }
 
     /// The configuration in use.
@@ -271,12 +297,17 @@ impl Detector {
     /// The learned hub heatmap's input for `image` (see [`heat::network_input`]): the working
     /// pyramid level of the configured mode, grey, at the network's size.
     pub fn network_input(&mut self, image: &ImageView<'_>) -> Result<Mat, DetectError> {
+        let mut out = Mat::default();
+        heat::network_input(&self.working_level(image)?, &mut out)?;
+        Ok(out)
+    }
+
+    /// The working pyramid level of the configured mode for `image`, grey: what the default
+    /// pipeline and the hub crop network (`heat::HubCropNet`) see.
+    pub fn working_level(&mut self, image: &ImageView<'_>) -> Result<Mat, DetectError> {
         image::check_view(image)?;
         let levels = self.levels_for(image);
-        let small = self.pyramid.build(image, levels)?;
-        let mut out = Mat::default();
-        heat::network_input(small, &mut out)?;
-        Ok(out)
+        Ok(self.pyramid.build(image, levels)?.clone())
     }
 
     /// Pyramid steps down to the working size of the configured mode.
@@ -325,6 +356,13 @@ impl Detector {
         };
         // The heatmap is part of recognising the hub among the lines' candidates.
         found.geometry_us += heat_us;
+        if let Some(net) = self.hubcrop.as_mut().filter(|_| self.config.mode == Mode::Default) {
+            let t = Instant::now();
+            if hints.predicted_hub_px.is_none() || self.config.default.hub_crop_when_tracking {
+                place_hub_by_crop(&self.config.default, net, small, &mut found)?;
+            }
+            found.geometry_us += us_since(t);
+        }
         if self.config.mode == Mode::Default {
             self.refine_spinner(&mut found, image, k);
         }
@@ -448,6 +486,51 @@ impl Detector {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The hub crop moves a detected hub 5 % of the height off onto the hub of a rendered frame
+    /// (medium range, oblique), but leaves one already within `hub_crop_min_shift_frac`, an
+    /// undetected one, and a spinner circle's centre.
+    #[test]
+    fn the_hub_crop_moves_only_detected_hubs_that_are_clearly_off() {
+        use hubtrack_render::dataset::synth_case;
+        use hubtrack_render::{Camera, Renderer};
+        let p = params::DefaultParams::default();
+        let mut net = heat::HubCropNet::new().unwrap();
+        let mut det = Detector::new(DetectConfig::default()).unwrap();
+        // The first medium-range frame of seed 2026 with the hub in view.
+        let (small, hub) = (0..20u64)
+            .find_map(|i| {
+                let case = synth_case(2026, 1, i, false);
+                let cam = if case.wide { Camera::gopro_hero3() } else { Camera::usb_narrow() };
+                let mut buf = vec![0u8; cam.frame_bytes()];
+                let truth = Renderer::new(cam).render(&case.scene, &case.pose, &mut buf).unwrap();
+                let hub = truth.hub_px.filter(|_| truth.turbine_in_view)?;
+                let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
+                let small = det.working_level(&view).unwrap();
+                let k = cam.height as f64 / opencv::prelude::MatTraitConst::rows(&small) as f64;
+                Some((small, [hub[0] / k, hub[1] / k]))
+            })
+            .unwrap();
+        let h = opencv::prelude::MatTraitConst::rows(&small) as f64;
+        let at = |dx: f64, detected: bool| Found { detected, hub: [hub[0] + dx * h, hub[1]], ..Found::default() };
+
+        let mut off = at(0.05, true);
+        place_hub_by_crop(&p, &mut net, &small, &mut off).unwrap();
+        assert!(geometry::dist(off.hub, hub) < 0.03 * h, "moved to {:?}, hub {hub:?}", off.hub);
+
+        let mut near = at(0.01, true);
+        place_hub_by_crop(&p, &mut net, &small, &mut near).unwrap();
+        assert_eq!(near.hub, at(0.01, true).hub, "within the minimum shift the crossing stands");
+
+        let mut undetected = at(0.05, false);
+        place_hub_by_crop(&p, &mut net, &small, &mut undetected).unwrap();
+        assert_eq!(undetected.hub, at(0.05, false).hub);
+
+        let mut circle = at(0.05, true);
+        circle.circle = Some([circle.hub[0], circle.hub[1], 5.0]);
+        place_hub_by_crop(&p, &mut net, &small, &mut circle).unwrap();
+        assert_eq!(circle.hub, at(0.05, true).hub, "a spinner circle's centre stays");
+    }
 
     #[test]
     fn full_resolution_mapping_distance_and_yaw_sign() {

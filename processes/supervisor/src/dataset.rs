@@ -38,6 +38,11 @@ pub struct DatasetArgs {
     /// quarter as many negatives.
     #[arg(long, default_value_t = 0)]
     pub beyond: u64,
+    /// Write the whole working pyramid level (grey, e.g. 480x270 for 1920x1080) instead of the
+    /// heatmap network's input: the hub crop network's training set (`train-hubnet.py --model
+    /// crop` cuts its crops from these).
+    #[arg(long)]
+    pub working: bool,
 }
 
 /// Writes the set.
@@ -56,7 +61,7 @@ pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
         let cam = renderers[k].camera();
         let (w, h) = (cam.width as f64, cam.height as f64);
         let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buffers[k] };
-        let input = det.network_input(&view)?;
+        let input = if a.working { det.working_level(&view)? } else { det.network_input(&view)? };
         let file = format!("{name}.png");
         let path = a.out.join(&file);
         let p = path.to_str().context("non-UTF-8 path")?;
@@ -95,6 +100,7 @@ pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
         }
     }
     labels.flush()?;
-    eprintln!("[dataset] {written} frames ({NET_WIDTH}x{NET_HEIGHT} grey) and labels.jsonl in {}", a.out.display());
+    let size = if a.working { "working level".to_string() } else { format!("{NET_WIDTH}x{NET_HEIGHT}") };
+    eprintln!("[dataset] {written} frames ({size} grey) and labels.jsonl in {}", a.out.display());
     Ok(())
 }
