@@ -173,6 +173,23 @@ fn stills_are_also_detected_one_level_finer() {
     }
 }
 
+/// Frames of the evaluation seed 2026 (not trained on) with the hub in view: `count` cases
+/// cycling through the first `classes` distance classes, as (BGR frame, camera, true hub px).
+fn unseen_frames(count: u64, classes: u64) -> Vec<(Vec<u8>, Camera, [f64; 2])> {
+    use hubtrack_render::dataset::synth_case;
+    let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
+    (0..count)
+        .filter_map(|i| {
+            let case = synth_case(2026, (i % classes) as usize, i, false);
+            let r = &mut renderers[if case.wide { 0 } else { 1 }];
+            let cam = *r.camera();
+            let mut buf = vec![0u8; cam.frame_bytes()];
+            let truth = r.render(&case.scene, &case.pose, &mut buf).unwrap();
+            truth.hub_px.filter(|_| truth.turbine_in_view).map(|hub| (buf, cam, hub))
+        })
+        .collect()
+}
+
 /// The shipped hub heatmap finds the hub on frames of an evaluation seed it was not trained on
 /// (the training seeds are 101–104): its most probable cell lies within one cell of the truth
 /// in most frames with the hub in view. 97.6 % over 5,700 held-out frames at training, 30 of
@@ -180,20 +197,12 @@ fn stills_are_also_detected_one_level_finer() {
 #[test]
 fn the_hub_heatmap_peaks_at_the_hub_on_unseen_frames() {
     use hubtrack_detect::heat::{HubNet, NET_HEIGHT, NET_STRIDE, NET_WIDTH};
-    use hubtrack_render::dataset::synth_case;
-    let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
-    let mut buffers: Vec<Vec<u8>> = renderers.iter().map(|r| vec![0u8; r.camera().frame_bytes()]).collect();
     let mut det = Detector::new(DetectConfig::default()).unwrap();
     let mut net = HubNet::new().unwrap();
     let (cols, rows) = ((NET_WIDTH / NET_STRIDE) as f64, (NET_HEIGHT / NET_STRIDE) as f64);
     let (mut frames, mut near) = (0, 0);
-    for i in 0..30u64 {
-        let case = synth_case(2026, (i % 3) as usize, i, false);
-        let k = if case.wide { 0 } else { 1 };
-        let truth = renderers[k].render(&case.scene, &case.pose, &mut buffers[k]).unwrap();
-        let cam = renderers[k].camera();
-        let Some(hub) = truth.hub_px.filter(|_| truth.turbine_in_view) else { continue };
-        let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buffers[k] };
+    for (buf, cam, hub) in unseen_frames(30, 3) {
+        let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
         let heat = net.run(&det.network_input(&view).unwrap()).unwrap();
         let (peak, _) = heat.peak().unwrap();
         let (fx, fy) = (hub[0] / cam.width as f64, hub[1] / cam.height as f64);
@@ -215,19 +224,12 @@ fn the_hub_heatmap_peaks_at_the_hub_on_unseen_frames() {
 #[test]
 fn the_hub_crop_network_moves_offset_candidates_onto_the_hub() {
     use hubtrack_detect::heat::HubCropNet;
-    use hubtrack_render::dataset::synth_case;
-    let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
-    let mut buffers: Vec<Vec<u8>> = renderers.iter().map(|r| vec![0u8; r.camera().frame_bytes()]).collect();
     let mut det = Detector::new(DetectConfig::default()).unwrap();
     let mut net = HubCropNet::new().unwrap();
     let (mut frames, mut hits, mut closer) = (0, 0, 0);
-    for i in 0..40u64 {
-        let case = synth_case(2026, (i % 2) as usize, i, false);
-        let k = if case.wide { 0 } else { 1 };
-        let truth = renderers[k].render(&case.scene, &case.pose, &mut buffers[k]).unwrap();
-        let cam = renderers[k].camera();
-        let Some(hub) = truth.hub_px.filter(|_| truth.turbine_in_view) else { continue };
-        let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buffers[k] };
+    for (i, (buf, cam, hub)) in unseen_frames(40, 2).into_iter().enumerate() {
+        let i = i as u64;
+        let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
         let small = det.working_level(&view).unwrap();
         let scale = cam.height as f64 / opencv::prelude::MatTraitConst::rows(&small) as f64;
         // A start 2–5 % of the height away, in a direction that turns with the frame.
