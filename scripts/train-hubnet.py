@@ -142,10 +142,10 @@ def zoom_in(x, hubs, rng):
     return out, hubs
 
 
-def photometric(x, hubs, rng):
+def photometric(x, hubs, rng, mirror=True):
     """Mirror, brightness inversion, gamma, contrast, blur, noise and quantisation."""
     n = len(x)
-    flip = rng.random(n) < 0.5
+    flip = (rng.random(n) < 0.5) & mirror
     x[flip] = x[flip][:, :, ::-1]
     hubs[flip & (hubs[:, 0] >= 0), 0] = 1.0 - hubs[flip & (hubs[:, 0] >= 0), 0]
     inv = rng.random(n) < 0.35
@@ -258,6 +258,216 @@ def evaluate_crops(params, frames, hubs, fwd):
     }
 
 
+# The yaw network (keep in step with `heat.rs`: YAW_SIDE, YAW_WINDOW_M, YAW_BINS, YAW_MAX_DEG).
+YAW_SIDE = 64
+YAW_WINDOW_M = 8.0
+YAW_MAX_DEG = 40.0
+YAW_BINS = 33
+YAW_CENTRES = np.linspace(-YAW_MAX_DEG, YAW_MAX_DEG, YAW_BINS)
+# (in, out, stride, dilation) of the 3x3 convolutions down to 8x8; then an 8x8 convolution to
+# YAW_HIDDEN features (a fully connected layer written as a convolution) and a 1x1 to the bins.
+YAW_LAYERS = [(1, 16, 2, 1), (16, 32, 2, 1), (32, 32, 1, 1), (32, 48, 2, 1), (48, 48, 1, 1)]
+YAW_HIDDEN = 96
+# Soft targets: a Gaussian of this width over the bins, degrees.
+YAW_LABEL_SIGMA_DEG = 2.0
+# Training crops: the hub misplaced by this much (normal, fraction of the frame height), the
+# distance that scales the window wrong by this much (log-normal), frames within these distances.
+YAW_HUB_JITTER_FRAC = 0.015
+YAW_DISTANCE_JITTER = 0.1
+YAW_DISTANCE_RANGE_M = (3.5, 32.0)
+
+
+def load_yaw(dirs):
+    """Working levels with a hub in view within `YAW_DISTANCE_RANGE_M`, and per frame (hub x, hub
+    y as fractions, distance m, relative yaw deg, focal length per width)."""
+    from PIL import Image
+    xs, ys = [], []
+    for d in dirs:
+        for line in open(os.path.join(d, "labels.jsonl")):
+            r = json.loads(line)
+            hub = r["hub"]
+            if hub is None or not (0 <= hub[0] <= 1 and 0 <= hub[1] <= 1):
+                continue
+            if not YAW_DISTANCE_RANGE_M[0] <= r["distance_m"] <= YAW_DISTANCE_RANGE_M[1]:
+                continue
+            xs.append(np.asarray(Image.open(os.path.join(d, r["file"])).convert("L"), dtype=np.uint8))
+            ys.append([hub[0], hub[1], r["distance_m"], r["relative_yaw_deg"], r["focal_per_width"]])
+    return xs, np.asarray(ys, dtype=np.float64)
+
+
+def sample_yaw_crops(frames, labels, idx, rng, jitter=True):
+    """Crops (`YAW_SIDE` square, `YAW_WINDOW_M` wide at the hub's distance) around the hub of
+    frames `idx`, mirrored at random, and their relative yaws (degrees, negated when mirrored)."""
+    xs, yaws = [], []
+    for i in idx:
+        img = frames[i]
+        h, w = img.shape
+        hx, hy, dist, yaw, fpw = labels[i]
+        d = dist * (np.exp(rng.normal(0, YAW_DISTANCE_JITTER)) if jitter else 1.0)
+        side = fpw * w * YAW_WINDOW_M / d
+        j = rng.normal(0, YAW_HUB_JITTER_FRAC * h, 2) if jitter else np.zeros(2)
+        c = crop(img, hx * w + j[0], hy * h + j[1], side)
+        if jitter and rng.random() < 0.5:
+            c, yaw = c[:, ::-1], -yaw
+        xs.append(c)
+        yaws.append(yaw)
+    return np.stack(xs), np.asarray(yaws)
+
+
+def yaw_targets(yaws):
+    """Soft bin targets (rows sum to 1)."""
+    t = np.exp(-0.5 * ((YAW_CENTRES[None, :] - np.clip(yaws, -YAW_MAX_DEG, YAW_MAX_DEG)[:, None]) / YAW_LABEL_SIGMA_DEG) ** 2)
+    return (t / t.sum(1, keepdims=True)).astype(np.float32)
+
+
+def init_yaw(rng):
+    params = init(rng, YAW_LAYERS)[:-1]
+    cin = YAW_LAYERS[-1][1]
+    params.append((rng.normal(0, np.sqrt(2.0 / (cin * 64)), (YAW_HIDDEN, cin, 8, 8)).astype(np.float32), np.zeros(YAW_HIDDEN, np.float32)))
+    params.append((rng.normal(0, np.sqrt(1.0 / YAW_HIDDEN), (YAW_BINS, YAW_HIDDEN, 1, 1)).astype(np.float32), np.zeros(YAW_BINS, np.float32)))
+    return params
+
+
+def forward_yaw(params, x):
+    """Logits (n, YAW_BINS)."""
+    import jax
+    from jax import lax
+    dn = ("NCHW", "OIHW", "NCHW")
+    h = x[:, None]
+    for (w, b), (_, _, s, d) in zip(params[:-2], YAW_LAYERS):
+        h = lax.conv_general_dilated(h, w, (s, s), [(d, d), (d, d)], rhs_dilation=(d, d), dimension_numbers=dn)
+        h = jax.nn.relu(h + b[None, :, None, None])
+    w, b = params[-2]
+    h = jax.nn.relu(lax.conv_general_dilated(h, w, (1, 1), [(0, 0), (0, 0)], dimension_numbers=dn) + b[None, :, None, None])
+    w, b = params[-1]
+    h = lax.conv_general_dilated(h, w, (1, 1), [(0, 0), (0, 0)], dimension_numbers=dn) + b[None, :, None, None]
+    return h[:, :, 0, 0]
+
+
+def loss_yaw(params, x, t):
+    import jax
+    import jax.numpy as jnp
+    z = forward_yaw(params, x)
+    return -jnp.mean(jnp.sum(t * jax.nn.log_softmax(z, axis=1), axis=1))
+
+
+def yaw_of(z):
+    """Mean and standard deviation (degrees) of the bin distribution of logits `z` (as
+    `HubYawNet` in heat.rs)."""
+    p = np.exp(z - z.max(1, keepdims=True))
+    p /= p.sum(1, keepdims=True)
+    mean = p @ YAW_CENTRES
+    std = np.sqrt(np.maximum((p * (YAW_CENTRES[None, :] - mean[:, None]) ** 2).sum(1), 0))
+    return mean, std
+
+
+def evaluate_yaw(params, frames, labels, fwd):
+    """Held-out frames (hub and distance exact): error per distance band, the sign where the
+    yaw is beyond 4 degrees, and how the spread tracks the error."""
+    rng = np.random.default_rng(12345)
+    idx = np.arange(len(frames))
+    x, yaws = sample_yaw_crops(frames, labels, idx, rng, jitter=False)
+    z = np.concatenate([np.asarray(fwd(params, x[i:i + 256] / 255.0)) for i in range(0, len(x), 256)])
+    mean, std = yaw_of(z)
+    err = mean - yaws
+    dist = labels[idx, 2]
+    out = {}
+    for lo, hi in [(3.5, 8), (8, 15), (15, 25), (25, 32)]:
+        m = (dist >= lo) & (dist < hi)
+        if m.any():
+            big = m & (np.abs(yaws) > 4)
+            out[f"{lo:g}-{hi:g}m"] = {
+                "n": int(m.sum()),
+                "mae": round(float(np.abs(err[m]).mean()), 2),
+                "within3_%": round(100 * float((np.abs(err[m]) <= 3).mean()), 1),
+                "sign_ok_%": round(100 * float((np.sign(mean[big]) == np.sign(yaws[big])).mean()), 1) if big.any() else None,
+                "std_med": round(float(np.median(std[m])), 2),
+            }
+    return out
+
+
+def export_yaw(params, path):
+    import onnx
+    from onnx import TensorProto, helper, numpy_helper
+    nodes, inits = [], []
+    prev = "input"
+    for i, ((w, b), (_, _, s, d)) in enumerate(zip(params[:-2], YAW_LAYERS)):
+        inits += [numpy_helper.from_array(np.asarray(w, np.float32), f"w{i}"), numpy_helper.from_array(np.asarray(b, np.float32), f"b{i}")]
+        nodes.append(helper.make_node("Conv", [prev, f"w{i}", f"b{i}"], [f"c{i}"], kernel_shape=[3, 3], strides=[s, s], pads=[d, d, d, d], dilations=[d, d]))
+        nodes.append(helper.make_node("Relu", [f"c{i}"], [f"r{i}"]))
+        prev = f"r{i}"
+    (wh, bh), (wo, bo) = params[-2], params[-1]
+    inits += [numpy_helper.from_array(np.asarray(wh, np.float32), "wh"), numpy_helper.from_array(np.asarray(bh, np.float32), "bh"),
+              numpy_helper.from_array(np.asarray(wo, np.float32), "wout"), numpy_helper.from_array(np.asarray(bo, np.float32), "bout")]
+    nodes.append(helper.make_node("Conv", [prev, "wh", "bh"], ["ch"], kernel_shape=[8, 8]))
+    nodes.append(helper.make_node("Relu", ["ch"], ["rh"]))
+    nodes.append(helper.make_node("Conv", ["rh", "wout", "bout"], ["logits"], kernel_shape=[1, 1]))
+    graph = helper.make_graph(
+        nodes,
+        "hubyaw",
+        [helper.make_tensor_value_info("input", TensorProto.FLOAT, [1, 1, YAW_SIDE, YAW_SIDE])],
+        [helper.make_tensor_value_info("logits", TensorProto.FLOAT, [1, YAW_BINS, 1, 1])],
+        inits,
+    )
+    model = helper.make_model(graph, producer_name="hubtrack train-hubnet", opset_imports=[helper.make_opsetid("", 11)])
+    model.ir_version = 6
+    onnx.checker.check_model(model)
+    onnx.save(model, path)
+
+
+def load_yaw_onnx(path):
+    """The parameters of a yaw model written by `export_yaw`."""
+    import onnx
+    from onnx import numpy_helper
+    w = {t.name: numpy_helper.to_array(t) for t in onnx.load(path).graph.initializer}
+    params = [(w[f"w{i}"], w[f"b{i}"]) for i in range(len(YAW_LAYERS))]
+    return params + [(w["wh"], w["bh"]), (w["wout"], w["bout"])]
+
+
+def train_yaw(a):
+    """`--model yaw`: the relative-yaw network (or, with `--evaluate`, scores a trained one)."""
+    import jax
+    import jax.numpy as jnp
+    import optax
+
+    tag = "[train-hubnet yaw]"
+    if a.evaluate:
+        frames, labels = load_yaw(a.data)
+        print(f"{tag} {a.evaluate} on {len(frames)} frames: {evaluate_yaw(load_yaw_onnx(a.evaluate), frames, labels, jax.jit(forward_yaw))}")
+        return 0
+    train_dirs, hold_dirs = (a.data[:-1], a.data[-1:]) if len(a.data) > 1 else (a.data, [])
+    x, labels = load_yaw(train_dirs)
+    print(f"{tag} {len(x)} training frames from {', '.join(train_dirs)}", flush=True)
+    hold = load_yaw(hold_dirs) if hold_dirs else None
+    rng = np.random.default_rng(a.seed)
+    params = [tuple(jnp.asarray(p) for p in layer) for layer in init_yaw(rng)]
+    steps = a.epochs * (a.crops_per_epoch // a.batch)
+    opt = optax.adamw(optax.cosine_decay_schedule(a.lr, steps), weight_decay=1e-4)
+    state = opt.init(params)
+    fwd = jax.jit(forward_yaw)
+
+    @jax.jit
+    def step(params, state, xb, tb):
+        loss, g = jax.value_and_grad(lambda p: loss_yaw(p, xb, tb))(params)
+        upd, state = opt.update(g, state, params)
+        return optax.apply_updates(params, upd), state, loss
+
+    t0 = time.time()
+    for epoch in range(a.epochs):
+        losses = []
+        for _ in range(a.crops_per_epoch // a.batch):
+            xb, yb = sample_yaw_crops(x, labels, rng.integers(0, len(x), a.batch), rng)
+            xb, _ = photometric(xb.astype(np.float32) / 255.0, -np.ones((len(xb), 2), np.float32), rng, mirror=False)
+            params, state, loss = step(params, state, xb, yaw_targets(yb))
+            losses.append(float(loss))
+        msg = f"{tag} epoch {epoch + 1}/{a.epochs} loss {np.mean(losses):.4f} ({time.time() - t0:.0f} s)"
+        if hold is not None and (epoch + 1 == a.epochs or epoch % 3 == 2):
+            msg += f" held out: {evaluate_yaw(params, hold[0], hold[1], fwd)}"
+        print(msg, flush=True)
+    export_yaw([tuple(np.asarray(p) for p in layer) for layer in params], a.out)
+    print(f"{tag} wrote {a.out}")
+
+
 def export(params, path, layers=LAYERS, size=(H, W), grid=(GH, GW), name="hubnet"):
     import onnx
     from onnx import TensorProto, helper, numpy_helper
@@ -287,19 +497,25 @@ def export(params, path, layers=LAYERS, size=(H, W), grid=(GH, GW), name="hubnet
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("data", nargs="+", help="dataset folders (hubtrack dataset); the last is held out")
-    ap.add_argument("--out", required=True, help="ONNX file to write")
-    ap.add_argument("--model", choices=["frame", "crop"], default="frame",
-                    help="frame: the whole-frame heatmap (hubnet.onnx); crop: the hub crop network (hubcrop.onnx)")
+    ap.add_argument("--out", help="ONNX file to write (required unless --evaluate)")
+    ap.add_argument("--model", choices=["frame", "crop", "yaw"], default="frame",
+                    help="frame: the whole-frame heatmap (hubnet.onnx); crop: the hub crop network (hubcrop.onnx); "
+                         "yaw: the relative-yaw network (hubyaw.onnx)")
     ap.add_argument("--epochs", type=int, default=20)
     ap.add_argument("--crops-per-epoch", type=int, default=20000, help="crop model: crops drawn per epoch")
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--lr", type=float, default=2e-3)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--evaluate", metavar="MODEL", help="yaw model: score this ONNX file on all the folders instead of training")
     a = ap.parse_args()
+    if not a.out and not a.evaluate:
+        ap.error("--out is required")
     import jax
     import jax.numpy as jnp
     import optax
 
+    if a.model == "yaw":
+        return train_yaw(a)
     crop_model = a.model == "crop"
     layers = CROP_LAYERS if crop_model else LAYERS
     tag = "[train-hubnet" + (" crop]" if crop_model else "]")

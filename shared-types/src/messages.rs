@@ -185,6 +185,16 @@ pub struct Detection {
     /// Signed horizontal offset from the hub to the nacelle's far end, px (positive: to the
     /// right; a camera on the turbine's left sees the nacelle to the right of the hub).
     pub nacelle_end_dx_px: f64,
+    /// The learned yaw network read the view around the hub (needs the hub's distance; see
+    /// `detect.default.hub_yaw`). Absent in recordings from before it: false.
+    #[serde(default)]
+    pub yaw_net_valid: bool,
+    /// The relative yaw it read, degrees (the sign of `TrackState::yaw_deg`).
+    #[serde(default)]
+    pub yaw_net_deg: f64,
+    /// Its standard deviation, degrees.
+    #[serde(default)]
+    pub yaw_net_std_deg: f64,
     /// Number of valid entries in `blade_angles_deg`.
     pub blade_count: u32,
     /// Blade angles in the image, degrees, 0 = up, clockwise.

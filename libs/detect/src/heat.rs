@@ -8,6 +8,9 @@
 //! around the candidate at four times the heatmap's resolution, where the blades' edge crossings
 //! sit a spinner radius or two beside an obliquely seen hub (`detect.default.hub_crop`).
 //!
+//! A third, [`HubYawNet`], reads the relative yaw from a view of fixed metric width around the
+//! chosen hub (`detect.default.hub_yaw`), for the tracker to weigh with the hub–tower gap.
+//!
 //! The network input is the working pyramid level resized to [`NET_WIDTH`]×[`NET_HEIGHT`]
 //! (area interpolation, aspect not kept): the same function makes the training set
 //! (`hubtrack dataset`) and the detector's input, so the two cannot drift apart.
@@ -132,25 +135,101 @@ impl HubCropNet {
     /// The hub near `centre` (working px) of the working level `working` (grey).
     pub fn run(&mut self, working: &Mat, centre: [f64; 2]) -> Result<CropPeak, DetectError> {
         let side = CROP_FRAC * working.rows() as f64;
-        let s = side / CROP_SIDE as f64;
         let (x0, y0) = (centre[0] - side / 2.0, centre[1] - side / 2.0);
-        // Crop pixel u samples the working level at x0 + (u + 0.5)·s − 0.5 (pixel centres), as
-        // the training crops do; outside the frame the border repeats.
-        let m = Mat::from_slice_2d(&[[s, 0.0, x0 + 0.5 * s - 0.5], [0.0, s, y0 + 0.5 * s - 0.5]])?;
-        imgproc::warp_affine(
-            working,
-            &mut self.crop,
-            &m,
-            Size::new(CROP_SIDE, CROP_SIDE),
-            imgproc::INTER_LINEAR | imgproc::WARP_INVERSE_MAP,
-            opencv::core::BORDER_REPLICATE,
-            opencv::core::Scalar::default(),
-        )?;
+        warp_crop(working, centre, side, CROP_SIDE, &mut self.crop)?;
         let g = (CROP_SIDE / CROP_STRIDE) as usize;
         let map = probabilities(&mut self.net, &self.crop, &mut self.blob, (g, g), "hub crop network")?;
         let Some(([fx, fy], p)) = map.peak() else { unreachable!("a non-empty map has a peak") };
         Ok(CropPeak { hub: [x0 + fx * side, y0 + fy * side], p, at_centre: map.near(0.5, 0.5, 1.0) })
     }
+}
+
+/// Side of the yaw network's square input, px.
+pub const YAW_SIDE: i32 = 64;
+/// Width of the yaw network's view at the hub's distance, metres: the spinner, the blade roots,
+/// the nacelle's sides and the tower top all fit (the nacelle reaches ~1.7 m beside the hub at
+/// 10° of yaw). Fixed by training (`YAW_WINDOW_M` in train-hubnet.py).
+pub const YAW_WINDOW_M: f64 = 8.0;
+/// The yaw network's bins are centred from −`YAW_MAX_DEG` to +`YAW_MAX_DEG`, degrees ...
+pub const YAW_MAX_DEG: f64 = 40.0;
+/// ... evenly, this many.
+pub const YAW_BINS: usize = 33;
+/// The yaw model the build ships (`scripts/train-hubnet.sh yaw`; ONNX, input `1×1×64×64` grey in
+/// [0, 1], output `1×33×1×1` logits).
+const YAW_MODEL: &[u8] = include_bytes!("../models/hubyaw.onnx");
+
+/// The relative yaw the yaw network reads.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct YawReading {
+    /// Mean of the network's yaw distribution, degrees (the sign of `TrackState::yaw_deg`:
+    /// positive with the camera on the turbine's own left).
+    pub yaw_deg: f64,
+    /// Its standard deviation, degrees.
+    pub std_deg: f64,
+}
+
+/// The yaw network: a `YAW_WINDOW_M`-wide square of the working level around the hub (its side
+/// in px from the hub's distance), scaled to `YAW_SIDE`², to a distribution over `YAW_BINS`
+/// relative yaws. What it reads is what the gap needs the tower for (the nacelle's sides, the
+/// tower top beside the spinner, the spinner's shading), so it still reads when a blade
+/// pointing down hides the tower. Trained on the renderer (`train-hubnet.py --model yaw`).
+pub struct HubYawNet {
+    net: dnn::Net,
+    crop: Mat,
+    blob: Mat,
+}
+
+impl HubYawNet {
+    /// Load the shipped model.
+    pub fn new() -> Result<HubYawNet, DetectError> {
+        Ok(HubYawNet { net: load(YAW_MODEL)?, crop: Mat::default(), blob: Mat::default() })
+    }
+
+    /// The yaw around `hub` (working px) of the working level `working` (grey), seen from
+    /// `distance_m` with the focal length `focal_px` (working px).
+    pub fn run(&mut self, working: &Mat, hub: [f64; 2], distance_m: f64, focal_px: f64) -> Result<YawReading, DetectError> {
+        let side = focal_px * YAW_WINDOW_M / distance_m;
+        warp_crop(working, hub, side, YAW_SIDE, &mut self.crop)?;
+        dnn::blob_from_image_to(&self.crop, &mut self.blob, 1.0 / 255.0, Size::new(YAW_SIDE, YAW_SIDE), opencv::core::Scalar::default(), false, false, opencv::core::CV_32F)?;
+        self.net.set_input(&self.blob, "", 1.0, opencv::core::Scalar::default())?;
+        let out = self.net.forward_single("")?;
+        let logits = out.data_typed::<f32>()?;
+        if logits.len() != YAW_BINS {
+            return Err(DetectError::BadImage(format!("yaw network gave {} values for {YAW_BINS} bins", logits.len())));
+        }
+        Ok(yaw_of_logits(logits))
+    }
+}
+
+/// Mean and standard deviation of the softmax of the yaw network's logits over its bins.
+pub fn yaw_of_logits(logits: &[f32]) -> YawReading {
+    let top = logits.iter().copied().fold(f32::NEG_INFINITY, f32::max) as f64;
+    let w: Vec<f64> = logits.iter().map(|&l| (l as f64 - top).exp()).collect();
+    let sum: f64 = w.iter().sum();
+    let n = logits.len().max(2) as f64;
+    let centre = |i: usize| -YAW_MAX_DEG + 2.0 * YAW_MAX_DEG * i as f64 / (n - 1.0);
+    let mean = w.iter().enumerate().map(|(i, p)| p * centre(i)).sum::<f64>() / sum;
+    let var = w.iter().enumerate().map(|(i, p)| p * (centre(i) - mean).powi(2)).sum::<f64>() / sum;
+    YawReading { yaw_deg: mean, std_deg: var.max(0.0).sqrt() }
+}
+
+/// Cuts the `out_side`² square of side `side` (px) centred on `centre` out of `working`,
+/// bilinear: crop pixel u samples x0 + (u + 0.5)·s − 0.5 (pixel centres), as the training crops
+/// do; outside the frame the border repeats.
+fn warp_crop(working: &Mat, centre: [f64; 2], side: f64, out_side: i32, out: &mut Mat) -> Result<(), DetectError> {
+    let s = side / out_side as f64;
+    let (x0, y0) = (centre[0] - side / 2.0, centre[1] - side / 2.0);
+    let m = Mat::from_slice_2d(&[[s, 0.0, x0 + 0.5 * s - 0.5], [0.0, s, y0 + 0.5 * s - 0.5]])?;
+    imgproc::warp_affine(
+        working,
+        out,
+        &m,
+        Size::new(out_side, out_side),
+        imgproc::INTER_LINEAR | imgproc::WARP_INVERSE_MAP,
+        opencv::core::BORDER_REPLICATE,
+        opencv::core::Scalar::default(),
+    )?;
+    Ok(())
 }
 
 /// An ONNX model compiled into the detector, loaded by OpenCV's dnn module.
@@ -197,6 +276,25 @@ impl HubNet {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_yaw_is_the_mean_and_spread_of_the_bin_distribution() {
+        // Bin i is centred at −40 + 2.5·i degrees.
+        let mut logits = vec![-30.0f32; YAW_BINS];
+        logits[20] = 0.0;
+        let r = yaw_of_logits(&logits);
+        assert!((r.yaw_deg - 10.0).abs() < 1e-6 && r.std_deg < 1e-3, "{r:?}");
+        // Two equal neighbours: halfway, spread half a bin.
+        logits[21] = 0.0;
+        let r = yaw_of_logits(&logits);
+        assert!((r.yaw_deg - 11.25).abs() < 1e-6 && (r.std_deg - 1.25).abs() < 1e-6, "{r:?}");
+        // A flat distribution: centred, as wide as 33 evenly spaced points: 2.5°·√((33² − 1)/12) = 23.80°.
+        let r = yaw_of_logits(&[0.0f32; YAW_BINS]);
+        assert!(r.yaw_deg.abs() < 1e-9 && (r.std_deg - 23.805).abs() < 0.01, "{r:?}");
+        // Large logits do not overflow.
+        let r = yaw_of_logits(&[1e4f32; YAW_BINS]);
+        assert!(r.yaw_deg.is_finite() && r.std_deg.is_finite());
+    }
 
     fn map(cols: usize, rows: usize, hot: &[(usize, usize, f32)]) -> Heatmap {
         let mut p = vec![0.01; cols * rows];

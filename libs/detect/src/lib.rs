@@ -250,6 +250,8 @@ pub struct Detector {
     hubnet: Option<heat::HubNet>,
     /// The learned hub crop network (`default.hub_crop`, default mode only).
     hubcrop: Option<heat::HubCropNet>,
+    /// The learned yaw network (`default.hub_yaw`, default mode only).
+    hubyaw: Option<heat::HubYawNet>,
 }
 
 impl Detector {
@@ -258,7 +260,8 @@ impl Detector {
         config.validate()?;
         let hubnet = (config.mode == Mode::Default && config.default.hub_heat).then(heat::HubNet::new).transpose()?;
         let hubcrop = (config.mode == Mode::Default && config.default.hub_crop).then(heat::HubCropNet::new).transpose()?;
-        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet, hubcrop })
+        let hubyaw = (config.mode == Mode::Default && config.default.hub_yaw).then(heat::HubYawNet::new).transpose()?;
+        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet, hubcrop, hubyaw })
     }
 
     /// The configuration in use.
@@ -335,6 +338,7 @@ impl Detector {
             }),
             heat: None,
         };
+        let focal_small = self.focal_px(image.width) / k;
         let small = self.pyramid.build(image, levels)?;
         let pyramid_us = us_since(t0);
         // Hint in working px.
@@ -363,10 +367,30 @@ impl Detector {
             }
             found.geometry_us += us_since(t);
         }
+        let mut yaw_reading = None;
+        if let Some(net) = self.hubyaw.as_mut().filter(|_| self.config.mode == Mode::Default && found.detected) {
+            let t = Instant::now();
+            let p = &self.config.default;
+            let spinner_r_m = self.config.camera.spinner_diameter_m / 2.0;
+            // The tracker's distance, else the spinner circle's: the dome's silhouette,
+            // d = R·√(1 + (f/r)²) (as the tracker's `distance_from_spinner`).
+            let distance = hints.hub_distance_m.or_else(|| found.circle.filter(|c| c[2] > 0.0).map(|c| spinner_r_m * (1.0 + (focal_small / c[2]).powi(2)).sqrt()));
+            if let Some(d) = distance.filter(|d| (p.hub_yaw_min_distance_m..=p.hub_yaw_max_distance_m).contains(d)) {
+                let r = net.run(small, found.hub, d, focal_small)?;
+                log::trace!("yaw network at {d:.1} m: {:+.1} ± {:.1} deg", r.yaw_deg, r.std_deg);
+                yaw_reading = Some(r);
+            }
+            found.geometry_us += us_since(t);
+        }
         if self.config.mode == Mode::Default {
             self.refine_spinner(&mut found, image, k);
         }
         let mut out = self.to_output(&found, k, image.width, image.height);
+        if let Some(r) = yaw_reading {
+            out.detection.yaw_net_valid = true;
+            out.detection.yaw_net_deg = r.yaw_deg;
+            out.detection.yaw_net_std_deg = r.std_deg;
+        }
         out.detection.timings.pyramid_us = pyramid_us;
         out.detection.timings.total_us = us_since(t0);
         Ok(out)

@@ -692,6 +692,15 @@ pub struct DefaultParams {
     /// fewer successes (see the README, "Learned hub crop"); stills and the frames before
     /// acquisition use it.
     pub hub_crop_when_tracking: bool,
+    /// Read the relative yaw with the learned yaw network (`heat::HubYawNet`) around a
+    /// detected hub, from the tracker's distance or else the spinner circle's (the detection's
+    /// `yaw_net_*`; the tracker weighs it in, see `track.yaw.use_net`).
+    pub hub_yaw: bool,
+    /// ... only from this distance, metres (trained from 3.5 m), range [0, 100] ...
+    pub hub_yaw_min_distance_m: f64,
+    /// ... up to this one, metres (trained to 32 m; farther the gap's own error shrinks in
+    /// degrees less than the view does in pixels), range [0, 100].
+    pub hub_yaw_max_distance_m: f64,
     /// How the hub is picked among the candidates.
     pub ranker: RankerParams,
 }
@@ -1039,6 +1048,9 @@ impl Default for DefaultParams {
             hub_crop_min_shift_frac: 0.03,
             hub_crop_keep_spinner: true,
             hub_crop_when_tracking: false,
+            hub_yaw: true,
+            hub_yaw_min_distance_m: 3.5,
+            hub_yaw_max_distance_m: 30.0,
             ranker: RankerParams::default(),
         }
     }
@@ -1221,6 +1233,8 @@ impl DefaultParams {
         c.closed("hub_crop_min", self.hub_crop_min, 0.0, 1.0)?;
         c.closed("hub_crop_max_shift_frac", self.hub_crop_max_shift_frac, 0.0, 0.15)?;
         c.closed("hub_crop_min_shift_frac", self.hub_crop_min_shift_frac, 0.0, 0.15)?;
+        c.closed("hub_yaw_min_distance_m", self.hub_yaw_min_distance_m, 0.0, 100.0)?;
+        c.closed("hub_yaw_max_distance_m", self.hub_yaw_max_distance_m, 0.0, 100.0)?;
         c.closed("spinner_max_convergence_radii", self.spinner_max_convergence_radii, 0.0, 100.0)?;
         c.closed("spinner_convergence_tol_px", self.spinner_convergence_tol_px, 0.0, 100.0)?;
         c.closed("spinner_min_kept_support", self.spinner_min_kept_support, 0.0, 1.0)?;

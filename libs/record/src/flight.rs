@@ -60,6 +60,12 @@ pub struct Band {
     pub yaw_error_deg: Option<Spread>,
     /// Of the valid yaws at a truth beyond [`SIGN_MIN_DEG`], the share with the wrong sign, %.
     pub yaw_wrong_sign_pct: Option<f64>,
+    /// Share of the frames with a yaw from the detector's learned yaw network, %.
+    pub net_valid_pct: f64,
+    /// |network yaw − true yaw|, degrees.
+    pub net_error_deg: Option<Spread>,
+    /// Network yaws of the wrong sign, % of those where the true |yaw| ≥ [`SIGN_MIN_DEG`].
+    pub net_wrong_sign_pct: Option<f64>,
 }
 
 /// The truth and the track at the last frame with truth.
@@ -162,6 +168,11 @@ fn band(name: String, samples: &[&Sample<'_>]) -> Band {
     ratios.sort_by(f64::total_cmp);
     let yaws: Vec<(f64, f64)> = tracks.iter().filter(|(_, t)| t.yaw_valid).map(|(h, t)| (h.truth.relative_yaw_deg, t.yaw_deg)).collect();
     let signed: Vec<&(f64, f64)> = yaws.iter().filter(|(truth, _)| truth.abs() >= SIGN_MIN_DEG).collect();
+    let nets: Vec<(f64, f64)> = samples
+        .iter()
+        .filter_map(|s| s.detection.filter(|d| d.detected && d.yaw_net_valid).map(|d| (s.header.truth.relative_yaw_deg, d.yaw_net_deg)))
+        .collect();
+    let nets_signed: Vec<&(f64, f64)> = nets.iter().filter(|(truth, _)| truth.abs() >= SIGN_MIN_DEG).collect();
     Band {
         name,
         frames: n as u64,
@@ -176,6 +187,10 @@ fn band(name: String, samples: &[&Sample<'_>]) -> Band {
         yaw_valid_pct: pct(yaws.len(), n),
         yaw_error_deg: spread(yaws.iter().map(|(truth, est)| (est - truth).abs()).collect()),
         yaw_wrong_sign_pct: (!signed.is_empty()).then(|| pct(signed.iter().filter(|(truth, est)| truth * est < 0.0).count(), signed.len())),
+        net_valid_pct: pct(nets.len(), n),
+        net_error_deg: spread(nets.iter().map(|(truth, est)| (est - truth).abs()).collect()),
+        net_wrong_sign_pct: (!nets_signed.is_empty())
+            .then(|| pct(nets_signed.iter().filter(|(truth, est)| truth * est < 0.0).count(), nets_signed.len())),
     }
 }
 
@@ -231,14 +246,17 @@ pub fn print(r: &FlightReport) {
     let opt = |v: Option<f64>, w: usize| v.map_or(format!("{:>w$}", "-"), |v| format!("{v:>w$.1}"));
     let sp = |v: Option<Spread>| v.map_or(format!("{:>11}", "-"), |s| format!("{:>5.1} {:>5.1}", s.p50, s.p90));
     println!(
-        "{:<9}{:>7}{:>6} {:>11}{:>6}{:>6}{:>6}{:>6} | {:>6} {:>17} | {:>6} {:>11} {:>6}",
-        "truth", "frames", "det%", "hub err %h", "tow%", "circ%", "nac%", "side%", "dist%", "dist/truth", "yaw%", "|yaw err|°", "wrong%"
+        "{:<9}{:>7}{:>6} {:>11}{:>6}{:>6}{:>6}{:>6} | {:>6} {:>17} | {:>6} {:>11} {:>6} | {:>6} {:>11} {:>6}",
+        "truth", "frames", "det%", "hub err %h", "tow%", "circ%", "nac%", "side%", "dist%", "dist/truth", "yaw%", "|yaw err|°", "wrong%", "net%", "|net err|°", "wrong%"
     );
-    println!("{:<9}{:>7}{:>6} {:>11}{:>6}{:>6}{:>6}{:>6} | {:>6} {:>17} | {:>6} {:>11} {:>6}", "", "", "", "p50   p90", "", "", "", "", "", "p10   p50   p90", "", "p50   p90", "");
+    println!(
+        "{:<9}{:>7}{:>6} {:>11}{:>6}{:>6}{:>6}{:>6} | {:>6} {:>17} | {:>6} {:>11} {:>6} | {:>6} {:>11} {:>6}",
+        "", "", "", "p50   p90", "", "", "", "", "", "p10   p50   p90", "", "p50   p90", "", "", "p50   p90", ""
+    );
     for b in &r.bands {
         let ratio = b.distance_ratio.map_or(format!("{:>17}", "-"), |q| format!("{:>5.2} {:>5.2} {:>5.2}", q[0], q[1], q[2]));
         println!(
-            "{:<9}{:>7}{:>6.1} {}{:>6.1}{:>6.1}{:>6.1}{} | {:>6.1} {} | {:>6.1} {} {}",
+            "{:<9}{:>7}{:>6.1} {}{:>6.1}{:>6.1}{:>6.1}{} | {:>6.1} {} | {:>6.1} {} {} | {:>6.1} {} {}",
             b.name,
             b.frames,
             b.detected_pct,
@@ -251,11 +269,14 @@ pub fn print(r: &FlightReport) {
             ratio,
             b.yaw_valid_pct,
             sp(b.yaw_error_deg),
-            opt(b.yaw_wrong_sign_pct, 6)
+            opt(b.yaw_wrong_sign_pct, 6),
+            b.net_valid_pct,
+            sp(b.net_error_deg),
+            opt(b.net_wrong_sign_pct, 6)
         );
     }
     println!(
-        "side% = nacelle ends on the side the true yaw puts the nacelle; wrong% = valid yaws of the wrong sign; both where the true |yaw| >= {SIGN_MIN_DEG:.0}°"
+        "side% = nacelle ends on the side the true yaw puts the nacelle; wrong% = valid yaws (the track's, the yaw network's) of the wrong sign; both where the true |yaw| >= {SIGN_MIN_DEG:.0}°"
     );
     if !r.task_frames.is_empty() {
         let tasks: Vec<String> = r.task_frames.iter().map(|(t, n)| format!("{t} {n}")).collect();

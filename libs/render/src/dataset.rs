@@ -54,6 +54,10 @@ pub struct SynthCase {
 /// dataset --beyond`), metres: photos show turbines well beyond the approach's 45 m.
 pub const BEYOND_M: (f64, f64) = (45.0, 250.0);
 
+/// Distances of the hover views that only the learned yaw network's training set holds
+/// (`hubtrack dataset --close-in`), metres: the approach ends 5 m from the hub.
+pub const CLOSE_IN_M: (f64, f64) = (4.0, 8.0);
+
 /// The `index`-th case of a distance class (deterministic in `seed`).
 pub fn synth_case(seed: u64, class: usize, index: u64, negative: bool) -> SynthCase {
     let (name, lo, hi) = CLASSES[class];

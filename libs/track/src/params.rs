@@ -461,6 +461,30 @@ pub struct YawConfig {
     /// With the std scaled to 960 px (σ ≈ 8.5 px) 2σ also drops true readings below ~12° at
     /// 30 m, where the nacelle is the main far-range cue.
     pub nacelle_min_excess_sigma: f64,
+    /// Also use the relative yaw the detector's learned yaw network read (`yaw_net_deg`,
+    /// `detect.default.hub_yaw`), with its spread as the standard deviation: to veto the gaps
+    /// and nacelle yaws that contradict it (`net_vetoes_gap`) and, with `net_fuse`, as one more
+    /// measurement.
+    pub use_net: bool,
+    /// Least standard deviation of a network yaw, degrees: its errors from frame to frame of
+    /// one flight are correlated (the same scene, the same bias), so its own spread overstates
+    /// what many frames add up to. Range (0, 90].
+    pub net_min_std_deg: f64,
+    /// A network yaw whose spread exceeds this is not used, degrees (a broad distribution: the
+    /// view does not tell). Range (0, 90].
+    pub net_max_std_deg: f64,
+    /// A hub–tower gap or nacelle yaw beyond the yaw gate (`gate_chi2`) from the network's is
+    /// dropped: the network still reads where a blade pointing down in front of the tower
+    /// makes the gap take either sign.
+    pub net_vetoes_gap: bool,
+    /// Fuse the network's yaw into the yaw filter (with the gap, nacelle and blades); false
+    /// (default): it only vetoes (`net_vetoes_gap`). Its error is a bias per scene more than
+    /// noise per frame (3.5–8 m: 4.4° mean at training), and fused it set the final yaw close
+    /// in: `fly` seeds 161–184 and 261–284 with the first model fused at its own spread, 4 of
+    /// 13 flights ended 5.1–5.4° off (median |final yaw| 3.5°); the final model fused with a
+    /// floor of 5° (`net_min_std_deg`) gave 91 of 100 of seeds 161–210 and 261–310 against 98
+    /// of 102 vetoing only (session 26).
+    pub net_fuse: bool,
     /// Fewest detected blades for a blade-skew estimate (2 fits exactly, 3 or more also checks
     /// the fit).
     pub min_blades: u32,
@@ -540,6 +564,11 @@ impl Default for YawConfig {
             nacelle_needs_spinner: true,
             nacelle_front_m: 1.2,
             nacelle_min_excess_sigma: 0.0,
+            use_net: true,
+            net_min_std_deg: 2.0,
+            net_max_std_deg: 8.0,
+            net_vetoes_gap: true,
+            net_fuse: false,
             min_blades: 3,
             blade_fit_chi2: 10.83,
             max_abs_deg: 85.0,
@@ -655,6 +684,8 @@ impl TrackConfig {
         c.closed("nacelle_half_width_m", y.nacelle_half_width_m, 0.0, MAX_SIZE_M)?;
         c.open_closed("nacelle_std_px", y.nacelle_std_px, 0.0, MAX_PX)?;
         c.closed("nacelle_min_std_deg", y.nacelle_min_std_deg, 0.0, 90.0)?;
+        c.open_closed("net_min_std_deg", y.net_min_std_deg, 0.0, 90.0)?;
+        c.open_closed("net_max_std_deg", y.net_max_std_deg, 0.0, 90.0)?;
         c.closed("nacelle_min_abs_deg", y.nacelle_min_abs_deg, 0.0, 90.0)?;
         c.closed("nacelle_gate_px", y.nacelle_gate_px, 0.0, 1e4)?;
         c.closed("nacelle_front_m", y.nacelle_front_m, 0.0, 50.0)?;

@@ -568,6 +568,18 @@ impl Core {
             (Some(g), Some(n)) if (g.value - n.value).powi(2) / (g.var() + n.var()) > yc.gate_chi2 => None,
             (g, _) => g,
         };
+        // The learned yaw network's reading (see `use_net`); with `net_vetoes_gap` a gap or
+        // nacelle yaw it contradicts is dropped.
+        let net = (yc.use_net && det.detected && det.yaw_net_valid && det.yaw_net_deg.is_finite())
+            .then_some(det.yaw_net_std_deg)
+            .filter(|s| s.is_finite() && *s <= yc.net_max_std_deg)
+            .map(|s| Estimate { value: det.yaw_net_deg.to_radians(), std: s.max(yc.net_min_std_deg).to_radians() });
+        let contradicts = |m: Option<Estimate>| match (m, net) {
+            (Some(m), Some(n)) => yc.net_vetoes_gap && (m.value - n.value).powi(2) / (m.var() + n.var()) > yc.gate_chi2,
+            _ => false,
+        };
+        let gap = if contradicts(gap) { None } else { gap };
+        let nacelle = if contradicts(nacelle) { None } else { nacelle };
         let n = (det.blade_count as usize).min(det.blade_angles_deg.len());
         let blade = if yc.use_blade_skew && n >= yc.min_blades as usize {
             blade_skew_yaw(&det.blade_angles_deg[..n], yc.rotor_blades, yc.blade_angle_std_deg.to_radians(), max_yaw, yc.blade_fit_chi2)
@@ -579,14 +591,16 @@ impl Core {
         let blade_signed = blade.zip(sign_ref).map(|(b, r)| Estimate { value: b.value.copysign(r.value), std: b.std });
         let show = |e: Option<Estimate>| e.map_or("-".to_string(), |e| format!("{:+.1}±{:.1}°", e.value.to_degrees(), e.std.to_degrees()));
         log::debug!(
-            "yaw, frame {}: gap {} nacelle {} blades {} prior {}",
+            "yaw, frame {}: gap {} nacelle {} blades {} network {} prior {}",
             det.stamps.seq,
             show(gap),
             show(nacelle),
             show(blade_signed),
+            show(net),
             show(yaw_prior)
         );
-        if let Some(m) = fuse(&[gap, nacelle, blade_signed].into_iter().flatten().collect::<Vec<_>>()) {
+        let net_fused = net.filter(|_| yc.net_fuse);
+        if let Some(m) = fuse(&[gap, nacelle, blade_signed, net_fused].into_iter().flatten().collect::<Vec<_>>()) {
             // No jumps close in (see `jump_min_distance_m`): only gated updates.
             let close = self.distance.estimate().is_some_and(|d| d.value < yc.jump_min_distance_m);
             let jump_count = if close { u32::MAX } else { yc.jump_accept_count };

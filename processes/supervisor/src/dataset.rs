@@ -4,7 +4,7 @@
 use anyhow::Context;
 use hubtrack_detect::heat::{NET_HEIGHT, NET_WIDTH};
 use hubtrack_detect::ImageView;
-use hubtrack_render::dataset::{flight, synth_case, synth_case_between, BEYOND_M, CLASSES};
+use hubtrack_render::dataset::{flight, synth_case, synth_case_between, BEYOND_M, CLASSES, CLOSE_IN_M};
 use hubtrack_render::{Camera, CameraPose, Renderer, Scene};
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_types::PixelFormat;
@@ -38,6 +38,10 @@ pub struct DatasetArgs {
     /// quarter as many negatives.
     #[arg(long, default_value_t = 0)]
     pub beyond: u64,
+    /// Single frames from inside the close class, where the approach ends (4–8 m), plus a
+    /// quarter as many negatives: the hub yaw network's hover views.
+    #[arg(long, default_value_t = 0)]
+    pub close_in: u64,
     /// Write the whole working pyramid level (grey, e.g. 480x270 for 1920x1080) instead of the
     /// heatmap network's input: the hub crop network's training set (`train-hubnet.py --model
     /// crop` cuts its crops from these).
@@ -72,6 +76,8 @@ pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
             "hub": frac(truth.hub_px),
             "nose": frac(truth.nose_px),
             "distance_m": truth.distance_m,
+            "relative_yaw_deg": truth.relative_yaw_deg,
+            "focal_per_width": cam.fx / w,
             "image_height": cam.height,
         });
         writeln!(labels, "{line}")?;
@@ -92,6 +98,11 @@ pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
         // Class index 3: a scene stream of its own, apart from the three classes'.
         let case = synth_case_between(a.seed, CLASSES.len(), i, i >= a.beyond, "beyond", BEYOND_M.0, BEYOND_M.1);
         one(format!("{}_beyond_{i:05}", a.seed), &case.scene, &case.pose, case.wide)?;
+    }
+    for i in 0..a.close_in + a.close_in / 4 {
+        // Class index 4: a scene stream of its own.
+        let case = synth_case_between(a.seed, CLASSES.len() + 1, i, i >= a.close_in, "close_in", CLOSE_IN_M.0, CLOSE_IN_M.1);
+        one(format!("{}_closein_{i:05}", a.seed), &case.scene, &case.pose, case.wide)?;
     }
     for f in 0..a.flights {
         let seed = a.seed.wrapping_mul(1000).wrapping_add(f);
