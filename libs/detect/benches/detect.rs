@@ -30,32 +30,46 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (scene, pose) = (case.scene, case.pose);
         let mut buf = vec![0u8; cam.frame_bytes()];
         r.render(&scene, &pose, &mut buf)?;
-        frames.push((buf, pose.roll_deg.to_radians()));
+        frames.push((buf, pose.roll_deg.to_radians(), pose.distance_m));
     }
     let default_threads = opencv::core::get_num_threads()?;
     println!("{FRAMES} rendered 1920x1080 BGR frames x {REPEATS} repeats; times in ms (wall clock of detect(), per-step medians from Detection.timings)");
-    println!("{:<8} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}", "mode", "threads", "median", "p99", "pyramid", "edges", "hough", "geometry");
+    println!("{:<9} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}", "mode", "threads", "median", "p99", "pyramid", "edges", "hough", "geometry");
     // The default mode also without the hub crop (`default.hub_crop`), its cost compared in one run.
     let no_crop = {
         let mut c = DetectConfig { mode: Mode::Default, ..DetectConfig::default() };
         c.default.hub_crop = false;
         c
     };
+    // ... and without the yaw network (`default.hub_yaw`). Without a tracker's distance it runs
+    // only where a spinner circle gives one (3.5–30 m); the `+d` rows pass the true distance as
+    // the tracker's hint, as the detect stage does in flight (the network then runs on every
+    // detection within 30 m; the hint also narrows the tower's width window).
+    let no_yaw = {
+        let mut c = DetectConfig { mode: Mode::Default, ..DetectConfig::default() };
+        c.default.hub_yaw = false;
+        c
+    };
+    let default = DetectConfig { mode: Mode::Default, ..DetectConfig::default() };
     let variants = [
-        ("thesis", DetectConfig { mode: Mode::Thesis, ..DetectConfig::default() }),
-        ("default", DetectConfig { mode: Mode::Default, ..DetectConfig::default() }),
-        ("no-crop", no_crop),
+        ("thesis", DetectConfig { mode: Mode::Thesis, ..DetectConfig::default() }, false),
+        ("default", default.clone(), false),
+        ("no-crop", no_crop, false),
+        ("no-yaw", no_yaw.clone(), false),
+        ("default+d", default, true),
+        ("no-yaw+d", no_yaw, true),
     ];
-    for (name, config) in variants {
+    for (name, config, hinted) in variants {
         for threads in [1, default_threads] {
             opencv::core::set_num_threads(threads)?;
             let mut det = Detector::new(config.clone())?;
             let (mut tot, mut py, mut ed, mut ho, mut ge) = (vec![], vec![], vec![], vec![], vec![]);
             for rep in 0..=REPEATS {
-                for (buf, roll) in &frames {
+                for (buf, roll, distance) in &frames {
                     let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: buf };
                     let t = Instant::now();
-                    let out = det.detect(&view, &Hints { roll_rad: Some(*roll), ..Hints::default() })?;
+                    let hints = Hints { roll_rad: Some(*roll), hub_distance_m: hinted.then_some(*distance), ..Hints::default() };
+                    let out = det.detect(&view, &hints)?;
                     let ms = t.elapsed().as_secs_f64() * 1e3;
                     if rep == 0 {
                         continue; // warm-up pass
@@ -69,7 +83,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }
             }
             println!(
-                "{:<8} {:>7} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+                "{:<9} {:>7} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
                 name,
                 threads,
                 pct(&mut tot, 0.5),

@@ -241,6 +241,32 @@ fn place_hub_by_crop(p: &params::DefaultParams, net: &mut heat::HubCropNet, smal
     Ok(())
 }
 
+/// The yaw network's reading around a detected hub (working px, `small` the working level,
+/// `focal_small` its focal length), seen from the tracker's distance, else the spinner circle's
+/// (the dome's silhouette, d = R·√(1 + (f/r)²), as the tracker's `distance_from_spinner`);
+/// `None` without a hub, without a distance or outside `hub_yaw_min/max_distance_m`. It reads
+/// the hub before the full-resolution spinner refinement, which moves it by a fraction of a
+/// working pixel.
+fn read_yaw(
+    config: &DetectConfig,
+    net: &mut heat::HubYawNet,
+    small: &Mat,
+    found: &Found,
+    hub_distance_m: Option<f64>,
+    focal_small: f64,
+) -> Result<Option<heat::YawReading>, DetectError> {
+    if !found.detected {
+        return Ok(None);
+    }
+    let p = &config.default;
+    let spinner_r_m = config.camera.spinner_diameter_m / 2.0;
+    let distance = hub_distance_m.or_else(|| found.circle.filter(|c| c[2] > 0.0).map(|c| spinner_r_m * (1.0 + (focal_small / c[2]).powi(2)).sqrt()));
+    let Some(d) = distance.filter(|d| (p.hub_yaw_min_distance_m..=p.hub_yaw_max_distance_m).contains(d)) else { return Ok(None) };
+    let r = net.run(small, found.hub, d, focal_small)?;
+    log::trace!("yaw network at {d:.1} m: {:+.1} ± {:.1} deg", r.yaw_deg, r.std_deg);
+    Ok(Some(r))
+}
+
 /// The hub detector; owns all reusable buffers.
 pub struct Detector {
     config: DetectConfig,
@@ -367,21 +393,15 @@ impl Detector {
             }
             found.geometry_us += us_since(t);
         }
-        let mut yaw_reading = None;
-        if let Some(net) = self.hubyaw.as_mut().filter(|_| self.config.mode == Mode::Default && found.detected) {
-            let t = Instant::now();
-            let p = &self.config.default;
-            let spinner_r_m = self.config.camera.spinner_diameter_m / 2.0;
-            // The tracker's distance, else the spinner circle's: the dome's silhouette,
-            // d = R·√(1 + (f/r)²) (as the tracker's `distance_from_spinner`).
-            let distance = hints.hub_distance_m.or_else(|| found.circle.filter(|c| c[2] > 0.0).map(|c| spinner_r_m * (1.0 + (focal_small / c[2]).powi(2)).sqrt()));
-            if let Some(d) = distance.filter(|d| (p.hub_yaw_min_distance_m..=p.hub_yaw_max_distance_m).contains(d)) {
-                let r = net.run(small, found.hub, d, focal_small)?;
-                log::trace!("yaw network at {d:.1} m: {:+.1} ± {:.1} deg", r.yaw_deg, r.std_deg);
-                yaw_reading = Some(r);
+        let yaw_reading = match self.hubyaw.as_mut().filter(|_| self.config.mode == Mode::Default) {
+            Some(net) => {
+                let t = Instant::now();
+                let r = read_yaw(&self.config, net, small, &found, hints.hub_distance_m, focal_small)?;
+                found.geometry_us += us_since(t);
+                r
             }
-            found.geometry_us += us_since(t);
-        }
+            None => None,
+        };
         if self.config.mode == Mode::Default {
             self.refine_spinner(&mut found, image, k);
         }

@@ -278,3 +278,22 @@ fn the_yaw_network_reads_the_relative_yaw_of_unseen_views() {
     assert!(median <= 5.0, "median yaw error {median:.1} deg");
     assert!(sign_ok * 10 >= oblique * 9, "sign right in {sign_ok} of {oblique} views beyond 8 deg");
 }
+
+/// The detection carries the yaw network's reading when it has a distance in the network's
+/// range (the tracker's hint), not beyond it nor with `hub_yaw` off; its sign is the truth's.
+#[test]
+fn the_detection_carries_the_yaw_network_reading_within_its_range() {
+    let (mut r, mut buf) = gopro_renderer();
+    let pose = CameraPose::looking_at_hub(15.0, -4.0, 0.0);
+    let hints = |d: f64| Hints { roll_rad: Some(0.0), hub_distance_m: Some(d), ..Hints::default() };
+    let (d, truth) = render_and_detect(&mut r, &mut buf, &sunlit_sea(), &pose, DetectConfig::default(), &hints(15.5));
+    assert!(d.detected && d.yaw_net_valid, "{d:?}");
+    assert!(truth.relative_yaw_deg < -10.0 && d.yaw_net_deg < 0.0, "network {:+.1} for {:+.1}", d.yaw_net_deg, truth.relative_yaw_deg);
+    assert!(d.yaw_net_std_deg > 0.0 && d.yaw_net_std_deg < 15.0);
+    let (far, _) = render_and_detect(&mut r, &mut buf, &sunlit_sea(), &pose, DetectConfig::default(), &hints(60.0));
+    assert!(far.detected && !far.yaw_net_valid, "read beyond hub_yaw_max_distance_m");
+    let mut off = DetectConfig::default();
+    off.default.hub_yaw = false;
+    let (none, _) = render_and_detect(&mut r, &mut buf, &sunlit_sea(), &pose, off, &hints(15.5));
+    assert!(none.detected && !none.yaw_net_valid, "read with hub_yaw off");
+}
