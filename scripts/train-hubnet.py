@@ -387,32 +387,16 @@ def evaluate_yaw(params, frames, labels, fwd):
 
 
 def export_yaw(params, path):
-    import onnx
-    from onnx import TensorProto, helper, numpy_helper
-    nodes, inits = [], []
-    prev = "input"
-    for i, ((w, b), (_, _, s, d)) in enumerate(zip(params[:-2], YAW_LAYERS)):
-        inits += [numpy_helper.from_array(np.asarray(w, np.float32), f"w{i}"), numpy_helper.from_array(np.asarray(b, np.float32), f"b{i}")]
-        nodes.append(helper.make_node("Conv", [prev, f"w{i}", f"b{i}"], [f"c{i}"], kernel_shape=[3, 3], strides=[s, s], pads=[d, d, d, d], dilations=[d, d]))
-        nodes.append(helper.make_node("Relu", [f"c{i}"], [f"r{i}"]))
-        prev = f"r{i}"
+    """The yaw network as ONNX: the 3x3 stack, then the 8x8 "fully connected" layer and the bins."""
+    from onnx import helper, numpy_helper
+    nodes, inits, prev = conv_stack(params[:-2], YAW_LAYERS)
     (wh, bh), (wo, bo) = params[-2], params[-1]
     inits += [numpy_helper.from_array(np.asarray(wh, np.float32), "wh"), numpy_helper.from_array(np.asarray(bh, np.float32), "bh"),
               numpy_helper.from_array(np.asarray(wo, np.float32), "wout"), numpy_helper.from_array(np.asarray(bo, np.float32), "bout")]
     nodes.append(helper.make_node("Conv", [prev, "wh", "bh"], ["ch"], kernel_shape=[8, 8]))
     nodes.append(helper.make_node("Relu", ["ch"], ["rh"]))
     nodes.append(helper.make_node("Conv", ["rh", "wout", "bout"], ["logits"], kernel_shape=[1, 1]))
-    graph = helper.make_graph(
-        nodes,
-        "hubyaw",
-        [helper.make_tensor_value_info("input", TensorProto.FLOAT, [1, 1, YAW_SIDE, YAW_SIDE])],
-        [helper.make_tensor_value_info("logits", TensorProto.FLOAT, [1, YAW_BINS, 1, 1])],
-        inits,
-    )
-    model = helper.make_model(graph, producer_name="hubtrack train-hubnet", opset_imports=[helper.make_opsetid("", 11)])
-    model.ir_version = 6
-    onnx.checker.check_model(model)
-    onnx.save(model, path)
+    save_onnx(nodes, inits, path, "hubyaw", [1, 1, YAW_SIDE, YAW_SIDE], [1, YAW_BINS, 1, 1])
 
 
 def load_yaw_onnx(path):
@@ -468,30 +452,45 @@ def train_yaw(a):
     print(f"{tag} wrote {a.out}")
 
 
-def export(params, path, layers=LAYERS, size=(H, W), grid=(GH, GW), name="hubnet"):
-    import onnx
-    from onnx import TensorProto, helper, numpy_helper
+def conv_stack(params, layers):
+    """ONNX nodes and initialisers of the 3x3 Conv+Relu layers from "input" (names w{i}, b{i}),
+    and the name of the last output."""
+    from onnx import helper, numpy_helper
     nodes, inits = [], []
     prev = "input"
-    for i, ((w, b), (_, _, s, d)) in enumerate(zip(params[:-1], layers)):
+    for i, ((w, b), (_, _, s, d)) in enumerate(zip(params, layers)):
         inits += [numpy_helper.from_array(np.asarray(w, np.float32), f"w{i}"), numpy_helper.from_array(np.asarray(b, np.float32), f"b{i}")]
         nodes.append(helper.make_node("Conv", [prev, f"w{i}", f"b{i}"], [f"c{i}"], kernel_shape=[3, 3], strides=[s, s], pads=[d, d, d, d], dilations=[d, d]))
         nodes.append(helper.make_node("Relu", [f"c{i}"], [f"r{i}"]))
         prev = f"r{i}"
-    w, b = params[-1]
-    inits += [numpy_helper.from_array(np.asarray(w, np.float32), "wout"), numpy_helper.from_array(np.asarray(b, np.float32), "bout")]
-    nodes.append(helper.make_node("Conv", [prev, "wout", "bout"], ["logits"], kernel_shape=[1, 1]))
+    return nodes, inits, prev
+
+
+def save_onnx(nodes, inits, path, name, input_shape, output_shape):
+    """Writes the graph (opset 11, IR 6: what OpenCV 4.6's dnn module reads) after checking it."""
+    import onnx
+    from onnx import TensorProto, helper
     graph = helper.make_graph(
         nodes,
         name,
-        [helper.make_tensor_value_info("input", TensorProto.FLOAT, [1, 1, size[0], size[1]])],
-        [helper.make_tensor_value_info("logits", TensorProto.FLOAT, [1, 1, grid[0], grid[1]])],
+        [helper.make_tensor_value_info("input", TensorProto.FLOAT, input_shape)],
+        [helper.make_tensor_value_info("logits", TensorProto.FLOAT, output_shape)],
         inits,
     )
     model = helper.make_model(graph, producer_name="hubtrack train-hubnet", opset_imports=[helper.make_opsetid("", 11)])
     model.ir_version = 6
     onnx.checker.check_model(model)
     onnx.save(model, path)
+
+
+def export(params, path, layers=LAYERS, size=(H, W), grid=(GH, GW), name="hubnet"):
+    """The heatmap or crop network as ONNX: the 3x3 stack and a 1x1 convolution to the logit."""
+    from onnx import helper, numpy_helper
+    nodes, inits, prev = conv_stack(params[:-1], layers)
+    w, b = params[-1]
+    inits += [numpy_helper.from_array(np.asarray(w, np.float32), "wout"), numpy_helper.from_array(np.asarray(b, np.float32), "bout")]
+    nodes.append(helper.make_node("Conv", [prev, "wout", "bout"], ["logits"], kernel_shape=[1, 1]))
+    save_onnx(nodes, inits, path, name, [1, 1, size[0], size[1]], [1, 1, grid[0], grid[1]])
 
 
 def main():

@@ -50,14 +50,20 @@ if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
   "$venv/bin/pip" install -q "jax[cpu]==0.10.2" "optax==0.2.8" "onnx==1.23.2" "pillow==13.0.0" "numpy==2.4.6"
 fi
+# Renders a `hubtrack dataset` folder unless it is there already: render DIR DATASET-OPTIONS...
+render() {
+  local dir=$1
+  shift
+  if [ ! -s "$dir/labels.jsonl" ]; then
+    echo "[train-hubnet] rendering $dir" >&2
+    "$bin" dataset -o "$dir" "$@"
+  fi
+}
 if [ "$model" = yaw ]; then
   data=target/hubyaw-data
   mkdir -p "$data"
   for seed in 111 113 112; do
-    if [ ! -s "$data/s$seed/labels.jsonl" ]; then
-      echo "[train-hubnet] rendering working levels with yaw, seed $seed" >&2
-      "$bin" dataset --working -o "$data/s$seed" --seed "$seed" --per-class 800 --close-in 1200 --flights 15
-    fi
+    render "$data/s$seed" --working --seed "$seed" --per-class 800 --close-in 1200 --flights 15
   done
   exec "$venv/bin/python" scripts/train-hubnet.py --model yaw --epochs 30 --out "$out" "$@" \
     "$data/s111" "$data/s113" "$data/s112"
@@ -66,30 +72,18 @@ if [ "$model" = crop ]; then
   data=target/hubcrop-data
   mkdir -p "$data"
   for seed in 101 103 102; do
-    if [ ! -s "$data/s$seed/labels.jsonl" ]; then
-      echo "[train-hubnet] rendering working levels, seed $seed" >&2
-      "$bin" dataset --working -o "$data/s$seed" --seed "$seed" --per-class 1000 --flights 10
-    fi
+    render "$data/s$seed" --working --seed "$seed" --per-class 1000 --flights 10
   done
-  if [ ! -s "$data/b105/labels.jsonl" ]; then
-    echo "[train-hubnet] rendering working levels, seed 105 beyond 45 m" >&2
-    "$bin" dataset --working -o "$data/b105" --seed 105 --per-class 0 --flights 0 --beyond 2000
-  fi
+  render "$data/b105" --working --seed 105 --per-class 0 --flights 0 --beyond 2000
   exec "$venv/bin/python" scripts/train-hubnet.py --model crop --epochs 15 --out "$out" "$@" \
     "$data/s101" "$data/s103" "$data/b105" "$data/s102"
 fi
 mkdir -p "$data"
 for seed in 101 103 104 102; do
-  if [ ! -s "$data/s$seed/labels.jsonl" ]; then
-    echo "[train-hubnet] rendering seed $seed" >&2
-    "$bin" dataset -o "$data/s$seed" --seed "$seed" --per-class 1500 --flights 20
-  fi
+  render "$data/s$seed" --seed "$seed" --per-class 1500 --flights 20
 done
 for seed in 105 106; do
-  if [ ! -s "$data/b$seed/labels.jsonl" ]; then
-    echo "[train-hubnet] rendering seed $seed beyond 45 m" >&2
-    "$bin" dataset -o "$data/b$seed" --seed "$seed" --per-class 0 --flights 0 --beyond 3000
-  fi
+  render "$data/b$seed" --seed "$seed" --per-class 0 --flights 0 --beyond 3000
 done
 # The last folder is held out.
 "$venv/bin/python" scripts/train-hubnet.py --out "$out" "$@" \
