@@ -274,7 +274,7 @@ YAW_LABEL_SIGMA_DEG = 2.0
 # distance that scales the window wrong by this much (log-normal), frames within these distances.
 YAW_HUB_JITTER_FRAC = 0.015
 YAW_DISTANCE_JITTER = 0.1
-YAW_DISTANCE_RANGE_M = (3.5, 32.0)
+YAW_DISTANCE_RANGE_M = (3.5, 46.0)
 
 
 def load_yaw(dirs):
@@ -372,7 +372,7 @@ def evaluate_yaw(params, frames, labels, fwd):
     err = mean - yaws
     dist = labels[idx, 2]
     out = {}
-    for lo, hi in [(3.5, 8), (8, 15), (15, 25), (25, 32)]:
+    for lo, hi in [(3.5, 8), (8, 15), (15, 25), (25, 32), (32, 46)]:
         m = (dist >= lo) & (dist < hi)
         if m.any():
             big = m & (np.abs(yaws) > 4)

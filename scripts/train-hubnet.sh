@@ -29,8 +29,9 @@
 # Data: whole working levels with the relative yaw (`hubtrack dataset --working`) of seeds 111
 # and 113 (800 frames per class, 1,200 from 4–8 m with `--close-in`, 15 flights) and 112 held
 # out; crops 8 m wide at the hub's distance around the hub, the hub and the distance jittered
-# (30 epochs of 20,000 crops). About 25 minutes of rendering and 13 of training on 2 cores
-# (session 26: held out, mean error 4.4° at 3.5–8 m, 3.4° at 8–15 m, 2.5° at 15–32 m).
+# (frames within 3.5–46 m; 24 epochs of 20,000 crops). About 25 minutes of rendering and 10–13
+# of training on 2 cores (session 26: held out, mean error 4.0° at 3.5–8 m, 3.4° at 8–15 m,
+# 2.3–2.6° at 15–46 m).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 model=frame
@@ -65,7 +66,7 @@ if [ "$model" = yaw ]; then
   for seed in 111 113 112; do
     render "$data/s$seed" --working --seed "$seed" --per-class 800 --close-in 1200 --flights 15
   done
-  exec "$venv/bin/python" scripts/train-hubnet.py --model yaw --epochs 30 --out "$out" "$@" \
+  exec "$venv/bin/python" scripts/train-hubnet.py --model yaw --epochs 24 --out "$out" "$@" \
     "$data/s111" "$data/s113" "$data/s112"
 fi
 if [ "$model" = crop ]; then

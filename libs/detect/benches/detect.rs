@@ -42,9 +42,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c
     };
     // ... and without the yaw network (`default.hub_yaw`). Without a tracker's distance it runs
-    // only where a spinner circle gives one (3.5–30 m); the `+d` rows pass the true distance as
+    // only where a spinner circle gives one (3.5–45 m); the `+d` rows pass the true distance as
     // the tracker's hint, as the detect stage does in flight (the network then runs on every
-    // detection within 30 m; the hint also narrows the tower's width window).
+    // detection within 45 m; the hint also narrows the tower's width window).
     let no_yaw = {
         let mut c = DetectConfig { mode: Mode::Default, ..DetectConfig::default() };
         c.default.hub_yaw = false;

@@ -251,16 +251,16 @@ fn the_hub_crop_network_moves_offset_candidates_onto_the_hub() {
 /// The shipped yaw network reads the relative yaw of views from an evaluation seed it was not
 /// trained on (training seeds 111 and 113), around the true hub at the true distance: the sign
 /// of clearly oblique views (|yaw| ≥ 8°) and a median error of a few degrees. At training, on
-/// the held-out seed 112: mean error 3–5° from 3.5 to 32 m, the sign right for 94–100 % of the
-/// views beyond 4°.
+/// the held-out seed 112: mean error 2.3–4.0° from 3.5 to 46 m, the sign right for 97–100 % of
+/// the views beyond 4°.
 #[test]
 fn the_yaw_network_reads_the_relative_yaw_of_unseen_views() {
     use hubtrack_detect::heat::HubYawNet;
     let mut det = Detector::new(DetectConfig::default()).unwrap();
     let mut net = HubYawNet::new().unwrap();
     let (mut errors, mut oblique, mut sign_ok) = (Vec::new(), 0, 0);
-    // Medium and close (far views reach beyond the network's 30 m).
-    for (buf, cam, hub, truth) in unseen_frames(90, 3).into_iter().filter(|f| f.3.distance_m <= 30.0) {
+    // All three classes (6–45 m), within the network's range.
+    for (buf, cam, hub, truth) in unseen_frames(90, 3).into_iter().filter(|f| f.3.distance_m <= 45.0) {
         let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
         let small = det.working_level(&view).unwrap();
         let scale = cam.height as f64 / opencv::prelude::MatTraitConst::rows(&small) as f64;
@@ -274,7 +274,7 @@ fn the_yaw_network_reads_the_relative_yaw_of_unseen_views() {
     errors.sort_by(f64::total_cmp);
     let median = errors[errors.len() / 2];
     eprintln!("yaw network: {} views, median error {median:.1} deg, sign right in {sign_ok} of {oblique} oblique", errors.len());
-    assert!(errors.len() >= 40, "only {} views within 30 m", errors.len());
+    assert!(errors.len() >= 60, "only {} views within 45 m", errors.len());
     assert!(median <= 5.0, "median yaw error {median:.1} deg");
     assert!(sign_ok * 10 >= oblique * 9, "sign right in {sign_ok} of {oblique} views beyond 8 deg");
 }
