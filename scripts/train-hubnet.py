@@ -399,6 +399,14 @@ def export_yaw(params, path):
     save_onnx(nodes, inits, path, "hubyaw", [1, 1, YAW_SIDE, YAW_SIDE], [1, YAW_BINS, 1, 1])
 
 
+def load_onnx(path, n_layers):
+    """The parameters of a heatmap or crop model written by `export`."""
+    import onnx
+    from onnx import numpy_helper
+    w = {t.name: numpy_helper.to_array(t) for t in onnx.load(path).graph.initializer}
+    return [(w[f"w{i}"], w[f"b{i}"]) for i in range(n_layers)] + [(w["wout"], w["bout"])]
+
+
 def load_yaw_onnx(path):
     """The parameters of a yaw model written by `export_yaw`."""
     import onnx
@@ -505,7 +513,9 @@ def main():
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--lr", type=float, default=2e-3)
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--evaluate", metavar="MODEL", help="yaw model: score this ONNX file on all the folders instead of training")
+    ap.add_argument("--evaluate", metavar="MODEL", help="score this ONNX file on all the folders, each on its own, instead of training")
+    ap.add_argument("--held-out", action="append", default=[], metavar="DIR",
+                    help="frame and crop models: a further held-out folder, scored on its own beside the last one (repeatable)")
     a = ap.parse_args()
     if not a.out and not a.evaluate:
         ap.error("--out is required")
@@ -518,17 +528,23 @@ def main():
     crop_model = a.model == "crop"
     layers = CROP_LAYERS if crop_model else LAYERS
     tag = "[train-hubnet" + (" crop]" if crop_model else "]")
+    fwd = jax.jit(lambda p, xb: forward(p, xb, layers))
+    score = (lambda p, h: evaluate_crops(p, h[0], h[1], fwd)) if crop_model else (lambda p, h: evaluate(p, h[0], h[1], fwd))
+    if a.evaluate:
+        params = load_onnx(a.evaluate, len(layers))
+        for d in a.data + a.held_out:
+            print(f"{tag} {a.evaluate} on {d}: {score(params, load([d], any_size=crop_model))}", flush=True)
+        return 0
     train_dirs, hold_dirs = (a.data[:-1], a.data[-1:]) if len(a.data) > 1 else (a.data, [])
     x, hubs = load(train_dirs, any_size=crop_model)
     print(f"{tag} {len(x)} training frames ({int((hubs[:, 0] >= 0).sum())} with a hub in view) from {', '.join(train_dirs)}", flush=True)
-    hold = load(hold_dirs, any_size=crop_model) if hold_dirs else None
+    holds = [(d, load([d], any_size=crop_model)) for d in hold_dirs + a.held_out]
     rng = np.random.default_rng(a.seed)
     params = [tuple(jnp.asarray(p) for p in layer) for layer in init(rng, layers)]
     per_epoch = a.crops_per_epoch if crop_model else len(x)
     steps = a.epochs * (per_epoch // a.batch)
     opt = optax.adamw(optax.cosine_decay_schedule(a.lr, steps), weight_decay=1e-4)
     state = opt.init(params)
-    fwd = jax.jit(lambda p, xb: forward(p, xb, layers))
 
     @jax.jit
     def step(params, state, xb, tb):
@@ -553,9 +569,9 @@ def main():
                 params, state, loss = step(params, state, xb, targets(hb))
                 losses.append(float(loss))
         msg = f"{tag} epoch {epoch + 1}/{a.epochs} loss {np.mean(losses):.4f} ({time.time() - t0:.0f} s)"
-        if hold is not None and (epoch + 1 == a.epochs or epoch % 3 == 2):
-            score = evaluate_crops(params, hold[0], hold[1], fwd) if crop_model else evaluate(params, hold[0], hold[1], fwd)
-            msg += f" held out: {score}"
+        if epoch + 1 == a.epochs or epoch % 3 == 2:
+            for d, hold in holds:
+                msg += f"\n  held out {d}: {score(params, hold)}"
         print(msg, flush=True)
     params = [tuple(np.asarray(p) for p in layer) for layer in params]
     if crop_model:

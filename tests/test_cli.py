@@ -213,3 +213,25 @@ def test_dataset_writes_the_heatmap_training_set(runner, tmp_path):
         width, height, depth, colour = struct.unpack(">IIBB", png[16:26])
         assert depth == 8 and colour == 0, l["file"]
         assert 200 <= max(width, height) <= 500 and (width, height) != (192, 128), (l["file"], width, height)
+
+
+def test_photo_like_views_are_rendered_for_training_and_scored_as_stills(runner, tmp_path):
+    """`--photo-like N` (the renderer's stand-in for drone photos): `hubtrack dataset` writes N
+    frames plus a quarter as many negatives, with the hub where it is in view; `hubtrack eval`
+    scores N views plus a twelfth as many negatives as still photos, in its own table."""
+    out = tmp_path / "photo"
+    res = runner.run("hubtrack", "dataset", "-o", out, "--seed", 9, "--per-class", 0, "--flights", 0, "--photo-like", 8)
+    assert res.returncode == 0, res.stderr
+    labels = [json.loads(l) for l in (out / "labels.jsonl").read_text().splitlines()]
+    assert len(labels) == 10 and all("_photo_" in l["file"] for l in labels), labels
+    assert all(l["hub"] is None for l in labels[8:]), labels[8:]
+    with_hub = [l for l in labels[:8] if l["hub"] is not None]
+    assert len(with_hub) >= 5, labels
+    # 12-250 m over the ground, seen from up to 50° above: at most 250 / cos 50° ≈ 389 m away.
+    distances = sorted(l["distance_m"] for l in with_hub)
+    assert distances[0] >= 12.0 and distances[-1] <= 390.0, distances
+    res = runner.run("hubtrack", "eval", "--no-photos", "--synthetic", 0, "--photo-like", 12, "--seed", 3)
+    assert res.returncode == 0, res.stderr
+    rows = {l.split()[0]: l.split() for l in res.stdout.splitlines() if l.strip()}
+    assert "photo-like rendered views: 12, seed 3, as still photos" in res.stdout, res.stdout
+    assert rows["photo-like"][1] == "12" and rows["negatives"][1] == "1", res.stdout

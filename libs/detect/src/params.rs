@@ -737,7 +737,11 @@ pub struct RankerParams {
     /// 6.8 % false positives, −0.5 76.3 % with 4.0 %, −0.25 75.8 % with 2.5 %, 0 75.2 % with
     /// 1.5 %. Held out (`hubtrack eval`, seeds 2026 / 77 / 500): −1 83.7 / 78.8 / 78.5 % hits
     /// with 4.2 / 12.5 / 2.1 % false positives; −0.5 81.0 / 77.7 / 76.5 % with 0 / 2.1 / 0.
-    /// Before the heatmap (session 19) the default was −1.
+    /// Before the heatmap (session 19) the default was −1. Session 27 (the heatmap and ranker
+    /// with photo-like views, training frames of seeds 11–18 and photo-like 11–14): −0.5 76.5 %
+    /// with 6.3 % false positives, −0.25 75.6 % with 4.1 %, −0.1 75.0 % with 3.3 %, 0 74.5 %
+    /// with 2.9 %: −0.1, the first under 4 % (held out, seeds 2026 / 77 / 500: 90.5 / 89.0 /
+    /// 87.7 % hits with 8.3 / 4.2 / 4.2 % false positives).
     pub min_score: f64,
     /// Log-odds per unit of each feature (`hubtrack train-ranker` prints a fitted section).
     pub weights: FeatureWeights,
@@ -847,44 +851,45 @@ impl FeatureWeights {
 
 impl Default for RankerParams {
     fn default() -> Self {
-        RankerParams { ranking: Ranking::Learned, min_score: -0.5, weights: FeatureWeights::default() }
+        RankerParams { ranking: Ranking::Learned, min_score: -0.1, weights: FeatureWeights::default() }
     }
 }
 
 impl Default for FeatureWeights {
-    /// Fitted by `scripts/train-ranker.sh -- --also-without hub_heat` (see the README,
-    /// "Learned ranking" and "Learned hub heatmap") in session 24, with the shipped
-    /// `models/hubnet.onnx`: every training frame also counts once with `hub_heat` zeroed, so
-    /// the ranker does not depend on a network that has seen renders only.
+    /// Fitted by `scripts/train-ranker.sh` (see the README, "Learned ranking", "Learned hub
+    /// heatmap" and "Photo-like views") in session 27, with the shipped `models/hubnet.onnx`
+    /// and photo-like views among the training frames: every training frame also counts once
+    /// with `hub_heat` zeroed, so the ranker does not depend on a network that has seen renders
+    /// only.
     fn default() -> Self {
         FeatureWeights {
-            bias: -0.501,
-            two_blades: -1.966,
-            three_blades: -0.480,
-            extra_blades: -0.113,
-            tower: 0.062,
-            tower_lines: 0.361,
-            hidden_blade_down: 0.640,
-            geometry_ok: 0.447,
-            paired: 2.998,
-            spinner: 0.741,
-            spinner_radius: 0.322,
-            spinner_size_match: 1.614,
-            passes_through: -0.446,
-            near_prediction: 0.345,
-            support: 0.434,
-            weakest_blade: 0.916,
-            strongest_blade: -0.298,
-            separation_error: -1.734,
-            rejected_lines: 1.020,
-            rule_score: -0.347,
-            clutter: -2.942,
-            banded_blades: -1.906,
-            tower_top_below: 0.397,
-            image_lines: -0.173,
-            spinner_coverage: 4.675,
-            spinner_axes_offset: -1.136,
-            hub_heat: 2.110,
+            bias: -0.200,
+            two_blades: -2.126,
+            three_blades: -0.518,
+            extra_blades: -0.008,
+            tower: 0.119,
+            tower_lines: 0.587,
+            hidden_blade_down: 0.773,
+            geometry_ok: 0.612,
+            paired: 3.120,
+            spinner: 0.760,
+            spinner_radius: 0.344,
+            spinner_size_match: 1.674,
+            passes_through: -0.501,
+            near_prediction: 0.082,
+            support: 0.220,
+            weakest_blade: 0.963,
+            strongest_blade: -0.407,
+            separation_error: -1.515,
+            rejected_lines: 1.038,
+            rule_score: -0.371,
+            clutter: -2.785,
+            banded_blades: -1.932,
+            tower_top_below: 0.217,
+            image_lines: 0.302,
+            spinner_coverage: 4.284,
+            spinner_axes_offset: -1.122,
+            hub_heat: 2.474,
         }
     }
 }

@@ -227,6 +227,8 @@ enum CellKind {
 /// Everything about the current frame that the per-pixel kernels need.
 struct FrameCtx {
     ground: Ground,
+    /// Land detail from the shrub texture instead of the grass one ([`Scene::shrubland`]).
+    shrubland: bool,
     eye_z: f32,
     /// Camera position in texture-plane coordinates (m, offset positive).
     eye_u: f32,
@@ -523,6 +525,7 @@ impl Background {
         };
         FrameCtx {
             ground: scene.ground,
+            shrubland: scene.shrubland,
             eye_z: eye[2] as f32,
             eye_u,
             eye_v,
@@ -1099,10 +1102,19 @@ fn land_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], l0: &LandNode, l1: 
     }
 }
 
+/// The land's detail texture: fields or shrubland.
+fn land_detail<'a>(ctx: &FrameCtx, tex: &'a Textures) -> &'a crate::texture::MipTex {
+    if ctx.shrubland {
+        &tex.shrubs
+    } else {
+        &tex.grass
+    }
+}
+
 /// Land pixels with exact per-pixel perspective and haze (float path, used near the horizon).
 fn land_persp_pixels(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, level: u32) {
     let inv = 1.0 / GRID as f32;
-    let det = tex.grass.view(level);
+    let det = land_detail(ctx, tex).view(level);
     let pal = &ctx.palette_i[level as usize];
     let l2 = level.saturating_sub(MACRO_SHIFT);
     let mac = tex.grass.view(l2);
@@ -1127,7 +1139,7 @@ fn land_persp_pixels(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, 
 }
 
 fn land_pixels<G: UvGen>(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], l0: &LandNode, l1: &LandNode, level: u32, mut gen: G) {
-    let det = tex.grass.view(level);
+    let det = land_detail(ctx, tex).view(level);
     let pal = &ctx.palette_i[level as usize];
     let fs = ctx.field_seed;
     // Stripes only at full texture resolution (they would alias otherwise).

@@ -3,7 +3,7 @@
 //! pointing error, roll, horizon near the hub, shadows, propellers, skies, both lenses, negatives).
 //! One generator for `hubtrack eval`, the detector benchmark and the sequence evaluation.
 
-use crate::{CameraPose, Distractor, Scene};
+use crate::{Camera, CameraPose, Distractor, Scene};
 
 /// Distance classes of the synthetic set, metres: far ≥ 25, medium 12–25, close < 12.
 pub const CLASSES: [(&str, f64, f64); 3] = [("far", 25.0, 45.0), ("medium", 12.0, 25.0), ("close", 6.0, 12.0)];
@@ -103,6 +103,78 @@ pub fn synth_case_between(seed: u64, class: usize, index: u64, negative: bool, n
     SynthCase { scene, pose, wide, categories }
 }
 
+/// Distances of the photo-like views ([`photo_case`]), metres (drawn log-uniformly).
+pub const PHOTO_DISTANCE_M: (f64, f64) = (12.0, 250.0);
+/// Elevation of the photo-like camera above the hub as seen from it, degrees: drone photos look
+/// at turbines from above as often as from below.
+pub const PHOTO_ELEVATION_DEG: (f64, f64) = (-20.0, 50.0);
+/// Largest relative yaw of the photo-like views, degrees (beyond it the hub hides behind the
+/// rotor's edge).
+pub const PHOTO_MAX_REL_YAW_DEG: f64 = 70.0;
+/// Largest pointing error of the photo-like views as a fraction of the lens's half field of view
+/// (horizontal, vertical): photographers frame the turbine anywhere, even cut by the border.
+pub const PHOTO_POINTING_FRAC: (f64, f64) = (0.75, 0.6);
+/// Share of the photo-like land scenes with shrubland ground.
+pub const PHOTO_SHRUBLAND_SHARE: f64 = 0.6;
+/// Share of the photo-like scenes with wind-farm neighbours, and their largest number.
+pub const PHOTO_NEIGHBOURS: (f64, u8) = (0.6, 5);
+/// Photo-like views from this far or farther count as `photo-like:beyond` (beyond the approach's
+/// far class), the others as `photo-like:approach`, metres.
+pub const PHOTO_BEYOND_M: f64 = 45.0;
+/// Lowest camera height above the ground in the photo-like views, metres.
+pub const PHOTO_MIN_CAMERA_HEIGHT_M: f64 = 3.0;
+
+/// Horizontal field of view of the photo-like views' photo camera (a 1920x1080 pinhole, as a
+/// drone's photo camera), degrees.
+pub const PHOTO_LENS_HFOV_DEG: f64 = 75.0;
+
+/// The lenses of the photo-like views: `[0]` the GoPro (`SynthCase::wide`, a third of the
+/// views), `[1]` a drone's photo camera.
+pub fn photo_lenses() -> [Camera; 2] {
+    [Camera::gopro_hero3(), Camera::pinhole(1920, 1080, PHOTO_LENS_HFOV_DEG)]
+}
+
+/// Horizontal and vertical half fields of view of a camera, degrees (pinhole approximation).
+fn half_fov_deg(cam: &Camera) -> (f64, f64) {
+    let half = |pixels: u32, f: f64| (pixels as f64 / 2.0 / f).atan().to_degrees();
+    (half(cam.width, cam.fx), half(cam.height, cam.fy))
+}
+
+/// The `index`-th photo-like case (deterministic in `seed`): a turbine as drone photos show it
+/// and approaches do not (`hubtrack dataset --photo-like`, `hubtrack eval --photo-like`). Views
+/// from 12–250 m, from 20° below to 50° above the hub, relative yaw up to ±70°, the hub anywhere
+/// in the frame, shrubland ground and wind-farm neighbours, through one of [`photo_lenses`].
+pub fn photo_case(seed: u64, index: u64, negative: bool) -> SynthCase {
+    let mut r = Rng(seed ^ 0x9407_0000_0000 ^ index.wrapping_mul(0x9E37_79B9));
+    let wide = r.next_u64().is_multiple_of(3);
+    let half_fov_deg = half_fov_deg(&photo_lenses()[if wide { 0 } else { 1 }]);
+    let mut scene = Scene::random(r.next_u64());
+    scene.turbine_present = !negative;
+    if negative && scene.distractor == Distractor::None {
+        scene.distractor = Distractor::Mast;
+    }
+    scene.shrubland = scene.ground != crate::Ground::Sea && r.range(0.0, 1.0) < PHOTO_SHRUBLAND_SHARE;
+    if !negative && r.range(0.0, 1.0) < PHOTO_NEIGHBOURS.0 {
+        scene.neighbour_turbines = 1 + (r.next_u64() % PHOTO_NEIGHBOURS.1 as u64) as u8;
+    }
+    let ground_range = (r.range(PHOTO_DISTANCE_M.0.ln(), PHOTO_DISTANCE_M.1.ln())).exp();
+    // The camera's bearing from the hub (0 = in front of a rotor facing +X) and the nacelle's
+    // yaw: the relative yaw is their sum.
+    let rel_yaw = r.range(-PHOTO_MAX_REL_YAW_DEG, PHOTO_MAX_REL_YAW_DEG);
+    let nacelle = r.range(-0.5, 0.5) * rel_yaw;
+    scene.nacelle_yaw_deg = nacelle;
+    let bearing = (rel_yaw - nacelle).to_radians();
+    let (distance, lateral) = (ground_range * bearing.cos(), ground_range * bearing.sin());
+    let elevation = r.range(PHOTO_ELEVATION_DEG.0, PHOTO_ELEVATION_DEG.1);
+    let height = (ground_range * elevation.to_radians().tan()).max(PHOTO_MIN_CAMERA_HEIGHT_M - scene.hub_height_m);
+    let mut pose = CameraPose::looking_at_hub(distance, lateral, height);
+    pose.yaw_deg += r.range(-1.0, 1.0) * PHOTO_POINTING_FRAC.0 * half_fov_deg.0;
+    pose.pitch_deg += r.range(-1.0, 1.0) * PHOTO_POINTING_FRAC.1 * half_fov_deg.1;
+    pose.roll_deg = r.range(-MAX_ROLL_DEG, MAX_ROLL_DEG);
+    let class = if ground_range >= PHOTO_BEYOND_M { "beyond" } else { "approach" };
+    let categories = if negative { vec!["negatives".into()] } else { vec!["photo-like".into(), format!("photo-like:{class}")] };
+    SynthCase { scene, pose, wide, categories }
+}
 
 /// Frames per second of the evaluation flights.
 pub const FLIGHT_FPS: f64 = 15.0;

@@ -122,6 +122,23 @@ const SECOND_TURBINE_BEHIND_M: (f64, f64) = (450.0, 1100.0);
 const SECOND_TURBINE_SIDEWAYS_M: (f64, f64) = (120.0, 420.0);
 /// Second turbine: size relative to the main one (range).
 const SECOND_TURBINE_SCALE: (f64, f64) = (0.8, 1.0);
+/// Wind-farm neighbours ([`Scene::neighbour_turbines`]): distance behind the main tower along -X
+/// (m, range).
+const NEIGHBOUR_BEHIND_M: (f64, f64) = (-100.0, 800.0);
+/// Wind-farm neighbours: sideways offset along ±Y (m, range).
+const NEIGHBOUR_SIDEWAYS_M: (f64, f64) = (40.0, 450.0);
+/// Wind-farm neighbours: size relative to the main one (range).
+const NEIGHBOUR_SCALE: (f64, f64) = (0.9, 1.1);
+/// Wind-farm neighbours: nacelle yaw spread around the main one's (degrees, ±): one wind.
+const NEIGHBOUR_YAW_SPREAD_DEG: f64 = 8.0;
+/// A neighbour must be at least this much farther from the camera than the main tower, and
+/// [`NEIGHBOUR_MIN_DISTANCE_RATIO`] times as far, so the main turbine stays the nearest and
+/// largest (the one the truth is about) and is never hidden (m).
+const NEIGHBOUR_MIN_EXTRA_DISTANCE_M: f64 = 60.0;
+/// See [`NEIGHBOUR_MIN_EXTRA_DISTANCE_M`].
+const NEIGHBOUR_MIN_DISTANCE_RATIO: f64 = 1.3;
+/// Neighbours farther than this from the camera are built with low detail (m).
+const NEIGHBOUR_LOW_DETAIL_M: f64 = 250.0;
 /// The camera must be at least this high above the ground (m).
 pub const MIN_CAMERA_HEIGHT_M: f64 = 0.5;
 
@@ -285,6 +302,7 @@ impl Renderer {
             spec.shadow_sun = None;
             build_turbine(&mut self.mesh, &spec);
         }
+        self.build_neighbours(scene, w2c.origin);
         match scene.distractor {
             Distractor::None => {}
             Distractor::Mast => build_mast(&mut self.mesh, scene, &mut layout),
@@ -307,6 +325,37 @@ impl Renderer {
             self.effects.jpeg(out, q);
         }
         Ok(truth)
+    }
+
+    /// Adds the wind farm's other turbines ([`Scene::neighbour_turbines`]) to the mesh: full size,
+    /// facing the same wind, each farther from the camera at `eye` than the main tower.
+    fn build_neighbours(&mut self, scene: &Scene, eye: math::V3) {
+        let mut r = Rng::new(scene.seed, 0x4E16);
+        let horizontal = |p: math::V3| (p[0] - eye[0]).hypot(p[1] - eye[1]);
+        let main_distance = horizontal([0.0, 0.0, 0.0]);
+        for _ in 0..scene.neighbour_turbines {
+            // A few draws to find a place behind the main turbine as seen from the camera.
+            for _ in 0..8 {
+                let side = if r.chance(0.5) { 1.0 } else { -1.0 };
+                let base = [-r.range(NEIGHBOUR_BEHIND_M.0, NEIGHBOUR_BEHIND_M.1), side * r.range(NEIGHBOUR_SIDEWAYS_M.0, NEIGHBOUR_SIDEWAYS_M.1), 0.0];
+                let size = r.range(NEIGHBOUR_SCALE.0, NEIGHBOUR_SCALE.1);
+                let (yaw, rotor) = (r.range(-NEIGHBOUR_YAW_SPREAD_DEG, NEIGHBOUR_YAW_SPREAD_DEG), r.range(0.0, 120.0));
+                let distance = horizontal(base);
+                if distance < (main_distance + NEIGHBOUR_MIN_EXTRA_DISTANCE_M).max(main_distance * NEIGHBOUR_MIN_DISTANCE_RATIO) {
+                    continue;
+                }
+                let mut spec = TurbineSpec::main(scene);
+                spec.base = base;
+                spec.hub_height_m *= size;
+                spec.blade_length_m *= size;
+                spec.nacelle_yaw_deg += yaw;
+                spec.rotor_angle_deg = rotor;
+                spec.detail = if distance > NEIGHBOUR_LOW_DETAIL_M { Detail::Low } else { Detail::High };
+                spec.shadow_sun = None;
+                build_turbine(&mut self.mesh, &spec);
+                break;
+            }
+        }
     }
 
     fn truth(&self, scene: &Scene, pose: &CameraPose, w2c: &math::WorldToCam) -> Truth {

@@ -101,6 +101,16 @@ pub struct Scene {
     pub nacelle_shadow: bool,
     /// A smaller turbine far in the distance (not part of the truth).
     pub second_turbine: bool,
+    /// Further full-size turbines of a wind farm, 100–700 m behind and beside the main one,
+    /// facing the same wind (not part of the truth; 0 = none). [`Scene::random`] draws none: the
+    /// photo-like training views of [`crate::dataset::photo_case`] do.
+    #[serde(default)]
+    pub neighbour_turbines: u8,
+    /// Shrubland ground (dense dark bushes on light soil, as on Mediterranean wind farms) instead
+    /// of the smooth field texture: many short strong edges behind a turbine seen from above.
+    /// [`Scene::random`] draws none: the photo-like training views do.
+    #[serde(default)]
+    pub shrubland: bool,
     /// The UAV's own propeller blur in a top corner.
     pub propellers_in_view: bool,
     /// Masts / power lines (used esp. in scenes without a turbine).
@@ -142,6 +152,8 @@ impl Scene {
             sun_elevation_deg: 40.0,
             nacelle_shadow: true,
             second_turbine: false,
+            neighbour_turbines: 0,
+            shrubland: false,
             propellers_in_view: false,
             distractor: Distractor::None,
             noise_sigma: 2.0,
@@ -190,6 +202,8 @@ impl Scene {
             sun_elevation_deg: r.range(12.0, 65.0),
             nacelle_shadow: r.chance(0.8),
             second_turbine: r.chance(0.3),
+            neighbour_turbines: 0,
+            shrubland: false,
             propellers_in_view: r.chance(0.25),
             distractor,
             noise_sigma: r.range(0.0, 4.0) as f32,

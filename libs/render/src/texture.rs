@@ -113,7 +113,14 @@ pub(crate) struct Textures {
     pub waves: MipTex,
     /// Cloud density 0..255.
     pub clouds: MipTex,
+    /// Shrubland detail luminance (dark bushes 1–3 m across on light soil), 128 = 1.0.
+    pub shrubs: MipTex,
 }
+
+/// Noise level above which the shrub texture is bush (about half the ground is covered).
+const SHRUB_COVER_LEVEL: f32 = 0.5;
+/// Width of the bushes' soft rim, in noise units.
+const SHRUB_RIM: f32 = 0.08;
 
 /// Fixed seed of the texture set: scenes vary placement, not the textures themselves.
 const TEXTURE_SEED: u64 = 0x7E47_0E5E_ED00_0001;
@@ -127,7 +134,14 @@ impl Textures {
         let waves = MipTex::from_level0(w.iter().map(|&v| (128.0 * (0.62 + 0.76 * v * v * 1.2).min(1.95)) as u8).collect());
         let c = fbm(4, 8, 0.55, 1, TEXTURE_SEED ^ 0xC10D);
         let clouds = MipTex::from_level0(c.iter().map(|&v| (v * 255.0) as u8).collect());
-        Textures { grass, waves, clouds }
+        // Bushes: the top of high-frequency noise, with a soft rim (a texel is 0.5 m, so the
+        // 128-cell base lattice gives bushes ~2 m apart), over coarser noise that thins and
+        // thickens them. Soil 1.3, bush 0.55 of the field colour.
+        let b = fbm(128, 2, 0.5, 1, TEXTURE_SEED ^ 0xB05);
+        let density = fbm(16, 3, 0.5, 1, TEXTURE_SEED ^ 0xB06);
+        let bush = |v: f32, d: f32| ((v + 0.3 * (d - 0.5) - SHRUB_COVER_LEVEL) / SHRUB_RIM + 0.5).clamp(0.0, 1.0);
+        let shrubs = MipTex::from_level0(b.iter().zip(&density).map(|(&v, &d)| (128.0 * (1.3 - 0.75 * bush(v, d))) as u8).collect());
+        Textures { grass, waves, clouds, shrubs }
     }
 }
 

@@ -428,3 +428,78 @@ fn strong_custom_distortion_renders() {
     let (_, t) = render(cam, &Scene::default_clear(), &CameraPose::front(50.0));
     assert!(t.turbine_in_view);
 }
+
+/// Mean absolute difference between horizontally neighbouring pixels (green channel) in the
+/// rows `rows` of a frame: how much fine texture the ground shows.
+fn fine_texture(cam: &Camera, buf: &[u8], rows: std::ops::Range<usize>) -> f64 {
+    let (w, mut sum, mut n) = (cam.width as usize, 0.0, 0usize);
+    for y in rows {
+        for x in 1..w {
+            sum += (px(cam, buf, x, y)[1] as f64 - px(cam, buf, x - 1, y)[1] as f64).abs();
+            n += 1;
+        }
+    }
+    sum / n as f64
+}
+
+#[test]
+fn shrubland_ground_has_more_fine_texture_than_fields() {
+    // Looking down from above the hub: the lower half of the frame is ground near the tower.
+    let cam = Camera::pinhole(960, 540, 75.0);
+    let pose = CameraPose::looking_at_hub(60.0, 0.0, 40.0);
+    let fields = quiet(Scene { seed: 5, ..Scene::default_clear() });
+    let shrubs = Scene { shrubland: true, ..fields.clone() };
+    let (a, ta) = render(cam, &fields, &pose);
+    let (b, tb) = render(cam, &shrubs, &pose);
+    assert_eq!(ta, tb, "the ground does not change the truth");
+    let (fa, fb) = (fine_texture(&cam, &a, 400..540), fine_texture(&cam, &b, 400..540));
+    assert!(fb > 2.0 * fa, "shrubland {fb:.2} against fields {fa:.2} grey levels per pixel step");
+}
+
+#[test]
+fn wind_farm_neighbours_stand_behind_the_main_turbine() {
+    let cam = Camera::gopro_hero3();
+    let pose = CameraPose::looking_at_hub(40.0, 10.0, 15.0);
+    let alone = quiet(Scene { seed: 9, ..Scene::default_clear() });
+    let farm = Scene { neighbour_turbines: 5, ..alone.clone() };
+    let (a, ta) = render(cam, &alone, &pose);
+    let (b, tb) = render(cam, &farm, &pose);
+    assert_eq!(ta, tb, "the truth is the main turbine's");
+    let changed = a.chunks_exact(3).zip(b.chunks_exact(3)).filter(|(p, q)| p != q).count();
+    assert!(changed > 500, "the neighbours are drawn ({changed} pixels changed)");
+    // Nothing in front of the main turbine: its hub pixel and the pixels around it stay.
+    let [hx, hy] = ta.hub_px.expect("hub in view");
+    for dy in -3i64..=3 {
+        for dx in -3i64..=3 {
+            let (x, y) = ((hx as i64 + dx) as usize, (hy as i64 + dy) as usize);
+            assert_eq!(px(&cam, &a, x, y), px(&cam, &b, x, y), "hub area changed at ({x}, {y})");
+        }
+    }
+}
+
+#[test]
+fn photo_like_cases_cover_views_from_above_far_and_oblique() {
+    use hubtrack_render::dataset::{photo_case, PHOTO_DISTANCE_M, PHOTO_MAX_REL_YAW_DEG};
+    let cases: Vec<_> = (0..400).map(|i| photo_case(7, i, false)).collect();
+    let again = photo_case(7, 3, false);
+    assert_eq!((again.scene, again.pose.distance_m), (cases[3].scene.clone(), cases[3].pose.distance_m), "deterministic");
+    let (mut above, mut far, mut oblique, mut shrubs, mut farms) = (0, 0, 0, 0, 0);
+    for c in &cases {
+        let p = &c.pose;
+        let ground_range = p.distance_m.hypot(p.lateral_m);
+        assert!((PHOTO_DISTANCE_M.0 - 1e-9..PHOTO_DISTANCE_M.1 + 1e-9).contains(&ground_range), "{ground_range}");
+        let rel = c.scene.nacelle_yaw_deg + p.lateral_m.atan2(p.distance_m).to_degrees();
+        assert!(rel.abs() <= PHOTO_MAX_REL_YAW_DEG + 1e-9, "relative yaw {rel}");
+        assert!(c.scene.hub_height_m + p.height_m >= 2.9, "camera above the ground");
+        above += (p.height_m > 0.3 * ground_range) as usize;
+        far += (ground_range > 100.0) as usize;
+        oblique += (rel.abs() > 40.0) as usize;
+        shrubs += c.scene.shrubland as usize;
+        farms += (c.scene.neighbour_turbines > 0) as usize;
+    }
+    for (what, n) in [("from well above", above), ("beyond 100 m", far), ("beyond 40° yaw", oblique), ("shrubland", shrubs), ("wind farm", farms)] {
+        assert!(n >= 40, "{what}: {n} of 400");
+    }
+    let negative = photo_case(7, 0, true).scene;
+    assert!(negative.neighbour_turbines == 0 && !negative.turbine_present, "negatives hold no turbine");
+}

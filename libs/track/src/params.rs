@@ -485,6 +485,22 @@ pub struct YawConfig {
     /// floor of 5° (`net_min_std_deg`) gave 91 of 100 of seeds 161–210 and 261–310 against 98
     /// of 102 vetoing only (session 26).
     pub net_fuse: bool,
+    /// Let the network correct a stale yaw, seconds (0 = never, the default): once no hub–tower
+    /// gap, nacelle or blade-skew yaw has been fused for this long and the network's filtered
+    /// reading stands `net_fallback_min_deg` from the yaw, it restarts the yaw there and every
+    /// network reading is fused until a geometric cue returns. Close in the tower hides behind
+    /// the spinner and the blade pointing down, the yaw goes stale and the approach flies on what
+    /// it remembers: in 14 of the 19 failures of `fly` seeds 161–560 (session 26's build) the
+    /// yaw was invalid for the last metres and `done` came 5–15° off, while the network read it
+    /// within 1.3–4.9° (median per flight, 5–10 m). At 1 s it saved 12 of those 19, but the
+    /// network's bias (a few degrees per scene) then sets the final yaw where the remembered one
+    /// was right: on seeds 161–207 and 261–304 (session 27) 82 of 91 against 87 of 91 off (3
+    /// in, 7 out, the new failures 5.6–13° off). Fusing every reading once the cues were gone
+    /// (no `net_fallback_min_deg`) saved 13 of the 19 and lost 4 of 18 good endings of 161–180.
+    pub net_fallback_after_s: f64,
+    /// See `net_fallback_after_s`, degrees: a filtered network reading nearer the stale yaw
+    /// leaves it alone (its error is a bias per scene, ~4° at 3.5–8 m). Range [0, 90].
+    pub net_fallback_min_deg: f64,
     /// Fewest detected blades for a blade-skew estimate (2 fits exactly, 3 or more also checks
     /// the fit).
     pub min_blades: u32,
@@ -569,6 +585,8 @@ impl Default for YawConfig {
             net_max_std_deg: 8.0,
             net_vetoes_gap: true,
             net_fuse: false,
+            net_fallback_after_s: 0.0,
+            net_fallback_min_deg: 6.0,
             min_blades: 3,
             blade_fit_chi2: 10.83,
             max_abs_deg: 85.0,
@@ -686,6 +704,8 @@ impl TrackConfig {
         c.closed("nacelle_min_std_deg", y.nacelle_min_std_deg, 0.0, 90.0)?;
         c.open_closed("net_min_std_deg", y.net_min_std_deg, 0.0, 90.0)?;
         c.open_closed("net_max_std_deg", y.net_max_std_deg, 0.0, 90.0)?;
+        c.closed("net_fallback_after_s", y.net_fallback_after_s, 0.0, MAX_TIME_S)?;
+        c.closed("net_fallback_min_deg", y.net_fallback_min_deg, 0.0, 90.0)?;
         c.closed("nacelle_min_abs_deg", y.nacelle_min_abs_deg, 0.0, 90.0)?;
         c.closed("nacelle_gate_px", y.nacelle_gate_px, 0.0, 1e4)?;
         c.closed("nacelle_front_m", y.nacelle_front_m, 0.0, 50.0)?;

@@ -78,6 +78,13 @@ struct Core {
     pose: Option<CameraPose>,
     distance: ScalarFilter,
     yaw: ScalarFilter,
+    /// When a geometric yaw cue (gap, nacelle, blade skew) was last fused, ns (see
+    /// `yaw.net_fallback_after_s`).
+    yaw_cue_ns: Option<u64>,
+    /// Every network yaw reading, filtered like `yaw` (the fallback's reference).
+    net_yaw: ScalarFilter,
+    /// The network carries the yaw until a geometric cue returns (`yaw.net_fallback_after_s`).
+    net_fallback: bool,
     /// The current track's sightings, for the parallax distance.
     parallax: ParallaxRanger,
     /// Raw per-frame (distance, yaw) of the baseline.
@@ -107,6 +114,9 @@ impl Core {
             pose: None,
             distance: ScalarFilter::default(),
             yaw: ScalarFilter::default(),
+            yaw_cue_ns: None,
+            net_yaw: ScalarFilter::default(),
+            net_fallback: false,
             parallax: ParallaxRanger::default(),
             raw: (None, None),
             last_seq: 0,
@@ -258,6 +268,7 @@ impl Core {
         let y_shift = ego.and_then(|m| m.relative_yaw_change_rad).unwrap_or(0.0);
         let q_yaw = self.cfg.yaw.process_noise_deg2_s * 1f64.to_radians().powi(2);
         self.yaw.predict(dt, q_yaw, y_shift, frac2 * y_shift * y_shift);
+        self.net_yaw.predict(dt, q_yaw, y_shift, frac2 * y_shift * y_shift);
 
         self.pose = pose1;
         self.t_ns = Some(t);
@@ -599,12 +610,34 @@ impl Core {
             show(net),
             show(yaw_prior)
         );
+        let cues = [gap, nacelle, blade_signed].into_iter().flatten().collect::<Vec<_>>();
+        if let Some(n) = net {
+            self.net_yaw.update(n, yc.gate_chi2, yc.jump_accept_count, t);
+        }
         let net_fused = net.filter(|_| yc.net_fuse);
-        if let Some(m) = fuse(&[gap, nacelle, blade_signed, net_fused].into_iter().flatten().collect::<Vec<_>>()) {
+        if let Some(m) = fuse(&cues.iter().copied().chain(net_fused).collect::<Vec<_>>()) {
             // No jumps close in (see `jump_min_distance_m`): only gated updates.
             let close = self.distance.estimate().is_some_and(|d| d.value < yc.jump_min_distance_m);
             let jump_count = if close { u32::MAX } else { yc.jump_accept_count };
-            self.yaw.update(m, yc.gate_chi2, jump_count, t);
+            if self.yaw.update(m, yc.gate_chi2, jump_count, t) && !cues.is_empty() {
+                self.yaw_cue_ns = Some(t);
+                self.net_fallback = false;
+            }
+        } else if let Some(n) = net.filter(|_| yc.net_fallback_after_s > 0.0) {
+            // No geometric cue for `net_fallback_after_s` (since the first frame, if never):
+            // once the network's filtered reading stands `net_fallback_min_deg` from the stale
+            // yaw, it restarts the yaw and carries it, every reading fused, until a cue returns.
+            let cue_age_s = self.yaw_cue_ns.or(self.first_ns).map_or(0.0, |c| dt_s(t, c));
+            if self.net_fallback {
+                self.yaw.update(n, yc.gate_chi2, yc.jump_accept_count, t);
+            } else if let Some(reference) = self.net_yaw.estimate().filter(|_| cue_age_s >= yc.net_fallback_after_s) {
+                let far = self.yaw.estimate().is_none_or(|y| (reference.value - y.value).abs() >= yc.net_fallback_min_deg.to_radians());
+                if far {
+                    let std = reference.std.max(yc.net_min_std_deg.to_radians());
+                    self.yaw.update(Estimate { value: reference.value, std }, yc.gate_chi2, 1, t);
+                    self.net_fallback = true;
+                }
+            }
         }
 
         // Distance of the hub: tower depth minus the overhang, and the spinner.

@@ -879,6 +879,51 @@ fn the_yaw_network_vetoes_gaps_from_a_blade_hiding_the_tower() {
     assert!(without.yaw_valid && without.yaw_deg > psi_deg + 5.0, "the gaps alone: {}", without.yaw_deg);
 }
 
+/// Close in, the geometric yaw cues vanish (the spinner hides the tower top, a blade the
+/// tower). With `yaw.net_fallback_after_s` (off by default: flights were worse), after that
+/// long without one a filtered network reading far from the stale yaw (`net_fallback_min_deg`)
+/// restarts it there, even close in; readings near it leave it alone (the network's error is a
+/// bias per scene).
+#[test]
+fn the_yaw_network_carries_the_yaw_when_the_tower_is_gone() {
+    let cfg = pinhole_config();
+    let (d_hub, psi_deg) = (6.0, -12.0);
+    let run = |fallback_s: f64| {
+        let mut c = cfg.clone();
+        c.yaw.net_fallback_after_s = fallback_s;
+        c.yaw.use_nacelle = false;
+        // 1.5 s of a gap that reads 0° (and no network), then 3.5 s of the network alone.
+        track_turbine(&c, 29, 150, d_hub, psi_deg, |k, d, rng| {
+            d.blade_count = 0;
+            if k < 45 {
+                d.hub_tower_gap_px = rng.normal();
+            } else {
+                d.tower_found = false;
+                d.yaw_net_valid = true;
+                d.yaw_net_deg = psi_deg + 2.0 * rng.normal();
+                d.yaw_net_std_deg = 3.0;
+            }
+        })
+    };
+    let (stale, carried) = (run(0.0), run(1.0));
+    assert!(!stale.yaw_valid && stale.yaw_deg.abs() < 3.0, "without the fallback the wrong yaw goes stale ({} ± {})", stale.yaw_deg, stale.yaw_std_deg);
+    assert!((carried.yaw_deg - psi_deg).abs() < 5.0, "with it the network's reading: {} ± {}", carried.yaw_deg, carried.yaw_std_deg);
+    // A network 4° off a right stale yaw leaves it.
+    let mut c = cfg.clone();
+    c.yaw.use_nacelle = false;
+    c.yaw.net_fallback_after_s = 1.0;
+    let kept = track_turbine(&c, 29, 150, d_hub, psi_deg, |k, d, rng| {
+        d.blade_count = 0;
+        if k >= 45 {
+            d.tower_found = false;
+            d.yaw_net_valid = true;
+            d.yaw_net_deg = psi_deg + 4.0 + 0.5 * rng.normal();
+            d.yaw_net_std_deg = 3.0;
+        }
+    });
+    assert!((kept.yaw_deg - psi_deg).abs() < 1.5, "a near reading leaves the yaw: {}", kept.yaw_deg);
+}
+
 /// A nacelle end measured from a hub the detector placed by blade lines alone (no spinner
 /// circle) is not used (`yaw.nacelle_needs_spinner`): such a hub may sit half a chord off, and
 /// the "end" found is then the spinner's own rim, as often on the wrong side as the right one.

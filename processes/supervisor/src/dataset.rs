@@ -4,7 +4,7 @@
 use anyhow::Context;
 use hubtrack_detect::heat::{NET_HEIGHT, NET_WIDTH};
 use hubtrack_detect::ImageView;
-use hubtrack_render::dataset::{flight, synth_case, synth_case_between, BEYOND_M, CLASSES, CLOSE_IN_M};
+use hubtrack_render::dataset::{flight, photo_case, photo_lenses, synth_case, synth_case_between, BEYOND_M, CLASSES, CLOSE_IN_M};
 use hubtrack_render::{Camera, CameraPose, Renderer, Scene};
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_types::PixelFormat;
@@ -42,6 +42,11 @@ pub struct DatasetArgs {
     /// quarter as many negatives: the hub yaw network's hover views.
     #[arg(long, default_value_t = 0)]
     pub close_in: u64,
+    /// Photo-like single frames (12–250 m, from below and above, relative yaw to ±70°, the hub
+    /// anywhere in the frame, shrubland and wind farms; two thirds through a 1920x1080 photo
+    /// lens), plus a quarter as many negatives: what drone photos show and approaches do not.
+    #[arg(long, default_value_t = 0)]
+    pub photo_like: u64,
     /// Write the whole working pyramid level (grey, e.g. 480x270 for 1920x1080) instead of the
     /// heatmap network's input: the hub crop network's training set (`train-hubnet.py --model
     /// crop` cuts its crops from these).
@@ -56,11 +61,11 @@ pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let labels_path = a.out.join("labels.jsonl");
     let mut labels = std::io::BufWriter::new(std::fs::File::create(&labels_path).with_context(|| format!("creating {}", labels_path.display()))?);
-    let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
+    let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow()), Renderer::new(photo_lenses()[1])];
     let mut buffers: Vec<Vec<u8>> = renderers.iter().map(|r| vec![0u8; r.camera().frame_bytes()]).collect();
     let mut written = 0u64;
-    let mut one = |name: String, scene: &Scene, pose: &CameraPose, wide: bool| -> anyhow::Result<()> {
-        let k = if wide { 0 } else { 1 };
+    // Lens: 0 GoPro, 1 USB, 2 the photo lens.
+    let mut one = |name: String, scene: &Scene, pose: &CameraPose, k: usize| -> anyhow::Result<()> {
         let truth = renderers[k].render(scene, pose, &mut buffers[k]).map_err(|e| anyhow::anyhow!("{e}"))?;
         let cam = renderers[k].camera();
         let (w, h) = (cam.width as f64, cam.height as f64);
@@ -87,27 +92,32 @@ pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
         }
         Ok(())
     };
+    let lens = |wide: bool| if wide { 0 } else { 1 };
     for (class, def) in CLASSES.iter().enumerate() {
         for i in 0..a.per_class + a.per_class / 4 {
             let negative = i >= a.per_class;
             let case = synth_case(a.seed, class, i, negative);
-            one(format!("{}_{}_{i:05}", a.seed, def.0), &case.scene, &case.pose, case.wide)?;
+            one(format!("{}_{}_{i:05}", a.seed, def.0), &case.scene, &case.pose, lens(case.wide))?;
         }
     }
     for i in 0..a.beyond + a.beyond / 4 {
         // Class index 3: a scene stream of its own, apart from the three classes'.
         let case = synth_case_between(a.seed, CLASSES.len(), i, i >= a.beyond, "beyond", BEYOND_M.0, BEYOND_M.1);
-        one(format!("{}_beyond_{i:05}", a.seed), &case.scene, &case.pose, case.wide)?;
+        one(format!("{}_beyond_{i:05}", a.seed), &case.scene, &case.pose, lens(case.wide))?;
     }
     for i in 0..a.close_in + a.close_in / 4 {
         // Class index 4: a scene stream of its own.
         let case = synth_case_between(a.seed, CLASSES.len() + 1, i, i >= a.close_in, "close_in", CLOSE_IN_M.0, CLOSE_IN_M.1);
-        one(format!("{}_closein_{i:05}", a.seed), &case.scene, &case.pose, case.wide)?;
+        one(format!("{}_closein_{i:05}", a.seed), &case.scene, &case.pose, lens(case.wide))?;
+    }
+    for i in 0..a.photo_like + a.photo_like / 4 {
+        let case = photo_case(a.seed, i, i >= a.photo_like);
+        one(format!("{}_photo_{i:05}", a.seed), &case.scene, &case.pose, if case.wide { 0 } else { 2 })?;
     }
     for f in 0..a.flights {
         let seed = a.seed.wrapping_mul(1000).wrapping_add(f);
         for (i, fr) in flight(seed, a.flight_frames).iter().enumerate().step_by(a.flight_step.max(1) as usize) {
-            one(format!("{}_flight{f:02}_{i:04}", a.seed), &fr.scene, &fr.pose, true)?;
+            one(format!("{}_flight{f:02}_{i:04}", a.seed), &fr.scene, &fr.pose, 0)?;
         }
     }
     labels.flush()?;

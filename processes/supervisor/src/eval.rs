@@ -7,7 +7,7 @@ use anyhow::Context;
 use hubtrack_capture::images::read_image;
 use hubtrack_detect::params::Mode;
 use hubtrack_detect::{Hints, ImageView, Output};
-use hubtrack_render::dataset::{synth_case, CLASSES};
+use hubtrack_render::dataset::{photo_case, photo_lenses, synth_case, SynthCase, CLASSES};
 use hubtrack_render::{Camera, Renderer};
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_types::PixelFormat;
@@ -31,6 +31,12 @@ pub struct EvalArgs {
     /// Synthetic frames per distance class (0: none), plus as many negatives (no turbine) / 4.
     #[arg(long, default_value_t = 200)]
     pub synthetic: u64,
+    /// Photo-like rendered views (0: none; 12–250 m, from below and above, relative yaw to ±70°,
+    /// shrubland and wind farms), plus a twelfth as many negatives, detected as still photos:
+    /// the renderer's stand-in for the photos' domain, in the table `photo-like` (categories
+    /// `photo-like:approach` within 45 m, `photo-like:beyond`).
+    #[arg(long, default_value_t = 0)]
+    pub photo_like: u64,
     /// Seed of the synthetic set and flights.
     #[arg(long, default_value_t = 2026)]
     pub seed: u64,
@@ -92,6 +98,10 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     if args.synthetic > 0 {
         let table = eval_synthetic(args.synthetic, args.seed, &mut detectors, misses, cand_out.as_mut())?;
         print_table(&format!("synthetic frames: {} per distance class, seed {}", args.synthetic, args.seed), &names, &table);
+    }
+    if args.photo_like > 0 {
+        let table = eval_photo_like(args.photo_like, args.seed, &mut detectors, misses, cand_out.as_mut())?;
+        print_table(&format!("photo-like rendered views: {}, seed {}, as still photos", args.photo_like, args.seed), &names, &table);
     }
     if let Some(w) = cand_out.as_mut() {
         w.flush().context("writing the candidates file")?;
@@ -211,37 +221,61 @@ fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], mis
 }
 
 fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>, mut cand_out: Option<&mut CandidateSink>) -> anyhow::Result<Table> {
-    let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
-    let mut buffers: Vec<Vec<u8>> = renderers.iter().map(|r| vec![0u8; r.camera().frame_bytes()]).collect();
     let mut table = Table::new();
     for (class, class_def) in CLASSES.iter().enumerate() {
-        for i in 0..per_class + per_class / 12 {
-            let negative = i >= per_class;
-            let case = synth_case(seed, class, i, negative);
-            let k = if case.wide { 0 } else { 1 };
-            let truth = renderers[k].render(&case.scene, &case.pose, &mut buffers[k]).map_err(|e| anyhow::anyhow!("{e}"))?;
-            let cam = renderers[k].camera();
-            let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buffers[k] };
-            let t = if negative { Truth::Negative } else { Truth::of_rendered(&truth) };
-            let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() };
-            let outputs = detect_all(detectors, &view, &hints, false)?;
-            let outcomes = score_all(&outputs, &t, view.height);
-            if let Some(out) = outputs.last() {
-                write_candidates(cand_out.as_deref_mut(), &format!("{}_{i:04}", class_def.0), &t, out, view.height)?;
-            }
-            if misses.is_some() {
-                let mat = Mat::from_slice(&buffers[k])?.reshape(3, cam.height as i32)?.try_clone()?;
-                let name = format!("{}_{i:04}", class_def.0);
-                if write_miss(misses, &name, &mat, &t, &outputs, &outcomes)? {
-                    // The rendered input too, to re-run `hubtrack detect` on (with RUST_LOG=trace).
-                    let input = misses.unwrap_or(Path::new(".")).join(format!("{name}_input.png"));
-                    let path = input.to_str().context("non-UTF-8 path")?;
-                    anyhow::ensure!(opencv::imgcodecs::imwrite_def(path, &mat)?, "cannot write {path}");
-                }
-            }
-            add(&mut table, &case.categories, &t, &outcomes);
-        }
+        let cases = (0..per_class + per_class / 12).map(|i| (format!("{}_{i:04}", class_def.0), synth_case(seed, class, i, i >= per_class)));
+        let lenses = [Camera::gopro_hero3(), Camera::usb_narrow()];
+        eval_rendered(cases, lenses, false, detectors, misses, cand_out.as_deref_mut(), &mut table)?;
         eprintln!("[eval] synthetic class {} done", class_def.0);
     }
     Ok(table)
+}
+
+/// `count` photo-like rendered views (plus a twelfth as many negatives), detected as still
+/// photos are: no attitude, both pyramid levels.
+fn eval_photo_like(count: u64, seed: u64, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>, cand_out: Option<&mut CandidateSink>) -> anyhow::Result<Table> {
+    let mut table = Table::new();
+    let cases = (0..count + count / 12).map(|i| (format!("photo_{i:04}"), photo_case(seed, i, i >= count)));
+    eval_rendered(cases, photo_lenses(), true, detectors, misses, cand_out, &mut table)?;
+    Ok(table)
+}
+
+/// Renders and scores `cases` (name, case) through `lenses` (`[0]` for wide cases): as video
+/// frames with the roll known, or as still photos.
+fn eval_rendered(
+    cases: impl Iterator<Item = (String, SynthCase)>,
+    lenses: [Camera; 2],
+    still: bool,
+    detectors: &mut [hubtrack_detect::Detector],
+    misses: Option<&Path>,
+    mut cand_out: Option<&mut CandidateSink>,
+    table: &mut Table,
+) -> anyhow::Result<()> {
+    let mut renderers = lenses.map(Renderer::new);
+    let mut buffers: Vec<Vec<u8>> = renderers.iter().map(|r| vec![0u8; r.camera().frame_bytes()]).collect();
+    for (name, case) in cases {
+        let negative = case.categories.iter().any(|c| c == "negatives");
+        let k = if case.wide { 0 } else { 1 };
+        let truth = renderers[k].render(&case.scene, &case.pose, &mut buffers[k]).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let cam = renderers[k].camera();
+        let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buffers[k] };
+        let t = if negative { Truth::Negative } else { Truth::of_rendered(&truth) };
+        let hints = if still { Hints::default() } else { Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() } };
+        let outputs = detect_all(detectors, &view, &hints, still)?;
+        let outcomes = score_all(&outputs, &t, view.height);
+        if let Some(out) = outputs.last() {
+            write_candidates(cand_out.as_deref_mut(), &name, &t, out, view.height)?;
+        }
+        if misses.is_some() {
+            let mat = Mat::from_slice(&buffers[k])?.reshape(3, cam.height as i32)?.try_clone()?;
+            if write_miss(misses, &name, &mat, &t, &outputs, &outcomes)? {
+                // The rendered input too, to re-run `hubtrack detect` on (with RUST_LOG=trace).
+                let input = misses.unwrap_or(Path::new(".")).join(format!("{name}_input.png"));
+                let path = input.to_str().context("non-UTF-8 path")?;
+                anyhow::ensure!(opencv::imgcodecs::imwrite_def(path, &mat)?, "cannot write {path}");
+            }
+        }
+        add(table, &case.categories, &t, &outcomes);
+    }
+    Ok(())
 }
