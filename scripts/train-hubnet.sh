@@ -6,17 +6,20 @@
 # Data (`hubtrack dataset`): seeds 101, 103, 104 for training and 102 held out, each 1,500
 # single frames per distance class with a quarter as many negatives and 20 rendered approach
 # flights (every 5th frame): 6,825 frames; seeds 105, 106 with 3,000 frames each from
-# 45–250 m (`--beyond`, photos show turbines that far) and 750 negatives; and (session 27)
-# seeds 107, 108 with 3,000 photo-like views each (`--photo-like`: 12–250 m, from below and
-# above, relative yaw to ±70°, the hub anywhere in the frame, shrubland, wind farms) and 750
-# negatives, 109 held out and scored on its own. The evaluation seeds
+# 45–250 m (`--beyond`, photos show turbines that far) and 750 negatives. The evaluation seeds
 # of `hubtrack eval` and the README (2026, 77, 500; flights 2026, 7, 100, 500, 3000, 4000) are
 # not used.
 # Training: `scripts/train-hubnet.py` (JAX on the CPU, in its own virtual environment under
-# target/; 20 epochs). About 10 minutes of rendering and 25 of training on 2 cores; the held-out
-# scores are printed every 3 epochs (session 27: the peak within one cell of the hub in 98.4 %
-# of seed 102's frames and 90.1 % of the photo-like views of 109; session 24's model, trained
-# without the photo-like views: 97.6 % and 66.9 %).
+# target/; 20 epochs). About 5 minutes of rendering and 17 of training on 2 cores; the held-out
+# score is printed every 3 epochs (session 24: the peak within one cell of the hub in 97.6 %).
+#
+# The still photos' heatmap (`detect.default.still_models`, libs/detect/models/hubnet-still.onnx):
+#   scripts/train-hubnet.sh still [OUT.onnx] [-- train-hubnet.py options]
+# The same data plus seeds 107, 108 with 3,000 photo-like views each (`--photo-like`: 12–250 m,
+# from below and above, relative yaw to ±70°, the hub anywhere in the frame, shrubland, wind
+# farms) and 750 negatives, 109 held out and scored on its own. About 10 minutes of rendering and
+# 25–38 of training (session 27: held out 98.4 % on seed 102, 90.1 % on the photo-like views of
+# 109, where the video model gets 97.6 % and 66.9 %). Then `scripts/train-ranker.sh still`.
 # Usage: scripts/train-hubnet.sh [OUT.onnx] [-- train-hubnet.py options]
 # Then rebuild (the model is compiled in) and refit the ranker (scripts/train-ranker.sh): the
 # ranker's `hub_heat` weight belongs to the model it was fitted with.
@@ -40,8 +43,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 model=frame
-if [ "${1:-}" = "crop" ] || [ "${1:-}" = "yaw" ]; then model=$1; shift; fi
+if [ "${1:-}" = "crop" ] || [ "${1:-}" = "yaw" ] || [ "${1:-}" = "still" ]; then model=$1; shift; fi
 default_out=libs/detect/models/hubnet.onnx
+[ "$model" = still ] && default_out=libs/detect/models/hubnet-still.onnx
 [ "$model" = crop ] && default_out=libs/detect/models/hubcrop.onnx
 [ "$model" = yaw ] && default_out=libs/detect/models/hubyaw.onnx
 out=${1:-$default_out}
@@ -91,9 +95,14 @@ done
 for seed in 105 106; do
   render "$data/b$seed" --seed "$seed" --per-class 0 --flights 0 --beyond 3000
 done
-for seed in 107 108 109; do
-  render "$data/p$seed" --seed "$seed" --per-class 0 --flights 0 --photo-like 3000
-done
-# The last folder is held out, and so is p109 (photo-like views, scored on their own).
-"$venv/bin/python" scripts/train-hubnet.py --out "$out" --held-out "$data/p109" "$@" \
-  "$data/s101" "$data/s103" "$data/s104" "$data/b105" "$data/b106" "$data/p107" "$data/p108" "$data/s102"
+photo=()
+if [ "$model" = still ]; then
+  for seed in 107 108 109; do
+    render "$data/p$seed" --seed "$seed" --per-class 0 --flights 0 --photo-like 3000
+  done
+  photo=("$data/p107" "$data/p108")
+  set -- --held-out "$data/p109" "$@"
+fi
+# The last folder is held out (and with `still`, p109: photo-like views, scored on their own).
+"$venv/bin/python" scripts/train-hubnet.py --out "$out" "$@" \
+  "$data/s101" "$data/s103" "$data/s104" "$data/b105" "$data/b106" "${photo[@]}" "$data/s102"

@@ -31,6 +31,9 @@ pub const NET_STRIDE: i32 = 8;
 /// The model the build ships: written by `scripts/train-hubnet.sh` (ONNX, opset ≤ 13, input
 /// `1×1×128×192` grey scaled to [0, 1], output `1×1×16×24` logits).
 const MODEL: &[u8] = include_bytes!("../models/hubnet.onnx");
+/// The still photos' model (`detect.default.still_models`): the same network trained with
+/// photo-like rendered views too (`scripts/train-hubnet.sh`, session 27).
+const STILL_MODEL: &[u8] = include_bytes!("../models/hubnet-still.onnx");
 
 /// The network input of one working pyramid level: grey, resized to `NET_WIDTH`×`NET_HEIGHT`.
 pub fn network_input(working: &Mat, out: &mut Mat) -> Result<(), DetectError> {
@@ -260,9 +263,14 @@ pub struct HubNet {
 }
 
 impl HubNet {
-    /// Load the shipped model.
+    /// Load the shipped model (video frames).
     pub fn new() -> Result<HubNet, DetectError> {
         Ok(HubNet { net: load(MODEL)?, input: Mat::default(), blob: Mat::default() })
+    }
+
+    /// Load the still photos' model.
+    pub fn for_stills() -> Result<HubNet, DetectError> {
+        Ok(HubNet { net: load(STILL_MODEL)?, input: Mat::default(), blob: Mat::default() })
     }
 
     /// The heatmap of one working pyramid level (grey).

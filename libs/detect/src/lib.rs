@@ -274,6 +274,8 @@ pub struct Detector {
     scratch: Scratch,
     /// The learned hub heatmap (`default.hub_heat`, default mode only).
     hubnet: Option<heat::HubNet>,
+    /// The still photos' heatmap (`default.still_models`).
+    hubnet_still: Option<heat::HubNet>,
     /// The learned hub crop network (`default.hub_crop`, default mode only).
     hubcrop: Option<heat::HubCropNet>,
     /// The learned yaw network (`default.hub_yaw`, default mode only).
@@ -285,9 +287,12 @@ impl Detector {
     pub fn new(config: DetectConfig) -> Result<Detector, DetectError> {
         config.validate()?;
         let hubnet = (config.mode == Mode::Default && config.default.hub_heat).then(heat::HubNet::new).transpose()?;
+        let hubnet_still = (config.mode == Mode::Default && config.default.hub_heat && config.default.still_models)
+            .then(heat::HubNet::for_stills)
+            .transpose()?;
         let hubcrop = (config.mode == Mode::Default && config.default.hub_crop).then(heat::HubCropNet::new).transpose()?;
         let hubyaw = (config.mode == Mode::Default && config.default.hub_yaw).then(heat::HubYawNet::new).transpose()?;
-        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet, hubcrop, hubyaw })
+        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet, hubnet_still, hubcrop, hubyaw })
     }
 
     /// The configuration in use.
@@ -300,7 +305,7 @@ impl Detector {
     pub fn detect(&mut self, image: &ImageView<'_>, hints: &Hints) -> Result<Output, DetectError> {
         image::check_view(image)?;
         let levels = self.levels_for(image);
-        self.detect_at(image, hints, levels)
+        self.detect_at(image, hints, levels, false)
     }
 
     /// Detect the hub in a still photo (`hubtrack detect`, `hubtrack eval` on photos): as
@@ -311,11 +316,11 @@ impl Detector {
     pub fn detect_still(&mut self, image: &ImageView<'_>, hints: &Hints) -> Result<Output, DetectError> {
         image::check_view(image)?;
         let levels = self.levels_for(image);
-        let coarse = self.detect_at(image, hints, levels)?;
+        let coarse = self.detect_at(image, hints, levels, true)?;
         if self.config.mode != Mode::Default || !self.config.default.still_finer_level || levels < 2 {
             return Ok(coarse);
         }
-        let fine = self.detect_at(image, hints, levels - 1)?;
+        let fine = self.detect_at(image, hints, levels - 1, true)?;
         let total_us = coarse.detection.timings.total_us + fine.detection.timings.total_us;
         let (c, f) = (&coarse.detection, &fine.detection);
         let mut best = if f.detected && (!c.detected || f.confidence > c.confidence) { fine } else { coarse };
@@ -348,8 +353,9 @@ impl Detector {
         pyramid_levels(image.width, image.height, min_side, max_side)
     }
 
-    /// Detect at `levels` pyramid steps down (a view already checked).
-    fn detect_at(&mut self, image: &ImageView<'_>, hints: &Hints, levels: usize) -> Result<Output, DetectError> {
+    /// Detect at `levels` pyramid steps down (a view already checked); `still`: a still photo
+    /// (its own heatmap and ranking with `default.still_models`).
+    fn detect_at(&mut self, image: &ImageView<'_>, hints: &Hints, levels: usize, still: bool) -> Result<Output, DetectError> {
         let t0 = Instant::now();
         let k = (1u64 << levels) as f64;
         let expected = robust::Expected {
@@ -374,15 +380,18 @@ impl Detector {
             hub_distance_m: hints.hub_distance_m,
         };
         let t = Instant::now();
-        let heatmap = match (&mut self.hubnet, self.config.mode) {
+        let still_models = (still || self.config.default.still_models_for_frames) && self.hubnet_still.is_some();
+        let net = if still_models { &mut self.hubnet_still } else { &mut self.hubnet };
+        let heatmap = match (net, self.config.mode) {
             (Some(net), Mode::Default) => Some(net.run(small)?),
             _ => None,
         };
         let heat_us = us_since(t);
         let expected = robust::Expected { heat: heatmap.as_ref(), ..expected };
+        let still_params = still_models.then(|| params::DefaultParams { ranker: self.config.default.still_ranker.clone(), ..self.config.default.clone() });
         let mut found = match self.config.mode {
             Mode::Thesis => thesis::run(&self.config.thesis, small, &mut self.scratch, &hints_small)?,
-            Mode::Default => robust::run(&self.config.default, small, &mut self.scratch, &hints_small, expected)?,
+            Mode::Default => robust::run(still_params.as_ref().unwrap_or(&self.config.default), small, &mut self.scratch, &hints_small, expected)?,
         };
         // The heatmap is part of recognising the hub among the lines' candidates.
         found.geometry_us += heat_us;

@@ -704,6 +704,19 @@ pub struct DefaultParams {
     pub hub_yaw_max_distance_m: f64,
     /// How the hub is picked among the candidates.
     pub ranker: RankerParams,
+    /// Still photos (`hubtrack detect`, the photos of `hubtrack eval`) use their own learned
+    /// heatmap (`models/hubnet-still.onnx`) and `still_ranker`, both trained with photo-like
+    /// rendered views too (drone photos' viewpoints: from above, among wind farms, the hub
+    /// anywhere; see the README, "Photo-like views"); video frames keep `models/hubnet.onnx`
+    /// and `ranker`. Used everywhere, the photo-trained pair took the development photos from
+    /// 56.6 to 60.4 % hits and rendered frames (seed 2026) from 87.8 to 90.5 %, but `fly`
+    /// seeds 161–560 from 212 to 202 of the 221 flown (4 in, 14 out).
+    pub still_models: bool,
+    /// Video frames use the still photos' heatmap and `still_ranker` too (off): how session 27
+    /// measured them in flight, and how `scripts/train-ranker.sh still` fits `still_ranker`.
+    pub still_models_for_frames: bool,
+    /// The candidate ranking of still photos with `still_models` (see `ranker`).
+    pub still_ranker: RankerParams,
 }
 
 /// How the default pipeline picks the hub among its candidates.
@@ -737,11 +750,10 @@ pub struct RankerParams {
     /// 6.8 % false positives, −0.5 76.3 % with 4.0 %, −0.25 75.8 % with 2.5 %, 0 75.2 % with
     /// 1.5 %. Held out (`hubtrack eval`, seeds 2026 / 77 / 500): −1 83.7 / 78.8 / 78.5 % hits
     /// with 4.2 / 12.5 / 2.1 % false positives; −0.5 81.0 / 77.7 / 76.5 % with 0 / 2.1 / 0.
-    /// Before the heatmap (session 19) the default was −1. Session 27 (the heatmap and ranker
-    /// with photo-like views, training frames of seeds 11–18 and photo-like 11–14): −0.5 76.5 %
-    /// with 6.3 % false positives, −0.25 75.6 % with 4.1 %, −0.1 75.0 % with 3.3 %, 0 74.5 %
-    /// with 2.9 %: −0.1, the first under 4 % (held out, seeds 2026 / 77 / 500: 90.5 / 89.0 /
-    /// 87.7 % hits with 8.3 / 4.2 / 4.2 % false positives).
+    /// Before the heatmap (session 19) the default was −1. For `still_ranker` (session 27):
+    /// −0.1, chosen the same way (training frames of seeds 11–18 and photo-like views 11–14:
+    /// −0.5 76.5 % hits with 6.3 % false positives, −0.25 75.6 % with 4.1 %, −0.1 75.0 % with
+    /// 3.3 %, 0 74.5 % with 2.9 %; the first under 4 %).
     pub min_score: f64,
     /// Log-odds per unit of each feature (`hubtrack train-ranker` prints a fitted section).
     pub weights: FeatureWeights,
@@ -851,17 +863,54 @@ impl FeatureWeights {
 
 impl Default for RankerParams {
     fn default() -> Self {
-        RankerParams { ranking: Ranking::Learned, min_score: -0.1, weights: FeatureWeights::default() }
+        RankerParams { ranking: Ranking::Learned, min_score: -0.5, weights: FeatureWeights::default() }
     }
 }
 
 impl Default for FeatureWeights {
-    /// Fitted by `scripts/train-ranker.sh` (see the README, "Learned ranking", "Learned hub
-    /// heatmap" and "Photo-like views") in session 27, with the shipped `models/hubnet.onnx`
-    /// and photo-like views among the training frames: every training frame also counts once
-    /// with `hub_heat` zeroed, so the ranker does not depend on a network that has seen renders
-    /// only.
+    /// Fitted by `scripts/train-ranker.sh -- --also-without hub_heat` (see the README,
+    /// "Learned ranking" and "Learned hub heatmap") in session 24, with the shipped
+    /// `models/hubnet.onnx`: every training frame also counts once with `hub_heat` zeroed, so
+    /// the ranker does not depend on a network that has seen renders only.
     fn default() -> Self {
+        FeatureWeights {
+            bias: -0.501,
+            two_blades: -1.966,
+            three_blades: -0.480,
+            extra_blades: -0.113,
+            tower: 0.062,
+            tower_lines: 0.361,
+            hidden_blade_down: 0.640,
+            geometry_ok: 0.447,
+            paired: 2.998,
+            spinner: 0.741,
+            spinner_radius: 0.322,
+            spinner_size_match: 1.614,
+            passes_through: -0.446,
+            near_prediction: 0.345,
+            support: 0.434,
+            weakest_blade: 0.916,
+            strongest_blade: -0.298,
+            separation_error: -1.734,
+            rejected_lines: 1.020,
+            rule_score: -0.347,
+            clutter: -2.942,
+            banded_blades: -1.906,
+            tower_top_below: 0.397,
+            image_lines: -0.173,
+            spinner_coverage: 4.675,
+            spinner_axes_offset: -1.136,
+            hub_heat: 2.110,
+        }
+    }
+}
+
+impl FeatureWeights {
+    /// The still photos' weights (`still_ranker`): fitted by `scripts/train-ranker.sh` in
+    /// session 27 with the still heatmap (`models/hubnet-still.onnx`) and photo-like views
+    /// among the training frames (see the README, "Photo-like views"); every training frame
+    /// also counts once with `hub_heat` zeroed.
+    pub fn still() -> Self {
         FeatureWeights {
             bias: -0.200,
             two_blades: -2.126,
@@ -895,10 +944,12 @@ impl Default for FeatureWeights {
 }
 
 impl RankerParams {
-    fn validate(&self) -> Result<(), ParamError> {
-        let c = Check::new("detect.default.ranker");
+    /// Checks the values; errors name the keys under `section` (e.g. `detect.default.ranker`).
+    fn validate(&self, section: &str) -> Result<(), ParamError> {
+        let c = Check::new(section);
         c.closed("min_score", self.min_score, -50.0, 50.0)?;
-        let w = Check::new("detect.default.ranker.weights");
+        let weights = format!("{section}.weights");
+        let w = Check::new(&weights);
         for (name, v) in crate::ranker::FEATURE_NAMES.iter().zip(self.weights.to_array()) {
             w.closed(name, v, -100.0, 100.0)?;
         }
@@ -1058,6 +1109,9 @@ impl Default for DefaultParams {
             hub_yaw_min_distance_m: 3.5,
             hub_yaw_max_distance_m: 45.0,
             ranker: RankerParams::default(),
+            still_models: true,
+            still_models_for_frames: false,
+            still_ranker: RankerParams { ranking: Ranking::Learned, min_score: -0.1, weights: FeatureWeights::still() },
         }
     }
 }
@@ -1265,7 +1319,8 @@ impl DefaultParams {
         c.closed("occluded_offset_frac", self.occluded_offset_frac, 0.0, 1.0)?;
         c.closed("occluded_bend_deg", self.occluded_bend_deg, 0.0, 45.0)?;
         c.closed("occluded_bent_max_tilt_deg", self.occluded_bent_max_tilt_deg, 0.0, 90.0)?;
-        self.ranker.validate()
+        self.ranker.validate("detect.default.ranker")?;
+        self.still_ranker.validate("detect.default.still_ranker")
     }
 }
 

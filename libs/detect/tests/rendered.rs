@@ -148,19 +148,23 @@ fn a_band_along_a_tilted_blade_is_no_tower() {
 /// with `still_finer_level` off it is exactly the frame path, and a detection of the frame path
 /// is never lost or made less confident. (Its gain is on cluttered real photos, measured by
 /// `hubtrack eval`; on these clean renders both levels see the turbine to ~120 m and neither at
-/// 160 m.)
+/// 160 m.) The still photos' own heatmap and ranking (`still_models`) are off here, and on they
+/// find the same hubs.
 #[test]
 fn stills_are_also_detected_one_level_finer() {
     let cam = Camera::gopro_hero3();
     let (mut r, mut buf) = gopro_renderer();
     let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+    let mut levels_only = DetectConfig::default();
+    levels_only.default.still_models = false;
     for d in [30.0, 120.0, 160.0] {
         let truth = r.render(&sunlit_sea(), &CameraPose::front(d), &mut buf).unwrap();
         let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
-        let mut det = Detector::new(DetectConfig::default()).unwrap();
+        let mut det = Detector::new(levels_only.clone()).unwrap();
         let frame = det.detect(&view, &hints).unwrap().detection;
         let still = det.detect_still(&view, &hints).unwrap().detection;
-        let mut off = DetectConfig::default();
+        let with_models = Detector::new(DetectConfig::default()).unwrap().detect_still(&view, &hints).unwrap().detection;
+        let mut off = levels_only.clone();
         off.default.still_finer_level = false;
         let same = Detector::new(off).unwrap().detect_still(&view, &hints).unwrap().detection;
         assert_eq!((same.detected, same.hub_px, same.confidence), (frame.detected, frame.hub_px, frame.confidence), "{d} m");
@@ -170,6 +174,7 @@ fn stills_are_also_detected_one_level_finer() {
         let hub = truth.hub_px.unwrap();
         let on_hub = |x: &Detection| x.detected && (x.hub_px[0] - hub[0]).hypot(x.hub_px[1] - hub[1]) <= 0.03 * 1080.0;
         assert_eq!(on_hub(&still), on_hub(&frame), "{d} m: the clean render is seen alike at both levels");
+        assert_eq!(on_hub(&with_models), on_hub(&still), "{d} m: the still models see it alike");
     }
 }
 
