@@ -502,6 +502,7 @@ def export(params, path, layers=LAYERS, size=(H, W), grid=(GH, GW), name="hubnet
 
 
 def main():
+    global YAW_WINDOW_M, YAW_DISTANCE_RANGE_M
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("data", nargs="+", help="dataset folders (hubtrack dataset); the last is held out")
     ap.add_argument("--out", help="ONNX file to write (required unless --evaluate)")
@@ -514,6 +515,11 @@ def main():
     ap.add_argument("--lr", type=float, default=2e-3)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--evaluate", metavar="MODEL", help="score this ONNX file on all the folders, each on its own, instead of training")
+    ap.add_argument("--yaw-window-m", type=float, default=YAW_WINDOW_M,
+                    help="yaw model: the crop's width in metres at the hub's distance (keep in step with heat.rs: "
+                         "YAW_WINDOW_M, YAW_CLOSE_WINDOW_M for the close-range model)")
+    ap.add_argument("--yaw-range-m", type=float, nargs=2, default=YAW_DISTANCE_RANGE_M, metavar=("NEAR", "FAR"),
+                    help="yaw model: train and score on frames whose hub is this far (metres)")
     ap.add_argument("--held-out", action="append", default=[], metavar="DIR",
                     help="frame and crop models: a further held-out folder, scored on its own beside the last one (repeatable)")
     a = ap.parse_args()
@@ -524,6 +530,7 @@ def main():
     import optax
 
     if a.model == "yaw":
+        YAW_WINDOW_M, YAW_DISTANCE_RANGE_M = a.yaw_window_m, tuple(a.yaw_range_m)
         return train_yaw(a)
     crop_model = a.model == "crop"
     layers = CROP_LAYERS if crop_model else LAYERS

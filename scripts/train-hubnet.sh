@@ -40,14 +40,25 @@
 # (frames within 3.5–46 m; 24 epochs of 20,000 crops). About 25 minutes of rendering and 10–13
 # of training on 2 cores (session 26: held out, mean error 4.0° at 3.5–8 m, 3.4° at 8–15 m,
 # 2.3–2.6° at 15–46 m).
+#
+# The close-range yaw network (`detect.default.hub_yaw_close`, libs/detect/models/hubyaw-close.onnx):
+#   scripts/train-hubnet.sh yaw-close [OUT.onnx] [-- train-hubnet.py options]
+# The same network and window trained on the frames within 3.5–14 m only: the yaw network's
+# seeds 111 and 113 plus seeds 114 and 115 with 4,000 hover views each (`--close-in`, 4–8 m,
+# where the approach ends) and 1,000 negatives; 112 held out (24 epochs of 20,000 crops). About
+# 5 minutes of rendering and 11 of training on 2 cores (session 28: held out, mean error 3.3° at
+# 3.5–8 m and 8–15 m, where the whole-range model gets 4.0° and 3.4°; a 12 m window 3.9°, a
+# 16 m window 5.8° after 8 epochs: close in, the view is cropped by the frame and the spinner
+# shrinks).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 model=frame
-if [ "${1:-}" = "crop" ] || [ "${1:-}" = "yaw" ] || [ "${1:-}" = "still" ]; then model=$1; shift; fi
+case "${1:-}" in crop | yaw | yaw-close | still) model=$1; shift ;; esac
 default_out=libs/detect/models/hubnet.onnx
 [ "$model" = still ] && default_out=libs/detect/models/hubnet-still.onnx
 [ "$model" = crop ] && default_out=libs/detect/models/hubcrop.onnx
 [ "$model" = yaw ] && default_out=libs/detect/models/hubyaw.onnx
+[ "$model" = yaw-close ] && default_out=libs/detect/models/hubyaw-close.onnx
 out=${1:-$default_out}
 shift || true
 [ "${1:-}" = "--" ] && shift
@@ -77,6 +88,18 @@ if [ "$model" = yaw ]; then
   done
   exec "$venv/bin/python" scripts/train-hubnet.py --model yaw --epochs 24 --out "$out" "$@" \
     "$data/s111" "$data/s113" "$data/s112"
+fi
+if [ "$model" = yaw-close ]; then
+  data=target/hubyaw-data
+  mkdir -p "$data"
+  for seed in 111 113 112; do
+    render "$data/s$seed" --working --seed "$seed" --per-class 800 --close-in 1200 --flights 15
+  done
+  for seed in 114 115; do
+    render "$data/c$seed" --working --seed "$seed" --per-class 0 --close-in 4000 --flights 0
+  done
+  exec "$venv/bin/python" scripts/train-hubnet.py --model yaw --yaw-window-m 8 --yaw-range-m 3.5 14 --epochs 24 \
+    --out "$out" "$@" "$data/s111" "$data/s113" "$data/c114" "$data/c115" "$data/s112"
 fi
 if [ "$model" = crop ]; then
   data=target/hubcrop-data

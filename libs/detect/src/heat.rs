@@ -153,6 +153,9 @@ pub const YAW_SIDE: i32 = 64;
 /// the nacelle's sides and the tower top all fit (the nacelle reaches ~1.7 m beside the hub at
 /// 10° of yaw). Fixed by training (`YAW_WINDOW_M` in train-hubnet.py).
 pub const YAW_WINDOW_M: f64 = 8.0;
+/// Width of the close-range yaw network's view at the hub's distance, metres (fixed by its
+/// training, `train-hubnet.py --yaw-window-m`; see `detect.default.hub_yaw_close`).
+pub const YAW_CLOSE_WINDOW_M: f64 = 8.0;
 /// The yaw network's bins are centred from −`YAW_MAX_DEG` to +`YAW_MAX_DEG`, degrees ...
 pub const YAW_MAX_DEG: f64 = 40.0;
 /// ... evenly, this many.
@@ -160,6 +163,9 @@ pub const YAW_BINS: usize = 33;
 /// The yaw model the build ships (`scripts/train-hubnet.sh yaw`; ONNX, input `1×1×64×64` grey in
 /// [0, 1], output `1×33×1×1` logits).
 const YAW_MODEL: &[u8] = include_bytes!("../models/hubyaw.onnx");
+/// The close-range yaw model (`scripts/train-hubnet.sh yaw-close`: the same network trained on
+/// views from 3.5–14 m only, with a `YAW_CLOSE_WINDOW_M` window).
+const YAW_CLOSE_MODEL: &[u8] = include_bytes!("../models/hubyaw-close.onnx");
 
 /// The relative yaw the yaw network reads.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -178,20 +184,27 @@ pub struct YawReading {
 /// pointing down hides the tower. Trained on the renderer (`train-hubnet.py --model yaw`).
 pub struct HubYawNet {
     net: dnn::Net,
+    /// Width of its view at the hub's distance, metres.
+    window_m: f64,
     crop: Mat,
     blob: Mat,
 }
 
 impl HubYawNet {
-    /// Load the shipped model.
+    /// Load the shipped model (the whole approach, 3.5–46 m).
     pub fn new() -> Result<HubYawNet, DetectError> {
-        Ok(HubYawNet { net: load(YAW_MODEL)?, crop: Mat::default(), blob: Mat::default() })
+        Ok(HubYawNet { net: load(YAW_MODEL)?, window_m: YAW_WINDOW_M, crop: Mat::default(), blob: Mat::default() })
+    }
+
+    /// Load the shipped close-range model (3.5–14 m, where the approach ends).
+    pub fn close_range() -> Result<HubYawNet, DetectError> {
+        Ok(HubYawNet { net: load(YAW_CLOSE_MODEL)?, window_m: YAW_CLOSE_WINDOW_M, crop: Mat::default(), blob: Mat::default() })
     }
 
     /// The yaw around `hub` (working px) of the working level `working` (grey), seen from
     /// `distance_m` with the focal length `focal_px` (working px).
     pub fn run(&mut self, working: &Mat, hub: [f64; 2], distance_m: f64, focal_px: f64) -> Result<YawReading, DetectError> {
-        let side = focal_px * YAW_WINDOW_M / distance_m;
+        let side = focal_px * self.window_m / distance_m;
         warp_crop(working, hub, side, YAW_SIDE, &mut self.crop)?;
         dnn::blob_from_image_to(&self.crop, &mut self.blob, 1.0 / 255.0, Size::new(YAW_SIDE, YAW_SIDE), opencv::core::Scalar::default(), false, false, opencv::core::CV_32F)?;
         self.net.set_input(&self.blob, "", 1.0, opencv::core::Scalar::default())?;

@@ -250,6 +250,7 @@ fn place_hub_by_crop(p: &params::DefaultParams, net: &mut heat::HubCropNet, smal
 fn read_yaw(
     config: &DetectConfig,
     net: &mut heat::HubYawNet,
+    close_net: Option<&mut heat::HubYawNet>,
     small: &Mat,
     found: &Found,
     hub_distance_m: Option<f64>,
@@ -262,6 +263,11 @@ fn read_yaw(
     let spinner_r_m = config.camera.spinner_diameter_m / 2.0;
     let distance = hub_distance_m.or_else(|| found.circle.filter(|c| c[2] > 0.0).map(|c| spinner_r_m * (1.0 + (focal_small / c[2]).powi(2)).sqrt()));
     let Some(d) = distance.filter(|d| (p.hub_yaw_min_distance_m..=p.hub_yaw_max_distance_m).contains(d)) else { return Ok(None) };
+    // Close in, the close-range model when there is one (see `hub_yaw_close`).
+    let net = match close_net {
+        Some(close) if d <= p.hub_yaw_close_max_distance_m => close,
+        _ => net,
+    };
     let r = net.run(small, found.hub, d, focal_small)?;
     log::trace!("yaw network at {d:.1} m: {:+.1} ± {:.1} deg", r.yaw_deg, r.std_deg);
     Ok(Some(r))
@@ -280,6 +286,8 @@ pub struct Detector {
     hubcrop: Option<heat::HubCropNet>,
     /// The learned yaw network (`default.hub_yaw`, default mode only).
     hubyaw: Option<heat::HubYawNet>,
+    /// Its close-range model (`default.hub_yaw_close`).
+    hubyaw_close: Option<heat::HubYawNet>,
 }
 
 impl Detector {
@@ -292,7 +300,10 @@ impl Detector {
             .transpose()?;
         let hubcrop = (config.mode == Mode::Default && config.default.hub_crop).then(heat::HubCropNet::new).transpose()?;
         let hubyaw = (config.mode == Mode::Default && config.default.hub_yaw).then(heat::HubYawNet::new).transpose()?;
-        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet, hubnet_still, hubcrop, hubyaw })
+        let hubyaw_close = (config.mode == Mode::Default && config.default.hub_yaw && config.default.hub_yaw_close)
+            .then(heat::HubYawNet::close_range)
+            .transpose()?;
+        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet, hubnet_still, hubcrop, hubyaw, hubyaw_close })
     }
 
     /// The configuration in use.
@@ -405,7 +416,7 @@ impl Detector {
         let yaw_reading = match self.hubyaw.as_mut().filter(|_| self.config.mode == Mode::Default) {
             Some(net) => {
                 let t = Instant::now();
-                let r = read_yaw(&self.config, net, small, &found, hints.hub_distance_m, focal_small)?;
+                let r = read_yaw(&self.config, net, self.hubyaw_close.as_mut(), small, &found, hints.hub_distance_m, focal_small)?;
                 found.geometry_us += us_since(t);
                 r
             }

@@ -702,6 +702,17 @@ pub struct DefaultParams {
     /// [0, 100]. At 30 m (the first model, trained to 32 m) `fly` seeds 161–360 gave 190 of
     /// 200; at 45 with the model trained to 46 m, 191.
     pub hub_yaw_max_distance_m: f64,
+    /// Close in, read the yaw with a second model trained on views from 3.5–14 m only
+    /// (`models/hubyaw-close.onnx`, `scripts/train-hubnet.sh yaw-close`): where the approach
+    /// ends, the whole-range model's error was largest (held out, mean 4.0° at 3.5–8 m against
+    /// 2.3–2.6° beyond 15 m; the close model 3.3°). Off by default (session 28): as a veto only
+    /// it changed no outcome of 57 `fly` seeds, and as the yaw's fallback close in
+    /// (`track.yaw.net_fallback_after_s` 1 s, `net_fallback_min_deg` 3°) it saved 13 of session
+    /// 26's 19 failures but ended 15 good flights 5–10° off (seeds 161–560, stopped at 179: 164
+    /// against 172): its error is still a bias per scene, up to 13° at 5 m (seed 363) ...
+    pub hub_yaw_close: bool,
+    /// ... up to this distance, metres, range [0, 14] (its training range).
+    pub hub_yaw_close_max_distance_m: f64,
     /// How the hub is picked among the candidates.
     pub ranker: RankerParams,
     /// Still photos (`hubtrack detect`, the photos of `hubtrack eval`) use their own learned
@@ -1108,6 +1119,8 @@ impl Default for DefaultParams {
             hub_yaw: true,
             hub_yaw_min_distance_m: 3.5,
             hub_yaw_max_distance_m: 45.0,
+            hub_yaw_close: false,
+            hub_yaw_close_max_distance_m: 12.0,
             ranker: RankerParams::default(),
             still_models: true,
             still_models_for_frames: false,
@@ -1295,6 +1308,7 @@ impl DefaultParams {
         c.closed("hub_crop_min_shift_frac", self.hub_crop_min_shift_frac, 0.0, 0.15)?;
         c.closed("hub_yaw_min_distance_m", self.hub_yaw_min_distance_m, 0.0, 100.0)?;
         c.closed("hub_yaw_max_distance_m", self.hub_yaw_max_distance_m, 0.0, 100.0)?;
+        c.closed("hub_yaw_close_max_distance_m", self.hub_yaw_close_max_distance_m, 0.0, 14.0)?;
         c.closed("spinner_max_convergence_radii", self.spinner_max_convergence_radii, 0.0, 100.0)?;
         c.closed("spinner_convergence_tol_px", self.spinner_convergence_tol_px, 0.0, 100.0)?;
         c.closed("spinner_min_kept_support", self.spinner_min_kept_support, 0.0, 1.0)?;

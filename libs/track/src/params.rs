@@ -497,10 +497,20 @@ pub struct YawConfig {
     /// was right: on seeds 161–207 and 261–304 (session 27) 82 of 91 against 87 of 91 off (3
     /// in, 7 out, the new failures 5.6–13° off). Fusing every reading once the cues were gone
     /// (no `net_fallback_min_deg`) saved 13 of the 19 and lost 4 of 18 good endings of 161–180.
+    /// Session 28: with the close-range model (`detect.default.hub_yaw_close`) and 3°, 164
+    /// against 172 of the first 179 seeds of 161–560 (7 in, 15 out, up to 13° off: that model's
+    /// bias at 5 m); with readings only from 8 m out (`net_fallback_min_distance_m`) and 6°,
+    /// 207 against 208 of 216 (6 in, 7 out; |final yaw| p90 3.44° against 3.75°). Even, so off.
     pub net_fallback_after_s: f64,
     /// See `net_fallback_after_s`, degrees: a filtered network reading nearer the stale yaw
     /// leaves it alone (its error is a bias per scene, ~4° at 3.5–8 m). Range [0, 90].
     pub net_fallback_min_deg: f64,
+    /// See `net_fallback_after_s`, metres: the fallback uses only network readings taken with
+    /// the filtered distance at least this (0 = all, as session 27 flew it). Held out, the
+    /// network's mean error is 4.0° at 3.5–8 m against 3.4° at 8–15 m and 2.3–2.6° beyond
+    /// 15 m; readings from farther out are carried in by the ego-motion prediction, their
+    /// spread growing with time. Range [0, 100].
+    pub net_fallback_min_distance_m: f64,
     /// Fewest detected blades for a blade-skew estimate (2 fits exactly, 3 or more also checks
     /// the fit).
     pub min_blades: u32,
@@ -587,6 +597,7 @@ impl Default for YawConfig {
             net_fuse: false,
             net_fallback_after_s: 0.0,
             net_fallback_min_deg: 6.0,
+            net_fallback_min_distance_m: 8.0,
             min_blades: 3,
             blade_fit_chi2: 10.83,
             max_abs_deg: 85.0,
@@ -706,6 +717,7 @@ impl TrackConfig {
         c.open_closed("net_max_std_deg", y.net_max_std_deg, 0.0, 90.0)?;
         c.closed("net_fallback_after_s", y.net_fallback_after_s, 0.0, MAX_TIME_S)?;
         c.closed("net_fallback_min_deg", y.net_fallback_min_deg, 0.0, 90.0)?;
+        c.closed("net_fallback_min_distance_m", y.net_fallback_min_distance_m, 0.0, MAX_SIZE_M)?;
         c.closed("nacelle_min_abs_deg", y.nacelle_min_abs_deg, 0.0, 90.0)?;
         c.closed("nacelle_gate_px", y.nacelle_gate_px, 0.0, 1e4)?;
         c.closed("nacelle_front_m", y.nacelle_front_m, 0.0, 50.0)?;

@@ -611,7 +611,12 @@ impl Core {
             show(yaw_prior)
         );
         let cues = [gap, nacelle, blade_signed].into_iter().flatten().collect::<Vec<_>>();
-        if let Some(n) = net {
+        // The readings the fallback trusts: from `net_fallback_min_distance_m` out (closer, the
+        // network's error grows past the approach's yaw tolerance).
+        let net_trusted = net.filter(|_| {
+            yc.net_fallback_min_distance_m <= 0.0 || self.distance.estimate().is_some_and(|d| d.value >= yc.net_fallback_min_distance_m)
+        });
+        if let Some(n) = net_trusted {
             self.net_yaw.update(n, yc.gate_chi2, yc.jump_accept_count, t);
         }
         let net_fused = net.filter(|_| yc.net_fuse);
@@ -623,13 +628,16 @@ impl Core {
                 self.yaw_cue_ns = Some(t);
                 self.net_fallback = false;
             }
-        } else if let Some(n) = net.filter(|_| yc.net_fallback_after_s > 0.0) {
+        } else if yc.net_fallback_after_s > 0.0 && net.is_some() {
             // No geometric cue for `net_fallback_after_s` (since the first frame, if never):
             // once the network's filtered reading stands `net_fallback_min_deg` from the stale
-            // yaw, it restarts the yaw and carries it, every reading fused, until a cue returns.
+            // yaw, it restarts the yaw and carries it, every trusted reading fused, until a cue
+            // returns.
             let cue_age_s = self.yaw_cue_ns.or(self.first_ns).map_or(0.0, |c| dt_s(t, c));
             if self.net_fallback {
-                self.yaw.update(n, yc.gate_chi2, yc.jump_accept_count, t);
+                if let Some(n) = net_trusted {
+                    self.yaw.update(n, yc.gate_chi2, yc.jump_accept_count, t);
+                }
             } else if let Some(reference) = self.net_yaw.estimate().filter(|_| cue_age_s >= yc.net_fallback_after_s) {
                 let far = self.yaw.estimate().is_none_or(|y| (reference.value - y.value).abs() >= yc.net_fallback_min_deg.to_radians());
                 if far {

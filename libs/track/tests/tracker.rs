@@ -891,6 +891,8 @@ fn the_yaw_network_carries_the_yaw_when_the_tower_is_gone() {
     let run = |fallback_s: f64| {
         let mut c = cfg.clone();
         c.yaw.net_fallback_after_s = fallback_s;
+        // Every reading, even at 6 m (see the next test).
+        c.yaw.net_fallback_min_distance_m = 0.0;
         c.yaw.use_nacelle = false;
         // 1.5 s of a gap that reads 0° (and no network), then 3.5 s of the network alone.
         track_turbine(&c, 29, 150, d_hub, psi_deg, |k, d, rng| {
@@ -912,6 +914,7 @@ fn the_yaw_network_carries_the_yaw_when_the_tower_is_gone() {
     let mut c = cfg.clone();
     c.yaw.use_nacelle = false;
     c.yaw.net_fallback_after_s = 1.0;
+    c.yaw.net_fallback_min_distance_m = 0.0;
     let kept = track_turbine(&c, 29, 150, d_hub, psi_deg, |k, d, rng| {
         d.blade_count = 0;
         if k >= 45 {
@@ -922,6 +925,36 @@ fn the_yaw_network_carries_the_yaw_when_the_tower_is_gone() {
         }
     });
     assert!((kept.yaw_deg - psi_deg).abs() < 1.5, "a near reading leaves the yaw: {}", kept.yaw_deg);
+}
+
+/// The fallback takes only the network readings from `yaw.net_fallback_min_distance_m` out:
+/// the same readings at 6 m restart a stale yaw when the limit is 5 m and leave it at 8 m
+/// (closer in the network's error grows past the yaw tolerance).
+#[test]
+fn the_yaw_fallback_trusts_the_network_only_from_its_minimum_distance() {
+    let cfg = pinhole_config();
+    let (d_hub, psi_deg) = (6.0, -12.0);
+    let run = |min_distance_m: f64| {
+        let mut c = cfg.clone();
+        c.yaw.use_nacelle = false;
+        c.yaw.net_fallback_after_s = 1.0;
+        c.yaw.net_fallback_min_distance_m = min_distance_m;
+        // 1.5 s of a gap that reads 0°, then 3.5 s of the network alone.
+        track_turbine(&c, 31, 150, d_hub, psi_deg, |k, d, rng| {
+            d.blade_count = 0;
+            if k < 45 {
+                d.hub_tower_gap_px = rng.normal();
+            } else {
+                d.tower_found = false;
+                d.yaw_net_valid = true;
+                d.yaw_net_deg = psi_deg + 2.0 * rng.normal();
+                d.yaw_net_std_deg = 3.0;
+            }
+        })
+    };
+    let (trusted, ignored) = (run(5.0), run(8.0));
+    assert!((trusted.yaw_deg - psi_deg).abs() < 5.0, "readings from beyond the limit are used: {} ± {}", trusted.yaw_deg, trusted.yaw_std_deg);
+    assert!(ignored.yaw_deg.abs() < 3.0, "readings from inside it are not: {} ± {}", ignored.yaw_deg, ignored.yaw_std_deg);
 }
 
 /// A nacelle end measured from a hub the detector placed by blade lines alone (no spinner
