@@ -879,6 +879,27 @@ fn the_yaw_network_vetoes_gaps_from_a_blade_hiding_the_tower() {
     assert!(without.yaw_valid && without.yaw_deg > psi_deg + 5.0, "the gaps alone: {}", without.yaw_deg);
 }
 
+/// The tower gone close in (6 m, true yaw −12°): 1.5 s of a hub–tower gap that reads 0° (and no
+/// network), then 3.5 s of the network alone reading the truth, with the yaw fallback after
+/// `fallback_s` (0 = off) trusting readings from `min_distance_m` out.
+fn tower_gone_at_6_m(fallback_s: f64, min_distance_m: f64) -> TrackState {
+    let mut c = pinhole_config();
+    c.yaw.net_fallback_after_s = fallback_s;
+    c.yaw.net_fallback_min_distance_m = min_distance_m;
+    c.yaw.use_nacelle = false;
+    track_turbine(&c, 29, 150, 6.0, -12.0, |k, d, rng| {
+        d.blade_count = 0;
+        if k < 45 {
+            d.hub_tower_gap_px = rng.normal();
+        } else {
+            d.tower_found = false;
+            d.yaw_net_valid = true;
+            d.yaw_net_deg = -12.0 + 2.0 * rng.normal();
+            d.yaw_net_std_deg = 3.0;
+        }
+    })
+}
+
 /// Close in, the geometric yaw cues vanish (the spinner hides the tower top, a blade the
 /// tower). With `yaw.net_fallback_after_s` (off by default: flights were worse), after that
 /// long without one a filtered network reading far from the stale yaw (`net_fallback_min_deg`)
@@ -886,36 +907,17 @@ fn the_yaw_network_vetoes_gaps_from_a_blade_hiding_the_tower() {
 /// bias per scene).
 #[test]
 fn the_yaw_network_carries_the_yaw_when_the_tower_is_gone() {
-    let cfg = pinhole_config();
-    let (d_hub, psi_deg) = (6.0, -12.0);
-    let run = |fallback_s: f64| {
-        let mut c = cfg.clone();
-        c.yaw.net_fallback_after_s = fallback_s;
-        // Every reading, even at 6 m (see the next test).
-        c.yaw.net_fallback_min_distance_m = 0.0;
-        c.yaw.use_nacelle = false;
-        // 1.5 s of a gap that reads 0° (and no network), then 3.5 s of the network alone.
-        track_turbine(&c, 29, 150, d_hub, psi_deg, |k, d, rng| {
-            d.blade_count = 0;
-            if k < 45 {
-                d.hub_tower_gap_px = rng.normal();
-            } else {
-                d.tower_found = false;
-                d.yaw_net_valid = true;
-                d.yaw_net_deg = psi_deg + 2.0 * rng.normal();
-                d.yaw_net_std_deg = 3.0;
-            }
-        })
-    };
-    let (stale, carried) = (run(0.0), run(1.0));
+    let psi_deg = -12.0;
+    // Every reading, even at 6 m (see the next test).
+    let (stale, carried) = (tower_gone_at_6_m(0.0, 0.0), tower_gone_at_6_m(1.0, 0.0));
     assert!(!stale.yaw_valid && stale.yaw_deg.abs() < 3.0, "without the fallback the wrong yaw goes stale ({} ± {})", stale.yaw_deg, stale.yaw_std_deg);
     assert!((carried.yaw_deg - psi_deg).abs() < 5.0, "with it the network's reading: {} ± {}", carried.yaw_deg, carried.yaw_std_deg);
     // A network 4° off a right stale yaw leaves it.
-    let mut c = cfg.clone();
+    let mut c = pinhole_config();
     c.yaw.use_nacelle = false;
     c.yaw.net_fallback_after_s = 1.0;
     c.yaw.net_fallback_min_distance_m = 0.0;
-    let kept = track_turbine(&c, 29, 150, d_hub, psi_deg, |k, d, rng| {
+    let kept = track_turbine(&c, 29, 150, 6.0, psi_deg, |k, d, rng| {
         d.blade_count = 0;
         if k >= 45 {
             d.tower_found = false;
@@ -932,28 +934,8 @@ fn the_yaw_network_carries_the_yaw_when_the_tower_is_gone() {
 /// (closer in the network's error grows past the yaw tolerance).
 #[test]
 fn the_yaw_fallback_trusts_the_network_only_from_its_minimum_distance() {
-    let cfg = pinhole_config();
-    let (d_hub, psi_deg) = (6.0, -12.0);
-    let run = |min_distance_m: f64| {
-        let mut c = cfg.clone();
-        c.yaw.use_nacelle = false;
-        c.yaw.net_fallback_after_s = 1.0;
-        c.yaw.net_fallback_min_distance_m = min_distance_m;
-        // 1.5 s of a gap that reads 0°, then 3.5 s of the network alone.
-        track_turbine(&c, 31, 150, d_hub, psi_deg, |k, d, rng| {
-            d.blade_count = 0;
-            if k < 45 {
-                d.hub_tower_gap_px = rng.normal();
-            } else {
-                d.tower_found = false;
-                d.yaw_net_valid = true;
-                d.yaw_net_deg = psi_deg + 2.0 * rng.normal();
-                d.yaw_net_std_deg = 3.0;
-            }
-        })
-    };
-    let (trusted, ignored) = (run(5.0), run(8.0));
-    assert!((trusted.yaw_deg - psi_deg).abs() < 5.0, "readings from beyond the limit are used: {} ± {}", trusted.yaw_deg, trusted.yaw_std_deg);
+    let (trusted, ignored) = (tower_gone_at_6_m(1.0, 5.0), tower_gone_at_6_m(1.0, 8.0));
+    assert!((trusted.yaw_deg + 12.0).abs() < 5.0, "readings from beyond the limit are used: {} ± {}", trusted.yaw_deg, trusted.yaw_std_deg);
     assert!(ignored.yaw_deg.abs() < 3.0, "readings from inside it are not: {} ± {}", ignored.yaw_deg, ignored.yaw_std_deg);
 }
 
