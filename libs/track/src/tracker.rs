@@ -656,7 +656,9 @@ impl Core {
             (value > 0.0).then(|| Estimate { value, std: td.std.hypot(offset * psi.sin() * sig) })
         });
         if let Some(m) = fuse(&[tower_hub, spinner, parallax].into_iter().flatten().collect::<Vec<_>>()) {
-            self.distance.update(m, dc.gate_chi2, dc.jump_accept_count, t);
+            // No jumps close in (see `distance.jump_min_distance_m`): only gated updates.
+            let close = self.distance.estimate().is_some_and(|d| d.value < dc.jump_min_distance_m);
+            self.distance.update(m, dc.gate_chi2, if close { u32::MAX } else { dc.jump_accept_count }, t);
         }
     }
 

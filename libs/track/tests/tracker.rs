@@ -939,6 +939,31 @@ fn the_yaw_fallback_trusts_the_network_only_from_its_minimum_distance() {
     assert!(ignored.yaw_deg.abs() < 3.0, "readings from inside it are not: {} ± {}", ignored.yaw_deg, ignored.yaw_std_deg);
 }
 
+/// Close in, a tower band merged with the blade pointing down (1.55× the tower's width, no
+/// spinner circle in those frames; the spinner found in one frame of five) does not restart the
+/// distance as a jump (`distance.jump_min_distance_m`): in `fly` seeds 285 and 518 it read
+/// 1.4–2.7 m at 5 m and the vehicle backed away to 8 m.
+#[test]
+fn a_run_of_merged_tower_bands_close_in_does_not_restart_the_distance() {
+    let run = |jump_min_distance_m: f64| {
+        let mut c = pinhole_config();
+        c.distance.jump_min_distance_m = jump_min_distance_m;
+        track_turbine(&c, 37, 150, 5.0, 0.0, |k, d, _| {
+            if k >= 60 {
+                if k % 5 == 0 {
+                    d.tower_found = false;
+                } else {
+                    d.circle_found = false;
+                    d.tower_width_px *= 1.55;
+                }
+            }
+        })
+    };
+    let (jumped, kept) = (run(0.0), run(pinhole_config().distance.jump_min_distance_m));
+    assert!(jumped.distance_m < 4.0, "without the rule the merged bands take the distance: {}", jumped.distance_m);
+    assert!((kept.distance_m - 5.0).abs() < 0.5, "with it the spinner keeps it: {} ± {}", kept.distance_m, kept.distance_std_m);
+}
+
 /// A nacelle end measured from a hub the detector placed by blade lines alone (no spinner
 /// circle) is not used (`yaw.nacelle_needs_spinner`): such a hub may sit half a chord off, and
 /// the "end" found is then the spinner's own rim, as often on the wrong side as the right one.
