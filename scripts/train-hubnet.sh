@@ -32,6 +32,12 @@
 # crops). About 20 minutes of rendering and 10 of training on 2 cores. It only places the hub
 # (no ranker feature), so the ranker needs no refit.
 #
+# The still photos' crop network (`detect.default.still_models`, libs/detect/models/hubcrop-still.onnx):
+#   scripts/train-hubnet.sh crop-still [OUT.onnx] [-- train-hubnet.py options]
+# The crop network's data plus whole working levels of photo-like views, seeds 107 (2,500) and
+# 108 (3,000), each with a quarter as many negatives; 102 and 109 (800 photo-like views) held out
+# (40 epochs of 20,000 crops). About 5 minutes of rendering and 15 of training on 2 cores.
+#
 # The yaw network (`HubYawNet`, libs/detect/models/hubyaw.onnx):
 #   scripts/train-hubnet.sh yaw [OUT.onnx] [-- train-hubnet.py options]
 # Data: whole working levels with the relative yaw (`hubtrack dataset --working`) of seeds 111
@@ -53,10 +59,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 model=frame
-case "${1:-}" in crop | yaw | yaw-close | still) model=$1; shift ;; esac
+case "${1:-}" in crop | crop-still | yaw | yaw-close | still) model=$1; shift ;; esac
 default_out=libs/detect/models/hubnet.onnx
 [ "$model" = still ] && default_out=libs/detect/models/hubnet-still.onnx
 [ "$model" = crop ] && default_out=libs/detect/models/hubcrop.onnx
+[ "$model" = crop-still ] && default_out=libs/detect/models/hubcrop-still.onnx
 [ "$model" = yaw ] && default_out=libs/detect/models/hubyaw.onnx
 [ "$model" = yaw-close ] && default_out=libs/detect/models/hubyaw-close.onnx
 out=${1:-$default_out}
@@ -101,13 +108,20 @@ if [ "$model" = yaw-close ]; then
   exec "$venv/bin/python" scripts/train-hubnet.py --model yaw --yaw-window-m 8 --yaw-range-m 3.5 14 --epochs 24 \
     --out "$out" "$@" "$data/s111" "$data/s113" "$data/c114" "$data/c115" "$data/s112"
 fi
-if [ "$model" = crop ]; then
+if [ "$model" = crop ] || [ "$model" = crop-still ]; then
   data=target/hubcrop-data
   mkdir -p "$data"
   for seed in 101 103 102; do
     render "$data/s$seed" --working --seed "$seed" --per-class 1000 --flights 10
   done
   render "$data/b105" --working --seed 105 --per-class 0 --flights 0 --beyond 2000
+  if [ "$model" = crop-still ]; then
+    render "$data/p107" --working --seed 107 --per-class 0 --flights 0 --photo-like 2500
+    render "$data/p108" --working --seed 108 --per-class 0 --flights 0 --photo-like 3000
+    render "$data/p109" --working --seed 109 --per-class 0 --flights 0 --photo-like 800
+    exec "$venv/bin/python" scripts/train-hubnet.py --model crop --epochs 40 --out "$out" "$@" \
+      "$data/s101" "$data/s103" "$data/b105" "$data/p107" "$data/p108" "$data/s102" --held-out "$data/p109"
+  fi
   exec "$venv/bin/python" scripts/train-hubnet.py --model crop --epochs 15 --out "$out" "$@" \
     "$data/s101" "$data/s103" "$data/b105" "$data/s102"
 fi

@@ -108,6 +108,10 @@ pub const CROP_FRAC: f64 = 0.3;
 /// The crop model the build ships (`scripts/train-hubnet.sh`; ONNX, input `1×1×64×64` grey in
 /// [0, 1], output `1×1×16×16` logits).
 const CROP_MODEL: &[u8] = include_bytes!("../models/hubcrop.onnx");
+/// The still photos' crop model (`detect.default.still_models`): the same network trained with
+/// photo-like rendered views too (`scripts/train-hubnet.sh crop-still`, session 29), where a
+/// nacelle seen from above points at the hub like a fourth blade.
+const STILL_CROP_MODEL: &[u8] = include_bytes!("../models/hubcrop-still.onnx");
 
 /// Where the crop network puts the hub near a candidate.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -133,6 +137,11 @@ impl HubCropNet {
     /// Load the shipped model.
     pub fn new() -> Result<HubCropNet, DetectError> {
         Ok(HubCropNet { net: load(CROP_MODEL)?, crop: Mat::default(), blob: Mat::default() })
+    }
+
+    /// Load the still photos' model.
+    pub fn for_stills() -> Result<HubCropNet, DetectError> {
+        Ok(HubCropNet { net: load(STILL_CROP_MODEL)?, crop: Mat::default(), blob: Mat::default() })
     }
 
     /// The hub near `centre` (working px) of the working level `working` (grey).

@@ -674,6 +674,10 @@ pub struct DefaultParams {
     /// crop, and the hub moves to its peak. Blade-edge crossings sit up to a spinner radius or
     /// two beside the hub seen obliquely (the edges are half a chord off the blade axes), more
     /// than the 3 % of the image height a hit allows from 12 m on. About 0.2 ms per frame.
+    /// Still photos with `still_models` use their own crop model (`models/hubcrop-still.onnx`,
+    /// trained with photo-like views too: `scripts/train-hubnet.sh crop-still`), which places the
+    /// hub where the video model takes a nacelle seen from above for it (photos 32 → 33 of 53,
+    /// photo-like views of seed 2026 64.3 → 67.0 %, session 29).
     pub hub_crop: bool,
     /// ... when the crop's peak probability is at least this. Range [0, 1]; default 0.5.
     pub hub_crop_min: f64,
@@ -716,12 +720,14 @@ pub struct DefaultParams {
     /// How the hub is picked among the candidates.
     pub ranker: RankerParams,
     /// Still photos (`hubtrack detect`, the photos of `hubtrack eval`) use their own learned
-    /// heatmap (`models/hubnet-still.onnx`) and `still_ranker`, both trained with photo-like
-    /// rendered views too (drone photos' viewpoints: from above, among wind farms, the hub
-    /// anywhere; see the README, "Photo-like views"); video frames keep `models/hubnet.onnx`
-    /// and `ranker`. Used everywhere, the photo-trained pair took the development photos from
+    /// heatmap (`models/hubnet-still.onnx`), hub crop (`models/hubcrop-still.onnx`, session 29)
+    /// and `still_ranker`, all trained with photo-like rendered views too (drone photos'
+    /// viewpoints: from above, among wind farms, the hub anywhere; see the README, "Photo-like
+    /// views"); video frames keep `models/hubnet.onnx`, `models/hubcrop.onnx` and `ranker`.
+    /// Used everywhere, the photo-trained heatmap and ranking took the development photos from
     /// 56.6 to 60.4 % hits and rendered frames (seed 2026) from 87.8 to 90.5 %, but `fly`
-    /// seeds 161–560 from 212 to 202 of the 221 flown (4 in, 14 out).
+    /// seeds 161–560 from 212 to 202 of the 221 flown (4 in, 14 out); the photo-trained crop
+    /// places rendered approach frames' hubs slightly worse (87.8 → 87.2 %).
     pub still_models: bool,
     /// Video frames use the still photos' heatmap and `still_ranker` too (off): how session 27
     /// measured them in flight, and how `scripts/train-ranker.sh still` fits `still_ranker`.
