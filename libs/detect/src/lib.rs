@@ -224,13 +224,16 @@ fn place_hub_by_crop(p: &params::DefaultParams, net: &mut heat::HubCropNet, smal
     if !found.detected {
         return Ok(());
     }
-    let on_circle = found.circle.is_some_and(|c| geometry::dist(found.hub, [c[0], c[1]]) < 1e-9);
-    if on_circle && p.hub_crop_keep_spinner {
+    let circle_r = found.circle.filter(|c| geometry::dist(found.hub, [c[0], c[1]]) < 1e-9).map(|c| c[2]);
+    if circle_r.is_some() && p.hub_crop_keep_spinner && p.hub_crop_spinner_escape_radii >= 10.0 {
         return Ok(());
     }
     let peak = net.run(small, found.hub)?;
     let h = opencv::prelude::MatTraitConst::rows(small) as f64;
     let shift = geometry::dist(peak.hub, found.hub);
+    if circle_r.is_some_and(|r| p.hub_crop_keep_spinner && shift <= (1.0 + p.hub_crop_spinner_escape_radii) * r) {
+        return Ok(());
+    }
     if peak.p < p.hub_crop_min || shift > p.hub_crop_max_shift_frac * h || shift < p.hub_crop_min_shift_frac * h {
         return Ok(());
     }
@@ -559,7 +562,8 @@ mod tests {
 
     /// The hub crop moves a detected hub 5 % of the height off onto the hub of a rendered frame
     /// (medium range, oblique), but leaves one already within `hub_crop_min_shift_frac`, an
-    /// undetected one, and a spinner circle's centre.
+    /// undetected one, and a spinner circle's centre unless the network's peak lies beyond the
+    /// circle's rim (`hub_crop_spinner_escape_radii`).
     #[test]
     fn the_hub_crop_moves_only_detected_hubs_that_are_clearly_off() {
         use hubtrack_render::dataset::synth_case;
@@ -598,8 +602,21 @@ mod tests {
 
         let mut circle = at(0.05, true);
         circle.circle = Some([circle.hub[0], circle.hub[1], 5.0]);
-        place_hub_by_crop(&p, &mut net, &small, &mut circle).unwrap();
+        let never = params::DefaultParams { hub_crop_spinner_escape_radii: 10.0, ..p.clone() };
+        place_hub_by_crop(&never, &mut net, &small, &mut circle).unwrap();
         assert_eq!(circle.hub, at(0.05, true).hub, "a spinner circle's centre stays");
+
+        // With `hub_crop_spinner_escape_radii` a circle beside the hub (a blade root's) lets
+        // the hub go to the network's peak beyond its rim; one round the peak keeps it.
+        let escape = params::DefaultParams { hub_crop_spinner_escape_radii: 0.0, ..p.clone() };
+        let mut beside = at(0.05, true);
+        beside.circle = Some([beside.hub[0], beside.hub[1], 0.02 * h]);
+        place_hub_by_crop(&escape, &mut net, &small, &mut beside).unwrap();
+        assert!(geometry::dist(beside.hub, hub) < 0.03 * h, "moved to {:?}, hub {hub:?}", beside.hub);
+        let mut round = at(0.05, true);
+        round.circle = Some([round.hub[0], round.hub[1], 0.08 * h]);
+        place_hub_by_crop(&escape, &mut net, &small, &mut round).unwrap();
+        assert_eq!(round.hub, at(0.05, true).hub, "the peak inside the circle: its centre stays");
     }
 
     /// The still photos' crop network places the hub of photo-like views (from above, the
