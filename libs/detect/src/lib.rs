@@ -244,6 +244,57 @@ fn place_hub_by_crop(p: &params::DefaultParams, net: &mut heat::HubCropNet, smal
     Ok(())
 }
 
+/// Whether the lines around `hub` (working px, `h` the working height) leave it a hub for the
+/// networks' verdict (see `default.heat_verify_end_frac`): the lines that end near it, if any,
+/// include one oblique to both image axes, some such line lies within reach of it, and no long
+/// line passes through it.
+fn lines_allow_hub(p: &params::DefaultParams, lines: &[(Segment, LineKind)], hub: P2, h: f64) -> bool {
+    // A mast's top or a field's corner, where the lines end along the vertical and the
+    // horizontal only, is no rotor: three blades 120° apart always have one at least 30° from
+    // both axes (20° under ±10° of roll).
+    let off_axes = |s: &Segment| {
+        let o = s.orientation_deg();
+        o.min(180.0 - o).min((o - 90.0).abs())
+    };
+    let mut ending = lines.iter().map(|(s, _)| s).filter(|s| s.nearest_end(hub).1 <= p.heat_verify_end_frac * h).peekable();
+    if ending.peek().is_some() && !ending.any(|s| off_axes(s) > p.heat_verify_oblique_deg) {
+        return false;
+    }
+    // Some blade in reach at all: a mast whose top the lines lost against the horizon leaves
+    // only its own vertical and the level lines of the ground and the sea around.
+    if !lines.iter().any(|(s, _)| s.segment_distance(hub) <= p.heat_verify_blade_frac * h && off_axes(s) > p.heat_verify_oblique_deg) {
+        return false;
+    }
+    // A long line running on through it: a mast or a wire.
+    let segs: Vec<Segment> = lines.iter().map(|(s, _)| *s).collect();
+    !robust::passes_through(p, &segs, &vec![true; segs.len()], hub, h)
+}
+
+/// The networks' verdict on a frame where the lines found no hub (see
+/// `default.heat_verify_min`): the heatmap's peak, placed and confirmed by the crop network.
+fn verify_heat_peak(p: &params::DefaultParams, heat: &heat::Heatmap, net: &mut heat::HubCropNet, small: &Mat, found: &mut Found) -> Result<(), DetectError> {
+    if found.detected || p.heat_verify_min >= 1.0 {
+        return Ok(());
+    }
+    let Some((f, heat_p)) = heat.peak().filter(|(_, prob)| *prob >= p.heat_verify_min) else { return Ok(()) };
+    let (w, h) = (opencv::prelude::MatTraitConst::cols(small) as f64, opencv::prelude::MatTraitConst::rows(small) as f64);
+    let centre = [f[0] * w, f[1] * h];
+    let peak = net.run(small, centre)?;
+    if peak.p < p.heat_verify_crop_min || geometry::dist(peak.hub, centre) > p.hub_crop_max_shift_frac * h {
+        return Ok(());
+    }
+    if !lines_allow_hub(p, &found.lines, peak.hub, h) {
+        return Ok(());
+    }
+    log::trace!("networks' verdict: hub at {:?} (heatmap {heat_p:.2}, crop {:.2})", peak.hub, peak.p);
+    found.detected = true;
+    found.hub = peak.hub;
+    found.confidence = heat_p * peak.p;
+    (found.tower_top, found.tower_axis, found.tower_width, found.circle, found.nacelle_end_dx) = (None, None, None, None, None);
+    found.blade_angles.clear();
+    Ok(())
+}
+
 /// The yaw network's reading around a detected hub (working px, `small` the working level,
 /// `focal_small` its focal length), seen from the tracker's distance, else the spinner circle's
 /// (the dome's silhouette, d = R·√(1 + (f/r)²), as the tracker's `distance_from_spinner`);
@@ -420,6 +471,9 @@ impl Detector {
             if hints.predicted_hub_px.is_none() || self.config.default.hub_crop_when_tracking {
                 place_hub_by_crop(&self.config.default, net, small, &mut found)?;
             }
+            if let (None, Some(heat)) = (hints.predicted_hub_px, heatmap.as_ref()) {
+                verify_heat_peak(&self.config.default, heat, net, small, &mut found)?;
+            }
             found.geometry_us += us_since(t);
         }
         let yaw_reading = match self.hubyaw.as_mut().filter(|_| self.config.mode == Mode::Default) {
@@ -559,6 +613,84 @@ impl Detector {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The networks' verdict is refused where the lines say mast: lines ending at the point
+    /// only along the image axes (a mast's top, a field's corner), a long line running on
+    /// through it, or no line oblique to both axes (a blade) within reach; it stands with a
+    /// blade-like line near and among those ending.
+    #[test]
+    fn the_networks_verdict_stands_only_where_the_lines_allow_a_rotor() {
+        let p = params::DefaultParams::default();
+        let (h, hub) = (270.0, [200.0, 100.0]);
+        let line = |a: P2, b: P2| (Segment::new(a, b), LineKind::Other);
+        let mast = line([200.0, 101.0], [200.0, 260.0]);
+        let horizon_end = line([201.0, 102.0], [400.0, 104.0]);
+        let blade = line([202.0, 98.0], [260.0, 40.0]);
+        let far_away = line([20.0, 250.0], [120.0, 200.0]);
+        assert!(!lines_allow_hub(&p, &[], hub, h), "no lines at all: no blade");
+        assert!(!lines_allow_hub(&p, &[far_away], hub, h), "no line within reach");
+        assert!(lines_allow_hub(&p, &[blade, far_away], hub, h), "a blade alone");
+        assert!(!lines_allow_hub(&p, &[mast, far_away], hub, h), "a mast's top");
+        assert!(!lines_allow_hub(&p, &[mast, horizon_end], hub, h), "a corner of vertical and horizontal lines");
+        assert!(lines_allow_hub(&p, &[mast, blade], hub, h), "a tower and a blade");
+        // A mast (or wire) passing through: its ends are far from the point.
+        let through = line([199.0, 20.0], [201.0, 260.0]);
+        assert!(!lines_allow_hub(&p, &[through, blade], hub, h), "a line through the point");
+        // Rolled 10°, the blade-like line stays oblique enough, the mast stays a mast.
+        let tilted_mast = line([200.0, 101.0], [200.0 + 159.0 * 10f64.to_radians().tan(), 260.0]);
+        assert!(!lines_allow_hub(&p, &[tilted_mast], hub, h), "a mast rolled 10°");
+        // A mast whose top the lines lost: its vertical below, level lines about, no blade.
+        let mast_below = line([200.0, 160.0], [200.0, 260.0]);
+        let level = line([120.0, 110.0], [180.0, 112.0]);
+        assert!(!lines_allow_hub(&p, &[mast_below, level], hub, h), "a mast's top lost against the horizon");
+        assert!(lines_allow_hub(&p, &[mast_below, level, blade], hub, h), "and with a blade");
+    }
+
+    /// Close-range frames (seed 2026, not trained on) where the spinner fills the view and the
+    /// lines find nothing to rank: with the networks' verdict (`heat_verify_min`) more of them
+    /// are detected on the hub, and frames without a turbine gain no detection.
+    #[test]
+    fn the_networks_verdict_finds_close_hubs_the_lines_miss_and_no_turbine_where_there_is_none() {
+        use hubtrack_render::dataset::synth_case;
+        use hubtrack_render::{Camera, Renderer};
+        let on = DetectConfig::default();
+        assert!(on.default.heat_verify_min < 1.0, "the verdict is on by default");
+        let mut off = on.clone();
+        off.default.heat_verify_min = 1.0;
+        let (mut det_on, mut det_off) = (Detector::new(on).unwrap(), Detector::new(off).unwrap());
+        let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
+        let (mut frames, mut hits_on, mut hits_off, mut fp_on, mut fp_off, mut negatives) = (0, 0, 0, 0, 0, 0);
+        for i in 0..200u64 {
+            let negative = i % 4 == 3;
+            let case = synth_case(2026, 2, i, negative);
+            let r = &mut renderers[if case.wide { 0 } else { 1 }];
+            let cam = *r.camera();
+            let mut buf = vec![0u8; cam.frame_bytes()];
+            let truth = r.render(&case.scene, &case.pose, &mut buf).unwrap();
+            let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
+            let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() };
+            let (a, b) = (det_on.detect(&view, &hints).unwrap().detection, det_off.detect(&view, &hints).unwrap().detection);
+            let hub = truth.hub_px.filter(|_| truth.turbine_in_view && !negative);
+            match hub {
+                Some(t) => {
+                    let hit = |d: &Detection| d.detected && geometry::dist(d.hub_px, t) <= 0.03 * cam.height as f64;
+                    frames += 1;
+                    hits_on += usize::from(hit(&a));
+                    hits_off += usize::from(hit(&b));
+                }
+                None if negative => {
+                    negatives += 1;
+                    fp_on += usize::from(a.detected);
+                    fp_off += usize::from(b.detected);
+                }
+                None => {}
+            }
+        }
+        eprintln!("close range: {hits_on} of {frames} hits with the verdict, {hits_off} without; negatives detected {fp_on} / {fp_off} of {negatives}");
+        assert!(frames >= 120 && negatives >= 40, "{frames} frames, {negatives} negatives");
+        assert!(hits_on >= hits_off + 4, "verdict: {hits_on} hits against {hits_off}");
+        assert!(fp_on <= fp_off, "verdict: {fp_on} negatives detected against {fp_off}");
+    }
 
     /// The hub crop moves a detected hub 5 % of the height off onto the hub of a rendered frame
     /// (medium range, oblique), but leaves one already within `hub_crop_min_shift_frac`, an

@@ -933,7 +933,7 @@ fn hidden_blade_down(p: &DefaultParams, blades: &[Blade], down: f64) -> bool {
 }
 
 /// A long usable line passes through `c` (not ending near it): `c` lies on a tower, mast or wire.
-fn passes_through(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64) -> bool {
+pub(crate) fn passes_through(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64) -> bool {
     let min_len = p.candidate_min_length_frac * h;
     let margin = p.through_margin_frac * h;
     segs.iter().zip(usable).any(|(s, &u)| {
