@@ -273,11 +273,14 @@ fn lines_allow_hub(p: &params::DefaultParams, lines: &[(Segment, LineKind)], hub
 /// The networks' verdict on a frame where the lines found no hub (see
 /// `default.heat_verify_min`): the heatmap's peak, placed and confirmed by the crop network.
 fn verify_heat_peak(p: &params::DefaultParams, heat: &heat::Heatmap, net: &mut heat::HubCropNet, small: &Mat, found: &mut Found) -> Result<(), DetectError> {
-    if found.detected || p.heat_verify_min >= 1.0 {
+    if p.heat_verify_min >= 1.0 {
+        return Ok(());
+    }
+    let (w, h) = (opencv::prelude::MatTraitConst::cols(small) as f64, opencv::prelude::MatTraitConst::rows(small) as f64);
+    if found.detected && heat.near(found.hub[0] / w, found.hub[1] / h, p.hub_heat_radius_cells) >= p.heat_override_max {
         return Ok(());
     }
     let Some((f, heat_p)) = heat.peak().filter(|(_, prob)| *prob >= p.heat_verify_min) else { return Ok(()) };
-    let (w, h) = (opencv::prelude::MatTraitConst::cols(small) as f64, opencv::prelude::MatTraitConst::rows(small) as f64);
     let centre = [f[0] * w, f[1] * h];
     let peak = net.run(small, centre)?;
     if peak.p < p.heat_verify_crop_min || geometry::dist(peak.hub, centre) > p.hub_crop_max_shift_frac * h {
@@ -647,8 +650,9 @@ mod tests {
     }
 
     /// Close-range frames (seed 2026, not trained on) where the spinner fills the view and the
-    /// lines find nothing to rank: with the networks' verdict (`heat_verify_min`) more of them
-    /// are detected on the hub, and frames without a turbine gain no detection.
+    /// lines find nothing to rank: with the networks' verdict (`heat_verify_min`,
+    /// `heat_override_max`) more of them are detected on the hub (142 against 128 of 150 when
+    /// written), and frames without a turbine gain no detection.
     #[test]
     fn the_networks_verdict_finds_close_hubs_the_lines_miss_and_no_turbine_where_there_is_none() {
         use hubtrack_render::dataset::synth_case;
@@ -670,10 +674,12 @@ mod tests {
             let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
             let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() };
             let (a, b) = (det_on.detect(&view, &hints).unwrap().detection, det_off.detect(&view, &hints).unwrap().detection);
-            let hub = truth.hub_px.filter(|_| truth.turbine_in_view && !negative);
-            match hub {
-                Some(t) => {
-                    let hit = |d: &Detection| d.detected && geometry::dist(d.hub_px, t) <= 0.03 * cam.height as f64;
+            // A hit as `hubtrack eval` scores it: within 3 % of the height of the visible rotor
+            // axis, from the hub's centre to the spinner's nose.
+            let axis = truth.hub_px.zip(truth.nose_px).filter(|_| truth.turbine_in_view && !negative);
+            match axis {
+                Some((hub, nose)) => {
+                    let hit = |d: &Detection| d.detected && geometry::point_segment_distance(d.hub_px, hub, nose) <= 0.03 * cam.height as f64;
                     frames += 1;
                     hits_on += usize::from(hit(&a));
                     hits_off += usize::from(hit(&b));
@@ -688,7 +694,7 @@ mod tests {
         }
         eprintln!("close range: {hits_on} of {frames} hits with the verdict, {hits_off} without; negatives detected {fp_on} / {fp_off} of {negatives}");
         assert!(frames >= 120 && negatives >= 40, "{frames} frames, {negatives} negatives");
-        assert!(hits_on >= hits_off + 4, "verdict: {hits_on} hits against {hits_off}");
+        assert!(hits_on >= hits_off + 7, "verdict: {hits_on} hits against {hits_off}");
         assert!(fp_on <= fp_off, "verdict: {fp_on} negatives detected against {fp_off}");
     }
 
