@@ -746,8 +746,14 @@ pub struct DefaultParams {
     /// 94.7 / 93.8 / 93.0 / 94.2 / 93.5 → 94.7 / 93.8 / 93.3 / 94.3 / 94.0 → 94.7 / 93.7 /
     /// 93.3 / 94.5 / 94.0 % (at 1 close range loses where a spinner circle placed the hub),
     /// false positives unchanged; photo-like views (2026 / 500) 80.7 / 82.3 → 81.0 / 83.3 %
-    /// at 0.7 (session 30). Range [0, 1]; 0 = never.
+    /// at 0.7 (session 30). But flights start from such frames (acquisition, search), and
+    /// `hubtrack fly` seeds 161–560 at 0.7 gave 376 of 400 against 381 with 0 (2 in, 8 out,
+    /// 161 flights changed; the failures the usual yaw close in), so video frames keep 0 and
+    /// stills use `still_heat_override_max`. Range [0, 1]; 0 = never.
     pub heat_override_max: f64,
+    /// `heat_override_max` for still photos (`Detector::detect_still`): photo-like views
+    /// (seeds 2026 / 500) 80.7 / 82.3 → 81.0 / 83.3 % at 0.7. Range [0, 1]; 0 = never.
+    pub still_heat_override_max: f64,
     /// Read the relative yaw with the learned yaw network (`heat::HubYawNet`) around a
     /// detected hub, from the tracker's distance or else the spinner circle's (the detection's
     /// `yaw_net_*`; the tracker weighs it in, see `track.yaw.use_net`).
@@ -1180,7 +1186,8 @@ impl Default for DefaultParams {
             heat_verify_end_frac: 0.06,
             heat_verify_oblique_deg: 15.0,
             heat_verify_blade_frac: 0.3,
-            heat_override_max: 0.7,
+            heat_override_max: 0.0,
+            still_heat_override_max: 0.7,
             hub_yaw: true,
             hub_yaw_min_distance_m: 3.5,
             hub_yaw_max_distance_m: 45.0,
@@ -1375,6 +1382,7 @@ impl DefaultParams {
         c.closed("heat_verify_oblique_deg", self.heat_verify_oblique_deg, 0.0, 45.0)?;
         c.closed("heat_verify_blade_frac", self.heat_verify_blade_frac, 0.0, 2.0)?;
         c.closed("heat_override_max", self.heat_override_max, 0.0, 1.0)?;
+        c.closed("still_heat_override_max", self.still_heat_override_max, 0.0, 1.0)?;
         c.closed("hub_crop_max_shift_frac", self.hub_crop_max_shift_frac, 0.0, 0.15)?;
         c.closed("hub_crop_min_shift_frac", self.hub_crop_min_shift_frac, 0.0, 0.15)?;
         c.closed("hub_crop_spinner_escape_radii", self.hub_crop_spinner_escape_radii, 0.0, 10.0)?;
