@@ -138,13 +138,17 @@ fn peaks_and_rims(points: &[EdgePoint], cs: &CircleSearch, acc: &[u32], gw: usiz
             }
         }
     }
-    let mut out: Vec<[f64; 4]> = centres.into_iter().filter_map(|c| rim(points, c, cs)).collect();
+    // Points in row order (as the detector collects them) let each rim read only the rows it
+    // can reach.
+    let sorted = points.is_sorted_by(|a, b| a.p[1] <= b.p[1]);
+    let mut out: Vec<[f64; 4]> = centres.into_iter().filter_map(|c| rim(points, sorted, c, cs)).collect();
     out.sort_by(|a, b| b[3].total_cmp(&a[3]));
     out
 }
 
 /// The best-covered radius around `c`, refined by a circle fit; `None` below `min_coverage`.
-fn rim(points: &[EdgePoint], c: P2, cs: &CircleSearch) -> Option<[f64; 4]> {
+/// `sorted`: `points` are in row order.
+fn rim(points: &[EdgePoint], sorted: bool, c: P2, cs: &CircleSearch) -> Option<[f64; 4]> {
     let nb = cs.max_r.ceil() as usize + 2;
     let mut hist = vec![0u32; nb];
     // Squared bounds first: most points are outside the ring, and need no square root.
@@ -160,7 +164,9 @@ fn rim(points: &[EdgePoint], c: P2, cs: &CircleSearch) -> Option<[f64; 4]> {
     };
     // The radial points with their distances, kept for the rim fit below (one pass over all
     // points instead of two).
-    let ring: Vec<(P2, f64)> = points.iter().filter_map(|e| radial(e, c).map(|d| (e.p, d))).collect();
+    // Only rows within the outer radius can hold radial points (a px of margin for rounding).
+    let reach = cs.max_r + 2.0;
+    let ring: Vec<(P2, f64)> = rows_between(points, sorted, c[1] - reach, c[1] + reach).iter().filter_map(|e| radial(e, c).map(|d| (e.p, d))).collect();
     for &(_, d) in &ring {
         hist[(d.round() as usize).min(nb - 1)] += 1;
     }
@@ -181,11 +187,23 @@ fn rim(points: &[EdgePoint], c: P2, cs: &CircleSearch) -> Option<[f64; 4]> {
     let fit = fit_circle(&rim_pts).filter(|f| crate::geometry::dist([f[0], f[1]], c) <= tol + cs.cell && (f[2] - best_r).abs() <= tol);
     let [x, y, r] = fit.unwrap_or([c[0], c[1], best_r]);
     let inner2 = (INNER_FRAC * r).powi(2);
-    let inside = points.iter().filter(|e| (e.p[0] - x).powi(2) + (e.p[1] - y).powi(2) < inner2).count();
+    let inner = INNER_FRAC * r + 1.0;
+    let inside = rows_between(points, sorted, y - inner, y + inner).iter().filter(|e| (e.p[0] - x).powi(2) + (e.p[1] - y).powi(2) < inner2).count();
     if inside as f64 > cs.max_interior_density * std::f64::consts::PI * inner2 {
         return None;
     }
     Some([x, y, r, best_cov.min(1.0)])
+}
+
+/// The points with a row in `[y0, y1]`, a sub-slice in the same order, when `sorted` by row;
+/// else all of them.
+fn rows_between(points: &[EdgePoint], sorted: bool, y0: f64, y1: f64) -> &[EdgePoint] {
+    if !sorted {
+        return points;
+    }
+    let a = points.partition_point(|e| e.p[1] < y0);
+    let b = points.partition_point(|e| e.p[1] <= y1).max(a);
+    &points[a..b]
 }
 
 /// Algebraic (Kåsa) least-squares circle through `pts`: `[x, y, r]`; `None` if degenerate.
@@ -354,6 +372,24 @@ mod tests {
             }
         }
         acc
+    }
+
+    #[test]
+    fn rims_read_only_the_rows_they_reach_and_find_the_same_circles_in_any_order() {
+        let mut pts = rim_points([60.0, 60.0], 20.0, &[(0.0, 360.0)]);
+        pts.extend(rim_points([30.0, 100.0], 8.0, &[(0.0, 360.0)]));
+        let unsorted = pts.clone();
+        pts.sort_by(|a, b| a.p[1].total_cmp(&b.p[1]));
+        let window = rows_between(&pts, true, 38.0, 82.0);
+        assert!(window.iter().all(|e| (38.0..=82.0).contains(&e.p[1])));
+        assert_eq!(window.len(), pts.iter().filter(|e| (38.0..=82.0).contains(&e.p[1])).count());
+        assert_eq!(rows_between(&unsorted, false, 38.0, 82.0).len(), unsorted.len());
+        let (a, b) = (find_circles(&pts, &search()), find_circles(&unsorted, &search()));
+        assert!(!a.is_empty());
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(&b) {
+            assert!((0..4).all(|i| (x[i] - y[i]).abs() < 1e-9), "{x:?} vs {y:?}");
+        }
     }
 
     #[test]
