@@ -264,6 +264,20 @@ pub struct TrackState {
     pub yaw_deg: f64,
     /// Standard deviation of `yaw_deg`.
     pub yaw_std_deg: f64,
+    /// The detector's learned yaw network gave a trusted reading on this frame (taken from
+    /// `track.yaw.net_fallback_min_distance_m` out, within the gates of its own filter).
+    /// Absent in recordings from before it: false.
+    #[serde(default)]
+    pub net_yaw_valid: bool,
+    /// The network's relative yaw, filtered like `yaw_deg` over its trusted readings, degrees.
+    /// A separate cue from `yaw_deg` (which holds the geometric cues only, see
+    /// `track.yaw.net_fuse`): the controller weighs the two
+    /// (`control.approach.net_heading_weight`).
+    #[serde(default)]
+    pub net_yaw_deg: f64,
+    /// Standard deviation of `net_yaw_deg`.
+    #[serde(default)]
+    pub net_yaw_std_deg: f64,
     /// Frames since the last accepted detection.
     pub frames_since_detection: u32,
     /// Seconds since the last accepted detection.
@@ -446,6 +460,24 @@ mod tests {
         let t = Text64::new(&s);
         assert_eq!(t.as_str().len(), 64);
         assert_eq!(t.as_str(), &s[..64]);
+    }
+
+    /// Recordings made before a field was added still replay: the fields added later
+    /// (`Detection::yaw_net_*`, `TrackState::net_yaw_*`) default when absent.
+    #[test]
+    fn messages_recorded_before_the_network_fields_still_read() {
+        let mut track = serde_json::to_value(TrackState { yaw_valid: true, yaw_deg: 2.5, ..TrackState::default() }).unwrap();
+        for key in ["net_yaw_valid", "net_yaw_deg", "net_yaw_std_deg"] {
+            assert!(track.as_object_mut().unwrap().remove(key).is_some(), "{key}");
+        }
+        let back: TrackState = serde_json::from_value(track).unwrap();
+        assert!(back.yaw_valid && back.yaw_deg == 2.5 && !back.net_yaw_valid);
+        let mut det = serde_json::to_value(Detection { detected: true, ..Detection::default() }).unwrap();
+        for key in ["yaw_net_valid", "yaw_net_deg", "yaw_net_std_deg"] {
+            assert!(det.as_object_mut().unwrap().remove(key).is_some(), "{key}");
+        }
+        let back: Detection = serde_json::from_value(det).unwrap();
+        assert!(back.detected && !back.yaw_net_valid);
     }
 
     #[test]

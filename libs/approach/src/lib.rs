@@ -126,6 +126,8 @@ pub struct Approach {
     yaw_f: Option<f64>,
     /// Estimate of the heading that faces the rotor (world frame), kept across track losses.
     turbine_heading: Option<TurbineHeading>,
+    /// The same from the learned yaw network's readings (see `net_heading_weight`).
+    net_heading: Option<TurbineHeading>,
     /// Filtered distance, m.
     dist_f: Option<f64>,
     /// `capture_ns` of the track last fed to the filters (a repeated track is not re-filtered).
@@ -284,6 +286,7 @@ impl Approach {
             abort: None,
             yaw_f: None,
             turbine_heading: None,
+            net_heading: None,
             dist_f: None,
             filter_capture_ns: None,
             t1_active: true,
@@ -803,10 +806,26 @@ struct TurbineHeading {
     last_ns: u64,
 }
 
+impl TurbineHeading {
+    /// Takes one heading measurement `meas` (rad) of weight `w` at `now` (ns): old weight is
+    /// forgotten exponentially over `filter_s` (steps of at most `max_dt_s`), then a weighted
+    /// mean step whose innovation is clipped to `clip` (rad), so outliers have bounded influence.
+    fn add(&mut self, meas: f64, w: f64, now: u64, max_dt_s: f64, filter_s: f64, clip: f64) {
+        self.samples = self.samples.saturating_add(1);
+        let dt = secs(self.last_ns.min(now), now).min(max_dt_s);
+        self.last_ns = now;
+        self.weight = self.weight * (-dt / filter_s).exp() + w;
+        let innovation = wrap_pi(meas - self.heading_rad).clamp(-clip, clip);
+        self.heading_rad = wrap_pi(self.heading_rad + (w / self.weight) * innovation);
+    }
+}
+
 impl Approach {
     /// The relative yaw from the turbine-heading estimate and the current heading toward the
     /// hub (autopilot heading + hub azimuth), degrees; feeds the estimate with a new track
-    /// state's yaw. `None` while disabled, without attitude, or before enough samples.
+    /// state's yaw, and the network's estimate with its reading, and weighs the two
+    /// (`net_heading_weight`). `None` while disabled, without attitude, or before enough
+    /// samples of the geometric estimate.
     fn heading_yaw(&mut self, t: &TrackState, vehicle: Option<&VehicleState>, new: bool) -> Option<f64> {
         let c = &self.config;
         if c.turbine_heading_filter_s <= 0.0 {
@@ -839,26 +858,34 @@ impl Approach {
                 }
                 None => {}
                 Some(h) if w > 0.0 && !(close && h.samples >= c.turbine_heading_min_samples && beyond_clip(h)) => {
-                    h.samples = h.samples.saturating_add(1);
-                    let dt = secs(h.last_ns.min(now), now).min(c.max_dt_s);
-                    h.last_ns = now;
-                    // Exponential forgetting of old weight, then a weighted mean step.
-                    h.weight = h.weight * (-dt / c.turbine_heading_filter_s).exp() + w;
-                    let clip = c.turbine_heading_clip_deg.to_radians();
-                    let innovation = wrap_pi(meas - h.heading_rad).clamp(-clip, clip);
-                    h.heading_rad = wrap_pi(h.heading_rad + (w / h.weight) * innovation);
+                    h.add(meas, w, now, c.max_dt_s, c.turbine_heading_filter_s, c.turbine_heading_clip_deg.to_radians())
                 }
                 Some(_) => {}
             }
         }
-        let h = self.turbine_heading.as_ref().filter(|h| h.samples >= c.turbine_heading_min_samples)?;
-        let yaw = wrap_pi(h.heading_rad - to_hub).to_degrees();
+        if new && t.net_yaw_valid && t.net_yaw_deg.is_finite() && c.net_heading_weight > 0.0 {
+            let meas = wrap_pi(to_hub + t.net_yaw_deg.to_radians());
+            let now = t.stamps.capture_ns;
+            match self.net_heading.as_mut() {
+                None => self.net_heading = Some(TurbineHeading { heading_rad: meas, weight: 1.0, samples: 1, last_ns: now }),
+                Some(h) => h.add(meas, 1.0, now, c.max_dt_s, c.turbine_heading_filter_s, c.turbine_heading_clip_deg.to_radians()),
+            }
+        }
+        let enough = |h: &&TurbineHeading| h.samples >= c.turbine_heading_min_samples;
+        let h = self.turbine_heading.as_ref().filter(enough)?;
+        let heading = match self.net_heading.as_ref().filter(enough) {
+            Some(n) => wrap_pi(h.heading_rad + c.net_heading_weight * wrap_pi(n.heading_rad - h.heading_rad)),
+            None => h.heading_rad,
+        };
+        let yaw = wrap_pi(heading - to_hub).to_degrees();
         if new {
             log::debug!(
-                "turbine heading, frame {}: relative yaw {yaw:+.1} deg from {} samples (weight {:.2e}); track yaw {} at {}",
+                "turbine heading, frame {}: relative yaw {yaw:+.1} deg from {} samples (weight {:.2e}), the geometric one's {:+.1}, the network's {}; track yaw {} at {}",
                 t.stamps.seq,
                 h.samples,
                 h.weight,
+                wrap_pi(h.heading_rad - to_hub).to_degrees(),
+                self.net_heading.as_ref().map_or("-".into(), |n| format!("{:+.1} ({} samples)", wrap_pi(n.heading_rad - to_hub).to_degrees(), n.samples)),
                 if yaw_usable(t) { format!("{:+.1}", t.yaw_deg) } else { "-".into() },
                 if t.distance_valid { format!("{:.1} m", t.distance_m) } else { "-".into() },
             );

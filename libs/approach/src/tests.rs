@@ -617,6 +617,46 @@ fn closer_than_the_hold_distance_the_turbine_heading_holds() {
     assert!(followed > 7.0, "without the hold: {followed}");
 }
 
+/// The learned yaw network's readings build a second turbine heading, weighed in by
+/// `net_heading_weight` once both estimates hold enough samples; frames without a network
+/// reading leave it alone, and at weight 0 the geometric estimate flies alone.
+#[test]
+fn the_networks_turbine_heading_is_weighed_in() {
+    let with_net = |yaw: f64, net: Option<f64>| TrackState {
+        net_yaw_valid: net.is_some(),
+        net_yaw_deg: net.unwrap_or(0.0),
+        ..track(0.0, 0.0, Some(12.0), Some(yaw))
+    };
+    let run = |weight: f64| {
+        let c = ApproachConfig { net_heading_weight: weight, ..ApproachConfig::default() };
+        let mut rig = Rig::with(c);
+        rig.vehicle = Some(VehicleState { attitude_valid: true, yaw_rad: 0.3, ..vehicle(true) });
+        // The tower says 1°, the network −7°.
+        rig.run(Some(with_net(1.0, Some(-7.0))), 5.0);
+        let both = rig.ap.heading_yaw(&with_net(1.0, None), rig.vehicle.as_ref(), false).unwrap();
+        // Frames without a network reading (closer than its trusted range) keep its heading.
+        rig.run(Some(with_net(1.0, None)), 5.0);
+        let kept = rig.ap.heading_yaw(&with_net(1.0, None), rig.vehicle.as_ref(), false).unwrap();
+        (both, kept)
+    };
+    let (both, kept) = run(0.5);
+    assert!((both + 3.0).abs() < 0.1 && (kept + 3.0).abs() < 0.1, "halfway: {both}, then {kept}");
+    let (alone, _) = run(0.0);
+    assert!((alone - 1.0).abs() < 0.1, "geometric alone: {alone}");
+    let (net, _) = run(1.0);
+    assert!((net + 7.0).abs() < 0.1, "network alone: {net}");
+    // Without enough network samples the geometric estimate flies alone.
+    let c = ApproachConfig { net_heading_weight: 0.5, ..ApproachConfig::default() };
+    let mut rig = Rig::with(c.clone());
+    rig.vehicle = Some(VehicleState { attitude_valid: true, yaw_rad: 0.3, ..vehicle(true) });
+    rig.run(Some(with_net(1.0, None)), 5.0);
+    for _ in 1..c.turbine_heading_min_samples {
+        rig.step(Some(with_net(1.0, Some(-7.0))));
+    }
+    let few = rig.ap.heading_yaw(&with_net(1.0, None), rig.vehicle.as_ref(), false).unwrap();
+    assert!((few - 1.0).abs() < 0.1, "too few network samples: {few}");
+}
+
 /// A vehicle at `north` m on the local frame's north axis, facing north, with position and
 /// attitude.
 fn vehicle_at(north: f64) -> VehicleState {

@@ -723,6 +723,8 @@ impl Core {
         let yaw_any = yaw.or(if self.opts.raw_estimates { None } else { self.yaw.estimate() });
         let ray = self.camera().ray(hub_px);
         let hub_bearing_deg = [ray.x.atan2(ray.z).to_degrees(), (-ray.y).atan2(ray.x.hypot(ray.z)).to_degrees()];
+        // The network's filtered yaw, on the frames whose reading it took.
+        let net_yaw = self.net_yaw.estimate().filter(|_| self.net_yaw.last_accept_ns == Some(t_ns));
         TrackState {
             stamps: hubtrack_types::Stamps { seq, capture_ns, recv_ns: 0, publish_ns: 0 },
             mode,
@@ -740,6 +742,9 @@ impl Core {
             yaw_valid: yaw.is_some(),
             yaw_deg: yaw_any.map_or(0.0, |e| e.value.to_degrees()),
             yaw_std_deg: yaw_any.map_or(0.0, |e| e.std.to_degrees()),
+            net_yaw_valid: net_yaw.is_some(),
+            net_yaw_deg: net_yaw.map_or(0.0, |e| e.value.to_degrees()),
+            net_yaw_std_deg: net_yaw.map_or(0.0, |e| e.std.to_degrees()),
             frames_since_detection: self.frames_since,
             time_since_detection_s: since,
         }

@@ -939,6 +939,34 @@ fn the_yaw_fallback_trusts_the_network_only_from_its_minimum_distance() {
     assert!(ignored.yaw_deg.abs() < 3.0, "readings from inside it are not: {} ± {}", ignored.yaw_deg, ignored.yaw_std_deg);
 }
 
+/// The network's trusted readings are published beside the geometric yaw (`net_yaw_*`, for the
+/// controller's second turbine heading), on the frames that took one only: from
+/// `yaw.net_fallback_min_distance_m` out, not on frames without a reading, and never fused into
+/// `yaw_deg` (the gaps here read the truth, the network 8° off).
+#[test]
+fn the_networks_trusted_yaw_is_published_beside_the_geometric_one() {
+    let run = |d_hub: f64, every: u64| {
+        let mut c = pinhole_config();
+        c.yaw.use_nacelle = false;
+        c.yaw.net_vetoes_gap = false;
+        track_turbine(&c, 41, 150, d_hub, 6.0, |k, d, rng| {
+            d.blade_count = 0;
+            d.yaw_net_valid = k % every == 0;
+            d.yaw_net_deg = -2.0 + 2.0 * rng.normal();
+            d.yaw_net_std_deg = 3.0;
+        })
+    };
+    let far = run(12.0, 1);
+    assert!(far.net_yaw_valid && (far.net_yaw_deg + 2.0).abs() < 1.5, "12 m: {} ± {}", far.net_yaw_deg, far.net_yaw_std_deg);
+    assert!(far.net_yaw_std_deg > 0.0 && far.net_yaw_std_deg < 3.0, "filtered: ± {}", far.net_yaw_std_deg);
+    assert!(far.yaw_valid && (far.yaw_deg - 6.0).abs() < 1.5, "the geometric yaw stays the gaps': {}", far.yaw_deg);
+    // The last frame (149) carries no reading.
+    let gaps = run(12.0, 2);
+    assert!(!gaps.net_yaw_valid, "a frame without a reading: {gaps:?}");
+    let close = run(6.0, 1);
+    assert!(!close.net_yaw_valid, "inside the trusted range: {close:?}");
+}
+
 /// Close in, a tower band merged with the blade pointing down (1.55× the tower's width, no
 /// spinner circle in those frames; the spinner found in one frame of five) does not restart the
 /// distance as a jump (`distance.jump_min_distance_m`): in `fly` seeds 285 and 518 it read

@@ -56,6 +56,7 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
     let shutdown = Shutdown::install()?;
     let dir = tempdir()?;
     let mut outcomes = Vec::new();
+    let mut unfinished = Vec::new();
     if !args.json {
         println!(
             "hubtrack fly: {} flight(s) from seed {}, {}{}",
@@ -71,7 +72,8 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
         if shutdown.requested() {
             break;
         }
-        let port = free_udp_port()?;
+        // Held for the whole flight: parallel `hubtrack fly` runs never share a link port.
+        let (port, _port_lease) = free_udp_port()?;
         // A private IPC domain per flight: flights never see each other's services (nor a
         // pipeline or another `hubtrack fly` running on the machine), and no state is left over.
         let domain = format!("{}fly-{}-{seed}", base.as_ref().map(|b| format!("{b}-")).unwrap_or_default(), std::process::id());
@@ -109,8 +111,12 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
         let outcome: Outcome = match std::fs::read_to_string(&outcome_path) {
             Ok(text) => serde_json::from_str(&text).with_context(|| format!("outcome of seed {seed}"))?,
             Err(_) => {
+                // Not a flight result but a broken run (a stage given up on, a hang): said now,
+                // and the other seeds still fly; the command fails at the end.
                 let why = report.failure.unwrap_or_else(|| format!("no outcome within {:.0} s wall clock", wall_limit.as_secs_f64()));
-                bail!("flight seed {seed} did not finish: {why}");
+                log::error!("flight seed {seed} did not finish: {why}; going on with the next seed");
+                unfinished.push(format!("{seed} ({why})"));
+                continue;
             }
         };
         let line = FlightLine {
@@ -134,6 +140,9 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
     let _ = std::fs::remove_dir_all(&dir);
     if !args.json && !outcomes.is_empty() {
         summary(&outcomes, args.record.as_deref(), args.seeds);
+    }
+    if !unfinished.is_empty() {
+        bail!("{} of {} flight(s) did not finish, seed(s): {}", unfinished.len(), args.seeds, unfinished.join("; "));
     }
     Ok(())
 }
@@ -195,10 +204,38 @@ fn recording_path(record: &Path, seed: u64, seeds: u64) -> PathBuf {
     record.with_file_name(format!("{stem}-seed{seed}.mcap"))
 }
 
-/// A UDP port free right now on the loopback interface (the OS picks it).
-fn free_udp_port() -> anyhow::Result<u16> {
-    let sock = std::net::UdpSocket::bind("127.0.0.1:0").context("finding a free UDP port")?;
-    Ok(sock.local_addr()?.port())
+/// Attempts at a free UDP port before giving up (each one the OS's pick).
+const PORT_ATTEMPTS: usize = 64;
+
+/// A UDP port free right now on the loopback interface (the OS picks it), with a lease on it:
+/// an exclusive lock on `<temp>/hubtrack-udp-ports/<port>.lock`, held until the lease is
+/// dropped and released by the OS if the process dies. The socket that found the port must be
+/// closed before control binds it, and in that gap another `hubtrack fly` can be handed the
+/// same port by the OS (seen with four runs started together: one flight's control could not
+/// bind its link and the flight hung until its wall-clock limit); the lease makes the second
+/// one pick again.
+fn free_udp_port() -> anyhow::Result<(u16, std::fs::File)> {
+    let dir = std::env::temp_dir().join("hubtrack-udp-ports");
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    for _ in 0..PORT_ATTEMPTS {
+        let port = {
+            let sock = std::net::UdpSocket::bind("127.0.0.1:0").context("finding a free UDP port")?;
+            sock.local_addr()?.port()
+        };
+        let path = dir.join(format!("{port}.lock"));
+        let lease = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .with_context(|| format!("opening {}", path.display()))?;
+        match lease.try_lock() {
+            Ok(()) => return Ok((port, lease)),
+            Err(std::fs::TryLockError::WouldBlock) => log::debug!("UDP port {port} is leased by another flight; picking again"),
+            Err(std::fs::TryLockError::Error(e)) => return Err(e).with_context(|| format!("locking {}", path.display())),
+        }
+    }
+    anyhow::bail!("no free UDP port for the autopilot link after {PORT_ATTEMPTS} attempts")
 }
 
 /// A private folder for the outcome files.
@@ -206,4 +243,26 @@ fn tempdir() -> anyhow::Result<PathBuf> {
     let dir = std::env::temp_dir().join(format!("hubtrack-fly-{}", std::process::id()));
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     Ok(dir)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Leases held together are on different ports, and a held lease locks its port's file
+    /// against every other opener until it is dropped.
+    #[test]
+    fn a_leased_port_is_not_leased_again_while_held() {
+        let leases = (0..8).map(|_| free_udp_port().unwrap()).collect::<Vec<_>>();
+        let mut ports = leases.iter().map(|(p, _)| *p).collect::<Vec<_>>();
+        ports.sort_unstable();
+        ports.dedup();
+        assert_eq!(ports.len(), leases.len(), "{ports:?}");
+        let (port, lease) = free_udp_port().unwrap();
+        let path = std::env::temp_dir().join("hubtrack-udp-ports").join(format!("{port}.lock"));
+        let other = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
+        assert!(matches!(other.try_lock(), Err(std::fs::TryLockError::WouldBlock)), "held");
+        drop(lease);
+        other.try_lock().expect("released with the lease");
+    }
 }
