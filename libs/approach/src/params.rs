@@ -223,9 +223,10 @@ pub struct ApproachConfig {
     /// first; once both hold `turbine_heading_min_samples`, the approach flies on their
     /// weighted mean. The two fail in different places: the geometric estimate when the tower
     /// hides behind the blade pointing down or the spinner for the last 20 m and only far,
-    /// noisy views set it, the network by a bias per scene (~3° at 8–15 m). Default 0.5:
-    /// `fly` seeds 161–560 388 against 381 of 400 at 0 (16 in, 9 out); at 0.3, 282 against
-    /// 284 of the 294 seeds of 261–560 flown both ways.
+    /// noisy views set it, the network by a bias per scene (~3° at 8–15 m). Default 0.7:
+    /// `fly` seeds 161–560 393 of 400 against 388 at 0.5 and 381 at 0 (the geometric
+    /// estimate alone); seeds 1–20 20 of 20 against 18 at 0.5; at 0.3, 282 against 284 at 0.5
+    /// of the 294 seeds of 261–560 flown both ways.
     pub net_heading_weight: f64,
 
     // ---- track loss, search and abort ----
@@ -295,7 +296,7 @@ impl Default for ApproachConfig {
             turbine_heading_close_m: 10.0,
             turbine_heading_hold_m: 0.0,
             turbine_heading_min_samples: 15,
-            net_heading_weight: 0.5,
+            net_heading_weight: 0.7,
             reacquire_memory_s: 60.0,
             reacquire_check_s: 15.0,
             reacquire_margin_m: 2.0,
