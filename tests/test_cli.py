@@ -235,3 +235,16 @@ def test_photo_like_views_are_rendered_for_training_and_scored_as_stills(runner,
     rows = {l.split()[0]: l.split() for l in res.stdout.splitlines() if l.strip()}
     assert "photo-like rendered views: 12, seed 3, as still photos" in res.stdout, res.stdout
     assert rows["photo-like"][1] == "12" and rows["negatives"][1] == "1", res.stdout
+
+
+def test_synthetic_frames_can_be_scored_as_stills(runner):
+    """`hubtrack eval --as-stills` scores the `--synthetic` frames as `hubtrack detect` sees an
+    image (no attitude, both pyramid levels): the path outside evaluation takes on renders."""
+    res = runner.run("hubtrack", "eval", "--no-photos", "--synthetic", 12, "--as-stills", "--seed", 3)
+    assert res.returncode == 0, res.stderr
+    assert "synthetic frames: 12 per distance class, seed 3, as still photos" in res.stdout, res.stdout
+    rows = {l.split()[0]: l.split() for l in res.stdout.splitlines() if l.strip()}
+    assert [rows[f"distance:{c}"][1] for c in ("far", "medium", "close")] == ["12"] * 3, res.stdout
+    assert rows["negatives"][1] == "3", res.stdout
+    res = runner.run("hubtrack", "eval", "--no-photos", "--synthetic", 12, "--seed", 3)
+    assert res.returncode == 0 and "synthetic frames: 12 per distance class, seed 3\n" in res.stdout, res.stdout

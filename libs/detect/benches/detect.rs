@@ -2,7 +2,7 @@
 //!
 //! `cargo bench -p hubtrack-detect --bench detect` (or `cargo run --release --bench detect`).
 //! Prints, per mode and OpenCV thread count, median and p99 of the whole `detect` call and the
-//! median of each step.
+//! median of each step. `DETECT_BENCH_ROWS=default,thesis` limits the run to those rows.
 
 use std::time::Instant;
 
@@ -59,7 +59,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("default+d", default, true),
         ("no-yaw+d", no_yaw, true),
     ];
+    // `DETECT_BENCH_ROWS=default,no-crop` runs only those rows (e.g. under a profiler).
+    let only: Option<Vec<String>> = std::env::var("DETECT_BENCH_ROWS").ok().map(|v| v.split(',').map(|s| s.trim().to_string()).collect());
     for (name, config, hinted) in variants {
+        if only.as_ref().is_some_and(|o| !o.iter().any(|r| r == name)) {
+            continue;
+        }
         for threads in [1, default_threads] {
             opencv::core::set_num_threads(threads)?;
             let mut det = Detector::new(config.clone())?;

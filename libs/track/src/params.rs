@@ -289,6 +289,15 @@ pub struct DistanceConfig {
     /// 28) `fly` seeds 161–560 gave 383 of 400 against 381 (285 and 518 in, none out; 387
     /// flights bit for bit as before). Range [0, 100].
     pub jump_min_distance_m: f64,
+    /// How long the close-in rule (`jump_min_distance_m`) outlives the filter's last accepted
+    /// measurement, s (0 = forever). After that long without one, the old distance is no
+    /// evidence against new readings, and a consistent run of them restarts the filter as
+    /// anywhere else. Without it a wrong first reading is a trap: `fly` seed 176 started 40 m
+    /// out, its first tower band ran from the tower's edge to a field boundary (134 px for
+    /// 22), the filter started at 2.7 m, the vehicle backed away 6 m (`max_backoff_m`) and
+    /// then hovered for 100 s with every later reading gated out and the distance invalid.
+    /// Longer than the merged-band runs the rule is for (seconds). Range [0, 3600]; default 10.
+    pub jump_lockout_max_s: f64,
     /// The distance is reported valid only while its standard deviation is at most this, m.
     pub max_std_m: f64,
     /// The distance is reported valid only within this many seconds of its last accepted
@@ -309,6 +318,7 @@ impl Default for DistanceConfig {
             consistency_chi2: 16.0,
             jump_accept_count: 3,
             jump_min_distance_m: 10.0,
+            jump_lockout_max_s: 10.0,
             max_std_m: 10.0,
             stale_after_s: 2.0,
         }
@@ -695,6 +705,7 @@ impl TrackConfig {
         c.open_closed("consistency_chi2", d.consistency_chi2, 0.0, MAX_CHI2)?;
         c.count("jump_accept_count", d.jump_accept_count, 1, MAX_COUNT)?;
         c.closed("jump_min_distance_m", d.jump_min_distance_m, 0.0, MAX_SIZE_M)?;
+        c.closed("jump_lockout_max_s", d.jump_lockout_max_s, 0.0, MAX_TIME_S)?;
         c.open_closed("max_std_m", d.max_std_m, 0.0, 1e4)?;
         c.open_closed("stale_after_s", d.stale_after_s, 0.0, MAX_TIME_S)?;
 

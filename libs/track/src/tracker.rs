@@ -656,8 +656,10 @@ impl Core {
             (value > 0.0).then(|| Estimate { value, std: td.std.hypot(offset * psi.sin() * sig) })
         });
         if let Some(m) = fuse(&[tower_hub, spinner, parallax].into_iter().flatten().collect::<Vec<_>>()) {
-            // No jumps close in (see `distance.jump_min_distance_m`): only gated updates.
-            let close = self.distance.estimate().is_some_and(|d| d.value < dc.jump_min_distance_m);
+            // No jumps close in (see `distance.jump_min_distance_m`): only gated updates, while
+            // the filter has accepted a reading within `jump_lockout_max_s`.
+            let recent = dc.jump_lockout_max_s <= 0.0 || self.distance.last_accept_ns.is_some_and(|a| dt_s(t, a) <= dc.jump_lockout_max_s);
+            let close = recent && self.distance.estimate().is_some_and(|d| d.value < dc.jump_min_distance_m);
             self.distance.update(m, dc.gate_chi2, if close { u32::MAX } else { dc.jump_accept_count }, t);
         }
     }

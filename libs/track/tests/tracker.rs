@@ -992,6 +992,33 @@ fn a_run_of_merged_tower_bands_close_in_does_not_restart_the_distance() {
     assert!((kept.distance_m - 5.0).abs() < 0.5, "with it the spinner keeps it: {} ± {}", kept.distance_m, kept.distance_std_m);
 }
 
+/// A wrong first distance close in does not lock the filter for good
+/// (`distance.jump_lockout_max_s`): `fly` seed 176 started 40 m out on a tower band 6× too wide,
+/// and every true reading after it was gated out for the rest of the flight. The close-in rule
+/// holds for as long as the filter still accepts readings; after `jump_lockout_max_s` without
+/// one, a consistent run of readings restarts it.
+#[test]
+fn a_wrong_close_start_does_not_lock_out_the_true_distance() {
+    let run = |lockout_s: f64, frames: u64| {
+        let mut c = pinhole_config();
+        c.distance.jump_lockout_max_s = lockout_s;
+        // Two seconds of a band six times the tower's width and no spinner (5 m for 30 m), then
+        // the turbine as it is (30 frames a second).
+        track_turbine(&c, 41, frames, 30.0, 0.0, |k, d, _| {
+            if k < 60 {
+                d.circle_found = false;
+                d.tower_width_px *= 6.0;
+            }
+        })
+    };
+    let locked = run(0.0, 60 + 30 * 12);
+    assert!(!(locked.distance_valid && (locked.distance_m - 30.0).abs() < 3.0), "without a limit the rule keeps it out: {locked:?}");
+    let held = run(10.0, 60 + 30 * 8);
+    assert!(!(held.distance_valid && (held.distance_m - 30.0).abs() < 3.0), "for 8 s it still holds: {held:?}");
+    let back = run(10.0, 60 + 30 * 12);
+    assert!(back.distance_valid && (back.distance_m - 30.0).abs() < 1.5, "after 10 s without a reading: {} ± {}", back.distance_m, back.distance_std_m);
+}
+
 /// A nacelle end measured from a hub the detector placed by blade lines alone (no spinner
 /// circle) is not used (`yaw.nacelle_needs_spinner`): such a hub may sit half a chord off, and
 /// the "end" found is then the spinner's own rim, as often on the wrong side as the right one.

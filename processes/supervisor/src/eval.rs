@@ -37,6 +37,10 @@ pub struct EvalArgs {
     /// `photo-like:approach` within 45 m, `photo-like:beyond`).
     #[arg(long, default_value_t = 0)]
     pub photo_like: u64,
+    /// Detect the `--synthetic` frames as still photos are (`hubtrack detect`: no attitude,
+    /// both pyramid levels) instead of as video frames with the roll known (the detect stage).
+    #[arg(long)]
+    pub as_stills: bool,
     /// Seed of the synthetic set and flights.
     #[arg(long, default_value_t = 2026)]
     pub seed: u64,
@@ -96,8 +100,9 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         print_table(&format!("real photos: {}", truth.display()), &names, &table);
     }
     if args.synthetic > 0 {
-        let table = eval_synthetic(args.synthetic, args.seed, &mut detectors, misses, cand_out.as_mut())?;
-        print_table(&format!("synthetic frames: {} per distance class, seed {}", args.synthetic, args.seed), &names, &table);
+        let table = eval_synthetic(args.synthetic, args.seed, args.as_stills, &mut detectors, misses, cand_out.as_mut())?;
+        let how = if args.as_stills { ", as still photos" } else { "" };
+        print_table(&format!("synthetic frames: {} per distance class, seed {}{how}", args.synthetic, args.seed), &names, &table);
     }
     if args.photo_like > 0 {
         let table = eval_photo_like(args.photo_like, args.seed, &mut detectors, misses, cand_out.as_mut())?;
@@ -220,12 +225,14 @@ fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], mis
     Ok(table)
 }
 
-fn eval_synthetic(per_class: u64, seed: u64, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>, mut cand_out: Option<&mut CandidateSink>) -> anyhow::Result<Table> {
+/// `per_class` synthetic frames per distance class (plus negatives), as video frames or, with
+/// `still`, as still photos.
+fn eval_synthetic(per_class: u64, seed: u64, still: bool, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>, mut cand_out: Option<&mut CandidateSink>) -> anyhow::Result<Table> {
     let mut table = Table::new();
     for (class, class_def) in CLASSES.iter().enumerate() {
         let cases = (0..per_class + per_class / 12).map(|i| (format!("{}_{i:04}", class_def.0), synth_case(seed, class, i, i >= per_class)));
         let lenses = [Camera::gopro_hero3(), Camera::usb_narrow()];
-        eval_rendered(cases, lenses, false, detectors, misses, cand_out.as_deref_mut(), &mut table)?;
+        eval_rendered(cases, lenses, still, detectors, misses, cand_out.as_deref_mut(), &mut table)?;
         eprintln!("[eval] synthetic class {} done", class_def.0);
     }
     Ok(table)
