@@ -69,7 +69,14 @@ default_out=libs/detect/models/hubnet.onnx
 out=${1:-$default_out}
 shift || true
 [ "${1:-}" = "--" ] && shift
-data=target/hubnet-data
+# Video frames and still photos have different first pyramid levels
+# (`detect.default.box_first_level`): the still photos' models train on frames prepared as
+# stills (`hubtrack dataset --stills`). Each kind of set has a folder of its own (named after
+# the pyramid), so that sets of the other kind, or of an older pyramid, are not reused.
+pyramid=box
+stills=()
+case "$model" in still | crop-still) pyramid=gauss; stills=(--stills) ;; esac
+data=target/hubnet-data/$pyramid
 venv=target/hubnet-venv
 bin=target/release/hubtrack
 [ -x "$bin" ] || cargo build --release -p hubtrack
@@ -84,11 +91,11 @@ render() {
   shift
   if [ ! -s "$dir/labels.jsonl" ]; then
     echo "[train-hubnet] rendering $dir" >&2
-    "$bin" dataset -o "$dir" "$@"
+    "$bin" dataset -o "$dir" "${stills[@]}" "$@"
   fi
 }
 if [ "$model" = yaw ]; then
-  data=target/hubyaw-data
+  data=target/hubyaw-data/$pyramid
   mkdir -p "$data"
   for seed in 111 113 112; do
     render "$data/s$seed" --working --seed "$seed" --per-class 800 --close-in 1200 --flights 15
@@ -97,7 +104,7 @@ if [ "$model" = yaw ]; then
     "$data/s111" "$data/s113" "$data/s112"
 fi
 if [ "$model" = yaw-close ]; then
-  data=target/hubyaw-data
+  data=target/hubyaw-data/$pyramid
   mkdir -p "$data"
   for seed in 111 113 112; do
     render "$data/s$seed" --working --seed "$seed" --per-class 800 --close-in 1200 --flights 15
@@ -109,7 +116,7 @@ if [ "$model" = yaw-close ]; then
     --out "$out" "$@" "$data/s111" "$data/s113" "$data/c114" "$data/c115" "$data/s112"
 fi
 if [ "$model" = crop ] || [ "$model" = crop-still ]; then
-  data=target/hubcrop-data
+  data=target/hubcrop-data/$pyramid
   mkdir -p "$data"
   for seed in 101 103 102; do
     render "$data/s$seed" --working --seed "$seed" --per-class 1000 --flights 10

@@ -172,6 +172,8 @@ pub(crate) struct Scratch {
     pub segments: Vec<Segment>,
     pub hist: Vec<u32>,
     pub edge_points: Vec<spinner::EdgePoint>,
+    /// The edge points of the whole working image (see `robust::EdgePointCache`).
+    pub all_edge_points: Vec<spinner::EdgePoint>,
     pub hough: hough::OrientedHough,
 }
 
@@ -403,20 +405,42 @@ impl Detector {
         Ok(best)
     }
 
-    /// The learned hub heatmap's input for `image` (see [`heat::network_input`]): the working
-    /// pyramid level of the configured mode, grey, at the network's size.
+    /// The learned hub heatmap's input for `image` as a video frame (see
+    /// [`heat::network_input`]): the working pyramid level of the configured mode, grey, at the
+    /// network's size.
     pub fn network_input(&mut self, image: &ImageView<'_>) -> Result<Mat, DetectError> {
+        self.network_input_for(image, false)
+    }
+
+    /// [`Detector::network_input`] for a video frame or, with `still`, a still photo (their
+    /// pyramids differ: see `default.box_first_level`).
+    pub fn network_input_for(&mut self, image: &ImageView<'_>, still: bool) -> Result<Mat, DetectError> {
         let mut out = Mat::default();
-        heat::network_input(&self.working_level(image)?, &mut out)?;
+        heat::network_input(&self.working_level_for(image, still)?, &mut out)?;
         Ok(out)
     }
 
-    /// The working pyramid level of the configured mode for `image`, grey: what the default
-    /// pipeline and the hub crop network (`heat::HubCropNet`) see.
+    /// The working pyramid level of the configured mode for `image` as a video frame, grey:
+    /// what the default pipeline and the hub crop network (`heat::HubCropNet`) see.
     pub fn working_level(&mut self, image: &ImageView<'_>) -> Result<Mat, DetectError> {
+        self.working_level_for(image, false)
+    }
+
+    /// [`Detector::working_level`] for a video frame or, with `still`, a still photo.
+    pub fn working_level_for(&mut self, image: &ImageView<'_>, still: bool) -> Result<Mat, DetectError> {
         image::check_view(image)?;
         let levels = self.levels_for(image);
-        Ok(self.pyramid.build(image, levels)?.clone())
+        let first = self.first_step(still);
+        Ok(self.pyramid.build(image, levels, first)?.clone())
+    }
+
+    /// How the configured mode makes its first pyramid level for a video frame or a `still`
+    /// photo (which has no time budget: the Gaussian step, as the still models were trained).
+    fn first_step(&self, still: bool) -> image::FirstStep {
+        match self.config.mode {
+            Mode::Default if self.config.default.box_first_level && !still => image::FirstStep::Box,
+            _ => image::FirstStep::Gaussian,
+        }
     }
 
     /// Pyramid steps down to the working size of the configured mode.
@@ -446,7 +470,8 @@ impl Detector {
             heat: None,
         };
         let focal_small = self.focal_px(image.width) / k;
-        let small = self.pyramid.build(image, levels)?;
+        let first = self.first_step(still);
+        let small = self.pyramid.build(image, levels, first)?;
         let pyramid_us = us_since(t0);
         // Hint in working px.
         let hints_small = Hints {
@@ -492,6 +517,9 @@ impl Detector {
             None => None,
         };
         if self.config.mode == Mode::Default {
+            if found.circle.is_some() && found.detected && self.config.default.spinner_refine_rays > 0 {
+                self.pyramid.convert_full_grey(image)?;
+            }
             self.refine_spinner(&mut found, image, k);
         }
         let mut out = self.to_output(&found, k, image.width, image.height);
@@ -699,6 +727,39 @@ mod tests {
         assert!(frames >= 120 && negatives >= 40, "{frames} frames, {negatives} negatives");
         assert!(hits_on >= hits_off + 7, "verdict: {hits_on} hits against {hits_off}");
         assert!(fp_on <= fp_off, "verdict: {fp_on} negatives detected against {fp_off}");
+    }
+
+    /// Video frames take the box first pyramid level (`default.box_first_level`), still photos
+    /// and the thesis mode the Gaussian one; the two differ, and both are the image halved twice.
+    #[test]
+    fn video_frames_and_stills_take_their_own_first_pyramid_level() {
+        // 128x96 BGR: vertical stripes 3 px wide (a box and a Gaussian halving differ on them).
+        let (w, h) = (128usize, 96usize);
+        let data: Vec<u8> = (0..h).flat_map(|_| (0..w).flat_map(|x| if (x / 3) % 2 == 0 { [30u8, 60, 90] } else { [200, 180, 160] })).collect();
+        let view = ImageView { width: w as u32, height: h as u32, stride: 3 * w, format: PixelFormat::Bgr8, data: &data };
+        let cfg = |min_side: u32, max_side: u32, mode: Mode| {
+            let mut c = DetectConfig { mode, ..DetectConfig::default() };
+            (c.default.pyramid_min_side_px, c.default.pyramid_max_side_px) = (min_side, max_side);
+            (c.thesis.pyramid_min_side_px, c.thesis.pyramid_max_side_px) = (min_side, max_side);
+            c.default.hub_heat = false;
+            c.default.hub_crop = false;
+            c.default.hub_yaw = false;
+            c
+        };
+        let level = |det: &mut Detector, still: bool| image::mat_to_vec(&det.working_level_for(&view, still).unwrap()).unwrap();
+        let mut det = Detector::new(cfg(16, 40, Mode::Default)).unwrap();
+        let (video, still) = (level(&mut det, false), level(&mut det, true));
+        assert_eq!(video.len(), 32 * 24);
+        assert_ne!(video, still);
+        let mut reference = image::Pyramid::default();
+        let want = |p: &mut image::Pyramid, first| image::mat_to_vec(p.build(&view, 2, first).unwrap()).unwrap();
+        assert_eq!(video, want(&mut reference, image::FirstStep::Box));
+        assert_eq!(still, want(&mut reference, image::FirstStep::Gaussian));
+        let mut thesis = Detector::new(cfg(16, 40, Mode::Thesis)).unwrap();
+        assert_eq!(level(&mut thesis, false), still);
+        let mut off = cfg(16, 40, Mode::Default);
+        off.default.box_first_level = false;
+        assert_eq!(level(&mut Detector::new(off).unwrap(), false), still);
     }
 
     /// The hub crop moves a detected hub 5 % of the height off onto the hub of a rendered frame

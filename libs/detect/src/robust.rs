@@ -139,13 +139,19 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
         orientation_tol_deg: p.hough_orientation_tol_deg,
     };
     let (hough, segments, pts) = (&mut s.hough, &mut s.segments, &mut s.edge_points);
+    // Without a prediction the close-range search reads every edge point of the frame anyway
+    // (unless the tracker's distance rules close spinners out): then the searches around
+    // candidates take theirs from the same list.
+    let (close_min_r, close_max_r) = close_spinner_radii(p, h, expected.spinner_radius);
+    let share = hints.predicted_hub_px.is_none() && p.close_spinner_always && close_max_r > close_min_r;
+    let mut whole = EdgePointCache { points: &mut s.all_edge_points, ready: false, share };
     std::thread::scope(|scope| {
         // The spinner around the tracker's predicted hub needs only the edges, so it is searched
         // on a second thread while this one runs Hough and the geometry; the first candidate
         // near the prediction takes its circles, as a candidate near an already searched one
         // does in `recognise`.
         let img = &img;
-        let mut ahead = hints.predicted_hub_px.map(|c| (c, scope.spawn(move || search_circles(p, img, c, h, expected.spinner_radius, &mut Vec::new()))));
+        let mut ahead = hints.predicted_hub_px.map(|c| (c, scope.spawn(move || search_circles(p, img, c, h, expected.spinner_radius, &mut Vec::new(), None))));
         let t = Instant::now();
         hough.run(img.edges, img.dx, img.dy, ew, eh, &settings, segments);
         let hough_us = us_since(t);
@@ -156,11 +162,11 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
         log::trace!("hough {} merged {} high {high} longest {:?}", segments.len(), segs.len(), segs.iter().take(5).collect::<Vec<_>>());
         let reuse = spinner_reuse_px(p, h);
         let mut search = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
-            let CircleQuery::Around(c) = q else { return Ok(search_close_circles(p, img, h, expected.spinner_radius, pts)) };
+            let CircleQuery::Around(c) = q else { return Ok(search_close_circles(p, img, h, expected.spinner_radius, &mut whole)) };
             match ahead.take_if(|(q, _)| geometry::dist(*q, c) <= reuse) {
                 // A panic there is a bug here: carry it on.
                 Some((_, job)) => Ok(job.join().unwrap_or_else(|e| std::panic::resume_unwind(e))),
-                None => Ok(search_circles(p, img, c, h, expected.spinner_radius, pts)),
+                None => Ok(search_circles(p, img, c, h, expected.spinner_radius, pts, whole.shared(img))),
             }
         };
         let grad = Gradients { x: GradPlane { data: img.dx, width: ew, height: eh }, y: GradPlane { data: img.dy, width: ew, height: eh } };
@@ -172,6 +178,35 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
         found.geometry_us = us_since(t);
         Ok(found)
     })
+}
+
+/// The edge points of the whole working image, collected at most once per frame.
+struct EdgePointCache<'a> {
+    points: &'a mut Vec<EdgePoint>,
+    ready: bool,
+    /// The searches around candidates select their points from this list (else each collects
+    /// its own box).
+    share: bool,
+}
+
+impl EdgePointCache<'_> {
+    /// Every edge point of `img`, in row order.
+    fn all(&mut self, img: &EdgeImage<'_>) -> &[EdgePoint] {
+        if !self.ready {
+            edge_points(img, [0, 0, img.width as i32, img.height as i32], self.points);
+            self.ready = true;
+        }
+        self.points
+    }
+
+    /// [`EdgePointCache::all`] when it is to be shared with the searches around candidates.
+    fn shared(&mut self, img: &EdgeImage<'_>) -> Option<&[EdgePoint]> {
+        if self.share {
+            Some(self.all(img))
+        } else {
+            None
+        }
+    }
 }
 
 /// The Canny edge image and its Sobel gradients, row-major (working px).
@@ -194,7 +229,9 @@ fn spinner_reuse_px(p: &DefaultParams, h: f64) -> f64 {
 /// [`crate::spinner`].
 /// With an `expected` radius only the radii of the `spinner_hint_radius_*` window around it are
 /// searched, and only the edge pixels such circles can reach are collected.
-fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 4]> {
+/// `all`: every edge point of the image in row order, to select the box's from (else they are
+/// collected from `img` into `pts`).
+fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>, all: Option<&[EdgePoint]>) -> Vec<[f64; 4]> {
     let (min_r, max_r) = spinner_radii(p, h, expected);
     let off = p.spinner_max_offset_frac * h;
     let half = (p.spinner_search_frac * h).min(off + max_r + p.spinner_cell_px);
@@ -206,7 +243,10 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expecte
     if max_r <= min_r || x1 - x0 < 2 || y1 - y0 < 2 {
         return Vec::new();
     }
-    edge_points(img, [x0, y0, x1, y1], pts);
+    match all {
+        Some(all) => select_points(all, [x0, y0, x1, y1], pts),
+        None => edge_points(img, [x0, y0, x1, y1], pts),
+    }
     let cs = CircleSearch {
         roi: [(c[0] - off).max(0.0), (c[1] - off).max(0.0), (c[0] + off).min(cols as f64), (c[1] + off).min(rows as f64)],
         min_r,
@@ -217,6 +257,7 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expecte
         min_coverage: if expected.is_some() { p.spinner_hint_min_coverage } else { p.spinner_min_coverage },
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: SPINNER_PEAKS,
+        vote_every: 1,
     };
     find_circles(pts, &cs)
 }
@@ -242,19 +283,27 @@ fn edge_points(img: &EdgeImage<'_>, [x0, y0, x1, y1]: [i32; 4], pts: &mut Vec<Ed
     }
 }
 
+/// The points of `all` (in row order) inside the box `[x0, y0, x1, y1)`, in the same order:
+/// what [`edge_points`] collects for that box.
+fn select_points(all: &[EdgePoint], [x0, y0, x1, y1]: [i32; 4], pts: &mut Vec<EdgePoint>) {
+    pts.clear();
+    let (x0, y0, x1, y1) = (x0 as f64, y0 as f64, x1 as f64, y1 as f64);
+    let a = all.partition_point(|e| e.p[1] < y0);
+    let b = all.partition_point(|e| e.p[1] < y1).max(a);
+    pts.extend(all[a..b].iter().filter(|e| e.p[0] >= x0 && e.p[0] < x1));
+}
+
 /// Close-range spinners anywhere in the image: circles of radius at least
 /// `close_spinner_radius_frac · h` (working px, best first). At 5–8 m the blades run out of the
 /// frame and no blade crossing may lie near the spinner to search around; this runs only when
 /// nothing else was detected and no hub was predicted, and with an `expected` radius only over
 /// the radii it allows.
-fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>) -> Vec<[f64; 4]> {
-    // With a tracker's distance, only the radii it allows (none when the hub is far).
-    let (lo, max_r) = spinner_radii(p, h, expected);
-    let min_r = lo.max(p.close_spinner_radius_frac * h);
+fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected: Option<f64>, whole: &mut EdgePointCache<'_>) -> Vec<[f64; 4]> {
+    let (min_r, max_r) = close_spinner_radii(p, h, expected);
     if max_r <= min_r {
         return Vec::new();
     }
-    edge_points(img, [0, 0, img.width as i32, img.height as i32], pts);
+    let pts = whole.all(img);
     let cs = CircleSearch {
         roi: [0.0, 0.0, img.width as f64, img.height as f64],
         min_r,
@@ -265,8 +314,17 @@ fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected
         min_coverage: p.close_spinner_min_coverage,
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: SPINNER_PEAKS,
+        vote_every: p.close_spinner_vote_every as usize,
     };
     find_circles(pts, &cs)
+}
+
+/// Radii `[min, max]` the close-range search looks for (working px): at least
+/// `close_spinner_radius_frac · h`, and with a tracker's distance only the radii it allows (none
+/// when the hub is far).
+fn close_spinner_radii(p: &DefaultParams, h: f64, expected: Option<f64>) -> (f64, f64) {
+    let (lo, max_r) = spinner_radii(p, h, expected);
+    (lo.max(p.close_spinner_radius_frac * h), max_r)
 }
 
 /// Radii `[min, max]` the spinner step searches (working px): the configured limits, narrowed
@@ -1817,11 +1875,21 @@ mod tests {
         }
         let img = EdgeImage { edges: &edges, dx: &dx, dy: &dy, width: w, height: h };
         assert!(p.spinner_hint_min_coverage < 0.3 && 0.3 < p.spinner_min_coverage);
-        let blind = search_circles(&p, &img, c, h as f64, None, &mut Vec::new());
+        let blind = search_circles(&p, &img, c, h as f64, None, &mut Vec::new(), None);
         assert!(blind.is_empty(), "{blind:?}");
-        let hinted = search_circles(&p, &img, c, h as f64, Some(r), &mut Vec::new());
+        let hinted = search_circles(&p, &img, c, h as f64, Some(r), &mut Vec::new(), None);
         let k = hinted.first().expect("found with the expected radius");
         assert!(geometry::dist([k[0], k[1]], c) < 2.0 && (k[2] - r).abs() < 2.0, "{k:?}");
+        // The box's points selected from the whole image's are the box's own, in the same
+        // order, and find the same circles.
+        let mut all = Vec::new();
+        edge_points(&img, [0, 0, w as i32, h as i32], &mut all);
+        let (mut boxed, mut selected) = (Vec::new(), Vec::new());
+        edge_points(&img, [200, 100, 260, 180], &mut boxed);
+        select_points(&all, [200, 100, 260, 180], &mut selected);
+        assert!(!boxed.is_empty() && boxed.len() < all.len());
+        assert_eq!(boxed, selected);
+        assert_eq!(search_circles(&p, &img, c, h as f64, Some(r), &mut Vec::new(), Some(&all)), hinted);
     }
 
     #[test]

@@ -145,7 +145,8 @@ fn a_band_along_a_tilted_blade_is_no_tower() {
 }
 
 /// Still photos (`detect_still`): one level finer as well, the more confident detection wins;
-/// with `still_finer_level` off it is exactly the frame path, and a detection of the frame path
+/// with `still_finer_level` off it is exactly the frame path (given the stills' first pyramid
+/// level, `box_first_level` off), and a detection of the frame path
 /// is never lost or made less confident. (Its gain is on cluttered real photos, measured by
 /// `hubtrack eval`; on these clean renders both levels see the turbine to ~120 m and neither at
 /// 160 m.) The still photos' own heatmap and ranking (`still_models`) are off here, and on they
@@ -159,6 +160,8 @@ fn stills_are_also_detected_one_level_finer() {
     levels_only.default.still_models = false;
     // Stills' own override of weak choices off too: only the finer level differs here.
     levels_only.default.still_heat_override_max = levels_only.default.heat_override_max;
+    // Video frames' own first pyramid level off: stills always take the Gaussian one.
+    levels_only.default.box_first_level = false;
     for d in [30.0, 120.0, 160.0] {
         let truth = r.render(&sunlit_sea(), &CameraPose::front(d), &mut buf).unwrap();
         let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };

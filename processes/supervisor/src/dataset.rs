@@ -52,6 +52,11 @@ pub struct DatasetArgs {
     /// crop` cuts its crops from these).
     #[arg(long)]
     pub working: bool,
+    /// Prepare the frames as still photos are detected (`hubtrack detect`: the Gaussian first
+    /// pyramid level) instead of as video frames (`detect.default.box_first_level`): the
+    /// training sets of the still photos' models.
+    #[arg(long)]
+    pub stills: bool,
 }
 
 /// Writes the set.
@@ -70,7 +75,7 @@ pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
         let cam = renderers[k].camera();
         let (w, h) = (cam.width as f64, cam.height as f64);
         let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buffers[k] };
-        let input = if a.working { det.working_level(&view)? } else { det.network_input(&view)? };
+        let input = if a.working { det.working_level_for(&view, a.stills)? } else { det.network_input_for(&view, a.stills)? };
         let file = format!("{name}.png");
         let path = a.out.join(&file);
         let p = path.to_str().context("non-UTF-8 path")?;
