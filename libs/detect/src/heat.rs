@@ -37,8 +37,7 @@ const STILL_MODEL: &[u8] = include_bytes!("../models/hubnet-still.onnx");
 
 /// The network input of one working pyramid level: grey, resized to `NET_WIDTH`×`NET_HEIGHT`.
 pub fn network_input(working: &Mat, out: &mut Mat) -> Result<(), DetectError> {
-    imgproc::resize(working, out, Size::new(NET_WIDTH, NET_HEIGHT), 0.0, 0.0, imgproc::INTER_AREA)?;
-    Ok(())
+    crate::image::resize_area_grey(working, out, NET_WIDTH, NET_HEIGHT)
 }
 
 /// Hub probabilities on a grid of cells over the whole frame.

@@ -517,9 +517,6 @@ impl Detector {
             None => None,
         };
         if self.config.mode == Mode::Default {
-            if found.circle.is_some() && found.detected && self.config.default.spinner_refine_rays > 0 {
-                self.pyramid.convert_full_grey(image)?;
-            }
             self.refine_spinner(&mut found, image, k);
         }
         let mut out = self.to_output(&found, k, image.width, image.height);
@@ -538,7 +535,7 @@ impl Detector {
     fn refine_spinner(&self, found: &mut Found, image: &ImageView<'_>, k: f64) {
         let p = &self.config.default;
         let (Some(c), true) = (found.circle, found.detected && p.spinner_refine_rays > 0) else { return };
-        let Some(plane) = self.pyramid.full_grey(image) else { return };
+        let plane = image::full_grey(image);
         let rf = spinner::Refinement {
             rays: p.spinner_refine_rays as usize,
             band: p.spinner_refine_band,

@@ -246,16 +246,37 @@ pub(crate) fn fit_circle(pts: &[P2]) -> Option<[f64; 3]> {
     Some([uc + mx, vc + my, r])
 }
 
-/// A grey image plane, row-major with `stride` bytes per row.
+/// The grey of one BGR pixel exactly as OpenCV's `cvtColor(BGR2GRAY)` makes it for 8-bit
+/// images (OpenCV 4's `RGB2Gray<uchar>`): 0.114 B + 0.587 G + 0.299 R in 15-bit fixed point,
+/// rounded.
+pub(crate) fn bgr_grey(b: u8, g: u8, r: u8) -> u8 {
+    ((3735 * u32::from(b) + 19235 * u32::from(g) + 9798 * u32::from(r) + (1 << 14)) >> 15) as u8
+}
+
+/// An image plane read as grey, row-major with `stride` bytes per row: grey pixels, or BGR
+/// pixels converted as they are read ([`bgr_grey`]). The spinner's rim refinement reads a few
+/// thousand pixels of the full-resolution frame; converting the whole colour frame for them
+/// cost ~1 ms a frame at close range, where every frame has a spinner.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct GreyPlane<'a> {
     pub data: &'a [u8],
     pub width: usize,
     pub height: usize,
     pub stride: usize,
+    /// Bytes per pixel: 1 (grey) or 3 (BGR).
+    pub channels: usize,
 }
 
 impl GreyPlane<'_> {
+    /// The grey of pixel `(x, y)` (inside the image).
+    pub(crate) fn grey(&self, x: usize, y: usize) -> u8 {
+        let i = y * self.stride + x * self.channels;
+        match self.channels {
+            1 => self.data[i],
+            _ => bgr_grey(self.data[i], self.data[i + 1], self.data[i + 2]),
+        }
+    }
+
     /// Bilinear intensity at `(x, y)`; `None` outside the image.
     fn at(&self, x: f64, y: f64) -> Option<f64> {
         if !(x >= 0.0 && y >= 0.0 && x <= (self.width - 1) as f64 && y <= (self.height - 1) as f64) {
@@ -263,7 +284,7 @@ impl GreyPlane<'_> {
         }
         let (x0, y0) = ((x.floor() as usize).min(self.width.saturating_sub(2)), (y.floor() as usize).min(self.height.saturating_sub(2)));
         let (fx, fy) = (x - x0 as f64, y - y0 as f64);
-        let px = |xx: usize, yy: usize| f64::from(self.data[yy * self.stride + xx]);
+        let px = |xx: usize, yy: usize| f64::from(self.grey(xx, yy));
         let top = px(x0, y0) * (1.0 - fx) + px(x0 + 1, y0) * fx;
         let bottom = px(x0, y0 + 1) * (1.0 - fx) + px(x0 + 1, y0 + 1) * fx;
         Some(top * (1.0 - fy) + bottom * fy)
@@ -516,13 +537,13 @@ mod tests {
                 data[y * w + x] = (90 + (170 - 90) * inside / 16) as u8;
             }
         }
-        let img = GreyPlane { data: &data, width: w, height: h, stride: w };
+        let img = GreyPlane { data: &data, width: w, height: h, stride: w, channels: 1 };
         let rf = Refinement { rays: 64, band: 0.35, band_max_px: 8.0, inlier_px: 1.0, min_inliers: 0.5, max_change: 0.3 };
         let f = refine_circle(&img, [c[0] - 4.0, c[1] + 2.5, r - 2.0], &rf).expect("refined");
         assert!(crate::geometry::dist([f[0], f[1]], c) < 0.3 && (f[2] - r).abs() < 0.3, "{f:?}");
         // A flat image has no rim.
         let flat = vec![90u8; w * h];
-        assert!(refine_circle(&GreyPlane { data: &flat, width: w, height: h, stride: w }, [c[0], c[1], r], &rf).is_none());
+        assert!(refine_circle(&GreyPlane { data: &flat, width: w, height: h, stride: w, channels: 1 }, [c[0], c[1], r], &rf).is_none());
     }
 
     #[test]
