@@ -2,7 +2,8 @@
 //!
 //! `cargo bench -p hubtrack-detect --bench detect` (or `cargo run --release --bench detect`).
 //! Prints, per mode and OpenCV thread count, median and p99 of the whole `detect` call and the
-//! median of each step. `DETECT_BENCH_ROWS=default,thesis` limits the run to those rows.
+//! median of each step. `DETECT_BENCH_ROWS=default,thesis` limits the run to those rows. Rows
+//! `+d` pass the tracker's distance, `+t` its predicted hub too (the detect stage's steady state).
 
 use std::time::Instant;
 
@@ -14,6 +15,17 @@ use hubtrack_types::PixelFormat;
 
 const FRAMES: usize = 100;
 const REPEATS: usize = 3;
+
+/// What a row tells the detector besides the roll.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Hinted {
+    /// Nothing: frames before acquisition.
+    No,
+    /// The tracker's distance.
+    Distance,
+    /// The tracker's distance and predicted hub.
+    Tracking,
+}
 
 fn pct(v: &mut [f64], q: f64) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -29,8 +41,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let case = synth_case(5000, k % CLASSES.len(), k as u64, k % 8 == 7);
         let (scene, pose) = (case.scene, case.pose);
         let mut buf = vec![0u8; cam.frame_bytes()];
-        r.render(&scene, &pose, &mut buf)?;
-        frames.push((buf, pose.roll_deg.to_radians(), pose.distance_m));
+        let truth = r.render(&scene, &pose, &mut buf)?;
+        let hub = truth.hub_px.filter(|_| truth.turbine_in_view);
+        frames.push((buf, pose.roll_deg.to_radians(), pose.distance_m, hub));
     }
     let default_threads = opencv::core::get_num_threads()?;
     println!("{FRAMES} rendered 1920x1080 BGR frames x {REPEATS} repeats; times in ms (wall clock of detect(), per-step medians from Detection.timings)");
@@ -50,14 +63,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c.default.hub_yaw = false;
         c
     };
+    // The `+t` row passes the tracker's prediction too (the true hub, for frames showing one),
+    // as the detect stage does between acquisition and a loss: the hub crop then stays off
+    // (`default.hub_crop_when_tracking`) and the close spinner search only runs when nothing
+    // else is found.
     let default = DetectConfig { mode: Mode::Default, ..DetectConfig::default() };
     let variants = [
-        ("thesis", DetectConfig { mode: Mode::Thesis, ..DetectConfig::default() }, false),
-        ("default", default.clone(), false),
-        ("no-crop", no_crop, false),
-        ("no-yaw", no_yaw.clone(), false),
-        ("default+d", default, true),
-        ("no-yaw+d", no_yaw, true),
+        ("thesis", DetectConfig { mode: Mode::Thesis, ..DetectConfig::default() }, Hinted::No),
+        ("default", default.clone(), Hinted::No),
+        ("no-crop", no_crop, Hinted::No),
+        ("no-yaw", no_yaw.clone(), Hinted::No),
+        ("default+d", default.clone(), Hinted::Distance),
+        ("no-yaw+d", no_yaw, Hinted::Distance),
+        ("default+t", default, Hinted::Tracking),
     ];
     // `DETECT_BENCH_ROWS=default,no-crop` runs only those rows (e.g. under a profiler).
     let only: Option<Vec<String>> = std::env::var("DETECT_BENCH_ROWS").ok().map(|v| v.split(',').map(|s| s.trim().to_string()).collect());
@@ -70,10 +88,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut det = Detector::new(config.clone())?;
             let (mut tot, mut py, mut ed, mut ho, mut ge) = (vec![], vec![], vec![], vec![], vec![]);
             for rep in 0..=REPEATS {
-                for (buf, roll, distance) in &frames {
+                for (buf, roll, distance, hub) in &frames {
                     let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: buf };
                     let t = Instant::now();
-                    let hints = Hints { roll_rad: Some(*roll), hub_distance_m: hinted.then_some(*distance), ..Hints::default() };
+                    let hints = Hints {
+                        roll_rad: Some(*roll),
+                        hub_distance_m: (hinted != Hinted::No).then_some(*distance),
+                        predicted_hub_px: hub.filter(|_| hinted == Hinted::Tracking),
+                    };
                     let out = det.detect(&view, &hints)?;
                     let ms = t.elapsed().as_secs_f64() * 1e3;
                     if rep == 0 {

@@ -19,6 +19,7 @@ use opencv::core::{Mat, Size, Vector};
 use opencv::prelude::*;
 use opencv::{dnn, imgproc};
 
+use crate::convnet::ConvNet;
 use crate::DetectError;
 
 /// Network input width, px.
@@ -127,20 +128,19 @@ pub struct CropPeak {
 /// candidate, scaled to `CROP_SIDE`², to a probability per `CROP_STRIDE`² cell that the hub
 /// lies there. Trained on the renderer (`train-hubnet.py --model crop`).
 pub struct HubCropNet {
-    net: dnn::Net,
+    net: Runner,
     crop: Mat,
-    blob: Mat,
 }
 
 impl HubCropNet {
-    /// Load the shipped model.
-    pub fn new() -> Result<HubCropNet, DetectError> {
-        Ok(HubCropNet { net: load(CROP_MODEL)?, crop: Mat::default(), blob: Mat::default() })
+    /// Load the shipped model; `direct` as for [`HubNet::new`].
+    pub fn new(direct: bool) -> Result<HubCropNet, DetectError> {
+        Ok(HubCropNet { net: Runner::load(CROP_MODEL, direct)?, crop: Mat::default() })
     }
 
     /// Load the still photos' model.
-    pub fn for_stills() -> Result<HubCropNet, DetectError> {
-        Ok(HubCropNet { net: load(STILL_CROP_MODEL)?, crop: Mat::default(), blob: Mat::default() })
+    pub fn for_stills(direct: bool) -> Result<HubCropNet, DetectError> {
+        Ok(HubCropNet { net: Runner::load(STILL_CROP_MODEL, direct)?, crop: Mat::default() })
     }
 
     /// The hub near `centre` (working px) of the working level `working` (grey).
@@ -149,7 +149,7 @@ impl HubCropNet {
         let (x0, y0) = (centre[0] - side / 2.0, centre[1] - side / 2.0);
         warp_crop(working, centre, side, CROP_SIDE, &mut self.crop)?;
         let g = (CROP_SIDE / CROP_STRIDE) as usize;
-        let map = probabilities(&mut self.net, &self.crop, &mut self.blob, (g, g), "hub crop network")?;
+        let map = probabilities(&mut self.net, &self.crop, (g, g), "hub crop network")?;
         let Some(([fx, fy], p)) = map.peak() else { unreachable!("a non-empty map has a peak") };
         Ok(CropPeak { hub: [x0 + fx * side, y0 + fy * side], p, at_centre: map.near(0.5, 0.5, 1.0) })
     }
@@ -191,22 +191,21 @@ pub struct YawReading {
 /// tower top beside the spinner, the spinner's shading), so it still reads when a blade
 /// pointing down hides the tower. Trained on the renderer (`train-hubnet.py --model yaw`).
 pub struct HubYawNet {
-    net: dnn::Net,
+    net: Runner,
     /// Width of its view at the hub's distance, metres.
     window_m: f64,
     crop: Mat,
-    blob: Mat,
 }
 
 impl HubYawNet {
-    /// Load the shipped model (the whole approach, 3.5–46 m).
-    pub fn new() -> Result<HubYawNet, DetectError> {
-        Ok(HubYawNet { net: load(YAW_MODEL)?, window_m: YAW_WINDOW_M, crop: Mat::default(), blob: Mat::default() })
+    /// Load the shipped model (the whole approach, 3.5–46 m); `direct` as for [`HubNet::new`].
+    pub fn new(direct: bool) -> Result<HubYawNet, DetectError> {
+        Ok(HubYawNet { net: Runner::load(YAW_MODEL, direct)?, window_m: YAW_WINDOW_M, crop: Mat::default() })
     }
 
     /// Load the shipped close-range model (3.5–14 m, where the approach ends).
-    pub fn close_range() -> Result<HubYawNet, DetectError> {
-        Ok(HubYawNet { net: load(YAW_CLOSE_MODEL)?, window_m: YAW_CLOSE_WINDOW_M, crop: Mat::default(), blob: Mat::default() })
+    pub fn close_range(direct: bool) -> Result<HubYawNet, DetectError> {
+        Ok(HubYawNet { net: Runner::load(YAW_CLOSE_MODEL, direct)?, window_m: YAW_CLOSE_WINDOW_M, crop: Mat::default() })
     }
 
     /// The yaw around `hub` (working px) of the working level `working` (grey), seen from
@@ -214,10 +213,7 @@ impl HubYawNet {
     pub fn run(&mut self, working: &Mat, hub: [f64; 2], distance_m: f64, focal_px: f64) -> Result<YawReading, DetectError> {
         let side = focal_px * self.window_m / distance_m;
         warp_crop(working, hub, side, YAW_SIDE, &mut self.crop)?;
-        dnn::blob_from_image_to(&self.crop, &mut self.blob, 1.0 / 255.0, Size::new(YAW_SIDE, YAW_SIDE), opencv::core::Scalar::default(), false, false, opencv::core::CV_32F)?;
-        self.net.set_input(&self.blob, "", 1.0, opencv::core::Scalar::default())?;
-        let out = self.net.forward_single("")?;
-        let logits = out.data_typed::<f32>()?;
+        let logits = self.net.run(&self.crop)?;
         if logits.len() != YAW_BINS {
             return Err(DetectError::BadImage(format!("yaw network gave {} values for {YAW_BINS} bins", logits.len())));
         }
@@ -256,20 +252,54 @@ fn warp_crop(working: &Mat, centre: [f64; 2], side: f64, out_side: i32, out: &mu
     Ok(())
 }
 
-/// An ONNX model compiled into the detector, loaded by OpenCV's dnn module.
-fn load(model: &[u8]) -> Result<dnn::Net, DetectError> {
-    Ok(dnn::read_net_from_onnx_buffer(&Vector::<u8>::from_slice(model))?)
+/// A network compiled into the detector and what runs it.
+enum Runner {
+    /// Our own kernels ([`ConvNet`]).
+    Direct(ConvNet),
+    /// OpenCV's dnn module, with its input and output buffers.
+    Dnn { net: dnn::Net, blob: Mat, out: Mat },
+}
+
+impl Runner {
+    /// Loads the ONNX `model`: with `direct`, for [`ConvNet`] where this CPU and the model
+    /// allow it, else for the dnn module.
+    fn load(model: &[u8], direct: bool) -> Result<Runner, DetectError> {
+        if direct {
+            if let Some(net) = ConvNet::from_onnx(model)? {
+                return Ok(Runner::Direct(net));
+            }
+        }
+        let net = dnn::read_net_from_onnx_buffer(&Vector::<u8>::from_slice(model))?;
+        Ok(Runner::Dnn { net, blob: Mat::default(), out: Mat::default() })
+    }
+
+    /// The network's output for the grey image `input`, scaled to [0, 1].
+    fn run(&mut self, input: &Mat) -> Result<&[f32], DetectError> {
+        match self {
+            Runner::Direct(net) => {
+                let (h, w) = (input.rows() as usize, input.cols() as usize);
+                if input.is_continuous() {
+                    net.run(input.data_bytes()?, h, w)
+                } else {
+                    net.run(input.try_clone()?.data_bytes()?, h, w)
+                }
+            }
+            Runner::Dnn { net, blob, out } => {
+                let size = input.size()?;
+                dnn::blob_from_image_to(input, blob, 1.0 / 255.0, size, opencv::core::Scalar::default(), false, false, opencv::core::CV_32F)?;
+                net.set_input(blob, "", 1.0, opencv::core::Scalar::default())?;
+                *out = net.forward_single("")?;
+                Ok(out.data_typed::<f32>()?)
+            }
+        }
+    }
 }
 
 /// Runs `net` on the grey image `input` (scaled to [0, 1]) and returns its `cols`×`rows` logits
 /// as probabilities; `what` names the network in the error when the model's output has another
 /// size.
-fn probabilities(net: &mut dnn::Net, input: &Mat, blob: &mut Mat, (cols, rows): (usize, usize), what: &str) -> Result<Heatmap, DetectError> {
-    let size = input.size()?;
-    dnn::blob_from_image_to(input, blob, 1.0 / 255.0, size, opencv::core::Scalar::default(), false, false, opencv::core::CV_32F)?;
-    net.set_input(blob, "", 1.0, opencv::core::Scalar::default())?;
-    let out = net.forward_single("")?;
-    let logits = out.data_typed::<f32>()?;
+fn probabilities(net: &mut Runner, input: &Mat, (cols, rows): (usize, usize), what: &str) -> Result<Heatmap, DetectError> {
+    let logits = net.run(input)?;
     if logits.len() != rows * cols {
         return Err(DetectError::BadImage(format!("{what} gave {} values for {cols}x{rows} cells", logits.len())));
     }
@@ -278,27 +308,27 @@ fn probabilities(net: &mut dnn::Net, input: &Mat, blob: &mut Mat, (cols, rows): 
 
 /// The loaded network and its buffers.
 pub struct HubNet {
-    net: dnn::Net,
+    net: Runner,
     input: Mat,
-    blob: Mat,
 }
 
 impl HubNet {
-    /// Load the shipped model (video frames).
-    pub fn new() -> Result<HubNet, DetectError> {
-        Ok(HubNet { net: load(MODEL)?, input: Mat::default(), blob: Mat::default() })
+    /// Load the shipped model (video frames); `direct`: run it without the dnn module where
+    /// the CPU allows (`detect.default.builtin_nets`).
+    pub fn new(direct: bool) -> Result<HubNet, DetectError> {
+        Ok(HubNet { net: Runner::load(MODEL, direct)?, input: Mat::default() })
     }
 
     /// Load the still photos' model.
-    pub fn for_stills() -> Result<HubNet, DetectError> {
-        Ok(HubNet { net: load(STILL_MODEL)?, input: Mat::default(), blob: Mat::default() })
+    pub fn for_stills(direct: bool) -> Result<HubNet, DetectError> {
+        Ok(HubNet { net: Runner::load(STILL_MODEL, direct)?, input: Mat::default() })
     }
 
     /// The heatmap of one working pyramid level (grey).
     pub fn run(&mut self, working: &Mat) -> Result<Heatmap, DetectError> {
         network_input(working, &mut self.input)?;
         let (rows, cols) = ((NET_HEIGHT / NET_STRIDE) as usize, (NET_WIDTH / NET_STRIDE) as usize);
-        probabilities(&mut self.net, &self.input, &mut self.blob, (cols, rows), "hub network")
+        probabilities(&mut self.net, &self.input, (cols, rows), "hub network")
     }
 }
 
@@ -367,7 +397,7 @@ mod tests {
 
     #[test]
     fn the_shipped_model_loads_and_maps_the_whole_frame() {
-        let mut net = HubNet::new().expect("the shipped model loads");
+        let mut net = HubNet::new(true).expect("the shipped model loads");
         let img = Mat::new_rows_cols_with_default(270, 480, opencv::core::CV_8UC1, opencv::core::Scalar::all(100.0)).unwrap();
         let h = net.run(&img).unwrap();
         assert_eq!((h.cols, h.rows), ((NET_WIDTH / NET_STRIDE) as usize, (NET_HEIGHT / NET_STRIDE) as usize));

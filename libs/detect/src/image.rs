@@ -203,14 +203,44 @@ pub(crate) fn resize_area_grey(src: &Mat, dst: &mut Mat, width: i32, height: i32
     let ytaps = area_taps(sh as usize, h);
     // SAFETY: every pixel is written below; `create` reuses the allocation when size and type match.
     unsafe { dst.create_rows_cols(height, width, opencv::core::CV_8UC1)? };
+    // Each destination column's taps are consecutive; laid out as `depth` planes of one tap per
+    // column (short columns padded with zero weights), so that the sum over a row runs across
+    // columns, not down a chain of dependent additions. Per column the sum is the same as
+    // OpenCV's: from 0.0, taps left to right (then + 0.0, which changes nothing).
+    let mut spans = vec![(0usize, 0usize); w];
+    for (k, t) in xtaps.iter().enumerate() {
+        if spans[t.dst].1 == 0 {
+            spans[t.dst].0 = k;
+        }
+        spans[t.dst].1 = k + 1;
+    }
+    let depth = spans.iter().map(|(a, b)| b - a).max().unwrap_or(0);
+    let (mut index, mut weight) = (vec![0usize; depth * w], vec![0f32; depth * w]);
+    for (d, &(a, b)) in spans.iter().enumerate() {
+        for j in 0..depth {
+            let t = xtaps[(a + j).min(b - 1)];
+            index[j * w + d] = t.src;
+            weight[j * w + d] = if a + j < b { t.alpha } else { 0.0 };
+        }
+    }
+    let mut pixels = vec![0f32; sw as usize];
     let mut row = vec![0f32; w];
     let mut sum = vec![0f32; w];
     let mut current = ytaps[0].dst;
+    let mut row_of = usize::MAX;
     for yt in &ytaps {
-        let s = src.at_row::<u8>(yt.src as i32)?;
-        row.fill(0.0);
-        for t in &xtaps {
-            row[t.dst] += f32::from(s[t.src]) * t.alpha;
+        // A source row on the border of two destination rows is summed once.
+        if yt.src != row_of {
+            for (f, &b) in pixels.iter_mut().zip(src.at_row::<u8>(yt.src as i32)?) {
+                *f = f32::from(b);
+            }
+            row.fill(0.0);
+            for (idx, wt) in index.chunks_exact(w).zip(weight.chunks_exact(w)) {
+                for ((r, &i), &a) in row.iter_mut().zip(idx).zip(wt) {
+                    *r += pixels[i] * a;
+                }
+            }
+            row_of = yt.src;
         }
         if yt.dst != current {
             write_row(dst.at_row_mut::<u8>(current as i32)?, &sum);
@@ -231,8 +261,11 @@ pub(crate) fn resize_area_grey(src: &Mat, dst: &mut Mat, width: i32, height: i32
 /// A row of float sums as 8-bit pixels, rounded half to even and saturated (OpenCV's
 /// `saturate_cast<uchar>(float)`).
 fn write_row(out: &mut [u8], sum: &[f32]) {
+    // Adding and taking away 1.5·2²³ rounds a float below 2²² to an integer, half to even
+    // (the FPU's default rounding), without a library call on CPUs lacking `roundss`.
+    const ROUND: f32 = 12_582_912.0;
     for (o, v) in out.iter_mut().zip(sum) {
-        *o = v.round_ties_even().clamp(0.0, 255.0) as u8;
+        *o = ((v.clamp(-1.0, 256.0) + ROUND) - ROUND).clamp(0.0, 255.0) as u8;
     }
 }
 
@@ -351,6 +384,10 @@ mod tests {
             let differ = g.iter().zip(&o).filter(|(a, b)| a != b).count();
             assert_eq!(differ, 0, "{sw}x{sh} -> {w}x{h}: {differ} of {} pixels differ", o.len());
         }
+        // Halves round to even, as `saturate_cast<uchar>(float)`; out of range saturates.
+        let mut out = [0u8; 8];
+        write_row(&mut out, &[0.5, 1.5, 2.5, 3.49, 254.5, 255.5, -0.7, 300.0]);
+        assert_eq!(out, [0, 2, 2, 3, 254, 255, 0, 255]);
     }
 
     #[test]

@@ -16,6 +16,7 @@ pub mod geometry;
 pub mod params;
 
 mod blade;
+mod convnet;
 pub mod heat;
 mod hough;
 mod image;
@@ -160,6 +161,9 @@ pub enum DetectError {
     /// OpenCV reported an error.
     #[error("OpenCV: {0}")]
     OpenCv(#[from] opencv::Error),
+    /// A compiled-in network could not be read or run.
+    #[error("network: {0}")]
+    Model(String),
 }
 
 /// Reusable OpenCV buffers shared by both pipelines.
@@ -357,18 +361,14 @@ impl Detector {
     /// Validate `config` and allocate the (empty) buffers.
     pub fn new(config: DetectConfig) -> Result<Detector, DetectError> {
         config.validate()?;
-        let hubnet = (config.mode == Mode::Default && config.default.hub_heat).then(heat::HubNet::new).transpose()?;
-        let hubnet_still = (config.mode == Mode::Default && config.default.hub_heat && config.default.still_models)
-            .then(heat::HubNet::for_stills)
-            .transpose()?;
-        let hubcrop = (config.mode == Mode::Default && config.default.hub_crop).then(heat::HubCropNet::new).transpose()?;
-        let hubcrop_still = (config.mode == Mode::Default && config.default.hub_crop && config.default.still_models)
-            .then(heat::HubCropNet::for_stills)
-            .transpose()?;
-        let hubyaw = (config.mode == Mode::Default && config.default.hub_yaw).then(heat::HubYawNet::new).transpose()?;
-        let hubyaw_close = (config.mode == Mode::Default && config.default.hub_yaw && config.default.hub_yaw_close)
-            .then(heat::HubYawNet::close_range)
-            .transpose()?;
+        let on = |model: bool| config.mode == Mode::Default && model;
+        let (d, direct) = (&config.default, config.default.builtin_nets);
+        let hubnet = on(d.hub_heat).then(|| heat::HubNet::new(direct)).transpose()?;
+        let hubnet_still = on(d.hub_heat && d.still_models).then(|| heat::HubNet::for_stills(direct)).transpose()?;
+        let hubcrop = on(d.hub_crop).then(|| heat::HubCropNet::new(direct)).transpose()?;
+        let hubcrop_still = on(d.hub_crop && d.still_models).then(|| heat::HubCropNet::for_stills(direct)).transpose()?;
+        let hubyaw = on(d.hub_yaw).then(|| heat::HubYawNet::new(direct)).transpose()?;
+        let hubyaw_close = on(d.hub_yaw && d.hub_yaw_close).then(|| heat::HubYawNet::close_range(direct)).transpose()?;
         Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet, hubnet_still, hubcrop, hubcrop_still, hubyaw, hubyaw_close })
     }
 
@@ -768,7 +768,7 @@ mod tests {
         use hubtrack_render::dataset::synth_case;
         use hubtrack_render::{Camera, Renderer};
         let p = params::DefaultParams::default();
-        let mut net = heat::HubCropNet::new().unwrap();
+        let mut net = heat::HubCropNet::new(true).unwrap();
         let mut det = Detector::new(DetectConfig::default()).unwrap();
         // The first medium-range frame of seed 2026 with the hub in view.
         let (small, hub) = (0..20u64)
@@ -827,8 +827,8 @@ mod tests {
         use hubtrack_render::dataset::{photo_case, photo_lenses};
         use hubtrack_render::Renderer;
         let p = params::DefaultParams::default();
-        let mut video = heat::HubCropNet::new().unwrap();
-        let mut still = heat::HubCropNet::for_stills().unwrap();
+        let mut video = heat::HubCropNet::new(true).unwrap();
+        let mut still = heat::HubCropNet::for_stills(true).unwrap();
         let mut det = Detector::new(DetectConfig::default()).unwrap();
         let (mut placed_video, mut placed_still, mut tried) = (0, 0, 0);
         for i in 0..200u64 {

@@ -62,11 +62,6 @@ const ROLL_VERTICAL_TOL_DEG: f64 = 1.5;
 /// A candidate within this fraction of `spinner_max_offset_frac` of a searched one reuses its
 /// spinner circles.
 const SPINNER_REUSE_OF_OFFSET: f64 = 0.5;
-/// Centre peaks examined per spinner search. Small circles (corners, blade–nacelle junctions)
-/// take the strongest accumulator peaks, and a close spinner was often only the 4th to 12th:
-/// 3 → 12 took synthetic hits 57.5 → 60.2 %. More peaks find more false circles in textured
-/// ground too (real photos 35.8 → 28.3 % alone); `spinner_max_interior_density` removes those.
-const SPINNER_PEAKS: usize = 12;
 /// A circle lies inside another when it reaches at most this far (working px) beyond its rim.
 const SPINNER_NEST_TOL_PX: f64 = 1.0;
 /// Tower edges tried as seeds of the two-edge tower fit, longest first.
@@ -256,8 +251,8 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expecte
         // With the size known, the radii searched are few and a weaker rim suffices.
         min_coverage: if expected.is_some() { p.spinner_hint_min_coverage } else { p.spinner_min_coverage },
         max_interior_density: p.spinner_max_interior_density,
-        max_peaks: SPINNER_PEAKS,
-        vote_every: 1,
+        max_peaks: p.spinner_peaks as usize,
+        vote_every: p.spinner_vote_every as usize,
     };
     find_circles(pts, &cs)
 }
@@ -313,7 +308,7 @@ fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected
         radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
         min_coverage: p.close_spinner_min_coverage,
         max_interior_density: p.spinner_max_interior_density,
-        max_peaks: SPINNER_PEAKS,
+        max_peaks: p.spinner_peaks as usize,
         vote_every: p.close_spinner_vote_every as usize,
     };
     find_circles(pts, &cs)

@@ -209,7 +209,7 @@ fn unseen_frames(count: u64, classes: u64) -> Vec<(Vec<u8>, Camera, [f64; 2], hu
 fn the_hub_heatmap_peaks_at_the_hub_on_unseen_frames() {
     use hubtrack_detect::heat::{HubNet, NET_HEIGHT, NET_STRIDE, NET_WIDTH};
     let mut det = Detector::new(DetectConfig::default()).unwrap();
-    let mut net = HubNet::new().unwrap();
+    let mut net = HubNet::new(true).unwrap();
     let (cols, rows) = ((NET_WIDTH / NET_STRIDE) as f64, (NET_HEIGHT / NET_STRIDE) as f64);
     let (mut frames, mut near) = (0, 0);
     for (buf, cam, hub, _) in unseen_frames(30, 3) {
@@ -236,7 +236,7 @@ fn the_hub_heatmap_peaks_at_the_hub_on_unseen_frames() {
 fn the_hub_crop_network_moves_offset_candidates_onto_the_hub() {
     use hubtrack_detect::heat::HubCropNet;
     let mut det = Detector::new(DetectConfig::default()).unwrap();
-    let mut net = HubCropNet::new().unwrap();
+    let mut net = HubCropNet::new(true).unwrap();
     let (mut frames, mut hits, mut closer) = (0, 0, 0);
     for (i, (buf, cam, hub, _)) in unseen_frames(40, 2).into_iter().enumerate() {
         let i = i as u64;
@@ -267,7 +267,7 @@ fn the_hub_crop_network_moves_offset_candidates_onto_the_hub() {
 fn the_yaw_network_reads_the_relative_yaw_of_unseen_views() {
     use hubtrack_detect::heat::HubYawNet;
     let mut det = Detector::new(DetectConfig::default()).unwrap();
-    let mut net = HubYawNet::new().unwrap();
+    let mut net = HubYawNet::new(true).unwrap();
     let (mut errors, mut oblique, mut sign_ok) = (Vec::new(), 0, 0);
     // All three classes (6–45 m), within the network's range.
     for (buf, cam, hub, truth) in unseen_frames(90, 3).into_iter().filter(|f| f.3.distance_m <= 45.0) {
@@ -298,7 +298,7 @@ fn the_close_range_yaw_network_reads_the_hover_views() {
     use hubtrack_detect::heat::HubYawNet;
     use hubtrack_render::dataset::{synth_case_between, CLASSES, CLOSE_IN_M};
     let mut det = Detector::new(DetectConfig::default()).unwrap();
-    let (mut close, mut whole) = (HubYawNet::close_range().unwrap(), HubYawNet::new().unwrap());
+    let (mut close, mut whole) = (HubYawNet::close_range(true).unwrap(), HubYawNet::new(true).unwrap());
     let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
     let (mut close_err, mut whole_err) = (Vec::new(), Vec::new());
     for i in 0..80 {
