@@ -96,7 +96,8 @@ impl Pyramid {
         if first == FirstStep::Box && levels >= 1 && w >= 2 && h >= 2 {
             // An even-sized view, so that the halving is exactly 2×2 blocks (an odd last row
             // or column is dropped); bilinear resizing to exactly half size averages each 2×2
-            // block, and the "exact" variant rounds the same on every CPU.
+            // block, and the "exact" variant rounds the same on every CPU (the area resize's
+            // integer fast path gives the same pixels, and was no faster on cold frames).
             let (ew, eh) = (w / 2 * 2, h / 2 * 2);
             let half = Size::new(w / 2, h / 2);
             let even = roi.roi(Rect::new(0, 0, ew * bpp as i32, eh))?;
@@ -343,6 +344,31 @@ mod tests {
         let gview = ImageView { width: w as u32, height: h as u32, stride: w, format: PixelFormat::Gray8, data: &grey_data };
         let g = mat_to_vec(p.build(&gview, 1, FirstStep::Box).unwrap()).unwrap();
         assert!(g.iter().zip(&got).all(|(a, b)| a.abs_diff(*b) <= 1), "{g:?} vs {got:?}");
+    }
+
+    #[test]
+    fn box_halving_is_the_rounded_2x2_mean() {
+        // Pseudo-random colours, so that every rounding case occurs.
+        let (w, h, stride) = (64usize, 48usize, 64 * 3 + 7);
+        let data = padded(w, h, stride, |x, y| {
+            let k = ((y * w + x) as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            vec![(k >> 40) as u8, (k >> 48) as u8, (k >> 56) as u8]
+        });
+        let flat = Mat::new_rows_cols_with_data::<u8>(h as i32, stride as i32, &data).unwrap();
+        let roi = flat.roi(Rect::new(0, 0, 3 * w as i32, h as i32)).unwrap();
+        let bgr = roi.reshape(3, h as i32).unwrap();
+        let mut half = Mat::default();
+        imgproc::resize(&bgr, &mut half, Size::new(w as i32 / 2, h as i32 / 2), 0.0, 0.0, imgproc::INTER_LINEAR_EXACT).unwrap();
+        let got = mat_to_vec(&half.reshape(1, h as i32 / 2).unwrap().try_clone().unwrap()).unwrap();
+        for y in 0..h / 2 {
+            for x in 0..w / 2 {
+                for c in 0..3 {
+                    let at = |dx: usize, dy: usize| u32::from(data[(2 * y + dy) * stride + 3 * (2 * x + dx) + c]);
+                    let want = (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1) + 2) / 4;
+                    assert_eq!(u32::from(got[(y * w / 2 + x) * 3 + c]), want, "pixel {x},{y} channel {c}");
+                }
+            }
+        }
     }
 
     #[test]

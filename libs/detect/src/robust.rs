@@ -308,7 +308,7 @@ fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected
         radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
         min_coverage: p.close_spinner_min_coverage,
         max_interior_density: p.spinner_max_interior_density,
-        max_peaks: p.spinner_peaks as usize,
+        max_peaks: p.close_spinner_peaks as usize,
         vote_every: p.close_spinner_vote_every as usize,
     };
     find_circles(pts, &cs)
