@@ -227,6 +227,33 @@ fn the_hub_heatmap_peaks_at_the_hub_on_unseen_frames() {
     assert!(near * 10 >= frames * 8, "heatmap peak at the hub in {near} of {frames} frames");
 }
 
+/// The detector's own network kernels (`detect.default.builtin_nets`, where the CPU has AVX2
+/// and FMA) and OpenCV's dnn module give the same heatmaps on rendered frames, to float
+/// rounding, and the same detections.
+#[test]
+fn own_kernels_and_the_dnn_module_see_the_same() {
+    use hubtrack_detect::heat::HubNet;
+    let mut det = Detector::new(DetectConfig::default()).unwrap();
+    let mut dnn_config = DetectConfig::default();
+    dnn_config.default.builtin_nets = false;
+    let mut det_dnn = Detector::new(dnn_config).unwrap();
+    let (mut own, mut dnn) = (HubNet::new(true).unwrap(), HubNet::new(false).unwrap());
+    let mut frames = 0;
+    for (buf, cam, _, _) in unseen_frames(12, 3) {
+        let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
+        let input = det.network_input(&view).unwrap();
+        let (a, b) = (own.run(&input).unwrap(), dnn.run(&input).unwrap());
+        let worst = a.p.iter().zip(&b.p).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+        assert!(worst < 1e-4, "probabilities differ by {worst}");
+        let hints = Hints::default();
+        let (d1, d2) = (det.detect(&view, &hints).unwrap().detection, det_dnn.detect(&view, &hints).unwrap().detection);
+        assert_eq!(d1.detected, d2.detected);
+        assert!((d1.hub_px[0] - d2.hub_px[0]).abs() < 0.5 && (d1.hub_px[1] - d2.hub_px[1]).abs() < 0.5, "{:?} vs {:?}", d1.hub_px, d2.hub_px);
+        frames += 1;
+    }
+    assert!(frames >= 10);
+}
+
 /// The shipped hub crop network places the hub from candidates a spinner radius or two off, on
 /// frames of an evaluation seed it was not trained on (training seeds 101 and 103, 105 beyond
 /// 45 m): started 2–5 % of the image height beside the hub in a random direction, its peak is
