@@ -346,14 +346,19 @@ mod tests {
         assert!(g.iter().zip(&got).all(|(a, b)| a.abs_diff(*b) <= 1), "{g:?} vs {got:?}");
     }
 
-    #[test]
-    fn box_halving_is_the_rounded_2x2_mean() {
-        // Pseudo-random colours, so that every rounding case occurs.
-        let (w, h, stride) = (64usize, 48usize, 64 * 3 + 7);
-        let data = padded(w, h, stride, |x, y| {
+    /// A `w`×`h` BGR image of pseudo-random colours (every rounding case of a conversion
+    /// occurs), rows of `stride` bytes.
+    fn random_colours(w: usize, h: usize, stride: usize) -> Vec<u8> {
+        padded(w, h, stride, |x, y| {
             let k = ((y * w + x) as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
             vec![(k >> 40) as u8, (k >> 48) as u8, (k >> 56) as u8]
-        });
+        })
+    }
+
+    #[test]
+    fn box_halving_is_the_rounded_2x2_mean() {
+        let (w, h, stride) = (64usize, 48usize, 64 * 3 + 7);
+        let data = random_colours(w, h, stride);
         let flat = Mat::new_rows_cols_with_data::<u8>(h as i32, stride as i32, &data).unwrap();
         let roi = flat.roi(Rect::new(0, 0, 3 * w as i32, h as i32)).unwrap();
         let bgr = roi.reshape(3, h as i32).unwrap();
@@ -373,12 +378,9 @@ mod tests {
 
     #[test]
     fn colour_frames_read_as_grey_match_opencv() {
-        // 40,000 pseudo-random colours (many on a rounding edge), in a padded buffer.
+        // 40,000 colours.
         let (w, h, stride) = (251usize, 160usize, 251 * 3 + 5);
-        let data = padded(w, h, stride, |x, y| {
-            let k = ((y * w + x) as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-            vec![(k >> 40) as u8, (k >> 48) as u8, (k >> 56) as u8]
-        });
+        let data = random_colours(w, h, stride);
         let view = ImageView { width: w as u32, height: h as u32, stride, format: PixelFormat::Bgr8, data: &data };
         let flat = Mat::new_rows_cols_with_data::<u8>(h as i32, stride as i32, &data).unwrap();
         let roi = flat.roi(Rect::new(0, 0, 3 * w as i32, h as i32)).unwrap();
