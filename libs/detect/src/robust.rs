@@ -157,7 +157,7 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
         log::trace!("hough {} merged {} high {high} longest {:?}", segments.len(), segs.len(), segs.iter().take(5).collect::<Vec<_>>());
         let reuse = spinner_reuse_px(p, h);
         let mut search = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
-            let CircleQuery::Around(c) = q else { return Ok(search_close_circles(p, img, h, expected.spinner_radius, &mut whole)) };
+            let CircleQuery::Around(c) = q else { return Ok(search_close_circles(p, img, h, expected.spinner_radius, expected.heat, &mut whole, pts)) };
             match ahead.take_if(|(q, _)| geometry::dist(*q, c) <= reuse) {
                 // A panic there is a bug here: carry it on.
                 Some((_, job)) => Ok(job.join().unwrap_or_else(|e| std::panic::resume_unwind(e))),
@@ -293,14 +293,42 @@ fn select_points(all: &[EdgePoint], [x0, y0, x1, y1]: [i32; 4], pts: &mut Vec<Ed
 /// frame and no blade crossing may lie near the spinner to search around; this runs only when
 /// nothing else was detected and no hub was predicted, and with an `expected` radius only over
 /// the radii it allows.
-fn search_close_circles(p: &DefaultParams, img: &EdgeImage<'_>, h: f64, expected: Option<f64>, whole: &mut EdgePointCache<'_>) -> Vec<[f64; 4]> {
+/// With a confident heatmap (peak at least `close_spinner_heat_min`) only centres within
+/// `close_spinner_heat_box_frac · h` of its peak are searched, from the points that can reach
+/// them (`pts` holds them).
+fn search_close_circles(
+    p: &DefaultParams,
+    img: &EdgeImage<'_>,
+    h: f64,
+    expected: Option<f64>,
+    heat: Option<&crate::heat::Heatmap>,
+    whole: &mut EdgePointCache<'_>,
+    pts: &mut Vec<EdgePoint>,
+) -> Vec<[f64; 4]> {
     let (min_r, max_r) = close_spinner_radii(p, h, expected);
     if max_r <= min_r {
         return Vec::new();
     }
-    let pts = whole.all(img);
+    let (w, hh) = (img.width as f64, img.height as f64);
+    let focus = heat
+        .filter(|_| p.close_spinner_heat_min > 0.0)
+        .and_then(|m| m.peak())
+        .filter(|(_, prob)| *prob >= p.close_spinner_heat_min)
+        .map(|([fx, fy], _)| [fx * w, fy * hh]);
+    let (roi, pts): ([f64; 4], &[EdgePoint]) = match focus {
+        Some([cx, cy]) => {
+            let half = p.close_spinner_heat_box_frac * h;
+            let roi = [(cx - half).max(0.0), (cy - half).max(0.0), (cx + half).min(w), (cy + half).min(hh)];
+            // The rims of circles centred in the box lie within max_r of it.
+            let reach = max_r + 2.0;
+            let bounds = [(roi[0] - reach).floor() as i32, (roi[1] - reach).floor() as i32, (roi[2] + reach).ceil() as i32, (roi[3] + reach).ceil() as i32];
+            select_points(whole.all(img), bounds, pts);
+            (roi, pts)
+        }
+        None => ([0.0, 0.0, w, hh], whole.all(img)),
+    };
     let cs = CircleSearch {
-        roi: [0.0, 0.0, img.width as f64, img.height as f64],
+        roi,
         min_r,
         max_r,
         // Large circles need no fine centre cells; the rim fit refines the centre.
