@@ -368,3 +368,35 @@ fn the_detection_carries_the_yaw_network_reading_within_its_range() {
     let (none, _) = render_and_detect(&mut r, &mut buf, &sunlit_sea(), &pose, off, &hints(15.5));
     assert!(none.detected && !none.yaw_net_valid, "read with hub_yaw off");
 }
+
+/// The close-range spinner search restricted to a confident heatmap peak
+/// (`detect.default.close_spinner_heat_min`) still finds the hub in hover views (4–8 m, where
+/// the blades run out of the frame and the search matters most), about as often as the search
+/// over the whole image.
+#[test]
+fn the_close_search_near_the_heatmap_peak_finds_hover_views() {
+    use hubtrack_render::dataset::{synth_case_between, CLASSES, CLOSE_IN_M};
+    let mut whole = Detector::new(DetectConfig::default()).unwrap();
+    let mut focused_config = DetectConfig::default();
+    focused_config.default.close_spinner_heat_min = 0.5;
+    let mut focused = Detector::new(focused_config).unwrap();
+    let mut r = Renderer::new(Camera::gopro_hero3());
+    let cam = *r.camera();
+    let mut buf = vec![0u8; cam.frame_bytes()];
+    let (mut frames, mut hits_whole, mut hits_focused) = (0, 0, 0);
+    for i in 0..30 {
+        let case = synth_case_between(77, CLASSES.len() + 1, i, false, "close_in", CLOSE_IN_M.0, CLOSE_IN_M.1);
+        let truth = r.render(&case.scene, &case.pose, &mut buf).unwrap();
+        let Some(hub) = truth.hub_px.filter(|_| truth.turbine_in_view) else { continue };
+        let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
+        let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() };
+        let hit = |d: Detection| d.detected && (d.hub_px[0] - hub[0]).hypot(d.hub_px[1] - hub[1]) <= 0.03 * cam.height as f64;
+        frames += 1;
+        hits_whole += usize::from(hit(whole.detect(&view, &hints).unwrap().detection));
+        hits_focused += usize::from(hit(focused.detect(&view, &hints).unwrap().detection));
+    }
+    eprintln!("hover views: {frames}, hub found by the whole-image search in {hits_whole}, near the heatmap peak in {hits_focused}");
+    assert!(frames >= 20, "only {frames} hover views with the hub in view");
+    assert!(hits_whole * 10 >= frames * 6, "whole-image search: {hits_whole} of {frames}");
+    assert!(hits_focused + 2 >= hits_whole, "near the heatmap peak: {hits_focused} of {frames}, whole image {hits_whole}");
+}
