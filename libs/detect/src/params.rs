@@ -654,15 +654,17 @@ pub struct DefaultParams {
     /// A/B rounds in one sitting: the geometry step 3.13 against 3.12 ms); 3: close hits seed
     /// 2026 89.0 → 86.0 %.
     pub close_spinner_peaks: u32,
-    /// When the learned heatmap's peak is at least this probable, the close-range search
-    /// looks for centres only near it (`close_spinner_heat_box_frac`), from the edge points
-    /// that can reach them; below it (or at 0, off: the default) over the whole image. Session
-    /// 34, 0.5 with a box of ±0.2 h: bench default 5.50–5.65 → 4.99–5.25 ms (three A/B rounds),
-    /// synthetic hits seeds 2026 / 77 / 500 / 11–14 93.8 / 93.5 / 92.0 / 91.2 / 93.3 / 91.7 /
-    /// 93.0 → 92.8 / 93.7 / 92.3 / 92.0 / 92.0 / 92.0 / 92.5 % (close 607.5 → 606 summed
-    /// points; seed 500 close 84.0 → 85.5 %, seed 12 87.5 → 84.5 %), photos and false
-    /// positives the same; 0.3: about the same. Not adopted without a flight batch: ~7 fewer
-    /// hits in 4,200 frames for ~0.45 ms on frames before acquisition only.
+    /// Before acquisition (no tracker's prediction), when the learned heatmap's peak is at
+    /// least this probable, the close-range search looks for centres only near it
+    /// (`close_spinner_heat_box_frac`), from the edge points that can reach them; below it, with
+    /// a prediction, or at 0 (off) over the whole image. The whole-image search ran on every
+    /// frame without a tracker, ~0.6 ms. Session 34, 0.5 with a box of ±0.2 h against off:
+    /// bench default 5.50–5.65 → 4.99–5.25 ms (three A/B rounds), synthetic hits seeds 2026 /
+    /// 77 / 500 / 11–14 93.8 / 93.5 / 92.0 / 91.2 / 93.3 / 91.7 / 93.0 → 92.8 / 93.7 / 92.3 /
+    /// 92.0 / 92.0 / 92.0 / 92.5 % (close 607.5 → 606 summed points; seed 500 close 84.0 →
+    /// 85.5 %, seed 12 87.5 → 84.5 %), photos and false positives the same; 0.3 about the
+    /// same; `hubtrack fly` seeds 161–240 79 of 80 either way, every outcome the same (flights
+    /// acquire at 30 m, where no close spinner is searched for).
     pub close_spinner_heat_min: f64,
     /// ... within this of the peak, fraction of the image height (half the box's side).
     pub close_spinner_heat_box_frac: f64,
@@ -1227,7 +1229,7 @@ impl Default for DefaultParams {
             close_spinner_min_coverage: 0.3,
             close_spinner_vote_every: 2,
             close_spinner_peaks: 12,
-            close_spinner_heat_min: 0.0,
+            close_spinner_heat_min: 0.5,
             close_spinner_heat_box_frac: 0.2,
             close_spinner_always: true,
             through_dist_frac: 0.01,

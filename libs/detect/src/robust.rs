@@ -157,7 +157,10 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
         log::trace!("hough {} merged {} high {high} longest {:?}", segments.len(), segs.len(), segs.iter().take(5).collect::<Vec<_>>());
         let reuse = spinner_reuse_px(p, h);
         let mut search = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
-            let CircleQuery::Around(c) = q else { return Ok(search_close_circles(p, img, h, expected.spinner_radius, expected.heat, &mut whole, pts)) };
+            // Only before acquisition: with a tracker's prediction the search runs when nothing
+            // else was found, and the heatmap's peak may then be what misled it.
+            let heat = expected.heat.filter(|_| hints.predicted_hub_px.is_none());
+            let CircleQuery::Around(c) = q else { return Ok(search_close_circles(p, img, h, expected.spinner_radius, heat, &mut whole, pts)) };
             match ahead.take_if(|(q, _)| geometry::dist(*q, c) <= reuse) {
                 // A panic there is a bug here: carry it on.
                 Some((_, job)) => Ok(job.join().unwrap_or_else(|e| std::panic::resume_unwind(e))),
@@ -293,7 +296,7 @@ fn select_points(all: &[EdgePoint], [x0, y0, x1, y1]: [i32; 4], pts: &mut Vec<Ed
 /// frame and no blade crossing may lie near the spinner to search around; this runs only when
 /// nothing else was detected and no hub was predicted, and with an `expected` radius only over
 /// the radii it allows.
-/// With a confident heatmap (peak at least `close_spinner_heat_min`) only centres within
+/// With a confident `heat`map (peak at least `close_spinner_heat_min`) only centres within
 /// `close_spinner_heat_box_frac · h` of its peak are searched, from the points that can reach
 /// them (`pts` holds them).
 fn search_close_circles(

@@ -376,10 +376,11 @@ fn the_detection_carries_the_yaw_network_reading_within_its_range() {
 #[test]
 fn the_close_search_near_the_heatmap_peak_finds_hover_views() {
     use hubtrack_render::dataset::{synth_case_between, CLASSES, CLOSE_IN_M};
-    let mut whole = Detector::new(DetectConfig::default()).unwrap();
-    let mut focused_config = DetectConfig::default();
-    focused_config.default.close_spinner_heat_min = 0.5;
-    let mut focused = Detector::new(focused_config).unwrap();
+    let mut whole_config = DetectConfig::default();
+    whole_config.default.close_spinner_heat_min = 0.0;
+    let mut whole = Detector::new(whole_config).unwrap();
+    let mut focused = Detector::new(DetectConfig::default()).unwrap();
+    assert!(focused.config().default.close_spinner_heat_min > 0.0);
     let mut r = Renderer::new(Camera::gopro_hero3());
     let cam = *r.camera();
     let mut buf = vec![0u8; cam.frame_bytes()];
