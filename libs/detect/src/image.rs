@@ -40,8 +40,6 @@ pub(crate) fn check_view(image: &ImageView<'_>) -> Result<usize, DetectError> {
 pub(crate) struct Pyramid {
     /// The full-size grey of a [`FirstStep::Gaussian`] build of a colour frame.
     gray: Mat,
-    /// The half-size colour frame of a [`FirstStep::Box`] build.
-    half_bgr: Mat,
     levels: Vec<Mat>,
     /// Number of pyrDown steps of the last build.
     pub count: usize,
@@ -103,9 +101,8 @@ impl Pyramid {
             let even = roi.roi(Rect::new(0, 0, ew * bpp as i32, eh))?;
             match image.format {
                 PixelFormat::Bgr8 => {
-                    let bgr = even.reshape(3, eh)?;
-                    imgproc::resize(&bgr, &mut self.half_bgr, half, 0.0, 0.0, imgproc::INTER_LINEAR_EXACT)?;
-                    imgproc::cvt_color_def(&self.half_bgr, &mut self.levels[0], imgproc::COLOR_BGR2GRAY)?;
+                    let need = image.stride * (eh as usize - 1) + 3 * ew as usize;
+                    half_grey_bgr(&image.data[..need], image.stride, ew as usize, eh as usize, &mut self.levels[0])?;
                 }
                 PixelFormat::Gray8 => {
                     imgproc::resize(&even, &mut self.levels[0], half, 0.0, 0.0, imgproc::INTER_LINEAR_EXACT)?;
@@ -138,6 +135,114 @@ impl Pyramid {
         }
         self.count = levels;
         Ok(&self.levels[levels - 1])
+    }
+}
+
+/// The grey of the 2×2 block means of the `w`×`h` (even) BGR frame in `src` (rows of `stride`
+/// bytes) into `dst` (`w/2`×`h/2`): bit for bit OpenCV's `resize(INTER_LINEAR_EXACT)` to half
+/// size (each channel's rounded 2×2 mean) followed by `cvtColor(BGR2GRAY)`, in one pass over the
+/// frame without the half-size colour image in between.
+fn half_grey_bgr(src: &[u8], stride: usize, w: usize, h: usize, dst: &mut Mat) -> Result<(), DetectError> {
+    // SAFETY: every pixel is written below; `create` reuses the allocation when size and type match.
+    unsafe { dst.create_rows_cols((h / 2) as i32, (w / 2) as i32, opencv::core::CV_8UC1)? };
+    let (ow, oh) = (w / 2, h / 2);
+    let out = dst.data_bytes_mut()?;
+    let rows = |first: usize, out: &mut [u8]| {
+        for (k, o) in out.chunks_exact_mut(ow).enumerate() {
+            let y = first + k;
+            let (top, bottom) = (&src[2 * y * stride..][..3 * w], &src[(2 * y + 1) * stride..][..3 * w]);
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2 (checked just above).
+                unsafe { half_grey_row_avx2(top, bottom, o) };
+                continue;
+            }
+            half_grey_row(top, bottom, o);
+        }
+    };
+    // With OpenCV allowed more than one thread (as its own resize would use), the lower half
+    // of the frame goes to a second thread: the pass is bound by memory reads, which two cores
+    // make faster (a thread costs some 30 µs; the pass ~0.8 ms on one core).
+    if opencv::core::get_num_threads()? > 1 && oh >= 64 {
+        let (upper, lower) = out.split_at_mut(oh / 2 * ow);
+        std::thread::scope(|scope| {
+            scope.spawn(|| rows(oh / 2, lower));
+            rows(0, upper);
+        });
+    } else {
+        rows(0, out);
+    }
+    Ok(())
+}
+
+/// [`half_grey_row`] in AVX2 instructions, 16 output pixels from 32 input pixels of each row at
+/// a time (each 128-bit lane does 8 of them): the channels are separated with byte shuffles,
+/// each horizontal pair summed with `vpmaddubsw`, and the grey weighted with `vpmaddwd`, in the
+/// same integer arithmetic as the scalar row (so the same pixels).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn half_grey_row_avx2(top: &[u8], bottom: &[u8], out: &mut [u8]) {
+    use std::arch::x86_64::*;
+    // Shuffle masks taking channel `c` of 16 BGR pixels (48 bytes, in three 16-byte vectors)
+    // into one vector: mask k of channel c picks, from vector k, the bytes of the pixels whose
+    // channel-c byte lies there, at the pixel's lane (-1 zeroes the lane).
+    const fn mask(c: usize, k: usize) -> [i8; 16] {
+        let mut m = [-1i8; 16];
+        let mut p = 0;
+        while p < 16 {
+            let byte = 3 * p + c;
+            if byte / 16 == k {
+                m[p] = (byte % 16) as i8;
+            }
+            p += 1;
+        }
+        m
+    }
+    const MASKS: [[[i8; 16]; 3]; 3] = [
+        [mask(0, 0), mask(0, 1), mask(0, 2)],
+        [mask(1, 0), mask(1, 1), mask(1, 2)],
+        [mask(2, 0), mask(2, 1), mask(2, 2)],
+    ];
+    let m: [[__m256i; 3]; 3] = MASKS.map(|ch| ch.map(|k| _mm256_broadcastsi128_si256(_mm_loadu_si128(k.as_ptr().cast()))));
+    let ones8 = _mm256_set1_epi8(1);
+    let two = _mm256_set1_epi16(2);
+    // (B, G) pairs weighted 3735, 19235; (R, 1) pairs weighted 9798, 2^14 (the rounding).
+    let w_bg = _mm256_set1_epi32((19235 << 16) | 3735);
+    let w_r1 = _mm256_set1_epi32((1 << 14 << 16) | 9798);
+    let one16 = _mm256_set1_epi16(1);
+    let blocks = out.len().min(top.len() / 6).min(bottom.len() / 6) / 16;
+    for i in 0..blocks {
+        // 2×2 sums of each channel, u16: lane 0 the first 8 output pixels, lane 1 the next 8.
+        let sums = |row: &[u8]| -> [__m256i; 3] {
+            let p = row[96 * i..][..96].as_ptr();
+            let load = |k: usize| _mm256_loadu2_m128i(p.add(48 + 16 * k).cast(), p.add(16 * k).cast());
+            let v = [load(0), load(1), load(2)];
+            [0, 1, 2].map(|c| {
+                let shuffled = |k: usize| _mm256_shuffle_epi8(v[k], m[c][k]);
+                _mm256_maddubs_epi16(_mm256_or_si256(_mm256_or_si256(shuffled(0), shuffled(1)), shuffled(2)), ones8)
+            })
+        };
+        let (a, b) = (sums(top), sums(bottom));
+        let mean = |c: usize| _mm256_srli_epi16::<2>(_mm256_add_epi16(_mm256_add_epi16(a[c], b[c]), two));
+        let (bl, gr, rd) = (mean(0), mean(1), mean(2));
+        let grey = |bg: __m256i, r1: __m256i| _mm256_srli_epi32::<15>(_mm256_add_epi32(_mm256_madd_epi16(bg, w_bg), _mm256_madd_epi16(r1, w_r1)));
+        let lo = grey(_mm256_unpacklo_epi16(bl, gr), _mm256_unpacklo_epi16(rd, one16));
+        let hi = grey(_mm256_unpackhi_epi16(bl, gr), _mm256_unpackhi_epi16(rd, one16));
+        // Per lane: 8 pixels in order in the low 8 bytes; gather both lanes' into 16 bytes.
+        let px = _mm256_packus_epi16(_mm256_packs_epi32(lo, hi), _mm256_setzero_si256());
+        let px = _mm256_permute4x64_epi64::<0b1000>(px);
+        _mm_storeu_si128(out[16 * i..][..16].as_mut_ptr().cast(), _mm256_castsi256_si128(px));
+    }
+    let done = 16 * blocks;
+    half_grey_row(&top[6 * done..], &bottom[6 * done..], &mut out[done..]);
+}
+
+/// One output row of [`half_grey_bgr`] from two BGR rows.
+#[inline(always)]
+fn half_grey_row(top: &[u8], bottom: &[u8], out: &mut [u8]) {
+    for ((o, a), b) in out.iter_mut().zip(top.chunks_exact(6)).zip(bottom.chunks_exact(6)) {
+        let mean = |c: usize| (u32::from(a[c]) + u32::from(a[c + 3]) + u32::from(b[c]) + u32::from(b[c + 3]) + 2) >> 2;
+        *o = crate::spinner::bgr_grey(mean(0) as u8, mean(1) as u8, mean(2) as u8);
     }
 }
 
@@ -199,6 +304,26 @@ pub(crate) fn resize_area_grey(src: &Mat, dst: &mut Mat, width: i32, height: i32
         imgproc::resize(src, dst, Size::new(width, height), 0.0, 0.0, imgproc::INTER_AREA)?;
         return Ok(());
     }
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { resize_area_grey_avx2(src, dst, width, height) };
+    }
+    resize_area_grey_here(src, dst, width, height)
+}
+
+/// [`resize_area_grey_here`] compiled for AVX2 (the row conversions and roundings in vectors;
+/// the same float operations, nothing fused).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn resize_area_grey_avx2(src: &Mat, dst: &mut Mat, width: i32, height: i32) -> Result<(), DetectError> {
+    resize_area_grey_here(src, dst, width, height)
+}
+
+/// [`resize_area_grey`] of a grey `src` to a smaller, non-integer-ratio size.
+#[inline(always)]
+fn resize_area_grey_here(src: &Mat, dst: &mut Mat, width: i32, height: i32) -> Result<(), DetectError> {
+    let (sw, sh) = (src.cols(), src.rows());
     let (w, h) = (width as usize, height as usize);
     let xtaps = area_taps(sw as usize, w);
     let ytaps = area_taps(sh as usize, h);
@@ -216,11 +341,12 @@ pub(crate) fn resize_area_grey(src: &Mat, dst: &mut Mat, width: i32, height: i32
         spans[t.dst].1 = k + 1;
     }
     let depth = spans.iter().map(|(a, b)| b - a).max().unwrap_or(0);
-    let (mut index, mut weight) = (vec![0usize; depth * w], vec![0f32; depth * w]);
+    let (mut index, mut weight) = (vec![0u32; depth * w], vec![0f32; depth * w]);
     for (d, &(a, b)) in spans.iter().enumerate() {
         for j in 0..depth {
             let t = xtaps[(a + j).min(b - 1)];
-            index[j * w + d] = t.src;
+            assert!(t.src < sw as usize, "area tap outside the row");
+            index[j * w + d] = t.src as u32;
             weight[j * w + d] = if a + j < b { t.alpha } else { 0.0 };
         }
     }
@@ -236,11 +362,8 @@ pub(crate) fn resize_area_grey(src: &Mat, dst: &mut Mat, width: i32, height: i32
                 *f = f32::from(b);
             }
             row.fill(0.0);
-            for (idx, wt) in index.chunks_exact(w).zip(weight.chunks_exact(w)) {
-                for ((r, &i), &a) in row.iter_mut().zip(idx).zip(wt) {
-                    *r += pixels[i] * a;
-                }
-            }
+            // SAFETY: every index is below `sw` = `pixels.len()` (asserted as they were made).
+            unsafe { weigh_row(&pixels, &index, &weight, &mut row) };
             row_of = yt.src;
         }
         if yt.dst != current {
@@ -259,8 +382,65 @@ pub(crate) fn resize_area_grey(src: &Mat, dst: &mut Mat, width: i32, height: i32
     Ok(())
 }
 
+/// `row[d] += pixels[index[j·w + d]] · weight[j·w + d]` for the tap planes `j` in order (`w` =
+/// `row.len()`).
+///
+/// # Safety
+/// Every index must be below `pixels.len()` (the caller checks once, not per row).
+unsafe fn weigh_row(pixels: &[f32], index: &[u32], weight: &[f32], row: &mut [f32]) {
+    debug_assert!(index.iter().all(|&i| (i as usize) < pixels.len()) && index.len() == weight.len());
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above); the indices are the caller's promise.
+        return weigh_row_avx2(pixels, index, weight, row);
+    }
+    weigh_row_here(pixels, index, weight, row)
+}
+
+/// [`weigh_row_here`] with AVX2 gathers, 8 destination pixels at a time: the same float
+/// operations in the same order per pixel (nothing fused), so the same sums.
+///
+/// # Safety
+/// The CPU must have AVX2; every index must be below `pixels.len()`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn weigh_row_avx2(pixels: &[f32], index: &[u32], weight: &[f32], row: &mut [f32]) {
+    use std::arch::x86_64::*;
+    let w = row.len();
+    let planes = index.len() / w.max(1);
+    let blocks = w / 8;
+    for b in 0..blocks {
+        let mut r = _mm256_loadu_ps(row[8 * b..][..8].as_ptr());
+        for j in 0..planes {
+            let idx = _mm256_loadu_si256(index[j * w + 8 * b..][..8].as_ptr().cast());
+            let wt = _mm256_loadu_ps(weight[j * w + 8 * b..][..8].as_ptr());
+            r = _mm256_add_ps(r, _mm256_mul_ps(_mm256_i32gather_ps::<4>(pixels.as_ptr(), idx), wt));
+        }
+        _mm256_storeu_ps(row[8 * b..][..8].as_mut_ptr(), r);
+    }
+    let done = 8 * blocks;
+    for j in 0..planes {
+        for d in done..w {
+            row[d] += *pixels.get_unchecked(index[j * w + d] as usize) * weight[j * w + d];
+        }
+    }
+}
+
+/// # Safety
+/// Every index must be below `pixels.len()`.
+#[inline(always)]
+unsafe fn weigh_row_here(pixels: &[f32], index: &[u32], weight: &[f32], row: &mut [f32]) {
+    let w = row.len();
+    for (idx, wt) in index.chunks_exact(w).zip(weight.chunks_exact(w)) {
+        for ((r, &i), &a) in row.iter_mut().zip(idx).zip(wt) {
+            *r += *pixels.get_unchecked(i as usize) * a;
+        }
+    }
+}
+
 /// A row of float sums as 8-bit pixels, rounded half to even and saturated (OpenCV's
 /// `saturate_cast<uchar>(float)`).
+#[inline(always)]
 fn write_row(out: &mut [u8], sum: &[f32]) {
     // Adding and taking away 1.5·2²³ rounds a float below 2²² to an integer, half to even
     // (the FPU's default rounding), without a library call on CPUs lacking `roundss`.
@@ -373,6 +553,27 @@ mod tests {
                     assert_eq!(u32::from(got[(y * w / 2 + x) * 3 + c]), want, "pixel {x},{y} channel {c}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn box_first_level_of_colour_frames_is_opencvs_resize_then_grey() {
+        // Odd and even sizes, padded strides, every rounding case of both steps.
+        for (w, h, stride) in [(64usize, 48usize, 64 * 3 + 7), (251, 161, 251 * 3 + 5), (1920, 16, 1920 * 3), (640, 201, 640 * 3 + 1)] {
+            let data = random_colours(w, h, stride);
+            let flat = Mat::new_rows_cols_with_data::<u8>(h as i32, stride as i32, &data).unwrap();
+            let (ew, eh) = (w / 2 * 2, h / 2 * 2);
+            let even = flat.roi(Rect::new(0, 0, 3 * ew as i32, eh as i32)).unwrap();
+            let bgr = even.reshape(3, eh as i32).unwrap();
+            let (mut half, mut want) = (Mat::default(), Mat::default());
+            imgproc::resize(&bgr, &mut half, Size::new(w as i32 / 2, h as i32 / 2), 0.0, 0.0, imgproc::INTER_LINEAR_EXACT).unwrap();
+            imgproc::cvt_color_def(&half, &mut want, imgproc::COLOR_BGR2GRAY).unwrap();
+            let view = ImageView { width: w as u32, height: h as u32, stride, format: PixelFormat::Bgr8, data: &data };
+            let mut p = Pyramid::default();
+            let got = mat_to_vec(p.build(&view, 1, FirstStep::Box).unwrap()).unwrap();
+            let want = mat_to_vec(&want).unwrap();
+            let differ = got.iter().zip(&want).filter(|(a, b)| a != b).count();
+            assert_eq!((got.len(), differ), (want.len(), 0), "{w}x{h}: {differ} pixels differ");
         }
     }
 

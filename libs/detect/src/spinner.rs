@@ -271,6 +271,7 @@ pub(crate) fn fit_circle(pts: &[P2]) -> Option<[f64; 3]> {
 /// The grey of one BGR pixel exactly as OpenCV's `cvtColor(BGR2GRAY)` makes it for 8-bit
 /// images (OpenCV 4's `RGB2Gray<uchar>`): 0.114 B + 0.587 G + 0.299 R in 15-bit fixed point,
 /// rounded.
+#[inline]
 pub(crate) fn bgr_grey(b: u8, g: u8, r: u8) -> u8 {
     ((3735 * u32::from(b) + 19235 * u32::from(g) + 9798 * u32::from(r) + (1 << 14)) >> 15) as u8
 }
