@@ -19,7 +19,9 @@
 # from below and above, relative yaw to ±70°, the hub anywhere in the frame, shrubland, wind
 # farms) and 750 negatives, 109 held out and scored on its own. About 10 minutes of rendering and
 # 25–38 of training (session 27: held out 98.4 % on seed 102, 90.1 % on the photo-like views of
-# 109, where the video model gets 97.6 % and 66.9 %). Then `scripts/train-ranker.sh still`.
+# 109, where the video model gets 97.6 % and 66.9 %). Session 35 added close photo-like views
+# (`--photo-close`, 5–12 m: seeds 107, 108 with 1,500 each, 109 with 400 held out).
+# Then `scripts/train-ranker.sh still`.
 # Usage: scripts/train-hubnet.sh [OUT.onnx] [-- train-hubnet.py options]
 # Then rebuild (the model is compiled in) and refit the ranker (scripts/train-ranker.sh): the
 # ranker's `hub_heat` weight belongs to the model it was fitted with.
@@ -144,8 +146,13 @@ if [ "$model" = still ]; then
   for seed in 107 108 109; do
     render "$data/p$seed" --seed "$seed" --per-class 0 --flights 0 --photo-like 3000
   done
-  photo=("$data/p107" "$data/p108")
-  set -- --held-out "$data/p109" "$@"
+  # Close photo-like views (5–12 m, session 35): inspection photos next to the hub.
+  for seed in 107 108; do
+    render "$data/q$seed" --seed "$seed" --per-class 0 --flights 0 --photo-close 1500
+  done
+  render "$data/q109" --seed 109 --per-class 0 --flights 0 --photo-close 400
+  photo=("$data/p107" "$data/p108" "$data/q107" "$data/q108")
+  set -- --held-out "$data/p109" --held-out "$data/q109" "$@"
 fi
 # The last folder is held out (and with `still`, p109: photo-like views, scored on their own).
 "$venv/bin/python" scripts/train-hubnet.py --out "$out" "$@" \

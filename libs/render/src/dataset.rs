@@ -105,6 +105,10 @@ pub fn synth_case_between(seed: u64, class: usize, index: u64, negative: bool, n
 
 /// Distances of the photo-like views ([`photo_case`]), metres (drawn log-uniformly).
 pub const PHOTO_DISTANCE_M: (f64, f64) = (12.0, 250.0);
+/// Distances of the close photo-like views ([`photo_case_close`]), metres (drawn
+/// log-uniformly): inspection photos taken next to the hub, the spinner filling a fifth of the
+/// frame or more, most blades cut by the border.
+pub const PHOTO_CLOSE_DISTANCE_M: (f64, f64) = (5.0, 12.0);
 /// Elevation of the photo-like camera above the hub as seen from it, degrees: drone photos look
 /// at turbines from above as often as from below.
 pub const PHOTO_ELEVATION_DEG: (f64, f64) = (-20.0, 50.0);
@@ -145,6 +149,18 @@ fn half_fov_deg(cam: &Camera) -> (f64, f64) {
 /// from 12–250 m, from 20° below to 50° above the hub, relative yaw up to ±70°, the hub anywhere
 /// in the frame, shrubland ground and wind-farm neighbours, through one of [`photo_lenses`].
 pub fn photo_case(seed: u64, index: u64, negative: bool) -> SynthCase {
+    photo_case_within(seed, index, negative, PHOTO_DISTANCE_M)
+}
+
+/// The `index`-th close photo-like case (deterministic in `seed`, a stream apart from
+/// [`photo_case`]'s): the same views from 5–12 m ([`PHOTO_CLOSE_DISTANCE_M`]), category
+/// `photo-like:close` (`hubtrack dataset --photo-close`, `hubtrack eval --photo-close`).
+pub fn photo_case_close(seed: u64, index: u64, negative: bool) -> SynthCase {
+    photo_case_within(seed ^ 0xC105_E000_0000_0000, index, negative, PHOTO_CLOSE_DISTANCE_M)
+}
+
+/// A photo-like case whose ground range lies within `range` (metres).
+fn photo_case_within(seed: u64, index: u64, negative: bool, range: (f64, f64)) -> SynthCase {
     let mut r = Rng(seed ^ 0x9407_0000_0000 ^ index.wrapping_mul(0x9E37_79B9));
     let wide = r.next_u64().is_multiple_of(3);
     let half_fov_deg = half_fov_deg(&photo_lenses()[if wide { 0 } else { 1 }]);
@@ -157,7 +173,7 @@ pub fn photo_case(seed: u64, index: u64, negative: bool) -> SynthCase {
     if !negative && r.range(0.0, 1.0) < PHOTO_NEIGHBOURS.0 {
         scene.neighbour_turbines = 1 + (r.next_u64() % PHOTO_NEIGHBOURS.1 as u64) as u8;
     }
-    let ground_range = (r.range(PHOTO_DISTANCE_M.0.ln(), PHOTO_DISTANCE_M.1.ln())).exp();
+    let ground_range = (r.range(range.0.ln(), range.1.ln())).exp();
     // The camera's bearing from the hub (0 = in front of a rotor facing +X) and the nacelle's
     // yaw: the relative yaw is their sum.
     let rel_yaw = r.range(-PHOTO_MAX_REL_YAW_DEG, PHOTO_MAX_REL_YAW_DEG);
@@ -171,7 +187,13 @@ pub fn photo_case(seed: u64, index: u64, negative: bool) -> SynthCase {
     pose.yaw_deg += r.range(-1.0, 1.0) * PHOTO_POINTING_FRAC.0 * half_fov_deg.0;
     pose.pitch_deg += r.range(-1.0, 1.0) * PHOTO_POINTING_FRAC.1 * half_fov_deg.1;
     pose.roll_deg = r.range(-MAX_ROLL_DEG, MAX_ROLL_DEG);
-    let class = if ground_range >= PHOTO_BEYOND_M { "beyond" } else { "approach" };
+    let class = if ground_range >= PHOTO_BEYOND_M {
+        "beyond"
+    } else if ground_range < PHOTO_DISTANCE_M.0 {
+        "close"
+    } else {
+        "approach"
+    };
     let categories = if negative { vec!["negatives".into()] } else { vec!["photo-like".into(), format!("photo-like:{class}")] };
     SynthCase { scene, pose, wide, categories }
 }

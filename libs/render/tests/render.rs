@@ -503,3 +503,20 @@ fn photo_like_cases_cover_views_from_above_far_and_oblique() {
     let negative = photo_case(7, 0, true).scene;
     assert!(negative.neighbour_turbines == 0 && !negative.turbine_present, "negatives hold no turbine");
 }
+
+#[test]
+fn close_photo_like_cases_stay_within_their_range_in_a_stream_of_their_own() {
+    use hubtrack_render::dataset::{photo_case, photo_case_close, PHOTO_CLOSE_DISTANCE_M};
+    let mut from_above = 0;
+    for i in 0..200 {
+        let c = photo_case_close(7, i, false);
+        let ground_range = c.pose.distance_m.hypot(c.pose.lateral_m);
+        assert!((PHOTO_CLOSE_DISTANCE_M.0 - 1e-9..PHOTO_CLOSE_DISTANCE_M.1 + 1e-9).contains(&ground_range), "{ground_range}");
+        assert_eq!(c.categories, ["photo-like", "photo-like:close"]);
+        from_above += (c.pose.height_m > 0.3 * ground_range) as usize;
+        // Not the far views' scenes brought closer: a stream of its own.
+        assert_ne!(c.scene, photo_case(7, i, false).scene);
+    }
+    assert!(from_above >= 40, "from well above: {from_above} of 200");
+    assert_eq!(photo_case_close(7, 0, true).categories, ["negatives"]);
+}

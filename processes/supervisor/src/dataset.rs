@@ -4,7 +4,7 @@
 use anyhow::Context;
 use hubtrack_detect::heat::{NET_HEIGHT, NET_WIDTH};
 use hubtrack_detect::ImageView;
-use hubtrack_render::dataset::{flight, photo_case, photo_lenses, synth_case, synth_case_between, BEYOND_M, CLASSES, CLOSE_IN_M};
+use hubtrack_render::dataset::{flight, photo_case, photo_case_close, photo_lenses, synth_case, synth_case_between, BEYOND_M, CLASSES, CLOSE_IN_M};
 use hubtrack_render::{Camera, CameraPose, Renderer, Scene};
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_types::PixelFormat;
@@ -47,6 +47,10 @@ pub struct DatasetArgs {
     /// lens), plus a quarter as many negatives: what drone photos show and approaches do not.
     #[arg(long, default_value_t = 0)]
     pub photo_like: u64,
+    /// Close photo-like single frames (the same views from 5–12 m: inspection photos next to
+    /// the hub), plus a quarter as many negatives.
+    #[arg(long, default_value_t = 0)]
+    pub photo_close: u64,
     /// Write the whole working pyramid level (grey, e.g. 480x270 for 1920x1080) instead of the
     /// heatmap network's input: the hub crop network's training set (`train-hubnet.py --model
     /// crop` cuts its crops from these).
@@ -118,6 +122,10 @@ pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
     for i in 0..a.photo_like + a.photo_like / 4 {
         let case = photo_case(a.seed, i, i >= a.photo_like);
         one(format!("{}_photo_{i:05}", a.seed), &case.scene, &case.pose, if case.wide { 0 } else { 2 })?;
+    }
+    for i in 0..a.photo_close + a.photo_close / 4 {
+        let case = photo_case_close(a.seed, i, i >= a.photo_close);
+        one(format!("{}_photoclose_{i:05}", a.seed), &case.scene, &case.pose, if case.wide { 0 } else { 2 })?;
     }
     for f in 0..a.flights {
         let seed = a.seed.wrapping_mul(1000).wrapping_add(f);

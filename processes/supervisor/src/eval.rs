@@ -7,7 +7,7 @@ use anyhow::Context;
 use hubtrack_capture::images::read_image;
 use hubtrack_detect::params::Mode;
 use hubtrack_detect::{Hints, ImageView, Output};
-use hubtrack_render::dataset::{photo_case, photo_lenses, synth_case, SynthCase, CLASSES};
+use hubtrack_render::dataset::{photo_case, photo_case_close, photo_lenses, synth_case, SynthCase, CLASSES};
 use hubtrack_render::{Camera, Renderer};
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_types::PixelFormat;
@@ -37,6 +37,11 @@ pub struct EvalArgs {
     /// `photo-like:approach` within 45 m, `photo-like:beyond`).
     #[arg(long, default_value_t = 0)]
     pub photo_like: u64,
+    /// Close photo-like rendered views (0: none; the same views from 5–12 m, inspection photos
+    /// next to the hub), plus a twelfth as many negatives, detected as still photos: in the table
+    /// `photo-like close` (category `photo-like:close`).
+    #[arg(long, default_value_t = 0)]
+    pub photo_close: u64,
     /// Detect the `--synthetic` frames as still photos are (`hubtrack detect`: no attitude,
     /// both pyramid levels) instead of as video frames with the roll known (the detect stage).
     #[arg(long)]
@@ -105,8 +110,12 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         print_table(&format!("synthetic frames: {} per distance class, seed {}{how}", args.synthetic, args.seed), &names, &table);
     }
     if args.photo_like > 0 {
-        let table = eval_photo_like(args.photo_like, args.seed, &mut detectors, misses, cand_out.as_mut())?;
+        let table = eval_photo_like(args.photo_like, args.seed, false, &mut detectors, misses, cand_out.as_mut())?;
         print_table(&format!("photo-like rendered views: {}, seed {}, as still photos", args.photo_like, args.seed), &names, &table);
+    }
+    if args.photo_close > 0 {
+        let table = eval_photo_like(args.photo_close, args.seed, true, &mut detectors, misses, cand_out.as_mut())?;
+        print_table(&format!("photo-like close views (5-12 m): {}, seed {}, as still photos", args.photo_close, args.seed), &names, &table);
     }
     if let Some(w) = cand_out.as_mut() {
         w.flush().context("writing the candidates file")?;
@@ -238,11 +247,12 @@ fn eval_synthetic(per_class: u64, seed: u64, still: bool, detectors: &mut [hubtr
     Ok(table)
 }
 
-/// `count` photo-like rendered views (plus a twelfth as many negatives), detected as still
-/// photos are: no attitude, both pyramid levels.
-fn eval_photo_like(count: u64, seed: u64, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>, cand_out: Option<&mut CandidateSink>) -> anyhow::Result<Table> {
+/// `count` photo-like rendered views (plus a twelfth as many negatives), the `close` ones or
+/// the others, detected as still photos are: no attitude, both pyramid levels.
+fn eval_photo_like(count: u64, seed: u64, close: bool, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>, cand_out: Option<&mut CandidateSink>) -> anyhow::Result<Table> {
     let mut table = Table::new();
-    let cases = (0..count + count / 12).map(|i| (format!("photo_{i:04}"), photo_case(seed, i, i >= count)));
+    let (case, prefix): (fn(u64, u64, bool) -> SynthCase, _) = if close { (photo_case_close, "photoclose") } else { (photo_case, "photo") };
+    let cases = (0..count + count / 12).map(|i| (format!("{prefix}_{i:04}"), case(seed, i, i >= count)));
     eval_rendered(cases, photo_lenses(), true, detectors, misses, cand_out, &mut table)?;
     Ok(table)
 }
