@@ -14,8 +14,8 @@
 #
 # `still` fits the still photos' ranking (`detect.default.still_ranker`, session 27) instead:
 # every frame detected with the still photos' heatmap (`still_models_for_frames`), and photo-like
-# views of seeds 11-14 (500 each and, since session 35, 150 close ones from 5-12 m, detected as
-# stills) among the training frames, 300 (and 100 close ones) of seed 2026 held out; the section printed is [detect.default.still_ranker.weights]. About 15 minutes.
+# views of seeds 11-14 (500 each, detected as stills) among the training frames, 300 of seed
+# 2026 held out; the section printed is [detect.default.still_ranker.weights]. About 15 minutes.
 #
 # Usage: scripts/train-ranker.sh [still] [OUT_DIR] [-- train-ranker options]
 # (HUBTRACK_BIN=path runs another build of hubtrack, e.g. a copy made before a model changed.)
@@ -55,7 +55,7 @@ for seed in 11 12 13 14 15 16 17 18; do
 done
 for seed in $($still && echo 11 12 13 14); do
   echo "[train-ranker] rendering photo-like views, seed $seed" >&2
-  "$bin" eval "${rules[@]}" --synthetic 0 --photo-like 500 --photo-close 150 --seed "$seed" --no-photos --candidates "$out/photo$seed.jsonl" >/dev/null
+  "$bin" eval "${rules[@]}" --synthetic 0 --photo-like 500 --seed "$seed" --no-photos --candidates "$out/photo$seed.jsonl" >/dev/null
   train+=("$out/photo$seed.jsonl")
 done
 echo "[train-ranker] rendering flights, seed 3000" >&2
@@ -69,7 +69,7 @@ for seed in 2026 77 500; do
 done
 if $still; then
   echo "[train-ranker] held-out photo-like views, seed 2026" >&2
-  "$bin" eval "${rules[@]}" --synthetic 0 --photo-like 300 --photo-close 100 --seed 2026 --no-photos --candidates "$out/holdout-photo2026.jsonl" >/dev/null
+  "$bin" eval "${rules[@]}" --synthetic 0 --photo-like 300 --seed 2026 --no-photos --candidates "$out/holdout-photo2026.jsonl" >/dev/null
   holdout+=(--holdout "$out/holdout-photo2026.jsonl")
   # The first fit's flights ran at the threshold of the time (session 27: -0.5).
   fitted+=(--set detect.default.still_ranker.min_score=-0.5)
