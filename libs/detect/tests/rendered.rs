@@ -149,8 +149,8 @@ fn a_band_along_a_tilted_blade_is_no_tower() {
 /// level, `box_first_level` off), and a detection of the frame path
 /// is never lost or made less confident. (Its gain is on cluttered real photos, measured by
 /// `hubtrack eval`; on these clean renders both levels see the turbine to ~120 m and neither at
-/// 160 m.) The still photos' own heatmap and ranking (`still_models`) are off here, and on they
-/// find the same hubs.
+/// 160 m.) The still photos' own heatmap and ranking (`still_models`) are off here; on, they
+/// find every hub found without them (since session 35's still heatmap also the one at 160 m).
 #[test]
 fn stills_are_also_detected_one_level_finer() {
     let cam = Camera::gopro_hero3();
@@ -179,7 +179,7 @@ fn stills_are_also_detected_one_level_finer() {
         let hub = truth.hub_px.unwrap();
         let on_hub = |x: &Detection| x.detected && (x.hub_px[0] - hub[0]).hypot(x.hub_px[1] - hub[1]) <= 0.03 * 1080.0;
         assert_eq!(on_hub(&still), on_hub(&frame), "{d} m: the clean render is seen alike at both levels");
-        assert_eq!(on_hub(&with_models), on_hub(&still), "{d} m: the still models see it alike");
+        assert!(on_hub(&with_models) || !on_hub(&still), "{d} m: the still models lose the hub the levels find");
     }
 }
 
