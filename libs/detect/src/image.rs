@@ -34,6 +34,23 @@ pub(crate) fn check_view(image: &ImageView<'_>) -> Result<usize, DetectError> {
     Ok(bpp)
 }
 
+/// The mirror image (left and right swapped) of `image`, a view checked by [`check_view`],
+/// written into `buf` (rows packed).
+pub(crate) fn mirror_into<'b>(image: &ImageView<'_>, buf: &'b mut Vec<u8>) -> ImageView<'b> {
+    let bpp = image.format.bytes_per_pixel();
+    let (w, h) = (image.width as usize, image.height as usize);
+    let row = w * bpp;
+    buf.clear();
+    buf.resize(row * h, 0);
+    for (y, dst) in buf.chunks_exact_mut(row).enumerate() {
+        let src = &image.data[y * image.stride..y * image.stride + row];
+        for (d, s) in dst.chunks_exact_mut(bpp).zip(src.chunks_exact(bpp).rev()) {
+            d.copy_from_slice(s);
+        }
+    }
+    ImageView { width: image.width, height: image.height, stride: row, format: image.format, data: buf }
+}
+
 /// Reusable buffers: full-resolution grey (Gaussian first step) and the pyramid levels. OpenCV's `create` reuses a
 /// Mat's allocation when size and type match, so steady-state frames allocate nothing here.
 #[derive(Default)]

@@ -33,7 +33,7 @@ use opencv::core::{Mat, Vec4i, Vector};
 
 use geometry::{Segment, P2};
 use hubtrack_types::{Detection, PixelFormat, TrackMode, TrackState, MAX_BLADES};
-use params::{DetectConfig, Mode};
+use params::{DetectConfig, Mode, StillMirror};
 
 pub use image::pyramid_levels;
 
@@ -224,6 +224,73 @@ pub(crate) fn us_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e6
 }
 
+/// Column `x` (px) of an image `width` px wide seen in its mirror image, and back.
+fn mirror_x(x: f64, width: u32) -> f64 {
+    (width as f64 - 1.0) - x
+}
+
+/// `out`, detected in the mirror image of a frame `width` px wide, as seen in the frame itself:
+/// columns mirrored, angles measured clockwise from up and signed sideways offsets negated.
+fn mirror_output(out: &mut Output, width: u32) {
+    let d = &mut out.detection;
+    d.hub_px[0] = mirror_x(d.hub_px[0], width);
+    if d.tower_found {
+        d.tower_top_px[0] = mirror_x(d.tower_top_px[0], width);
+    }
+    if d.circle_found {
+        d.circle[0] = mirror_x(d.circle[0], width);
+    }
+    d.hub_tower_gap_px = -d.hub_tower_gap_px;
+    d.nacelle_end_dx_px = -d.nacelle_end_dx_px;
+    d.yaw_net_deg = -d.yaw_net_deg;
+    d.roll_used_deg = -d.roll_used_deg;
+    for a in d.blade_angles_deg.iter_mut().take(d.blade_count as usize) {
+        *a = (360.0 - *a) % 360.0;
+    }
+    out.yaw_deg = out.yaw_deg.map(|y| -y);
+    for l in &mut out.overlay.lines {
+        l.a[0] = mirror_x(l.a[0], width);
+        l.b[0] = mirror_x(l.b[0], width);
+    }
+    if let Some(c) = out.overlay.search_circle.as_mut() {
+        c[0] = mirror_x(c[0], width);
+    }
+    for c in &mut out.candidates {
+        c.hub[0] = mirror_x(c.hub[0], width);
+    }
+}
+
+/// One detection of a still photo from its detections `seen` in the photo and `mirrored` in
+/// its mirror image (already mapped back, [`mirror_output`]), as `default.still_mirror` says:
+/// hubs within `agree_px` of each other are averaged (into the more confident view's
+/// detection, the hub-relative offsets following the hub); with [`StillMirror::Either`] the
+/// more confident detection stands otherwise, with [`StillMirror::Average`] the photo's own.
+/// The time is both views'.
+fn combine_views(seen: Output, mirrored: Output, how: StillMirror, agree_px: f64) -> Output {
+    let (a, b) = (&seen.detection, &mirrored.detection);
+    let total_us = a.timings.total_us + b.timings.total_us;
+    let mirror_wins = b.detected && (!a.detected || b.confidence > a.confidence);
+    let mut out = if a.detected && b.detected && geometry::dist(a.hub_px, b.hub_px) <= agree_px {
+        let mid = [(a.hub_px[0] + b.hub_px[0]) / 2.0, (a.hub_px[1] + b.hub_px[1]) / 2.0];
+        let mut out = if mirror_wins { mirrored } else { seen };
+        let dx = mid[0] - out.detection.hub_px[0];
+        out.detection.hub_px = mid;
+        if out.detection.tower_found {
+            out.detection.hub_tower_gap_px += dx;
+        }
+        if out.detection.nacelle_found {
+            out.detection.nacelle_end_dx_px -= dx;
+        }
+        out
+    } else if how == StillMirror::Either && mirror_wins {
+        mirrored
+    } else {
+        seen
+    };
+    out.detection.timings.total_us = total_us;
+    out
+}
+
 /// Moves a detected hub to the hub crop network's peak around it (`default.hub_crop`), the
 /// nacelle's end measured from the old hub moved along.
 fn place_hub_by_crop(p: &params::DefaultParams, net: &mut heat::HubCropNet, small: &Mat, found: &mut Found) -> Result<(), DetectError> {
@@ -351,6 +418,8 @@ pub struct Detector {
     hubcrop: Option<heat::HubCropNet>,
     /// The still photos' crop network (`default.hub_crop` and `default.still_models`).
     hubcrop_still: Option<heat::HubCropNet>,
+    /// A still photo's mirror image (`default.still_mirror`), kept for the next photo.
+    mirror_buf: Vec<u8>,
     /// The learned yaw network (`default.hub_yaw`, default mode only).
     hubyaw: Option<heat::HubYawNet>,
     /// Its close-range model (`default.hub_yaw_close`).
@@ -369,7 +438,7 @@ impl Detector {
         let hubcrop_still = on(d.hub_crop && d.still_models).then(|| heat::HubCropNet::for_stills(direct)).transpose()?;
         let hubyaw = on(d.hub_yaw).then(|| heat::HubYawNet::new(direct)).transpose()?;
         let hubyaw_close = on(d.hub_yaw && d.hub_yaw_close).then(|| heat::HubYawNet::close_range(direct)).transpose()?;
-        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet, hubnet_still, hubcrop, hubcrop_still, hubyaw, hubyaw_close })
+        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet, hubnet_still, hubcrop, hubcrop_still, mirror_buf: Vec::new(), hubyaw, hubyaw_close })
     }
 
     /// The configuration in use.
@@ -391,6 +460,36 @@ impl Detector {
     /// are a pixel or two wide at the working size and vanish in the smoothing; a photo has no
     /// frame rate to keep, so it can afford the ~4× time.
     pub fn detect_still(&mut self, image: &ImageView<'_>, hints: &Hints) -> Result<Output, DetectError> {
+        let seen = self.detect_still_levels(image, hints)?;
+        let how = self.config.default.still_mirror;
+        if self.config.mode != Mode::Default || how == StillMirror::Off {
+            return Ok(seen);
+        }
+        // The mirror image: the same scene to a detector whose rules and networks are not
+        // exactly mirror-symmetric (the hint's roll mirrors too).
+        let mut buf = std::mem::take(&mut self.mirror_buf);
+        let view = image::mirror_into(image, &mut buf);
+        let mirror_hints = Hints {
+            roll_rad: hints.roll_rad.map(|r| -r),
+            predicted_hub_px: hints.predicted_hub_px.map(|p| [mirror_x(p[0], image.width), p[1]]),
+            hub_distance_m: hints.hub_distance_m,
+        };
+        let mirrored = self.detect_still_levels(&view, &mirror_hints);
+        self.mirror_buf = buf;
+        let mut mirrored = mirrored?;
+        mirror_output(&mut mirrored, image.width);
+        let agree_px = self.config.default.still_mirror_agree_frac * image.height as f64;
+        let mut out = combine_views(seen, mirrored, how, agree_px);
+        // The hub may have moved: the yaw from the hub–tower gap follows it.
+        if out.yaw_deg.is_some() {
+            out.yaw_deg = out.distance_m.map(|d| self.gap_yaw_deg(out.detection.hub_tower_gap_px, d, image.width));
+        }
+        Ok(out)
+    }
+
+    /// [`Detector::detect_still`] on one view: its working level and, with
+    /// `still_finer_level`, one finer, the more confident detection winning.
+    fn detect_still_levels(&mut self, image: &ImageView<'_>, hints: &Hints) -> Result<Output, DetectError> {
         image::check_view(image)?;
         let levels = self.levels_for(image);
         let coarse = self.detect_at(image, hints, levels, true)?;
@@ -581,6 +680,15 @@ impl Detector {
     }
 
     /// Scale a pipeline result to full resolution and derive distance and yaw.
+    /// The relative yaw from the hub–tower gap `gap_px` (full-resolution px) seen from
+    /// `distance_m` in a frame `width` px wide, degrees. Thesis eq. 7.14: ψ = asin(δ·d / (f·|p1 −
+    /// p2|)). The hub sits in front of the tower, so a camera on the turbine's left (positive
+    /// yaw) sees the hub to the LEFT of the tower axis: the sign is flipped.
+    fn gap_yaw_deg(&self, gap_px: f64, distance_m: f64, width: u32) -> f64 {
+        let s = (gap_px * distance_m / (self.focal_px(width) * self.config.camera.hub_tower_gap_m)).clamp(-1.0, 1.0);
+        -s.asin().to_degrees()
+    }
+
     fn to_output(&self, f: &Found, k: f64, width: u32, height: u32) -> Output {
         let mut d = Detection { image_width: width, image_height: height, ..Detection::default() };
         d.detected = f.detected;
@@ -622,11 +730,7 @@ impl Detector {
                 let axis_x = f.tower_axis.and_then(|a| a.x_at_y(f.hub[1])).unwrap_or(top[0]);
                 d.hub_tower_gap_px = (f.hub[0] - axis_x) * k;
                 if let Some(dist) = distance_m {
-                    // Thesis eq. 7.14: ψ = asin(δ·d / (f·|p1 − p2|)). The hub sits in front of the
-                    // tower, so a camera on the turbine's left (positive yaw) sees the hub to the
-                    // LEFT of the tower axis: the sign is flipped.
-                    let s = (d.hub_tower_gap_px * dist / (focal * self.config.camera.hub_tower_gap_m)).clamp(-1.0, 1.0);
-                    yaw_deg = Some(-s.asin().to_degrees());
+                    yaw_deg = Some(self.gap_yaw_deg(d.hub_tower_gap_px, dist, width));
                 }
             }
         }
@@ -863,6 +967,69 @@ mod tests {
         }
         assert_eq!(tried, 96, "too few photo-like views with the hub well inside the frame");
         assert!(placed_still >= 50 && placed_still >= placed_video + 10, "placed: still network {placed_still}, video network {placed_video} of {tried}");
+    }
+
+    /// The mirror image swaps columns pixel for pixel (stride padding dropped), and a detection
+    /// in it maps back: columns mirrored, blade angles and sideways offsets negated; twice is
+    /// the identity.
+    #[test]
+    fn a_detection_in_the_mirror_image_maps_back_onto_the_photo() {
+        // 3x2 BGR with 2 bytes of padding per row.
+        let data: Vec<u8> = vec![1, 2, 3, 4, 5, 6, 7, 8, 9, 0, 0, 11, 12, 13, 14, 15, 16, 17, 18, 19, 0, 0];
+        let view = ImageView { width: 3, height: 2, stride: 11, format: PixelFormat::Bgr8, data: &data };
+        let mut buf = Vec::new();
+        let m = image::mirror_into(&view, &mut buf);
+        assert_eq!((m.width, m.height, m.stride), (3, 2, 9));
+        assert_eq!(m.data, &[7, 8, 9, 4, 5, 6, 1, 2, 3, 17, 18, 19, 14, 15, 16, 11, 12, 13]);
+
+        let mut d = Detection { detected: true, hub_px: [100.0, 50.0], tower_found: true, tower_top_px: [110.0, 60.0], circle_found: true, circle: [101.0, 51.0, 7.0], hub_tower_gap_px: -10.0, nacelle_found: true, nacelle_end_dx_px: 4.0, yaw_net_deg: 3.0, roll_used_deg: 2.0, blade_count: 3, ..Detection::default() };
+        d.blade_angles_deg[..3].copy_from_slice(&[0.0, 60.0, 250.0]);
+        let out = Output {
+            detection: d,
+            distance_m: Some(20.0),
+            yaw_deg: Some(5.0),
+            overlay: Overlay { lines: vec![OverlayLine { a: [0.0, 1.0], b: [639.0, 2.0], kind: LineKind::Blade }], search_circle: Some([100.0, 50.0, 30.0]) },
+            candidates: vec![Considered { hub: [100.0, 50.0], confidence: 0.5, features: ranker::Features::default() }],
+        };
+        let mut back = out.clone();
+        mirror_output(&mut back, 640);
+        let b = &back.detection;
+        assert_eq!((b.hub_px, b.tower_top_px, b.circle), ([539.0, 50.0], [529.0, 60.0], [538.0, 51.0, 7.0]));
+        assert_eq!((b.hub_tower_gap_px, b.nacelle_end_dx_px, b.yaw_net_deg, b.roll_used_deg), (10.0, -4.0, -3.0, -2.0));
+        assert_eq!(&b.blade_angles_deg[..3], &[0.0, 300.0, 110.0]);
+        assert_eq!((back.yaw_deg, back.distance_m), (Some(-5.0), Some(20.0)));
+        assert_eq!((back.overlay.lines[0].a, back.overlay.lines[0].b), ([639.0, 1.0], [0.0, 2.0]));
+        assert_eq!(back.candidates[0].hub, [539.0, 50.0]);
+        mirror_output(&mut back, 640);
+        assert_eq!(back, out);
+    }
+
+    /// Hubs of the two views close together are averaged (into the more confident view's
+    /// detection, its hub-relative offsets following); apart, or found in one view only, the
+    /// photo's own detection stands with `average` and the more confident one with `either`.
+    #[test]
+    fn a_photo_and_its_mirror_image_combine_as_configured() {
+        let view = |detected: bool, hub: [f64; 2], confidence: f64, us: f64| {
+            let mut d = Detection { detected, hub_px: hub, confidence, tower_found: true, hub_tower_gap_px: 0.0, ..Detection::default() };
+            d.timings.total_us = us;
+            Output { detection: d, ..Output::default() }
+        };
+        let (seen, mirrored) = (view(true, [100.0, 50.0], 0.6, 10.0), view(true, [104.0, 53.0], 0.8, 12.0));
+        for how in [StillMirror::Average, StillMirror::Either] {
+            let out = combine_views(seen.clone(), mirrored.clone(), how, 6.0);
+            assert_eq!(out.detection.hub_px, [102.0, 51.5]);
+            assert_eq!((out.detection.confidence, out.detection.hub_tower_gap_px), (0.8, -2.0), "the mirror's detection, the gap from the new hub");
+            assert_eq!(out.detection.timings.total_us, 22.0);
+        }
+        let far = view(true, [140.0, 50.0], 0.8, 12.0);
+        assert_eq!(combine_views(seen.clone(), far.clone(), StillMirror::Average, 6.0).detection.hub_px, [100.0, 50.0]);
+        assert_eq!(combine_views(seen.clone(), far.clone(), StillMirror::Either, 6.0).detection.hub_px, [140.0, 50.0]);
+        let weak = view(true, [140.0, 50.0], 0.5, 12.0);
+        assert_eq!(combine_views(seen.clone(), weak, StillMirror::Either, 6.0).detection.hub_px, [100.0, 50.0]);
+        let none = view(false, [0.0, 0.0], 0.3, 12.0);
+        assert!(combine_views(none.clone(), far.clone(), StillMirror::Either, 6.0).detection.detected);
+        assert!(!combine_views(none.clone(), far, StillMirror::Average, 6.0).detection.detected);
+        assert_eq!(combine_views(seen.clone(), none, StillMirror::Either, 6.0).detection.hub_px, [100.0, 50.0]);
     }
 
     #[test]
