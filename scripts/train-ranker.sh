@@ -39,11 +39,15 @@ bin=${HUBTRACK_BIN:-target/release/hubtrack}
 robust=(--also-without hub_heat)
 # First pass with the rules' ranking, so that the data does not depend on the weights built in.
 rules=(--set detect.default.ranker.ranking=rules)
-# Options of every detection with the fitted ranking, and the section the weights go to.
-fitted=()
+# Options of every detection with the fitted ranking, and the section the weights go to. The
+# ranking scores the candidates of one view: stills (photo-like views) are detected without
+# their mirror image (`detect.default.still_mirror`), whose candidates would replace the
+# photo's own where it wins.
+fitted=(--set detect.default.still_mirror=off)
+rules=("${fitted[@]}" "${rules[@]}")
 section=ranker
 if $still; then
-  fitted=(--set detect.default.still_models_for_frames=true)
+  fitted=(--set detect.default.still_mirror=off --set detect.default.still_models_for_frames=true)
   rules=("${fitted[@]}" --set detect.default.still_ranker.ranking=rules)
   section=still_ranker
 fi
