@@ -263,8 +263,9 @@ fn mirror_output(out: &mut Output, width: u32) {
 /// One detection of a still photo from its detections `seen` in the photo and `mirrored` in
 /// its mirror image (already mapped back, [`mirror_output`]), as `default.still_mirror` says:
 /// hubs within `agree_px` of each other are averaged (into the more confident view's
-/// detection, the hub-relative offsets following the hub); with [`StillMirror::Either`] the
-/// more confident detection stands otherwise, with [`StillMirror::Average`] the photo's own.
+/// detection, the hub-relative offsets following the hub); otherwise with
+/// [`StillMirror::Either`] the more confident detection stands, with [`StillMirror::Average`]
+/// the photo's own, and with [`StillMirror::Both`] none.
 /// The time is both views'.
 fn combine_views(seen: Output, mirrored: Output, how: StillMirror, agree_px: f64) -> Output {
     let (a, b) = (&seen.detection, &mirrored.detection);
@@ -285,7 +286,9 @@ fn combine_views(seen: Output, mirrored: Output, how: StillMirror, agree_px: f64
     } else if how == StillMirror::Either && mirror_wins {
         mirrored
     } else {
-        seen
+        let mut out = seen;
+        out.detection.detected &= how != StillMirror::Both;
+        out
     };
     out.detection.timings.total_us = total_us;
     out
@@ -1006,7 +1009,8 @@ mod tests {
 
     /// Hubs of the two views close together are averaged (into the more confident view's
     /// detection, its hub-relative offsets following); apart, or found in one view only, the
-    /// photo's own detection stands with `average` and the more confident one with `either`.
+    /// photo's own detection stands with `average`, the more confident one with `either`, and
+    /// none with `both`.
     #[test]
     fn a_photo_and_its_mirror_image_combine_as_configured() {
         let view = |detected: bool, hub: [f64; 2], confidence: f64, us: f64| {
@@ -1029,7 +1033,11 @@ mod tests {
         let none = view(false, [0.0, 0.0], 0.3, 12.0);
         assert!(combine_views(none.clone(), far.clone(), StillMirror::Either, 6.0).detection.detected);
         assert!(!combine_views(none.clone(), far, StillMirror::Average, 6.0).detection.detected);
-        assert_eq!(combine_views(seen.clone(), none, StillMirror::Either, 6.0).detection.hub_px, [100.0, 50.0]);
+        assert_eq!(combine_views(seen.clone(), none.clone(), StillMirror::Either, 6.0).detection.hub_px, [100.0, 50.0]);
+        // `both`: only where the two views agree.
+        assert!(combine_views(seen.clone(), mirrored.clone(), StillMirror::Both, 6.0).detection.detected);
+        assert!(!combine_views(seen.clone(), none, StillMirror::Both, 6.0).detection.detected);
+        assert!(!combine_views(seen.clone(), view(true, [140.0, 50.0], 0.8, 12.0), StillMirror::Both, 6.0).detection.detected);
     }
 
     #[test]

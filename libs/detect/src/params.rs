@@ -609,12 +609,14 @@ pub struct DefaultParams {
     /// two views err apart. `"off"`; `"average"`: hubs found in both within
     /// `still_mirror_agree_frac` are averaged, nothing else changes; `"either"`: as average,
     /// and otherwise the more confident of the two detections stands (a hub found in one view
-    /// only counts). Doubles the time per photo. Session 36, hits off / average / either:
-    /// photo-like views seed 2026 81.3 / 84.0 / 89.0 % (negatives detected 1 / 1 / 2 of 25),
-    /// seed 500 81.2 / 82.8 / 85.2 % (7 / 7 / 9 of 50); close photo-like views seed 2026 62.0
-    /// / 66.0 / 72.0 % (1 / 1 / 2 of 25); approach frames as stills seed 2026 93.8 / 95.5 /
-    /// 96.8 % (5 / 5 / 5 of 48); the development photos 35 / 38 / 43 of 53 (0 of 8 negatives
-    /// each). Default `"either"`: the most hits everywhere for 3 more of 123 rendered negatives.
+    /// only counts); `"both"`: only hubs both views find count (averaged). Doubles the time
+    /// per photo. Session 36, hits off / average / either / both: photo-like views seed 2026
+    /// 81.3 / 84.0 / 89.0 / 78.3 % (negatives detected 1 / 1 / 2 / 0 of 25), seed 500 81.2 /
+    /// 82.8 / 85.2 / 78.0 % (7 / 7 / 9 / 4 of 50); close photo-like views seed 2026 62.0 /
+    /// 66.0 / 72.0 / 53.0 % (1 / 1 / 2 / 0 of 25); approach frames as stills seed 2026 93.8 /
+    /// 95.5 / 96.8 / 93.8 % (5 / 5 / 5 / 1 of 48); the development photos 35 / 38 / 43 / 36 of 53 (0 of 8
+    /// negatives each). Default `"either"`: the most hits everywhere for 3 more of 123
+    /// rendered negatives; `"both"` 5 instead of 14 of 148 for 0–9 points of hits.
     pub still_mirror: StillMirror,
     /// Hubs of the two views at most this far apart are one hub (averaged), fraction of the
     /// image height. Range [0, 0.5].
@@ -882,6 +884,8 @@ pub enum StillMirror {
     /// As `Average`, and otherwise the more confident detection of the two.
     #[default]
     Either,
+    /// Only hubs both views find (close together, averaged).
+    Both,
 }
 
 /// How the default pipeline picks the hub among its candidates.
