@@ -614,9 +614,9 @@ pub struct DefaultParams {
     /// 81.3 / 84.0 / 89.0 / 78.3 % (negatives detected 1 / 1 / 2 / 0 of 25), seed 500 81.2 /
     /// 82.8 / 85.2 / 78.0 % (7 / 7 / 9 / 4 of 50); close photo-like views seed 2026 62.0 /
     /// 66.0 / 72.0 / 53.0 % (1 / 1 / 2 / 0 of 25); approach frames as stills seed 2026 93.8 /
-    /// 95.5 / 96.8 / 93.8 % (5 / 5 / 5 / 1 of 48); the development photos 35 / 38 / 43 / 36 of 53 (0 of 8
-    /// negatives each). Default `"either"`: the most hits everywhere for 3 more of 123
-    /// rendered negatives; `"both"` 5 instead of 14 of 148 for 0–9 points of hits.
+    /// 95.5 / 96.8 / 93.8 % (5 / 5 / 5 / 1 of 48); the development photos 35 / 38 / 43 / 36 of
+    /// 53 (0 of 8 negatives each). Default `"either"`: the most hits everywhere, 18 instead of
+    /// 14 of the 148 rendered negatives detected; `"both"` 5, for 0–9 points of hits.
     pub still_mirror: StillMirror,
     /// Hubs of the two views at most this far apart are one hub (averaged), fraction of the
     /// image height. Range [0, 0.5].
