@@ -459,9 +459,11 @@ impl Detector {
 
     /// Detect the hub in a still photo (`hubtrack detect`, `hubtrack eval` on photos): as
     /// [`Detector::detect`], and in the `default` mode with `still_finer_level` also one
-    /// pyramid level finer, the more confident detection winning. A distant turbine's blades
-    /// are a pixel or two wide at the working size and vanish in the smoothing; a photo has no
-    /// frame rate to keep, so it can afford the ~4× time.
+    /// pyramid level finer, the more confident detection winning, and with `still_mirror` all
+    /// that also in the photo's mirror image, the two views combined as it says. A distant
+    /// turbine's blades are a pixel or two wide at the working size and vanish in the
+    /// smoothing, and the rules and networks err differently on the mirror image; a photo has
+    /// no frame rate to keep, so it can afford the ~8× time.
     pub fn detect_still(&mut self, image: &ImageView<'_>, hints: &Hints) -> Result<Output, DetectError> {
         let seen = self.detect_still_levels(image, hints)?;
         let how = self.config.default.still_mirror;
@@ -682,7 +684,6 @@ impl Detector {
         }
     }
 
-    /// Scale a pipeline result to full resolution and derive distance and yaw.
     /// The relative yaw from the hub–tower gap `gap_px` (full-resolution px) seen from
     /// `distance_m` in a frame `width` px wide, degrees. Thesis eq. 7.14: ψ = asin(δ·d / (f·|p1 −
     /// p2|)). The hub sits in front of the tower, so a camera on the turbine's left (positive
@@ -692,6 +693,7 @@ impl Detector {
         -s.asin().to_degrees()
     }
 
+    /// Scale a pipeline result to full resolution and derive distance and yaw.
     fn to_output(&self, f: &Found, k: f64, width: u32, height: u32) -> Output {
         let mut d = Detection { image_width: width, image_height: height, ..Detection::default() };
         d.detected = f.detected;
