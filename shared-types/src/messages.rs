@@ -12,7 +12,9 @@ use serde::{Deserialize, Serialize};
 /// Frame sequence number, capture time and per-stage stamps carried by every result message.
 /// All times are `CLOCK_MONOTONIC` ns (see [`crate::time`]).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::Stamps")]
 pub struct Stamps {
     /// Sequence number of the camera frame this result derives from.
@@ -27,7 +29,9 @@ pub struct Stamps {
 
 /// Pixel layout of a frame's `[u8]` payload.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::PixelFormat")]
 pub enum PixelFormat {
     /// 8-bit blue, green, red; `stride >= 3 * width`.
@@ -49,7 +53,9 @@ impl PixelFormat {
 
 /// Which kind of source produced a frame.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::FrameSourceKind")]
 pub enum FrameSourceKind {
     /// A V4L2 camera.
@@ -70,7 +76,9 @@ pub enum FrameSourceKind {
 /// Exact ground truth of a rendered frame (synthetic source and simulator only; `valid == false`
 /// for real cameras). Pixel coordinates are in the frame's own resolution, origin top-left.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::FrameTruth")]
 pub struct FrameTruth {
     /// The frame was rendered and the fields below hold its truth.
@@ -96,7 +104,9 @@ pub struct FrameTruth {
 
 /// User header of every sample on the frames service; the pixels are the sample's `[u8]` payload.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::FrameHeader")]
 pub struct FrameHeader {
     /// Frame sequence number, +1 per frame the source produced (a gap means a lost frame).
@@ -133,7 +143,9 @@ pub const MAX_BLADES: usize = 6;
 
 /// Time spent in each step of one detection, microseconds.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::DetectTimings")]
 pub struct DetectTimings {
     /// Pyramid downsampling (and colour conversion).
@@ -150,7 +162,9 @@ pub struct DetectTimings {
 
 /// Result of the detect stage for one frame.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::Detection")]
 pub struct Detection {
     /// Frame identity and stage stamps.
@@ -213,7 +227,9 @@ pub struct Detection {
 
 /// Track mode of the hub tracker.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::TrackMode")]
 #[serde(rename_all = "snake_case")]
 pub enum TrackMode {
@@ -230,7 +246,9 @@ pub enum TrackMode {
 
 /// Output of the track stage.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::TrackState")]
 pub struct TrackState {
     /// Frame identity and stage stamps.
@@ -346,7 +364,9 @@ impl JsonSchema for Text64 {
 
 /// Which task of the approach produced a setpoint.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::ApproachTask")]
 #[serde(rename_all = "snake_case")]
 pub enum ApproachTask {
@@ -369,7 +389,9 @@ pub enum ApproachTask {
 
 /// Output of the control stage: a body-frame velocity and yaw-rate command.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::Setpoint")]
 pub struct Setpoint {
     /// Frame identity and stage stamps.
@@ -392,7 +414,9 @@ pub struct Setpoint {
 
 /// The vehicle's state as reported by the autopilot (or the simulator).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::VehicleState")]
 pub struct VehicleState {
     /// When the newest autopilot message in this state was received (monotonic ns).
@@ -425,7 +449,9 @@ pub struct VehicleState {
 
 /// Periodic status of a stage process (its heartbeat); read by the supervisor and recorded.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::StageStatus")]
 pub struct StageStatus {
     /// Stage name (`capture`, `detect`, ...).
@@ -466,13 +492,25 @@ mod tests {
     /// (`Detection::yaw_net_*`, `TrackState::net_yaw_*`) default when absent.
     #[test]
     fn messages_recorded_before_the_network_fields_still_read() {
-        let mut track = serde_json::to_value(TrackState { yaw_valid: true, yaw_deg: 2.5, ..TrackState::default() }).unwrap();
+        let mut track = serde_json::to_value(TrackState {
+            yaw_valid: true,
+            yaw_deg: 2.5,
+            ..TrackState::default()
+        })
+        .unwrap();
         for key in ["net_yaw_valid", "net_yaw_deg", "net_yaw_std_deg"] {
-            assert!(track.as_object_mut().unwrap().remove(key).is_some(), "{key}");
+            assert!(
+                track.as_object_mut().unwrap().remove(key).is_some(),
+                "{key}"
+            );
         }
         let back: TrackState = serde_json::from_value(track).unwrap();
         assert!(back.yaw_valid && back.yaw_deg == 2.5 && !back.net_yaw_valid);
-        let mut det = serde_json::to_value(Detection { detected: true, ..Detection::default() }).unwrap();
+        let mut det = serde_json::to_value(Detection {
+            detected: true,
+            ..Detection::default()
+        })
+        .unwrap();
         for key in ["yaw_net_valid", "yaw_net_deg", "yaw_net_std_deg"] {
             assert!(det.as_object_mut().unwrap().remove(key).is_some(), "{key}");
         }
@@ -592,7 +630,9 @@ pub const MAX_STAGES: usize = 8;
 
 /// Lifecycle state of a supervised stage.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::StageState")]
 #[serde(rename_all = "snake_case")]
 pub enum StageState {
@@ -611,7 +651,9 @@ pub enum StageState {
 
 /// The supervisor's view of one stage.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::SupervisedStage")]
 pub struct SupervisedStage {
     /// Stage name.
@@ -632,7 +674,9 @@ pub struct SupervisedStage {
 
 /// Published by `hubtrack run` (history 1: a late subscriber gets the latest at once).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::SupervisorStatus")]
 pub struct SupervisorStatus {
     /// Supervisor process id.
@@ -653,7 +697,9 @@ pub struct SupervisorStatus {
 /// `CLOCK_MONOTONIC` when `control.clock = "sim"`, so that every time stamp in a simulated run
 /// is on one clock (as ROS's `use_sim_time`).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 #[type_name("hubtrack::SimClock")]
 pub struct SimClock {
     /// Simulated time on the pipeline clock (sim start's `CLOCK_MONOTONIC` + simulated ns).

@@ -14,7 +14,11 @@ pub struct ParamError {
 
 impl std::fmt::Display for ParamError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "config key `{}` = {} is out of range: allowed {}", self.key, self.value, self.allowed)
+        write!(
+            f,
+            "config key `{}` = {} is out of range: allowed {}",
+            self.key, self.value, self.allowed
+        )
     }
 }
 
@@ -32,7 +36,11 @@ impl<'a> Check<'a> {
     }
 
     fn err(&self, key: &str, value: String, allowed: String) -> ParamError {
-        ParamError { key: format!("{}.{}", self.prefix, key), value, allowed }
+        ParamError {
+            key: format!("{}.{}", self.prefix, key),
+            value,
+            allowed,
+        }
     }
 
     /// `lo <= v <= hi`, finite.
@@ -85,7 +93,11 @@ impl<'a> Check<'a> {
         if lo < hi {
             Ok(())
         } else {
-            Err(self.err(key_lo, lo.to_string(), format!("less than {}.{key_hi} = {hi}", self.prefix)))
+            Err(self.err(
+                key_lo,
+                lo.to_string(),
+                format!("less than {}.{key_hi} = {hi}", self.prefix),
+            ))
         }
     }
 }
@@ -98,12 +110,25 @@ mod tests {
     fn errors_name_the_full_key_and_range() {
         let c = Check::new("track.filter");
         let e = c.open_closed("damping", 3.0, 0.0, 1.0).unwrap_err();
-        assert_eq!(e.to_string(), "config key `track.filter.damping` = 3 is out of range: allowed (0, 1]");
+        assert_eq!(
+            e.to_string(),
+            "config key `track.filter.damping` = 3 is out of range: allowed (0, 1]"
+        );
         assert!(c.closed("x", f64::NAN, 0.0, 1.0).is_err());
-        assert!(c.less("lo", 2.0, "hi", 1.0).unwrap_err().allowed.contains("track.filter.hi"));
+        assert!(c
+            .less("lo", 2.0, "hi", 1.0)
+            .unwrap_err()
+            .allowed
+            .contains("track.filter.hi"));
         let e = c.zero_or_closed("tol", 0.5, 1.0, 10.0).unwrap_err();
-        assert_eq!(e.to_string(), "config key `track.filter.tol` = 0.5 is out of range: allowed 0 (off) or [1, 10]");
-        assert!(c.zero_or_closed("tol", 0.0, 1.0, 10.0).is_ok() && c.zero_or_closed("tol", 1.5, 1.0, 10.0).is_ok());
+        assert_eq!(
+            e.to_string(),
+            "config key `track.filter.tol` = 0.5 is out of range: allowed 0 (off) or [1, 10]"
+        );
+        assert!(
+            c.zero_or_closed("tol", 0.0, 1.0, 10.0).is_ok()
+                && c.zero_or_closed("tol", 1.5, 1.0, 10.0).is_ok()
+        );
         assert!(c.zero_or_closed("tol", f64::NAN, 1.0, 10.0).is_err());
     }
 }

@@ -183,7 +183,13 @@ impl HubFix {
         let v = Some(v).filter(|v| v.position_valid && v.attitude_valid)?;
         let heading = v.yaw_rad + t.hub_bearing_deg[0].to_radians();
         let [n, e, _] = v.position_ned_m;
-        let fix = HubFix { north_east: [n + distance_m * heading.cos(), e + distance_m * heading.sin()], at_ns: now };
+        let fix = HubFix {
+            north_east: [
+                n + distance_m * heading.cos(),
+                e + distance_m * heading.sin(),
+            ],
+            at_ns: now,
+        };
         fix.north_east.iter().all(|x| x.is_finite()).then_some(fix)
     }
 
@@ -262,7 +268,9 @@ fn secs(a: u64, b: u64) -> f64 {
 
 /// What an unusable track looks like, for the Hold/Search reasons.
 fn unusable_reason(track: Option<&TrackState>, age_s: f64, max_age_s: f64) -> Option<String> {
-    let Some(t) = track else { return Some("no track yet".into()) };
+    let Some(t) = track else {
+        return Some("no track yet".into());
+    };
     match t.mode {
         TrackMode::Acquiring => Some("track acquiring".into()),
         TrackMode::Lost => Some("track lost".into()),
@@ -365,7 +373,10 @@ impl Approach {
                     Some(a) => a.why,
                     None => why,
                 };
-                self.abort = Some(AbortState { why: why.clone(), good_since_ns: None });
+                self.abort = Some(AbortState {
+                    why: why.clone(),
+                    good_since_ns: None,
+                });
                 self.abort_output(format!("abort: {why}"))
             }
             None => match self.abort.as_mut() {
@@ -393,7 +404,11 @@ impl Approach {
         let cmd = self.sanitise(cmd);
         self.cmd = cmd;
         let reason = truncate_reason(reason);
-        let transition = (task != self.task).then(|| Transition { from: self.task, to: task, reason: reason.clone() });
+        let transition = (task != self.task).then(|| Transition {
+            from: self.task,
+            to: task,
+            reason: reason.clone(),
+        });
         if let Some(t) = &transition {
             log::debug!("approach: {:?} -> {:?}: {}", t.from, t.to, t.reason);
         }
@@ -452,17 +467,33 @@ impl Approach {
     }
 
     /// Normal operation (no abort): Hold/Search without a usable track, else the tasks.
-    fn control(&mut self, now: u64, dt: f64, input: &ApproachInput) -> (ApproachTask, Command, String) {
+    fn control(
+        &mut self,
+        now: u64,
+        dt: f64,
+        input: &ApproachInput,
+    ) -> (ApproachTask, Command, String) {
         // Age of the track = time since its last detection + how old the state itself is.
-        let age_s = input.track.map_or(0.0, |t| t.time_since_detection_s + secs(t.stamps.capture_ns, now));
-        match (unusable_reason(input.track, age_s, self.config.max_track_age_s), input.track) {
+        let age_s = input.track.map_or(0.0, |t| {
+            t.time_since_detection_s + secs(t.stamps.capture_ns, now)
+        });
+        match (
+            unusable_reason(input.track, age_s, self.config.max_track_age_s),
+            input.track,
+        ) {
             (None, Some(t)) => self.tasks(now, dt, t, input.vehicle),
             (why, _) => self.no_track(now, dt, input.track, why.unwrap_or_default()),
         }
     }
 
     /// Hold, or a bounded search rotation, while there is no usable track.
-    fn no_track(&mut self, now: u64, dt: f64, track: Option<&TrackState>, why: String) -> (ApproachTask, Command, String) {
+    fn no_track(
+        &mut self,
+        now: u64,
+        dt: f64,
+        track: Option<&TrackState>,
+        why: String,
+    ) -> (ApproachTask, Command, String) {
         if self.unusable_since_ns.is_none() {
             self.unusable_since_ns = Some(now);
             // The filtered yaw and distance describe a scene we no longer see: start afresh.
@@ -475,12 +506,33 @@ impl Approach {
         // Lost close to the rotor: turning away would lose it for good (and swing the camera
         // away from the blades we are next to); back away slowly instead, until the whole
         // rotor is back in view.
-        if let (true, false, Some(d)) = (want_search, self.search_exhausted, self.last_distance_m.filter(|d| *d < c.close_range_m)) {
-            let speed = slew_forward(self.cmd.vx, -c.search_backoff_m_s, c.accel_xy_m_s2, c.brake_x_m_s2, dt);
+        if let (true, false, Some(d)) = (
+            want_search,
+            self.search_exhausted,
+            self.last_distance_m.filter(|d| *d < c.close_range_m),
+        ) {
+            let speed = slew_forward(
+                self.cmd.vx,
+                -c.search_backoff_m_s,
+                c.accel_xy_m_s2,
+                c.brake_x_m_s2,
+                dt,
+            );
             self.backoff_m += speed.abs() * dt;
             if self.backoff_m < c.close_range_m - d {
-                let reason = format!("search: back off, {:.1}/{:.1} m, lost at {d:.1} m", self.backoff_m, c.close_range_m - d);
-                return (ApproachTask::Search, Command { vx: speed, ..Command::default() }, reason);
+                let reason = format!(
+                    "search: back off, {:.1}/{:.1} m, lost at {d:.1} m",
+                    self.backoff_m,
+                    c.close_range_m - d
+                );
+                return (
+                    ApproachTask::Search,
+                    Command {
+                        vx: speed,
+                        ..Command::default()
+                    },
+                    reason,
+                );
             }
             self.search_exhausted = true;
         }
@@ -488,7 +540,12 @@ impl Approach {
             let right = self.last_seen_right.unwrap_or(true);
             let sign = if right { 1.0 } else { -1.0 };
             let target = sign * c.search_yaw_rate_deg_s.to_radians();
-            let rate = slew(self.cmd.yaw_rate, target, c.yaw_accel_deg_s2.to_radians(), dt);
+            let rate = slew(
+                self.cmd.yaw_rate,
+                target,
+                c.yaw_accel_deg_s2.to_radians(),
+                dt,
+            );
             self.search_turned_deg += rate.abs().to_degrees() * dt;
             if self.search_turned_deg < c.search_max_turn_deg {
                 let side = if right { "right" } else { "left" };
@@ -497,7 +554,14 @@ impl Approach {
                     c.search_yaw_rate_deg_s, self.search_turned_deg, c.search_max_turn_deg
                 );
                 // Translation stops at once; only the rotation ramps.
-                return (ApproachTask::Search, Command { yaw_rate: rate, ..Command::default() }, reason);
+                return (
+                    ApproachTask::Search,
+                    Command {
+                        yaw_rate: rate,
+                        ..Command::default()
+                    },
+                    reason,
+                );
             }
             self.search_exhausted = true;
         }
@@ -512,7 +576,13 @@ impl Approach {
     }
 
     /// T1/T2/T3 and Done with a usable track.
-    fn tasks(&mut self, now: u64, dt: f64, t: &TrackState, vehicle: Option<&VehicleState>) -> (ApproachTask, Command, String) {
+    fn tasks(
+        &mut self,
+        now: u64,
+        dt: f64,
+        t: &TrackState,
+        vehicle: Option<&VehicleState>,
+    ) -> (ApproachTask, Command, String) {
         let c = self.config.clone();
         if self.unusable_since_ns.take().is_some() {
             // Re-acquired: a fresh track, a fresh search budget.
@@ -521,13 +591,19 @@ impl Approach {
             self.search_exhausted = false;
             self.backoff_m = 0.0;
             // ... which may be something else: the remembered hub bounds its distance.
-            if self.hub_fix.is_some_and(|f| secs(f.at_ns, now) <= c.reacquire_memory_s) {
+            if self
+                .hub_fix
+                .is_some_and(|f| secs(f.at_ns, now) <= c.reacquire_memory_s)
+            {
                 self.reacquired_ns = Some(now);
             }
         }
 
         // Normalised image errors (checked non-zero size and finite position in check_inputs).
-        let (hw, hh) = (f64::from(t.image_width) / 2.0, f64::from(t.image_height) / 2.0);
+        let (hw, hh) = (
+            f64::from(t.image_width) / 2.0,
+            f64::from(t.image_height) / 2.0,
+        );
         let ex = (t.hub_px[0] - hw) / hw;
         let ey = (t.hub_px[1] - hh) / hh;
         self.last_seen_right = Some(ex >= 0.0);
@@ -602,16 +678,31 @@ impl Approach {
                 limit_abs(-c.done_lateral_gain_per_s * lateral_m, c.max_lateral_m_s)
             });
             let vx_t = dist.map_or(0.0, |d| {
-                limit(c.done_distance_gain_per_s * (d - c.target_distance_m), -c.max_backward_m_s, c.max_forward_m_s)
+                limit(
+                    c.done_distance_gain_per_s * (d - c.target_distance_m),
+                    -c.max_backward_m_s,
+                    c.max_forward_m_s,
+                )
             });
             let vy = slew(self.cmd.vy, vy_t, c.accel_xy_m_s2, dt);
             let vx = slew(self.cmd.vx, vx_t, c.accel_xy_m_s2, dt);
-            return (ApproachTask::Done, Command { vx, vy, ..Command::default() }, reason);
+            return (
+                ApproachTask::Done,
+                Command {
+                    vx,
+                    vy,
+                    ..Command::default()
+                },
+                reason,
+            );
         }
 
         // --- targets of each axis ---
         // T1 vertical: always on.
-        let vz_t = limit_abs(c.climb_gain_m_s * deadband(ey, c.deadband_y), c.max_vertical_m_s);
+        let vz_t = limit_abs(
+            c.climb_gain_m_s * deadband(ey, c.deadband_y),
+            c.max_vertical_m_s,
+        );
 
         // T2 lateral: on in T2 and T3 (keeps the yaw small during the approach), off in T1.
         // Without a yaw (T2) or a distance (T3: no forward motion) for long, probe sideways: both
@@ -625,9 +716,11 @@ impl Approach {
         } else {
             secs(*self.cue_missing_since_ns.get_or_insert(now), now)
         };
-        let probe_span_m = dist.unwrap_or(c.nominal_distance_m) * c.yaw_probe_span_deg.to_radians().tan();
+        let probe_span_m =
+            dist.unwrap_or(c.nominal_distance_m) * c.yaw_probe_span_deg.to_radians().tan();
         let steering = yaw.is_some() && self.t2_active;
-        let probing = !steering && !self.t1_active && probe_span_m > 0.0 && missing_s >= c.yaw_probe_after_s;
+        let probing =
+            !steering && !self.t1_active && probe_span_m > 0.0 && missing_s >= c.yaw_probe_after_s;
         let vy_t = match (self.t1_active, yaw) {
             (false, _) if probing => {
                 // Sweep between −span and +span around where the probe started.
@@ -684,10 +777,18 @@ impl Approach {
             None => 0.0,
         };
         let max_r = c.max_yaw_rate_deg_s.to_radians();
-        let r_t = limit_abs(c.yaw_gain_deg_s.to_radians() * deadband(ex, c.deadband_x) + ff, max_r);
+        let r_t = limit_abs(
+            c.yaw_gain_deg_s.to_radians() * deadband(ex, c.deadband_x) + ff,
+            max_r,
+        );
         let yaw_rate = slew(self.cmd.yaw_rate, r_t, c.yaw_accel_deg_s2.to_radians(), dt);
 
-        let cmd = Command { vx, vy, vz, yaw_rate };
+        let cmd = Command {
+            vx,
+            vy,
+            vz,
+            yaw_rate,
+        };
         let (task, reason) = if self.t1_active {
             (ApproachTask::CentreHub, t1_reason(ex, ey, &c))
         } else if self.t2_active {
@@ -737,19 +838,29 @@ impl Approach {
     /// after a re-acquisition, until the track's distance agrees with the hub remembered from
     /// the last confirmed track (or `reacquire_check_s` has passed), the smaller of the two
     /// (see `reacquire_memory_s`). A confirmed track's distance fixes the hub anew.
-    fn bounded_distance(&mut self, now: u64, t: &TrackState, vehicle: Option<&VehicleState>) -> (Option<f64>, Option<f64>) {
+    fn bounded_distance(
+        &mut self,
+        now: u64,
+        t: &TrackState,
+        vehicle: Option<&VehicleState>,
+    ) -> (Option<f64>, Option<f64>) {
         let c = &self.config;
         let dist = self.dist_f;
         if c.reacquire_memory_s <= 0.0 {
             return (dist, None);
         }
         if let Some(since) = self.reacquired_ns {
-            let remembered = self.hub_fix.zip(vehicle).and_then(|(f, v)| f.distance_from(v));
+            let remembered = self
+                .hub_fix
+                .zip(vehicle)
+                .and_then(|(f, v)| f.distance_from(v));
             match (remembered, dist) {
                 // Checked long enough, or nothing to check against: the new track stands alone.
                 _ if secs(since, now) > c.reacquire_check_s => self.reacquired_ns = None,
                 (None, _) => self.reacquired_ns = None,
-                (Some(m), Some(d)) if (d - m).abs() <= c.reacquire_margin_m + c.reacquire_margin_frac * m => {
+                (Some(m), Some(d))
+                    if (d - m).abs() <= c.reacquire_margin_m + c.reacquire_margin_frac * m =>
+                {
                     self.reacquired_ns = None
                 }
                 (Some(m), Some(d)) => {
@@ -783,13 +894,21 @@ impl Approach {
             }
             return;
         }
-        let dt = self.filter_capture_ns.map_or(0.0, |p| secs(p, capture).min(c.max_dt_s));
+        let dt = self
+            .filter_capture_ns
+            .map_or(0.0, |p| secs(p, capture).min(c.max_dt_s));
         self.filter_capture_ns = Some(capture);
         // Act only on the significant part of the yaw: shrink it toward 0 by k standard deviations.
-        let margin = c.yaw_significance_sigmas * if t.yaw_std_deg.is_finite() { t.yaw_std_deg.max(0.0) } else { 0.0 };
+        let margin = c.yaw_significance_sigmas
+            * if t.yaw_std_deg.is_finite() {
+                t.yaw_std_deg.max(0.0)
+            } else {
+                0.0
+            };
         let yaw = t.yaw_deg.signum() * (t.yaw_deg.abs() - margin).max(0.0);
         self.yaw_f = yaw_usable(t).then(|| low_pass(self.yaw_f, yaw, c.yaw_filter_s, dt));
-        self.dist_f = distance_usable(t).then(|| low_pass(self.dist_f, t.distance_m, c.distance_filter_s, dt));
+        self.dist_f = distance_usable(t)
+            .then(|| low_pass(self.dist_f, t.distance_m, c.distance_filter_s, dt));
         if self.dist_f.is_some() {
             self.last_distance_m = self.dist_f;
         }
@@ -826,7 +945,12 @@ impl Approach {
     /// state's yaw, and the network's estimate with its reading, and weighs the two
     /// (`net_heading_weight`). `None` while disabled, without attitude, or before enough
     /// samples of the geometric estimate.
-    fn heading_yaw(&mut self, t: &TrackState, vehicle: Option<&VehicleState>, new: bool) -> Option<f64> {
+    fn heading_yaw(
+        &mut self,
+        t: &TrackState,
+        vehicle: Option<&VehicleState>,
+        new: bool,
+    ) -> Option<f64> {
         let c = &self.config;
         if c.turbine_heading_filter_s <= 0.0 {
             return None;
@@ -844,21 +968,51 @@ impl Approach {
             let now = t.stamps.capture_ns;
             // Weight ∝ 1/distance²: the hub–tower gap grows as 1/distance, so one metre of
             // gap error is worth far more yaw far away than close in.
-            let w = if t.distance_valid && t.distance_m.is_finite() && t.distance_m > 0.0 { 1.0 / (t.distance_m * t.distance_m) } else { 0.0 };
+            let w = if t.distance_valid && t.distance_m.is_finite() && t.distance_m > 0.0 {
+                1.0 / (t.distance_m * t.distance_m)
+            } else {
+                0.0
+            };
             // Close in, an established estimate drops what it would clip (see
             // `turbine_heading_close_m`).
             let close = w > 0.0 && t.distance_m < c.turbine_heading_close_m;
             // Closer still, an established estimate holds (see `turbine_heading_hold_m`).
-            let established = self.turbine_heading.as_ref().is_some_and(|h| h.samples >= c.turbine_heading_min_samples);
-            let w = if established && w > 0.0 && t.distance_m < c.turbine_heading_hold_m { 0.0 } else { w };
-            let beyond_clip = |h: &TurbineHeading| wrap_pi(meas - h.heading_rad).abs() > c.turbine_heading_clip_deg.to_radians();
+            let established = self
+                .turbine_heading
+                .as_ref()
+                .is_some_and(|h| h.samples >= c.turbine_heading_min_samples);
+            let w = if established && w > 0.0 && t.distance_m < c.turbine_heading_hold_m {
+                0.0
+            } else {
+                w
+            };
+            let beyond_clip = |h: &TurbineHeading| {
+                wrap_pi(meas - h.heading_rad).abs() > c.turbine_heading_clip_deg.to_radians()
+            };
             match self.turbine_heading.as_mut() {
                 None if w > 0.0 => {
-                    self.turbine_heading = Some(TurbineHeading { heading_rad: meas, weight: w, samples: 1, last_ns: now })
+                    self.turbine_heading = Some(TurbineHeading {
+                        heading_rad: meas,
+                        weight: w,
+                        samples: 1,
+                        last_ns: now,
+                    })
                 }
                 None => {}
-                Some(h) if w > 0.0 && !(close && h.samples >= c.turbine_heading_min_samples && beyond_clip(h)) => {
-                    h.add(meas, w, now, c.max_dt_s, c.turbine_heading_filter_s, c.turbine_heading_clip_deg.to_radians())
+                Some(h)
+                    if w > 0.0
+                        && !(close
+                            && h.samples >= c.turbine_heading_min_samples
+                            && beyond_clip(h)) =>
+                {
+                    h.add(
+                        meas,
+                        w,
+                        now,
+                        c.max_dt_s,
+                        c.turbine_heading_filter_s,
+                        c.turbine_heading_clip_deg.to_radians(),
+                    )
                 }
                 Some(_) => {}
             }
@@ -867,14 +1021,30 @@ impl Approach {
             let meas = wrap_pi(to_hub + t.net_yaw_deg.to_radians());
             let now = t.stamps.capture_ns;
             match self.net_heading.as_mut() {
-                None => self.net_heading = Some(TurbineHeading { heading_rad: meas, weight: 1.0, samples: 1, last_ns: now }),
-                Some(h) => h.add(meas, 1.0, now, c.max_dt_s, c.turbine_heading_filter_s, c.turbine_heading_clip_deg.to_radians()),
+                None => {
+                    self.net_heading = Some(TurbineHeading {
+                        heading_rad: meas,
+                        weight: 1.0,
+                        samples: 1,
+                        last_ns: now,
+                    })
+                }
+                Some(h) => h.add(
+                    meas,
+                    1.0,
+                    now,
+                    c.max_dt_s,
+                    c.turbine_heading_filter_s,
+                    c.turbine_heading_clip_deg.to_radians(),
+                ),
             }
         }
         let enough = |h: &&TurbineHeading| h.samples >= c.turbine_heading_min_samples;
         let h = self.turbine_heading.as_ref().filter(enough)?;
         let heading = match self.net_heading.as_ref().filter(enough) {
-            Some(n) => wrap_pi(h.heading_rad + c.net_heading_weight * wrap_pi(n.heading_rad - h.heading_rad)),
+            Some(n) => wrap_pi(
+                h.heading_rad + c.net_heading_weight * wrap_pi(n.heading_rad - h.heading_rad),
+            ),
             None => h.heading_rad,
         };
         let yaw = wrap_pi(heading - to_hub).to_degrees();
@@ -921,7 +1091,10 @@ fn track_data_error(t: &TrackState) -> Option<String> {
         return Some(format!("image size {}x{}", t.image_width, t.image_height));
     }
     if !t.time_since_detection_s.is_finite() || t.time_since_detection_s < 0.0 {
-        return Some(format!("bad time since detection {}", t.time_since_detection_s));
+        return Some(format!(
+            "bad time since detection {}",
+            t.time_since_detection_s
+        ));
     }
     let positioned = matches!(t.mode, TrackMode::Tracking | TrackMode::Coasting);
     if positioned && !(t.hub_px[0].is_finite() && t.hub_px[1].is_finite()) {

@@ -15,8 +15,8 @@
 
 use serde::{Deserialize, Serialize};
 
-pub use hubtrack_types::params::ParamError;
 use hubtrack_types::params::Check;
+pub use hubtrack_types::params::ParamError;
 
 /// `[control.approach]`: the T1/T2/T3 approach controller (thesis section 7.1, algorithm 2).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -322,7 +322,12 @@ impl ApproachConfig {
         let c = Check::new("control.approach");
         c.closed("target_distance_m", self.target_distance_m, 1.0, 100.0)?;
         c.open_closed("distance_tolerance_m", self.distance_tolerance_m, 0.0, 10.0)?;
-        c.open_closed("distance_tolerance_outer_m", self.distance_tolerance_outer_m, 0.0, 20.0)?;
+        c.open_closed(
+            "distance_tolerance_outer_m",
+            self.distance_tolerance_outer_m,
+            0.0,
+            20.0,
+        )?;
         // The outer threshold must lie outside the inner one, or the hysteresis would chatter.
         c.less(
             "distance_tolerance_m",
@@ -330,27 +335,62 @@ impl ApproachConfig {
             "distance_tolerance_outer_m",
             self.distance_tolerance_outer_m,
         )?;
-        c.open("min_distance_m", self.min_distance_m, 0.0, self.target_distance_m)?;
+        c.open(
+            "min_distance_m",
+            self.min_distance_m,
+            0.0,
+            self.target_distance_m,
+        )?;
         c.open_closed("max_backoff_m", self.max_backoff_m, 0.0, 1000.0)?;
         c.open_closed("yaw_tolerance_deg", self.yaw_tolerance_deg, 0.0, 45.0)?;
-        c.open("yaw_tolerance_outer_deg", self.yaw_tolerance_outer_deg, 0.0, 90.0)?;
-        c.less("yaw_tolerance_deg", self.yaw_tolerance_deg, "yaw_tolerance_outer_deg", self.yaw_tolerance_outer_deg)?;
+        c.open(
+            "yaw_tolerance_outer_deg",
+            self.yaw_tolerance_outer_deg,
+            0.0,
+            90.0,
+        )?;
+        c.less(
+            "yaw_tolerance_deg",
+            self.yaw_tolerance_deg,
+            "yaw_tolerance_outer_deg",
+            self.yaw_tolerance_outer_deg,
+        )?;
         c.open_closed("box_x", self.box_x, 0.0, 1.0)?;
         c.open_closed("box_y", self.box_y, 0.0, 1.0)?;
         c.open("box_inner_x", self.box_inner_x, 0.0, self.box_x)?;
         c.open("box_inner_y", self.box_inner_y, 0.0, self.box_y)?;
         // A deadband as wide as the inner box would let the hub rest outside it forever.
         c.closed("deadband_x", self.deadband_x, 0.0, 1.0)?;
-        c.less("deadband_x", self.deadband_x, "box_inner_x", self.box_inner_x)?;
+        c.less(
+            "deadband_x",
+            self.deadband_x,
+            "box_inner_x",
+            self.box_inner_x,
+        )?;
         c.closed("deadband_y", self.deadband_y, 0.0, 1.0)?;
-        c.less("deadband_y", self.deadband_y, "box_inner_y", self.box_inner_y)?;
+        c.less(
+            "deadband_y",
+            self.deadband_y,
+            "box_inner_y",
+            self.box_inner_y,
+        )?;
         c.closed("done_hold_s", self.done_hold_s, 0.0, 60.0)?;
 
         c.open_closed("yaw_gain_deg_s", self.yaw_gain_deg_s, 0.0, 1000.0)?;
         c.open_closed("climb_gain_m_s", self.climb_gain_m_s, 0.0, 100.0)?;
         c.open_closed("lateral_gain_per_s", self.lateral_gain_per_s, 0.0, 10.0)?;
-        c.closed("done_lateral_gain_per_s", self.done_lateral_gain_per_s, 0.0, 10.0)?;
-        c.closed("done_distance_gain_per_s", self.done_distance_gain_per_s, 0.0, 10.0)?;
+        c.closed(
+            "done_lateral_gain_per_s",
+            self.done_lateral_gain_per_s,
+            0.0,
+            10.0,
+        )?;
+        c.closed(
+            "done_distance_gain_per_s",
+            self.done_distance_gain_per_s,
+            0.0,
+            10.0,
+        )?;
         c.open_closed("forward_gain_per_s", self.forward_gain_per_s, 0.0, 10.0)?;
         c.open_closed("slowdown_gain_per_s", self.slowdown_gain_per_s, 0.0, 10.0)?;
         c.closed("arc_feedforward", self.arc_feedforward, 0.0, 1.0)?;
@@ -371,24 +411,69 @@ impl ApproachConfig {
         c.open_closed("max_dt_s", self.max_dt_s, 0.0, 5.0)?;
 
         c.closed("yaw_filter_s", self.yaw_filter_s, 0.0, 60.0)?;
-        c.closed("yaw_significance_sigmas", self.yaw_significance_sigmas, 0.0, 5.0)?;
-        c.closed("turbine_heading_filter_s", self.turbine_heading_filter_s, 0.0, 600.0)?;
+        c.closed(
+            "yaw_significance_sigmas",
+            self.yaw_significance_sigmas,
+            0.0,
+            5.0,
+        )?;
+        c.closed(
+            "turbine_heading_filter_s",
+            self.turbine_heading_filter_s,
+            0.0,
+            600.0,
+        )?;
         c.closed("close_range_m", self.close_range_m, 0.0, 100.0)?;
         c.open_closed("search_backoff_m_s", self.search_backoff_m_s, 0.0, 2.0)?;
-        c.open_closed("turbine_heading_clip_deg", self.turbine_heading_clip_deg, 0.0, 90.0)?;
-        c.closed("turbine_heading_close_m", self.turbine_heading_close_m, 0.0, 100.0)?;
-        c.closed("turbine_heading_hold_m", self.turbine_heading_hold_m, 0.0, 100.0)?;
-        c.count("turbine_heading_min_samples", self.turbine_heading_min_samples, 1, 10_000)?;
+        c.open_closed(
+            "turbine_heading_clip_deg",
+            self.turbine_heading_clip_deg,
+            0.0,
+            90.0,
+        )?;
+        c.closed(
+            "turbine_heading_close_m",
+            self.turbine_heading_close_m,
+            0.0,
+            100.0,
+        )?;
+        c.closed(
+            "turbine_heading_hold_m",
+            self.turbine_heading_hold_m,
+            0.0,
+            100.0,
+        )?;
+        c.count(
+            "turbine_heading_min_samples",
+            self.turbine_heading_min_samples,
+            1,
+            10_000,
+        )?;
         c.closed("net_heading_weight", self.net_heading_weight, 0.0, 1.0)?;
-        c.closed("reacquire_memory_s", self.reacquire_memory_s, 0.0, MAX_TIME_S)?;
+        c.closed(
+            "reacquire_memory_s",
+            self.reacquire_memory_s,
+            0.0,
+            MAX_TIME_S,
+        )?;
         c.closed("reacquire_check_s", self.reacquire_check_s, 0.0, 600.0)?;
         c.closed("reacquire_margin_m", self.reacquire_margin_m, 0.0, 100.0)?;
-        c.closed("reacquire_margin_frac", self.reacquire_margin_frac, 0.0, 1.0)?;
+        c.closed(
+            "reacquire_margin_frac",
+            self.reacquire_margin_frac,
+            0.0,
+            1.0,
+        )?;
         c.closed("distance_filter_s", self.distance_filter_s, 0.0, 60.0)?;
 
         c.open_closed("max_track_age_s", self.max_track_age_s, 0.0, 60.0)?;
         c.closed("search_after_s", self.search_after_s, 0.0, MAX_TIME_S)?;
-        c.open_closed("search_yaw_rate_deg_s", self.search_yaw_rate_deg_s, 0.0, self.max_yaw_rate_deg_s)?;
+        c.open_closed(
+            "search_yaw_rate_deg_s",
+            self.search_yaw_rate_deg_s,
+            0.0,
+            self.max_yaw_rate_deg_s,
+        )?;
         c.closed("search_max_turn_deg", self.search_max_turn_deg, 0.0, 3600.0)?;
         c.closed("abort_recover_s", self.abort_recover_s, 0.0, MAX_TIME_S)?;
         Ok(())

@@ -17,7 +17,10 @@ fn track(ex: f64, ey: f64, dist: Option<f64>, yaw: Option<f64>) -> TrackState {
         mode: TrackMode::Tracking,
         image_width: W,
         image_height: H,
-        hub_px: [f64::from(W) / 2.0 * (1.0 + ex), f64::from(H) / 2.0 * (1.0 + ey)],
+        hub_px: [
+            f64::from(W) / 2.0 * (1.0 + ex),
+            f64::from(H) / 2.0 * (1.0 + ey),
+        ],
         distance_valid: dist.is_some(),
         distance_m: dist.unwrap_or(0.0),
         yaw_valid: yaw.is_some(),
@@ -28,32 +31,58 @@ fn track(ex: f64, ey: f64, dist: Option<f64>, yaw: Option<f64>) -> TrackState {
 
 /// A track in `mode` with the hub at the centre and no estimates.
 fn track_mode(mode: TrackMode, since_s: f64) -> TrackState {
-    TrackState { mode, time_since_detection_s: since_s, ..track(0.0, 0.0, None, None) }
+    TrackState {
+        mode,
+        time_since_detection_s: since_s,
+        ..track(0.0, 0.0, None, None)
+    }
 }
 
 fn vehicle(link_ok: bool) -> VehicleState {
-    VehicleState { link_ok, armed: true, custom_mode: 4, ..VehicleState::default() }
+    VehicleState {
+        link_ok,
+        armed: true,
+        custom_mode: 4,
+        ..VehicleState::default()
+    }
 }
 
 /// Checks that hold for every output of every test.
 fn check_output(out: &ApproachOutput, c: &ApproachConfig) {
-    assert!(out.reason.len() <= MAX_REASON_BYTES, "reason too long: {:?}", out.reason);
+    assert!(
+        out.reason.len() <= MAX_REASON_BYTES,
+        "reason too long: {:?}",
+        out.reason
+    );
     assert!(!out.reason.is_empty());
     for v in [out.vx_m_s, out.vy_m_s, out.vz_m_s, out.yaw_rate_rad_s] {
         assert!(v.is_finite(), "{out:?}");
     }
-    assert!(out.vx_m_s <= c.max_forward_m_s + EPS && out.vx_m_s >= -c.max_backward_m_s - EPS, "{out:?}");
+    assert!(
+        out.vx_m_s <= c.max_forward_m_s + EPS && out.vx_m_s >= -c.max_backward_m_s - EPS,
+        "{out:?}"
+    );
     assert!(out.vy_m_s.abs() <= c.max_lateral_m_s + EPS, "{out:?}");
     assert!(out.vz_m_s.abs() <= c.max_vertical_m_s + EPS, "{out:?}");
-    assert!(out.yaw_rate_rad_s.abs() <= c.max_yaw_rate_deg_s.to_radians() + EPS, "{out:?}");
+    assert!(
+        out.yaw_rate_rad_s.abs() <= c.max_yaw_rate_deg_s.to_radians() + EPS,
+        "{out:?}"
+    );
     if matches!(out.task, ApproachTask::Hold | ApproachTask::Abort) {
-        assert_eq!((out.vx_m_s, out.vy_m_s, out.vz_m_s, out.yaw_rate_rad_s), (0.0, 0.0, 0.0, 0.0), "{out:?}");
+        assert_eq!(
+            (out.vx_m_s, out.vy_m_s, out.vz_m_s, out.yaw_rate_rad_s),
+            (0.0, 0.0, 0.0, 0.0),
+            "{out:?}"
+        );
     }
     if out.task == ApproachTask::Done {
         // Hovering, holding the station sideways and the distance (gently: Done is left beyond
         // the outer distance tolerance).
         assert_eq!((out.vz_m_s, out.yaw_rate_rad_s), (0.0, 0.0), "{out:?}");
-        assert!(out.vx_m_s.abs() <= c.done_distance_gain_per_s * c.distance_tolerance_outer_m + EPS, "{out:?}");
+        assert!(
+            out.vx_m_s.abs() <= c.done_distance_gain_per_s * c.distance_tolerance_outer_m + EPS,
+            "{out:?}"
+        );
     }
     if let Some(t) = &out.transition {
         assert_eq!(t.to, out.task);
@@ -77,7 +106,12 @@ impl Rig {
     }
 
     fn with(c: ApproachConfig) -> Rig {
-        Rig { ap: Approach::new(c).unwrap(), now: 1_000_000_000, vehicle: None, log: Vec::new() }
+        Rig {
+            ap: Approach::new(c).unwrap(),
+            now: 1_000_000_000,
+            vehicle: None,
+            log: Vec::new(),
+        }
     }
 
     /// One step with `t` captured now (or no track), then time advances one frame.
@@ -86,7 +120,11 @@ impl Rig {
             t.stamps.capture_ns = self.now;
             t
         });
-        let out = self.ap.step(&ApproachInput { now_ns: self.now, track: t.as_ref(), vehicle: self.vehicle.as_ref() });
+        let out = self.ap.step(&ApproachInput {
+            now_ns: self.now,
+            track: t.as_ref(),
+            vehicle: self.vehicle.as_ref(),
+        });
         check_output(&out, self.ap.config());
         assert_eq!(self.ap.task(), out.task);
         self.now += FRAME_NS;
@@ -127,25 +165,91 @@ fn defaults_validate_and_new_accepts_them() {
 
 #[test]
 fn bad_values_name_their_key() {
-    let c = ApproachConfig { max_forward_m_s: -1.0, ..ApproachConfig::default() };
+    let c = ApproachConfig {
+        max_forward_m_s: -1.0,
+        ..ApproachConfig::default()
+    };
     let e = c.validate().unwrap_err();
     assert_eq!(e.key, "control.approach.max_forward_m_s");
-    assert!(e.to_string().contains("control.approach.max_forward_m_s"), "{e}");
-    assert_eq!(Approach::new(c).unwrap_err().key, "control.approach.max_forward_m_s");
+    assert!(
+        e.to_string().contains("control.approach.max_forward_m_s"),
+        "{e}"
+    );
+    assert_eq!(
+        Approach::new(c).unwrap_err().key,
+        "control.approach.max_forward_m_s"
+    );
 
     let cases: Vec<(&str, ApproachConfig)> = vec![
-        ("target_distance_m", ApproachConfig { target_distance_m: f64::NAN, ..Default::default() }),
-        ("yaw_filter_s", ApproachConfig { yaw_filter_s: f64::INFINITY, ..Default::default() }),
-        ("box_inner_x", ApproachConfig { box_inner_x: 0.2, ..Default::default() }),
-        ("distance_tolerance_m", ApproachConfig { distance_tolerance_m: 0.6, ..Default::default() }),
-        ("yaw_tolerance_deg", ApproachConfig { yaw_tolerance_deg: 6.0, ..Default::default() }),
-        ("deadband_y", ApproachConfig { deadband_y: 0.09, ..Default::default() }),
-        ("min_distance_m", ApproachConfig { min_distance_m: 6.0, ..Default::default() }),
-        ("search_yaw_rate_deg_s", ApproachConfig { search_yaw_rate_deg_s: 30.0, ..Default::default() }),
-        ("max_dt_s", ApproachConfig { max_dt_s: 0.0, ..Default::default() }),
+        (
+            "target_distance_m",
+            ApproachConfig {
+                target_distance_m: f64::NAN,
+                ..Default::default()
+            },
+        ),
+        (
+            "yaw_filter_s",
+            ApproachConfig {
+                yaw_filter_s: f64::INFINITY,
+                ..Default::default()
+            },
+        ),
+        (
+            "box_inner_x",
+            ApproachConfig {
+                box_inner_x: 0.2,
+                ..Default::default()
+            },
+        ),
+        (
+            "distance_tolerance_m",
+            ApproachConfig {
+                distance_tolerance_m: 0.6,
+                ..Default::default()
+            },
+        ),
+        (
+            "yaw_tolerance_deg",
+            ApproachConfig {
+                yaw_tolerance_deg: 6.0,
+                ..Default::default()
+            },
+        ),
+        (
+            "deadband_y",
+            ApproachConfig {
+                deadband_y: 0.09,
+                ..Default::default()
+            },
+        ),
+        (
+            "min_distance_m",
+            ApproachConfig {
+                min_distance_m: 6.0,
+                ..Default::default()
+            },
+        ),
+        (
+            "search_yaw_rate_deg_s",
+            ApproachConfig {
+                search_yaw_rate_deg_s: 30.0,
+                ..Default::default()
+            },
+        ),
+        (
+            "max_dt_s",
+            ApproachConfig {
+                max_dt_s: 0.0,
+                ..Default::default()
+            },
+        ),
     ];
     for (key, c) in cases {
-        assert_eq!(c.validate().unwrap_err().key, format!("control.approach.{key}"));
+        assert_eq!(
+            c.validate().unwrap_err().key,
+            format!("control.approach.{key}")
+        );
     }
 }
 
@@ -157,7 +261,13 @@ fn default_config_round_trips_through_toml() {
     assert_eq!(back, c);
     // Keys left out take their defaults; unknown keys are rejected.
     let partial: ApproachConfig = toml::from_str("target_distance_m = 8.0").unwrap();
-    assert_eq!(partial, ApproachConfig { target_distance_m: 8.0, ..ApproachConfig::default() });
+    assert_eq!(
+        partial,
+        ApproachConfig {
+            target_distance_m: 8.0,
+            ..ApproachConfig::default()
+        }
+    );
     assert!(toml::from_str::<ApproachConfig>("target_distanse_m = 8.0").is_err());
 }
 
@@ -176,7 +286,11 @@ fn t1_signs() {
         let mut rig = Rig::new();
         let out = rig.run(Some(track(ex, ey, Some(30.0), Some(10.0))), 1.0);
         assert_eq!(out.task, ApproachTask::CentreHub, "{ex} {ey}: {out:?}");
-        assert_eq!(out.yaw_rate_rad_s.signum() * r_sign.abs(), r_sign, "{out:?}");
+        assert_eq!(
+            out.yaw_rate_rad_s.signum() * r_sign.abs(),
+            r_sign,
+            "{out:?}"
+        );
         assert_eq!(out.vz_m_s.signum() * vz_sign.abs(), vz_sign, "{out:?}");
         if r_sign == 0.0 {
             assert_eq!(out.yaw_rate_rad_s, 0.0);
@@ -227,7 +341,11 @@ fn t1_preempts_t2_preempts_t3() {
     assert_eq!(out.task, ApproachTask::ReduceYaw);
     assert_eq!(
         out.transition,
-        Some(Transition { from: ApproachTask::CentreHub, to: ApproachTask::ReduceYaw, reason: out.reason.clone() })
+        Some(Transition {
+            from: ApproachTask::CentreHub,
+            to: ApproachTask::ReduceYaw,
+            reason: out.reason.clone()
+        })
     );
     let out = rig.run(Some(track(0.0, 0.0, Some(30.0), Some(10.0))), 1.0);
     assert_eq!(out.vx_m_s, 0.0);
@@ -236,8 +354,19 @@ fn t1_preempts_t2_preempts_t3() {
     assert_eq!(out.task, ApproachTask::Approach);
     assert!((out.vx_m_s - 1.5).abs() < EPS, "{out:?}");
     assert!(out.reason.starts_with("T3: 30.0 m"), "{}", out.reason);
-    assert_eq!(rig.tasks_since(0), vec![ApproachTask::CentreHub, ApproachTask::ReduceYaw, ApproachTask::Approach]);
-    let transitions: Vec<_> = rig.log.iter().filter_map(|o| o.transition.as_ref().map(|t| (t.from, t.to))).collect();
+    assert_eq!(
+        rig.tasks_since(0),
+        vec![
+            ApproachTask::CentreHub,
+            ApproachTask::ReduceYaw,
+            ApproachTask::Approach
+        ]
+    );
+    let transitions: Vec<_> = rig
+        .log
+        .iter()
+        .filter_map(|o| o.transition.as_ref().map(|t| (t.from, t.to)))
+        .collect();
     assert_eq!(
         transitions,
         vec![
@@ -260,15 +389,24 @@ fn hub_leaving_the_box_during_t3_reverts_to_t1_then_back() {
     let mark = rig.log.len();
     let first = rig.step(Some(track(0.2, 0.0, Some(30.0), Some(0.0))));
     assert_eq!(first.task, ApproachTask::CentreHub);
-    assert_eq!(first.transition.as_ref().map(|t| t.from), Some(ApproachTask::Approach));
-    let out = rig.run(Some(track(0.2, 0.0, Some(30.0), Some(0.0))), 1.5 / c.brake_x_m_s2 + 0.2);
+    assert_eq!(
+        first.transition.as_ref().map(|t| t.from),
+        Some(ApproachTask::Approach)
+    );
+    let out = rig.run(
+        Some(track(0.2, 0.0, Some(30.0), Some(0.0))),
+        1.5 / c.brake_x_m_s2 + 0.2,
+    );
     assert_eq!(out.task, ApproachTask::CentreHub);
     assert!(out.yaw_rate_rad_s > 0.0);
     assert_eq!(out.vx_m_s, 0.0, "T3 stopped");
     let vx: Vec<f64> = rig.log[mark - 1..].iter().map(|o| o.vx_m_s).collect();
     let dv = c.brake_x_m_s2 * FRAME_NS as f64 * 1e-9;
     for w in vx.windows(2) {
-        assert!(w[1] <= w[0] + EPS && w[0] - w[1] <= dv + EPS, "ramp, not a jump: {w:?}");
+        assert!(
+            w[1] <= w[0] + EPS && w[0] - w[1] <= dv + EPS,
+            "ramp, not a jump: {w:?}"
+        );
     }
     assert!(vx[1] > 1.0, "still moving just after the switch: ramp down");
 
@@ -278,26 +416,54 @@ fn hub_leaving_the_box_during_t3_reverts_to_t1_then_back() {
     // Inside the inner box: back to T3 and forward again.
     let out = rig.step(Some(track(0.03, 0.0, Some(30.0), Some(0.0))));
     assert_eq!(out.task, ApproachTask::Approach);
-    assert_eq!(out.transition.as_ref().map(|t| t.from), Some(ApproachTask::CentreHub));
+    assert_eq!(
+        out.transition.as_ref().map(|t| t.from),
+        Some(ApproachTask::CentreHub)
+    );
     let out = rig.run(Some(track(0.03, 0.0, Some(30.0), Some(0.0))), 3.0);
     assert!(out.vx_m_s > 1.0);
     // And the hub between the boxes during T3 does not interrupt it.
     let out = rig.run(Some(track(-0.09, 0.09, Some(30.0), Some(0.0))), 1.0);
     assert_eq!(out.task, ApproachTask::Approach);
-    assert!(rig.log[mark..].iter().filter(|o| o.transition.is_some()).count() == 2, "no chatter");
+    assert!(
+        rig.log[mark..]
+            .iter()
+            .filter(|o| o.transition.is_some())
+            .count()
+            == 2,
+        "no chatter"
+    );
 }
 
 #[test]
 fn yaw_hysteresis_between_t2_and_t3() {
-    let mut rig = Rig::with(ApproachConfig { yaw_filter_s: 0.0, ..Default::default() });
-    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(30.0), Some(4.0))), 1.0).task, ApproachTask::ReduceYaw);
-    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(30.0), Some(2.5))), 1.0).task, ApproachTask::Approach);
-    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(30.0), Some(4.5))), 1.0).task, ApproachTask::Approach);
+    let mut rig = Rig::with(ApproachConfig {
+        yaw_filter_s: 0.0,
+        ..Default::default()
+    });
+    assert_eq!(
+        rig.run(Some(track(0.0, 0.0, Some(30.0), Some(4.0))), 1.0)
+            .task,
+        ApproachTask::ReduceYaw
+    );
+    assert_eq!(
+        rig.run(Some(track(0.0, 0.0, Some(30.0), Some(2.5))), 1.0)
+            .task,
+        ApproachTask::Approach
+    );
+    assert_eq!(
+        rig.run(Some(track(0.0, 0.0, Some(30.0), Some(4.5))), 1.0)
+            .task,
+        ApproachTask::Approach
+    );
     let out = rig.step(Some(track(0.0, 0.0, Some(30.0), Some(-5.5))));
     assert_eq!(out.task, ApproachTask::ReduceYaw);
     let out = rig.run(Some(track(0.0, 0.0, Some(30.0), Some(-5.5))), 1.0);
     assert_eq!(out.task, ApproachTask::ReduceYaw);
-    assert!(out.vy_m_s > 0.0 && out.vx_m_s < 1.0, "sideways, the approach ramping down: {out:?}");
+    assert!(
+        out.vy_m_s > 0.0 && out.vx_m_s < 1.0,
+        "sideways, the approach ramping down: {out:?}"
+    );
 }
 
 // ---------------------------------------------------------------- safety: forward motion
@@ -320,8 +486,16 @@ fn no_forward_motion_without_a_valid_distance() {
     let mut t = track(0.0, 0.0, Some(20.0), Some(0.0));
     t.distance_valid = false;
     assert_eq!(rig.run(Some(t), 1.0).vx_m_s, 0.0);
-    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(0.0), Some(0.0))), 1.0).vx_m_s, 0.0);
-    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(-3.0), Some(0.0))), 1.0).vx_m_s, 0.0);
+    assert_eq!(
+        rig.run(Some(track(0.0, 0.0, Some(0.0), Some(0.0))), 1.0)
+            .vx_m_s,
+        0.0
+    );
+    assert_eq!(
+        rig.run(Some(track(0.0, 0.0, Some(-3.0), Some(0.0))), 1.0)
+            .vx_m_s,
+        0.0
+    );
 }
 
 #[test]
@@ -329,7 +503,10 @@ fn no_yaw_for_long_probes_sideways_within_the_span_then_t2_takes_over() {
     let c = ApproachConfig::default();
     let mut rig = Rig::new();
     // Centred, distance known, yaw never valid: hold at first ...
-    let out = rig.run(Some(track(0.0, 0.0, Some(30.0), None)), c.yaw_probe_after_s - 1.0);
+    let out = rig.run(
+        Some(track(0.0, 0.0, Some(30.0), None)),
+        c.yaw_probe_after_s - 1.0,
+    );
     assert_eq!(out.task, ApproachTask::ReduceYaw);
     assert_eq!(out.vy_m_s, 0.0);
     assert!(out.reason.contains("holding"), "{}", out.reason);
@@ -350,13 +527,27 @@ fn no_yaw_for_long_probes_sideways_within_the_span_then_t2_takes_over() {
     let span = 30.0 * c.yaw_probe_span_deg.to_radians().tan();
     assert!(max > span - 0.5 && max < span + brake, "{min} .. {max}");
     assert!(min < -span + 0.5 && min > -span - brake, "{min} .. {max}");
-    assert!(rig.log.last().unwrap().reason.contains("probing"), "{}", rig.log.last().unwrap().reason);
+    assert!(
+        rig.log.last().unwrap().reason.contains("probing"),
+        "{}",
+        rig.log.last().unwrap().reason
+    );
     // A valid yaw ends the probe: T2 proper (positive yaw moves left).
     let out = rig.run(Some(track(0.0, 0.0, Some(30.0), Some(15.0))), 3.0);
-    assert!(out.vy_m_s < 0.0 && out.reason.starts_with("T2: yaw"), "{out:?}");
+    assert!(
+        out.vy_m_s < 0.0 && out.reason.starts_with("T2: yaw"),
+        "{out:?}"
+    );
     // Disabled: holds however long.
-    let mut rig = Rig::with(ApproachConfig { yaw_probe_span_deg: 0.0, ..c });
-    assert_eq!(rig.run(Some(track(0.0, 0.0, Some(30.0), None)), 30.0).vy_m_s, 0.0);
+    let mut rig = Rig::with(ApproachConfig {
+        yaw_probe_span_deg: 0.0,
+        ..c
+    });
+    assert_eq!(
+        rig.run(Some(track(0.0, 0.0, Some(30.0), None)), 30.0)
+            .vy_m_s,
+        0.0
+    );
 }
 
 #[test]
@@ -364,19 +555,34 @@ fn no_distance_for_long_probes_sideways_never_forward() {
     let c = ApproachConfig::default();
     let mut rig = Rig::new();
     // Centred, yaw known and small, distance never valid: T3 cannot move forward ...
-    let out = rig.run(Some(track(0.0, 0.0, None, Some(1.0))), c.yaw_probe_after_s - 1.0);
+    let out = rig.run(
+        Some(track(0.0, 0.0, None, Some(1.0))),
+        c.yaw_probe_after_s - 1.0,
+    );
     assert_eq!(out.task, ApproachTask::Approach);
     assert!(out.vy_m_s.abs() < 0.1 && out.vx_m_s <= 0.0, "{out:?}");
     // ... so after a while it looks from a few metres aside, still never forward.
     let from = rig.log.len();
     rig.run(Some(track(0.0, 0.0, None, Some(1.0))), 20.0);
     assert!(rig.log[from..].iter().all(|o| o.vx_m_s <= 0.0));
-    assert!(rig.log[from..].iter().any(|o| o.vy_m_s.abs() > 0.9 * c.yaw_probe_speed_m_s), "no sideways sweep");
+    assert!(
+        rig.log[from..]
+            .iter()
+            .any(|o| o.vy_m_s.abs() > 0.9 * c.yaw_probe_speed_m_s),
+        "no sideways sweep"
+    );
     let last = rig.log.last().unwrap();
-    assert!(last.reason.starts_with("T3: no valid distance") && last.reason.contains("probing"), "{}", last.reason);
+    assert!(
+        last.reason.starts_with("T3: no valid distance") && last.reason.contains("probing"),
+        "{}",
+        last.reason
+    );
     // A distance ends the probe: forward again.
     let out = rig.run(Some(track(0.0, 0.0, Some(20.0), Some(1.0))), 3.0);
-    assert!(out.vx_m_s > 0.0 && out.reason.starts_with("T3: 20"), "{out:?}");
+    assert!(
+        out.vx_m_s > 0.0 && out.reason.starts_with("T3: 20"),
+        "{out:?}"
+    );
 }
 
 #[test]
@@ -387,14 +593,21 @@ fn no_forward_motion_with_a_stale_track() {
     assert!(rig.log.last().unwrap().vx_m_s > 1.0);
 
     // Tracking, but the last detection is older than max_track_age_s: Hold.
-    let out = rig.step(Some(TrackState { time_since_detection_s: 1.1, ..good }));
+    let out = rig.step(Some(TrackState {
+        time_since_detection_s: 1.1,
+        ..good
+    }));
     assert_eq!(out.task, ApproachTask::Hold);
     assert!(out.reason.contains("stale"), "{}", out.reason);
 
     // Coasting within the age limit keeps going; beyond it holds.
     let mut rig = Rig::new();
     rig.run(Some(good), 3.0);
-    let coast = |s: f64| TrackState { mode: TrackMode::Coasting, time_since_detection_s: s, ..good };
+    let coast = |s: f64| TrackState {
+        mode: TrackMode::Coasting,
+        time_since_detection_s: s,
+        ..good
+    };
     let out = rig.step(Some(coast(0.3)));
     assert_eq!(out.task, ApproachTask::Approach);
     assert!(out.vx_m_s > 1.0);
@@ -407,7 +620,11 @@ fn no_forward_motion_with_a_stale_track() {
     let mut old = good;
     old.stamps.capture_ns = rig.now - FRAME_NS;
     for i in 0..18 {
-        let out = rig.ap.step(&ApproachInput { now_ns: rig.now, track: Some(&old), vehicle: None });
+        let out = rig.ap.step(&ApproachInput {
+            now_ns: rig.now,
+            track: Some(&old),
+            vehicle: None,
+        });
         check_output(&out, rig.ap.config());
         if i >= 16 {
             assert_eq!((out.task, out.vx_m_s), (ApproachTask::Hold, 0.0), "{i}");
@@ -437,8 +654,16 @@ fn backing_away_stops_when_the_distance_does_not_follow() {
     let out = rig.run(stuck, 2.0);
     assert!(out.vx_m_s < -0.3, "backs away at first: {out:?}");
     rig.run(stuck, 30.0);
-    let backed: f64 = rig.log.iter().map(|o| -o.vx_m_s.min(0.0) * FRAME_NS as f64 * 1e-9).sum();
-    assert!((backed - c.max_backoff_m).abs() < 0.5, "backed off {backed:.2} m, allowance {} m", c.max_backoff_m);
+    let backed: f64 = rig
+        .log
+        .iter()
+        .map(|o| -o.vx_m_s.min(0.0) * FRAME_NS as f64 * 1e-9)
+        .sum();
+    assert!(
+        (backed - c.max_backoff_m).abs() < 0.5,
+        "backed off {backed:.2} m, allowance {} m",
+        c.max_backoff_m
+    );
     let out = rig.run(stuck, 1.0);
     assert_eq!(out.vx_m_s, 0.0, "{out:?}");
     assert!(out.reason.contains("no further back"), "{}", out.reason);
@@ -454,7 +679,10 @@ fn backing_away_stops_when_the_distance_does_not_follow() {
         let out = rig.step(Some(track(0.0, 0.0, Some(d), Some(0.0))));
         d -= out.vx_m_s * FRAME_NS as f64 * 1e-9;
     }
-    assert!((d - c.target_distance_m).abs() < c.distance_tolerance_outer_m, "ended at {d:.2} m");
+    assert!(
+        (d - c.target_distance_m).abs() < c.distance_tolerance_outer_m,
+        "ended at {d:.2} m"
+    );
 }
 
 #[test]
@@ -462,7 +690,10 @@ fn forward_speed_slows_down_near_the_target() {
     let c = ApproachConfig::default();
     let mut last = f64::INFINITY;
     for d in [30.0, 10.0, 8.0, 6.0, 5.5, 5.0, 4.0] {
-        let mut rig = Rig::with(ApproachConfig { distance_filter_s: 0.0, ..c.clone() });
+        let mut rig = Rig::with(ApproachConfig {
+            distance_filter_s: 0.0,
+            ..c.clone()
+        });
         let out = rig.run(Some(track(0.0, 0.0, Some(d), Some(0.0))), 4.0);
         assert!(out.vx_m_s <= c.slowdown_gain_per_s * (d - c.min_distance_m) + EPS);
         assert!(out.vx_m_s <= last, "{d}: {out:?}");
@@ -489,13 +720,26 @@ fn lost_holds_then_searches_bounded_then_holds() {
     let mark = rig.log.len();
     let out = rig.run(Some(lost), 0.5);
     assert_eq!(out.task, ApproachTask::Search);
-    assert!(out.yaw_rate_rad_s < 0.0, "towards the last seen side (left)");
-    assert!(out.reason.starts_with("search left 10 deg/s"), "{}", out.reason);
+    assert!(
+        out.yaw_rate_rad_s < 0.0,
+        "towards the last seen side (left)"
+    );
+    assert!(
+        out.reason.starts_with("search left 10 deg/s"),
+        "{}",
+        out.reason
+    );
     // Search for a long time: it turns 360 degrees and then holds.
     rig.run(Some(lost), 60.0);
     let dt = FRAME_NS as f64 * 1e-9;
-    let turned: f64 = rig.log[mark..].iter().map(|o| o.yaw_rate_rad_s.abs().to_degrees() * dt).sum();
-    assert!((turned - c.search_max_turn_deg).abs() < 1.0, "turned {turned}");
+    let turned: f64 = rig.log[mark..]
+        .iter()
+        .map(|o| o.yaw_rate_rad_s.abs().to_degrees() * dt)
+        .sum();
+    assert!(
+        (turned - c.search_max_turn_deg).abs() < 1.0,
+        "turned {turned}"
+    );
     for o in &rig.log[mark..] {
         assert!(o.yaw_rate_rad_s.abs() <= c.search_yaw_rate_deg_s.to_radians() + EPS);
         assert_eq!((o.vx_m_s, o.vy_m_s, o.vz_m_s), (0.0, 0.0, 0.0));
@@ -503,7 +747,10 @@ fn lost_holds_then_searches_bounded_then_holds() {
     let out = rig.log.last().unwrap();
     assert_eq!(out.task, ApproachTask::Hold);
     assert!(out.reason.contains("searched 360"), "{}", out.reason);
-    assert_eq!(rig.tasks_since(mark), vec![ApproachTask::Hold, ApproachTask::Search, ApproachTask::Hold]);
+    assert_eq!(
+        rig.tasks_since(mark),
+        vec![ApproachTask::Hold, ApproachTask::Search, ApproachTask::Hold]
+    );
 
     // No track at all and never seen: hold, then search to the right.
     let mut rig = Rig::new();
@@ -519,12 +766,18 @@ fn lost_holds_then_searches_bounded_then_holds() {
 fn search_requested_searches_at_once() {
     let mut rig = Rig::new();
     rig.run(Some(track(0.02, 0.0, Some(20.0), Some(0.0))), 1.0);
-    let t = TrackState { search_requested: true, ..track_mode(TrackMode::Lost, 6.0) };
+    let t = TrackState {
+        search_requested: true,
+        ..track_mode(TrackMode::Lost, 6.0)
+    };
     let out = rig.run(Some(t), 0.5);
     assert_eq!(out.task, ApproachTask::Search);
     assert!(out.yaw_rate_rad_s > 0.0);
     // A zero search budget never searches.
-    let mut rig = Rig::with(ApproachConfig { search_max_turn_deg: 0.0, ..Default::default() });
+    let mut rig = Rig::with(ApproachConfig {
+        search_max_turn_deg: 0.0,
+        ..Default::default()
+    });
     assert_eq!(rig.run(Some(t), 10.0).task, ApproachTask::Hold);
 }
 
@@ -540,17 +793,26 @@ fn returning_track_resumes_through_rate_limits_with_fresh_filters() {
     // The turbine is found again, closer than before.
     let out = rig.step(Some(track(0.0, 0.0, Some(20.0), Some(0.0))));
     assert_ne!(out.task, ApproachTask::Search);
-    assert_eq!(rig.ap.dist_f, Some(20.0), "distance filter restarts at the new value");
+    assert_eq!(
+        rig.ap.dist_f,
+        Some(20.0),
+        "distance filter restarts at the new value"
+    );
     let out = rig.run(Some(track(0.0, 0.0, Some(20.0), Some(0.0))), 3.0);
     assert_eq!(out.task, ApproachTask::Approach);
     assert!(out.reason.starts_with("T3: 20.0 m"), "{}", out.reason);
     let dt = FRAME_NS as f64 * 1e-9;
     for w in rig.log[mark - 1..].windows(2) {
         let slowing = w[0].vx_m_s > 0.0 && w[1].vx_m_s < w[0].vx_m_s && w[1].vx_m_s >= -EPS;
-        let ax = if slowing { c.brake_x_m_s2 } else { c.accel_xy_m_s2 };
+        let ax = if slowing {
+            c.brake_x_m_s2
+        } else {
+            c.accel_xy_m_s2
+        };
         assert!((w[1].vx_m_s - w[0].vx_m_s).abs() <= ax * dt + EPS);
         assert!(
-            (w[1].yaw_rate_rad_s - w[0].yaw_rate_rad_s).abs() <= c.yaw_accel_deg_s2.to_radians() * dt + EPS
+            (w[1].yaw_rate_rad_s - w[0].yaw_rate_rad_s).abs()
+                <= c.yaw_accel_deg_s2.to_radians() * dt + EPS
         );
     }
     // The search budget is renewed by the re-acquisition.
@@ -570,7 +832,11 @@ fn filters_smooth_yaw_and_distance() {
     // The same state again is not filtered twice.
     let mut t = track(0.0, 0.0, Some(20.0), Some(10.0));
     t.stamps.capture_ns = rig.now - FRAME_NS;
-    rig.ap.step(&ApproachInput { now_ns: rig.now, track: Some(&t), vehicle: None });
+    rig.ap.step(&ApproachInput {
+        now_ns: rig.now,
+        track: Some(&t),
+        vehicle: None,
+    });
     assert_eq!(rig.ap.dist_f.unwrap(), d);
     // Converges.
     rig.run(Some(track(0.0, 0.0, Some(20.0), Some(10.0))), 5.0);
@@ -583,17 +849,34 @@ fn filters_smooth_yaw_and_distance() {
 #[test]
 fn close_in_a_run_of_wrong_yaws_leaves_the_turbine_heading() {
     let run = |close_m: f64| {
-        let c = ApproachConfig { turbine_heading_close_m: close_m, ..ApproachConfig::default() };
+        let c = ApproachConfig {
+            turbine_heading_close_m: close_m,
+            ..ApproachConfig::default()
+        };
         let mut rig = Rig::with(c);
-        rig.vehicle = Some(VehicleState { attitude_valid: true, yaw_rad: 0.3, ..vehicle(true) });
+        rig.vehicle = Some(VehicleState {
+            attitude_valid: true,
+            yaw_rad: 0.3,
+            ..vehicle(true)
+        });
         rig.run(Some(track(0.0, 0.0, Some(20.0), Some(3.0))), 15.0);
-        let far = rig.ap.heading_yaw(&track(0.0, 0.0, Some(20.0), Some(3.0)), rig.vehicle.as_ref(), false);
+        let far = rig.ap.heading_yaw(
+            &track(0.0, 0.0, Some(20.0), Some(3.0)),
+            rig.vehicle.as_ref(),
+            false,
+        );
         rig.run(Some(track(0.0, 0.0, Some(6.0), Some(28.0))), 10.0);
         let t = track(0.0, 0.0, Some(6.0), Some(28.0));
-        (far.unwrap(), rig.ap.heading_yaw(&t, rig.vehicle.as_ref(), false).unwrap())
+        (
+            far.unwrap(),
+            rig.ap.heading_yaw(&t, rig.vehicle.as_ref(), false).unwrap(),
+        )
     };
     let (far, kept) = run(10.0);
-    assert!((far - 3.0).abs() < 0.1 && (kept - 3.0).abs() < 0.1, "dropped: {far} then {kept}");
+    assert!(
+        (far - 3.0).abs() < 0.1 && (kept - 3.0).abs() < 0.1,
+        "dropped: {far} then {kept}"
+    );
     // Clipped, the same run owns the estimate.
     let (_, clipped) = run(0.0);
     assert!(clipped > 20.0, "clipped: {clipped}");
@@ -604,12 +887,25 @@ fn close_in_a_run_of_wrong_yaws_leaves_the_turbine_heading() {
 #[test]
 fn closer_than_the_hold_distance_the_turbine_heading_holds() {
     let run = |hold_m: f64| {
-        let c = ApproachConfig { turbine_heading_hold_m: hold_m, ..ApproachConfig::default() };
+        let c = ApproachConfig {
+            turbine_heading_hold_m: hold_m,
+            ..ApproachConfig::default()
+        };
         let mut rig = Rig::with(c);
-        rig.vehicle = Some(VehicleState { attitude_valid: true, yaw_rad: 0.3, ..vehicle(true) });
+        rig.vehicle = Some(VehicleState {
+            attitude_valid: true,
+            yaw_rad: 0.3,
+            ..vehicle(true)
+        });
         rig.run(Some(track(0.0, 0.0, Some(20.0), Some(2.0))), 15.0);
         rig.run(Some(track(0.0, 0.0, Some(7.0), Some(9.0))), 10.0);
-        rig.ap.heading_yaw(&track(0.0, 0.0, Some(7.0), Some(9.0)), rig.vehicle.as_ref(), false).unwrap()
+        rig.ap
+            .heading_yaw(
+                &track(0.0, 0.0, Some(7.0), Some(9.0)),
+                rig.vehicle.as_ref(),
+                false,
+            )
+            .unwrap()
     };
     let held = run(10.0);
     assert!((held - 2.0).abs() < 0.1, "held: {held}");
@@ -628,39 +924,70 @@ fn the_networks_turbine_heading_is_weighed_in() {
         ..track(0.0, 0.0, Some(12.0), Some(yaw))
     };
     let run = |weight: f64| {
-        let c = ApproachConfig { net_heading_weight: weight, ..ApproachConfig::default() };
+        let c = ApproachConfig {
+            net_heading_weight: weight,
+            ..ApproachConfig::default()
+        };
         let mut rig = Rig::with(c);
-        rig.vehicle = Some(VehicleState { attitude_valid: true, yaw_rad: 0.3, ..vehicle(true) });
+        rig.vehicle = Some(VehicleState {
+            attitude_valid: true,
+            yaw_rad: 0.3,
+            ..vehicle(true)
+        });
         // The tower says 1°, the network −7°.
         rig.run(Some(with_net(1.0, Some(-7.0))), 5.0);
-        let both = rig.ap.heading_yaw(&with_net(1.0, None), rig.vehicle.as_ref(), false).unwrap();
+        let both = rig
+            .ap
+            .heading_yaw(&with_net(1.0, None), rig.vehicle.as_ref(), false)
+            .unwrap();
         // Frames without a network reading (closer than its trusted range) keep its heading.
         rig.run(Some(with_net(1.0, None)), 5.0);
-        let kept = rig.ap.heading_yaw(&with_net(1.0, None), rig.vehicle.as_ref(), false).unwrap();
+        let kept = rig
+            .ap
+            .heading_yaw(&with_net(1.0, None), rig.vehicle.as_ref(), false)
+            .unwrap();
         (both, kept)
     };
     let (both, kept) = run(0.5);
-    assert!((both + 3.0).abs() < 0.1 && (kept + 3.0).abs() < 0.1, "halfway: {both}, then {kept}");
+    assert!(
+        (both + 3.0).abs() < 0.1 && (kept + 3.0).abs() < 0.1,
+        "halfway: {both}, then {kept}"
+    );
     let (alone, _) = run(0.0);
     assert!((alone - 1.0).abs() < 0.1, "geometric alone: {alone}");
     let (net, _) = run(1.0);
     assert!((net + 7.0).abs() < 0.1, "network alone: {net}");
     // Without enough network samples the geometric estimate flies alone.
-    let c = ApproachConfig { net_heading_weight: 0.5, ..ApproachConfig::default() };
+    let c = ApproachConfig {
+        net_heading_weight: 0.5,
+        ..ApproachConfig::default()
+    };
     let mut rig = Rig::with(c.clone());
-    rig.vehicle = Some(VehicleState { attitude_valid: true, yaw_rad: 0.3, ..vehicle(true) });
+    rig.vehicle = Some(VehicleState {
+        attitude_valid: true,
+        yaw_rad: 0.3,
+        ..vehicle(true)
+    });
     rig.run(Some(with_net(1.0, None)), 5.0);
     for _ in 1..c.turbine_heading_min_samples {
         rig.step(Some(with_net(1.0, Some(-7.0))));
     }
-    let few = rig.ap.heading_yaw(&with_net(1.0, None), rig.vehicle.as_ref(), false).unwrap();
+    let few = rig
+        .ap
+        .heading_yaw(&with_net(1.0, None), rig.vehicle.as_ref(), false)
+        .unwrap();
     assert!((few - 1.0).abs() < 0.1, "too few network samples: {few}");
 }
 
 /// A vehicle at `north` m on the local frame's north axis, facing north, with position and
 /// attitude.
 fn vehicle_at(north: f64) -> VehicleState {
-    VehicleState { attitude_valid: true, position_valid: true, position_ned_m: [north, 0.0, 0.0], ..vehicle(true) }
+    VehicleState {
+        attitude_valid: true,
+        position_valid: true,
+        position_ned_m: [north, 0.0, 0.0],
+        ..vehicle(true)
+    }
 }
 
 /// Lost at 5 m, a track re-acquired on something that reads 22 m does not fly the vehicle
@@ -678,12 +1005,24 @@ fn a_reacquired_track_that_reads_too_far_is_bounded_by_the_remembered_hub() {
     let far = track(0.0, 0.0, Some(22.0), Some(0.0));
     let mark = rig.log.len();
     rig.run(Some(far), 3.0);
-    assert!(rig.log[mark..].iter().all(|o| o.vx_m_s <= EPS), "no forward motion toward the remembered hub");
-    let bounded = rig.log[mark..].iter().filter(|o| o.reason.contains("3.5 m to the remembered hub (track 22.0 m)")).count();
+    assert!(
+        rig.log[mark..].iter().all(|o| o.vx_m_s <= EPS),
+        "no forward motion toward the remembered hub"
+    );
+    let bounded = rig.log[mark..]
+        .iter()
+        .filter(|o| {
+            o.reason
+                .contains("3.5 m to the remembered hub (track 22.0 m)")
+        })
+        .count();
     assert!(bounded > 10, "{:?}", rig.log.last());
     // Past the check time the new track stands alone.
     let out = rig.run(Some(far), c.reacquire_check_s);
-    assert!(out.vx_m_s > 0.1 && out.reason.starts_with("T3: 22.0 m"), "{out:?}");
+    assert!(
+        out.vx_m_s > 0.1 && out.reason.starts_with("T3: 22.0 m"),
+        "{out:?}"
+    );
 
     // A re-acquired track that agrees with the remembered hub is not bounded.
     let mut rig = Rig::new();
@@ -692,10 +1031,16 @@ fn a_reacquired_track_that_reads_too_far_is_bounded_by_the_remembered_hub() {
     rig.run(Some(track_mode(TrackMode::Lost, 2.0)), 1.0);
     rig.vehicle = Some(vehicle_at(2.0));
     let out = rig.run(Some(track(0.0, 0.0, Some(18.5), Some(0.0))), 3.0);
-    assert!(out.vx_m_s > 0.1 && out.reason.starts_with("T3: 18.5 m"), "{out:?}");
+    assert!(
+        out.vx_m_s > 0.1 && out.reason.starts_with("T3: 18.5 m"),
+        "{out:?}"
+    );
 
     // Without the memory the first re-acquired track flies forward at once.
-    let mut rig = Rig::with(ApproachConfig { reacquire_memory_s: 0.0, ..c });
+    let mut rig = Rig::with(ApproachConfig {
+        reacquire_memory_s: 0.0,
+        ..c
+    });
     rig.vehicle = Some(vehicle_at(0.0));
     rig.run(Some(track(0.0, 0.0, Some(3.5), Some(0.0))), 3.0);
     rig.run(Some(track_mode(TrackMode::Lost, 2.0)), 1.0);
@@ -717,16 +1062,31 @@ fn link_loss_aborts_sticky_until_good_for_a_while_or_reset() {
     let out = rig.step(Some(good));
     assert_eq!(out.task, ApproachTask::Abort);
     assert_eq!(out.reason, "abort: vehicle link lost");
-    assert_eq!(out.transition.as_ref().map(|t| t.from), Some(ApproachTask::Approach));
+    assert_eq!(
+        out.transition.as_ref().map(|t| t.from),
+        Some(ApproachTask::Approach)
+    );
     // Link back: still aborted for abort_recover_s, then the tasks resume from zero speed.
     rig.vehicle = Some(vehicle(true));
     let out = rig.run(Some(good), c.abort_recover_s - 0.2);
     assert_eq!(out.task, ApproachTask::Abort);
-    assert!(out.reason.contains("vehicle link lost (ok"), "{}", out.reason);
+    assert!(
+        out.reason.contains("vehicle link lost (ok"),
+        "{}",
+        out.reason
+    );
     let out = rig.run(Some(good), 0.4);
     assert_eq!(out.task, ApproachTask::Approach);
-    assert!(out.vx_m_s > 0.0 && out.vx_m_s < 0.5, "ramping up from zero: {out:?}");
-    let back = rig.log.iter().rev().find(|o| o.transition.is_some()).unwrap();
+    assert!(
+        out.vx_m_s > 0.0 && out.vx_m_s < 0.5,
+        "ramping up from zero: {out:?}"
+    );
+    let back = rig
+        .log
+        .iter()
+        .rev()
+        .find(|o| o.transition.is_some())
+        .unwrap();
     assert_eq!(back.transition.as_ref().unwrap().from, ApproachTask::Abort);
 
     // A link flicker during recovery restarts the good-input timer.
@@ -753,14 +1113,62 @@ fn link_loss_aborts_sticky_until_good_for_a_while_or_reset() {
 fn bad_data_aborts() {
     let good = track(0.0, 0.0, Some(20.0), Some(0.0));
     let bad: Vec<(&str, TrackState)> = vec![
-        ("hub position", TrackState { hub_px: [f64::NAN, 500.0], ..good }),
-        ("hub position", TrackState { hub_px: [900.0, f64::INFINITY], ..good }),
-        ("distance", TrackState { distance_m: f64::INFINITY, ..good }),
-        ("yaw", TrackState { yaw_deg: f64::NAN, ..good }),
-        ("image size", TrackState { image_width: 0, ..good }),
-        ("image size", TrackState { image_height: 0, ..good }),
-        ("time since detection", TrackState { time_since_detection_s: f64::NAN, ..good }),
-        ("time since detection", TrackState { time_since_detection_s: -1.0, ..good }),
+        (
+            "hub position",
+            TrackState {
+                hub_px: [f64::NAN, 500.0],
+                ..good
+            },
+        ),
+        (
+            "hub position",
+            TrackState {
+                hub_px: [900.0, f64::INFINITY],
+                ..good
+            },
+        ),
+        (
+            "distance",
+            TrackState {
+                distance_m: f64::INFINITY,
+                ..good
+            },
+        ),
+        (
+            "yaw",
+            TrackState {
+                yaw_deg: f64::NAN,
+                ..good
+            },
+        ),
+        (
+            "image size",
+            TrackState {
+                image_width: 0,
+                ..good
+            },
+        ),
+        (
+            "image size",
+            TrackState {
+                image_height: 0,
+                ..good
+            },
+        ),
+        (
+            "time since detection",
+            TrackState {
+                time_since_detection_s: f64::NAN,
+                ..good
+            },
+        ),
+        (
+            "time since detection",
+            TrackState {
+                time_since_detection_s: -1.0,
+                ..good
+            },
+        ),
     ];
     for (what, t) in bad {
         let mut rig = Rig::new();
@@ -774,9 +1182,18 @@ fn bad_data_aborts() {
 
     // NaN in an estimate flagged invalid, or in a lost track's position, is not used: no abort.
     let mut rig = Rig::new();
-    let t = TrackState { distance_valid: false, distance_m: f64::NAN, yaw_valid: false, yaw_deg: f64::NAN, ..good };
+    let t = TrackState {
+        distance_valid: false,
+        distance_m: f64::NAN,
+        yaw_valid: false,
+        yaw_deg: f64::NAN,
+        ..good
+    };
     assert_ne!(rig.run(Some(t), 0.5).task, ApproachTask::Abort);
-    let t = TrackState { hub_px: [f64::NAN; 2], ..track_mode(TrackMode::Lost, 2.0) };
+    let t = TrackState {
+        hub_px: [f64::NAN; 2],
+        ..track_mode(TrackMode::Lost, 2.0)
+    };
     assert_eq!(rig.run(Some(t), 0.5).task, ApproachTask::Hold);
 
     // Track time going backwards.
@@ -784,9 +1201,17 @@ fn bad_data_aborts() {
     rig.run(Some(good), 1.0);
     let mut t = good;
     t.stamps.capture_ns = rig.now - 10 * FRAME_NS;
-    let out = rig.ap.step(&ApproachInput { now_ns: rig.now, track: Some(&t), vehicle: None });
+    let out = rig.ap.step(&ApproachInput {
+        now_ns: rig.now,
+        track: Some(&t),
+        vehicle: None,
+    });
     assert_eq!(out.task, ApproachTask::Abort);
-    assert!(out.reason.contains("track time went backwards"), "{}", out.reason);
+    assert!(
+        out.reason.contains("track time went backwards"),
+        "{}",
+        out.reason
+    );
 
     // Step time going backwards.
     let mut rig = Rig::new();
@@ -794,7 +1219,11 @@ fn bad_data_aborts() {
     rig.now -= 20 * FRAME_NS;
     let mut t = good;
     t.stamps.capture_ns = rig.now + 30 * FRAME_NS; // the track itself is not older
-    let out = rig.ap.step(&ApproachInput { now_ns: rig.now, track: Some(&t), vehicle: None });
+    let out = rig.ap.step(&ApproachInput {
+        now_ns: rig.now,
+        track: Some(&t),
+        vehicle: None,
+    });
     assert_eq!(out.task, ApproachTask::Abort);
     assert!(out.reason.contains("time went backwards"), "{}", out.reason);
 }
@@ -803,19 +1232,42 @@ fn bad_data_aborts() {
 
 #[test]
 fn done_after_hold_time_and_left_on_a_disturbance() {
-    let c = ApproachConfig { distance_filter_s: 0.0, yaw_filter_s: 0.0, ..Default::default() };
+    let c = ApproachConfig {
+        distance_filter_s: 0.0,
+        yaw_filter_s: 0.0,
+        ..Default::default()
+    };
     let mut rig = Rig::with(c.clone());
     let at = track(0.01, -0.01, Some(5.1), Some(1.0));
     let mark = rig.log.len();
     rig.run(Some(at), c.done_hold_s - 0.2);
     assert_eq!(rig.ap.task(), ApproachTask::Approach);
-    assert!(rig.log.last().unwrap().reason.starts_with("T3: at 5.10 m, settling"), "{}", rig.log.last().unwrap().reason);
+    assert!(
+        rig.log
+            .last()
+            .unwrap()
+            .reason
+            .starts_with("T3: at 5.10 m, settling"),
+        "{}",
+        rig.log.last().unwrap().reason
+    );
     let out = rig.run(Some(at), 0.4);
     assert_eq!(out.task, ApproachTask::Done);
-    assert!(out.reason.starts_with("done: 5.10 m, yaw 1.0 deg"), "{}", out.reason);
-    let done_at = rig.log.iter().position(|o| o.task == ApproachTask::Done).unwrap();
+    assert!(
+        out.reason.starts_with("done: 5.10 m, yaw 1.0 deg"),
+        "{}",
+        out.reason
+    );
+    let done_at = rig
+        .log
+        .iter()
+        .position(|o| o.task == ApproachTask::Done)
+        .unwrap();
     let held = (done_at - mark) as f64 * FRAME_NS as f64 * 1e-9;
-    assert!(held >= c.done_hold_s && held < c.done_hold_s + 0.1, "{held}");
+    assert!(
+        held >= c.done_hold_s && held < c.done_hold_s + 0.1,
+        "{held}"
+    );
 
     // Small disturbances inside the outer thresholds: still Done, still hovering; a residual
     // yaw (drift aside) is held against sideways, toward the rotor axis, and a distance off the
@@ -831,9 +1283,19 @@ fn done_after_hold_time_and_left_on_a_disturbance() {
         assert_eq!(out.task, ApproachTask::Done);
         // Toward the axis, ramping (rate limit) to about the gain times the offset.
         let target = -c.done_lateral_gain_per_s * 5.1 * t.yaw_deg.to_radians().sin();
-        assert!(out.vy_m_s * target > 0.0 && out.vy_m_s.abs() <= 1.25 * target.abs(), "vy {} for yaw {}, target {target}", out.vy_m_s, t.yaw_deg);
+        assert!(
+            out.vy_m_s * target > 0.0 && out.vy_m_s.abs() <= 1.25 * target.abs(),
+            "vy {} for yaw {}, target {target}",
+            out.vy_m_s,
+            t.yaw_deg
+        );
         let toward = c.done_distance_gain_per_s * (t.distance_m - c.target_distance_m);
-        assert!(out.vx_m_s * toward > 0.0 && out.vx_m_s.abs() <= 1.01 * toward.abs(), "vx {} at {} m, target {toward}", out.vx_m_s, t.distance_m);
+        assert!(
+            out.vx_m_s * toward > 0.0 && out.vx_m_s.abs() <= 1.01 * toward.abs(),
+            "vx {} at {} m, target {toward}",
+            out.vx_m_s,
+            t.distance_m
+        );
     }
     // Losing the distance leaves Done for T3, which does not move forward without one: the
     // backward hold of the last Done command (4.6 m) only ramps down.
@@ -841,25 +1303,49 @@ fn done_after_hold_time_and_left_on_a_disturbance() {
     let mut no_distance = track(0.0, 0.0, Some(5.1), Some(1.0));
     no_distance.distance_valid = false;
     let out = rig.step(Some(no_distance));
-    assert_eq!((out.task, out.reason.as_str()), (ApproachTask::Approach, "T3: no valid distance, not moving forward"));
-    assert!(before < 0.0 && out.vx_m_s <= 0.0 && out.vx_m_s > before, "{before} -> {out:?}");
+    assert_eq!(
+        (out.task, out.reason.as_str()),
+        (
+            ApproachTask::Approach,
+            "T3: no valid distance, not moving forward"
+        )
+    );
+    assert!(
+        before < 0.0 && out.vx_m_s <= 0.0 && out.vx_m_s > before,
+        "{before} -> {out:?}"
+    );
     // Each outer threshold leaves Done for its task; coming back needs the hold again.
     for (t, task) in [
-        (track(0.0, 0.0, Some(5.6), Some(1.0)), ApproachTask::Approach),
-        (track(0.0, 0.0, Some(5.1), Some(-5.5)), ApproachTask::ReduceYaw),
-        (track(0.2, 0.0, Some(5.1), Some(1.0)), ApproachTask::CentreHub),
+        (
+            track(0.0, 0.0, Some(5.6), Some(1.0)),
+            ApproachTask::Approach,
+        ),
+        (
+            track(0.0, 0.0, Some(5.1), Some(-5.5)),
+            ApproachTask::ReduceYaw,
+        ),
+        (
+            track(0.2, 0.0, Some(5.1), Some(1.0)),
+            ApproachTask::CentreHub,
+        ),
     ] {
         rig.run(Some(at), c.done_hold_s + 0.2);
         assert_eq!(rig.ap.task(), ApproachTask::Done);
         let out = rig.step(Some(t));
         assert_eq!(out.task, task, "{t:?}");
-        assert_eq!(out.transition.as_ref().map(|t| t.from), Some(ApproachTask::Done));
+        assert_eq!(
+            out.transition.as_ref().map(|t| t.from),
+            Some(ApproachTask::Done)
+        );
         let out = rig.step(Some(at));
         assert_ne!(out.task, ApproachTask::Done, "the hold time starts again");
     }
     // Losing the track in Done holds, and Done needs the hold time again after it returns.
     rig.run(Some(at), c.done_hold_s + 0.2);
-    assert_eq!(rig.step(Some(track_mode(TrackMode::Lost, 1.0))).task, ApproachTask::Hold);
+    assert_eq!(
+        rig.step(Some(track_mode(TrackMode::Lost, 1.0))).task,
+        ApproachTask::Hold
+    );
     assert_ne!(rig.step(Some(at)).task, ApproachTask::Done);
 }
 
@@ -906,9 +1392,15 @@ fn forward_motion_brakes_faster_than_it_accelerates() {
     let steps_at_brake = (v0 / (c.brake_x_m_s2 * dt)).ceil() as usize + filter_steps;
     let steps_at_accel = (v0 / (c.accel_xy_m_s2 * dt)).floor() as usize;
     assert!(steps_at_brake < steps_at_accel);
-    assert!(stop <= steps_at_brake, "stopped after {stop} steps, braking allows {steps_at_brake}");
+    assert!(
+        stop <= steps_at_brake,
+        "stopped after {stop} steps, braking allows {steps_at_brake}"
+    );
     for w in log[stop..].windows(2) {
-        assert!((w[1].vx_m_s - w[0].vx_m_s).abs() <= c.accel_xy_m_s2 * dt + EPS, "backing away accelerates gently");
+        assert!(
+            (w[1].vx_m_s - w[0].vx_m_s).abs() <= c.accel_xy_m_s2 * dt + EPS,
+            "backing away accelerates gently"
+        );
     }
     assert!(log.last().unwrap().vx_m_s < 0.0, "backs away from 4 m");
 }
@@ -926,40 +1418,77 @@ fn rate_limits_hold_between_steps() {
         if i % 10 == 0 {
             let far = rng.uniform(0.0, 1.0) < 0.3;
             t = track(
-                if far { rng.uniform(-0.8, 0.8) } else { rng.uniform(-0.06, 0.06) },
-                if far { rng.uniform(-0.8, 0.8) } else { rng.uniform(-0.06, 0.06) },
+                if far {
+                    rng.uniform(-0.8, 0.8)
+                } else {
+                    rng.uniform(-0.06, 0.06)
+                },
+                if far {
+                    rng.uniform(-0.8, 0.8)
+                } else {
+                    rng.uniform(-0.06, 0.06)
+                },
                 Some(rng.uniform(4.0, 40.0)),
                 Some(rng.uniform(-25.0, 25.0)),
             );
         }
         // Irregular steps, including stalls longer than max_dt_s.
-        let gap = if rng.uniform(0.0, 1.0) < 0.02 { 3_000_000_000 } else { (rng.uniform(0.02, 0.12) * 1e9) as u64 };
+        let gap = if rng.uniform(0.0, 1.0) < 0.02 {
+            3_000_000_000
+        } else {
+            (rng.uniform(0.02, 0.12) * 1e9) as u64
+        };
         now += gap;
         t.stamps.capture_ns = now;
-        let out = ap.step(&ApproachInput { now_ns: now, track: Some(&t), vehicle: None });
+        let out = ap.step(&ApproachInput {
+            now_ns: now,
+            track: Some(&t),
+            vehicle: None,
+        });
         check_output(&out, &c);
         seen.insert(out.task as u32);
         if let Some((pnow, p)) = &prev {
             let dt = ((now - pnow) as f64 * 1e-9).min(c.max_dt_s);
             let moving = |k: ApproachTask| {
-                matches!(k, ApproachTask::CentreHub | ApproachTask::ReduceYaw | ApproachTask::Approach)
+                matches!(
+                    k,
+                    ApproachTask::CentreHub | ApproachTask::ReduceYaw | ApproachTask::Approach
+                )
             };
             if moving(p.task) && moving(out.task) {
                 // Forward motion may slow down at the braking rate, to a standstill at most.
                 let slowing = p.vx_m_s > 0.0 && out.vx_m_s < p.vx_m_s && out.vx_m_s >= -EPS;
-                let ax = if slowing { c.brake_x_m_s2 } else { c.accel_xy_m_s2 };
-                assert!((out.vx_m_s - p.vx_m_s).abs() <= ax * dt + EPS, "{i}: vx {p:?} {out:?}");
-                assert!((out.vy_m_s - p.vy_m_s).abs() <= c.accel_xy_m_s2 * dt + EPS, "{i}: vy");
-                assert!((out.vz_m_s - p.vz_m_s).abs() <= c.accel_z_m_s2 * dt + EPS, "{i}: vz");
+                let ax = if slowing {
+                    c.brake_x_m_s2
+                } else {
+                    c.accel_xy_m_s2
+                };
                 assert!(
-                    (out.yaw_rate_rad_s - p.yaw_rate_rad_s).abs() <= c.yaw_accel_deg_s2.to_radians() * dt + EPS,
+                    (out.vx_m_s - p.vx_m_s).abs() <= ax * dt + EPS,
+                    "{i}: vx {p:?} {out:?}"
+                );
+                assert!(
+                    (out.vy_m_s - p.vy_m_s).abs() <= c.accel_xy_m_s2 * dt + EPS,
+                    "{i}: vy"
+                );
+                assert!(
+                    (out.vz_m_s - p.vz_m_s).abs() <= c.accel_z_m_s2 * dt + EPS,
+                    "{i}: vz"
+                );
+                assert!(
+                    (out.yaw_rate_rad_s - p.yaw_rate_rad_s).abs()
+                        <= c.yaw_accel_deg_s2.to_radians() * dt + EPS,
                     "{i}: yaw rate"
                 );
             }
         }
         prev = Some((now, out));
     }
-    for k in [ApproachTask::CentreHub, ApproachTask::ReduceYaw, ApproachTask::Approach] {
+    for k in [
+        ApproachTask::CentreHub,
+        ApproachTask::ReduceYaw,
+        ApproachTask::Approach,
+    ] {
         assert!(seen.contains(&(k as u32)), "{k:?} not exercised");
     }
 }
@@ -969,7 +1498,17 @@ fn garbage_never_panics_and_outputs_stay_limited() {
     let c = ApproachConfig::default();
     let mut ap = Approach::new(c.clone()).unwrap();
     let mut rng = Rng(0xdead_beef_cafe_f00d);
-    let specials = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 0.0, -0.0, 1e308, -1e308, f64::MIN_POSITIVE, 5.0];
+    let specials = [
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        0.0,
+        -0.0,
+        1e308,
+        -1e308,
+        f64::MIN_POSITIVE,
+        5.0,
+    ];
     let pick = |rng: &mut Rng, lo: f64, hi: f64| {
         if rng.one_in(4) {
             specials[(rng.next() % specials.len() as u64) as usize]
@@ -986,14 +1525,25 @@ fn garbage_never_panics_and_outputs_stay_limited() {
             2 => u64::MAX - rng.next() % 1000,
             _ => now.saturating_add(rng.next() % 200_000_000),
         };
-        let mode = [TrackMode::Acquiring, TrackMode::Tracking, TrackMode::Coasting, TrackMode::Lost][(rng.next() % 4) as usize];
+        let mode = [
+            TrackMode::Acquiring,
+            TrackMode::Tracking,
+            TrackMode::Coasting,
+            TrackMode::Lost,
+        ][(rng.next() % 4) as usize];
         let t = TrackState {
-            stamps: Stamps { capture_ns: if rng.one_in(3) { rng.next() } else { now }, ..Stamps::default() },
+            stamps: Stamps {
+                capture_ns: if rng.one_in(3) { rng.next() } else { now },
+                ..Stamps::default()
+            },
             mode,
             search_requested: rng.one_in(5),
             image_width: [0, 1, 640, 1920, u32::MAX][(rng.next() % 5) as usize],
             image_height: [0, 1, 480, 1080, u32::MAX][(rng.next() % 5) as usize],
-            hub_px: [pick(&mut rng, -5000.0, 5000.0), pick(&mut rng, -5000.0, 5000.0)],
+            hub_px: [
+                pick(&mut rng, -5000.0, 5000.0),
+                pick(&mut rng, -5000.0, 5000.0),
+            ],
             distance_valid: rng.one_in(2),
             distance_m: pick(&mut rng, -10.0, 100.0),
             yaw_valid: rng.one_in(2),
@@ -1051,13 +1601,25 @@ impl Sim {
         let dist = (rel[0].powi(2) + rel[1].powi(2) + rel[2].powi(2)).sqrt();
         let u = f64::from(W) / 2.0 + f * right / fwd;
         let v = f64::from(H) / 2.0 + f * down / fwd;
-        let visible = fwd > 0.5 && (0.0..f64::from(W)).contains(&u) && (0.0..f64::from(H)).contains(&v);
+        let visible =
+            fwd > 0.5 && (0.0..f64::from(W)).contains(&u) && (0.0..f64::from(H)).contains(&v);
         TrackState {
-            stamps: Stamps { capture_ns: now, ..Stamps::default() },
-            mode: if visible { TrackMode::Tracking } else { TrackMode::Lost },
+            stamps: Stamps {
+                capture_ns: now,
+                ..Stamps::default()
+            },
+            mode: if visible {
+                TrackMode::Tracking
+            } else {
+                TrackMode::Lost
+            },
             image_width: W,
             image_height: H,
-            hub_px: if visible { [u, v] } else { [f64::from(W) / 2.0, f64::from(H) / 2.0] },
+            hub_px: if visible {
+                [u, v]
+            } else {
+                [f64::from(W) / 2.0, f64::from(H) / 2.0]
+            },
             distance_valid: visible,
             distance_m: dist,
             yaw_valid: visible,
@@ -1088,7 +1650,11 @@ impl Sim {
 /// Flies from 35 m out, `lateral` m to the side, `below` m under the hub, with the heading
 /// `heading_err_deg` off the hub. Returns (time of Done, distance and |yaw| then, closest
 /// distance, tasks in order).
-fn fly(lateral: f64, below: f64, heading_err_deg: f64) -> (Option<f64>, f64, f64, f64, Vec<ApproachTask>) {
+fn fly(
+    lateral: f64,
+    below: f64,
+    heading_err_deg: f64,
+) -> (Option<f64>, f64, f64, f64, Vec<ApproachTask>) {
     fly_with(35.0, lateral, below, heading_err_deg, None)
 }
 
@@ -1106,7 +1672,11 @@ fn fly_with(
     let c = ApproachConfig::default();
     let mut ap = Approach::new(c.clone()).unwrap();
     let (x, y) = (start, lateral);
-    let mut sim = Sim { pos: [x, y, -below], h: (-y).atan2(-x) + heading_err_deg.to_radians(), vel: [0.0; 4] };
+    let mut sim = Sim {
+        pos: [x, y, -below],
+        h: (-y).atan2(-x) + heading_err_deg.to_radians(),
+        vel: [0.0; 4],
+    };
     let mut now = 5_000_000_000u64;
     let dt = FRAME_NS as f64 * 1e-9;
     let mut closest = f64::INFINITY;
@@ -1116,7 +1686,13 @@ fn fly_with(
     let steps = (120.0 / dt) as usize;
     for i in 0..steps {
         let truth = sim.track(now);
-        assert_eq!(truth.mode, TrackMode::Tracking, "hub left the image at {:.1} s: {:?}", i as f64 * dt, sim.pos);
+        assert_eq!(
+            truth.mode,
+            TrackMode::Tracking,
+            "hub left the image at {:.1} s: {:?}",
+            i as f64 * dt,
+            sim.pos
+        );
         closest = closest.min(truth.distance_m);
         let t = if noise.is_some() {
             let mut m = truth;
@@ -1127,11 +1703,18 @@ fn fly_with(
             // One frame of latency: the controller sees the previous frame's measurement.
             let seen = delayed.unwrap_or(m);
             delayed = Some(m);
-            TrackState { stamps: truth.stamps, ..seen }
+            TrackState {
+                stamps: truth.stamps,
+                ..seen
+            }
         } else {
             truth
         };
-        let out = ap.step(&ApproachInput { now_ns: now, track: Some(&t), vehicle: None });
+        let out = ap.step(&ApproachInput {
+            now_ns: now,
+            track: Some(&t),
+            vehicle: None,
+        });
         check_output(&out, &c);
         if tasks.last() != Some(&out.task) {
             tasks.push(out.task);
@@ -1151,7 +1734,12 @@ fn fly_with(
 
 #[test]
 fn closed_loop_reaches_done_from_35_m_8_m_lateral_20_deg_off() {
-    for (lateral, below, heading) in [(8.0, 3.0, 20.0), (8.0, 3.0, -20.0), (-8.0, -2.0, 20.0), (-8.0, 0.0, -20.0)] {
+    for (lateral, below, heading) in [
+        (8.0, 3.0, 20.0),
+        (8.0, 3.0, -20.0),
+        (-8.0, -2.0, 20.0),
+        (-8.0, 0.0, -20.0),
+    ] {
         let (done_at, d, yaw, closest, tasks) = fly(lateral, below, heading);
         let done_at = done_at.unwrap_or_else(|| panic!("no Done: {tasks:?}"));
         println!(
@@ -1162,7 +1750,9 @@ fn closed_loop_reaches_done_from_35_m_8_m_lateral_20_deg_off() {
         assert!((d - 5.0).abs() <= 0.3, "distance {d}");
         assert!(yaw < 3.0, "yaw {yaw}");
         assert!(closest >= 3.0, "closest {closest}");
-        assert!(tasks.contains(&ApproachTask::CentreHub) && tasks.contains(&ApproachTask::ReduceYaw));
+        assert!(
+            tasks.contains(&ApproachTask::CentreHub) && tasks.contains(&ApproachTask::ReduceYaw)
+        );
         assert!(tasks.contains(&ApproachTask::Approach));
     }
 }
@@ -1177,6 +1767,9 @@ fn closed_loop_with_noise_and_latency_from_25_to_40_m() {
              {closest:.2} m, tasks {tasks:?}"
         );
         assert!(done_at <= 120.0);
-        assert!((d - 5.0).abs() <= 0.3 && yaw < 3.0 && closest >= 3.0, "{d} {yaw} {closest}");
+        assert!(
+            (d - 5.0).abs() <= 0.3 && yaw < 3.0 && closest >= 3.0,
+            "{d} {yaw} {closest}"
+        );
     }
 }

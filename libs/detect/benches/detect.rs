@@ -47,10 +47,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let default_threads = opencv::core::get_num_threads()?;
     println!("{FRAMES} rendered 1920x1080 BGR frames x {REPEATS} repeats; times in ms (wall clock of detect(), per-step medians from Detection.timings)");
-    println!("{:<9} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}", "mode", "threads", "median", "p99", "pyramid", "edges", "hough", "geometry");
+    println!(
+        "{:<9} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "mode", "threads", "median", "p99", "pyramid", "edges", "hough", "geometry"
+    );
     // The default mode also without the hub crop (`default.hub_crop`), its cost compared in one run.
     let no_crop = {
-        let mut c = DetectConfig { mode: Mode::Default, ..DetectConfig::default() };
+        let mut c = DetectConfig {
+            mode: Mode::Default,
+            ..DetectConfig::default()
+        };
         c.default.hub_crop = false;
         c
     };
@@ -59,7 +65,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // the tracker's hint, as the detect stage does in flight (the network then runs on every
     // detection within 45 m; the hint also narrows the tower's width window).
     let no_yaw = {
-        let mut c = DetectConfig { mode: Mode::Default, ..DetectConfig::default() };
+        let mut c = DetectConfig {
+            mode: Mode::Default,
+            ..DetectConfig::default()
+        };
         c.default.hub_yaw = false;
         c
     };
@@ -67,9 +76,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // as the detect stage does between acquisition and a loss: the hub crop then stays off
     // (`default.hub_crop_when_tracking`) and the close spinner search only runs when nothing
     // else is found.
-    let default = DetectConfig { mode: Mode::Default, ..DetectConfig::default() };
+    let default = DetectConfig {
+        mode: Mode::Default,
+        ..DetectConfig::default()
+    };
     let variants = [
-        ("thesis", DetectConfig { mode: Mode::Thesis, ..DetectConfig::default() }, Hinted::No),
+        (
+            "thesis",
+            DetectConfig {
+                mode: Mode::Thesis,
+                ..DetectConfig::default()
+            },
+            Hinted::No,
+        ),
         ("default", default.clone(), Hinted::No),
         ("no-crop", no_crop, Hinted::No),
         ("no-yaw", no_yaw.clone(), Hinted::No),
@@ -78,7 +97,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("default+t", default, Hinted::Tracking),
     ];
     // `DETECT_BENCH_ROWS=default,no-crop` runs only those rows (e.g. under a profiler).
-    let only: Option<Vec<String>> = std::env::var("DETECT_BENCH_ROWS").ok().map(|v| v.split(',').map(|s| s.trim().to_string()).collect());
+    let only: Option<Vec<String>> = std::env::var("DETECT_BENCH_ROWS")
+        .ok()
+        .map(|v| v.split(',').map(|s| s.trim().to_string()).collect());
     for (name, config, hinted) in variants {
         if only.as_ref().is_some_and(|o| !o.iter().any(|r| r == name)) {
             continue;
@@ -86,10 +107,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for threads in [1, default_threads] {
             opencv::core::set_num_threads(threads)?;
             let mut det = Detector::new(config.clone())?;
-            let (mut tot, mut py, mut ed, mut ho, mut ge) = (vec![], vec![], vec![], vec![], vec![]);
+            let (mut tot, mut py, mut ed, mut ho, mut ge) =
+                (vec![], vec![], vec![], vec![], vec![]);
             for rep in 0..=REPEATS {
                 for (buf, roll, distance, hub) in &frames {
-                    let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: buf };
+                    let view = ImageView {
+                        width: cam.width,
+                        height: cam.height,
+                        stride: cam.width as usize * 3,
+                        format: PixelFormat::Bgr8,
+                        data: buf,
+                    };
                     let t = Instant::now();
                     let hints = Hints {
                         roll_rad: Some(*roll),

@@ -38,7 +38,12 @@ impl Layer {
     fn out_size(&self, h: usize, w: usize) -> Option<(usize, usize)> {
         let reach = self.dilation * (self.kernel - 1) + 1;
         let (ph, pw) = (h + 2 * self.pad, w + 2 * self.pad);
-        (ph >= reach && pw >= reach).then(|| ((ph - reach) / self.stride + 1, (pw - reach) / self.stride + 1))
+        (ph >= reach && pw >= reach).then(|| {
+            (
+                (ph - reach) / self.stride + 1,
+                (pw - reach) / self.stride + 1,
+            )
+        })
     }
 }
 
@@ -60,9 +65,15 @@ impl ConvNet {
         if !vector_units() {
             return Ok(None);
         }
-        let Some(specs) = onnx::conv_chain(model).map_err(DetectError::Model)? else { return Ok(None) };
+        let Some(specs) = onnx::conv_chain(model).map_err(DetectError::Model)? else {
+            return Ok(None);
+        };
         let layers = specs.into_iter().map(pack).collect();
-        Ok(Some(ConvNet { layers, padded: Vec::new(), bufs: [Vec::new(), Vec::new()] }))
+        Ok(Some(ConvNet {
+            layers,
+            padded: Vec::new(),
+            bufs: [Vec::new(), Vec::new()],
+        }))
     }
 
     /// Runs the network on one grey image of `h`×`w` 8-bit pixels (row-major, scaled to
@@ -71,14 +82,22 @@ impl ConvNet {
     /// the layers.
     pub fn run(&mut self, pixels: &[u8], h: usize, w: usize) -> Result<&[f32], DetectError> {
         if pixels.len() != h * w || self.layers.first().is_some_and(|l| l.in_ch != 1) {
-            return Err(DetectError::Model(format!("network input of {} bytes is not one {w}x{h} grey image", pixels.len())));
+            return Err(DetectError::Model(format!(
+                "network input of {} bytes is not one {w}x{h} grey image",
+                pixels.len()
+            )));
         }
         let [mut cur, mut next] = std::mem::take(&mut self.bufs);
         cur.clear();
         cur.extend(pixels.iter().map(|&p| f32::from(p) * (1.0 / 255.0)));
         let (mut h, mut w) = (h, w);
         for l in &self.layers {
-            let (oh, ow) = l.out_size(h, w).ok_or_else(|| DetectError::Model(format!("a {w}x{h} input is too small for a {}x{} kernel", l.kernel, l.kernel)))?;
+            let (oh, ow) = l.out_size(h, w).ok_or_else(|| {
+                DetectError::Model(format!(
+                    "a {w}x{h} input is too small for a {}x{} kernel",
+                    l.kernel, l.kernel
+                ))
+            })?;
             pad_input(&cur, h, w, l, &mut self.padded);
             next.clear();
             next.resize(oh * ow * l.out_ch, 0.0);
@@ -106,8 +125,15 @@ fn vector_units() -> bool {
 /// Packs a layer's ONNX weights (`[out][in][ky][kx]`) for the kernel.
 fn pack(s: onnx::ConvSpec) -> Layer {
     let (o, i, k) = (s.out_ch, s.in_ch, s.kernel);
-    let at = |oc: usize, ic: usize, ky: usize, kx: usize| s.weights[((oc * i + ic) * k + ky) * k + kx];
-    let block = if o % 16 == 0 { 16 } else if o % 8 == 0 { 8 } else { 0 };
+    let at =
+        |oc: usize, ic: usize, ky: usize, kx: usize| s.weights[((oc * i + ic) * k + ky) * k + kx];
+    let block = if o % 16 == 0 {
+        16
+    } else if o % 8 == 0 {
+        8
+    } else {
+        0
+    };
     let mut plain = Vec::with_capacity(o * i * k * k);
     for ky in 0..k {
         for kx in 0..k {
@@ -133,7 +159,19 @@ fn pack(s: onnx::ConvSpec) -> Layer {
             })
             .collect(),
     };
-    Layer { in_ch: i, out_ch: o, kernel: k, stride: s.stride, pad: s.pad, dilation: s.dilation, relu: s.relu, plain, bias: s.bias, block, packed }
+    Layer {
+        in_ch: i,
+        out_ch: o,
+        kernel: k,
+        stride: s.stride,
+        pad: s.pad,
+        dilation: s.dilation,
+        relu: s.relu,
+        plain,
+        bias: s.bias,
+        block,
+        packed,
+    }
 }
 
 /// Copies the `h`×`w` channels-last `input` into the middle of a zero border of `l.pad` px.
@@ -167,7 +205,10 @@ fn conv_plain(l: &Layer, padded: &[f32], pw: usize, (oh, ow): (usize, usize), ou
             dst.copy_from_slice(&l.bias);
             for ky in 0..k {
                 for kx in 0..k {
-                    let src = &padded[((oy * l.stride + ky * l.dilation) * pw + ox * l.stride + kx * l.dilation) * ic..][..ic];
+                    let src = &padded[((oy * l.stride + ky * l.dilation) * pw
+                        + ox * l.stride
+                        + kx * l.dilation)
+                        * ic..][..ic];
                     let wk = &l.plain[(ky * k + kx) * ic * oc..][..ic * oc];
                     for (a, wr) in src.iter().zip(wk.chunks_exact(oc)) {
                         for (d, wv) in dst.iter_mut().zip(wr) {
@@ -190,7 +231,13 @@ mod x86 {
 
     /// All tiles of one layer.
     #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn conv_tiles(l: &Layer, padded: &[f32], pw: usize, (oh, ow): (usize, usize), out: &mut [f32]) {
+    pub(super) unsafe fn conv_tiles(
+        l: &Layer,
+        padded: &[f32],
+        pw: usize,
+        (oh, ow): (usize, usize),
+        out: &mut [f32],
+    ) {
         for (b, weights) in l.packed.iter().enumerate() {
             let oc0 = b * l.block;
             let bias = &l.bias[oc0..oc0 + l.block];
@@ -206,7 +253,16 @@ mod x86 {
     /// than narrow tiles); rows narrower than a tile go a pixel at a time.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    unsafe fn row_tiles<const M: usize, const P: usize>(l: &Layer, padded: &[f32], pw: usize, (oh, ow): (usize, usize), weights: &[f32], bias: &[f32], oc0: usize, out: &mut [f32]) {
+    unsafe fn row_tiles<const M: usize, const P: usize>(
+        l: &Layer,
+        padded: &[f32],
+        pw: usize,
+        (oh, ow): (usize, usize),
+        weights: &[f32],
+        bias: &[f32],
+        oc0: usize,
+        out: &mut [f32],
+    ) {
         for oy in 0..oh {
             if ow < P {
                 for ox in 0..ow {
@@ -228,7 +284,17 @@ mod x86 {
     /// Output pixels `ox .. ox + P` of row `oy`, channels `oc0 .. oc0 + 8·M`.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    unsafe fn tile<const M: usize, const P: usize>(l: &Layer, padded: &[f32], pw: usize, weights: &[f32], bias: &[f32], (oy, ox): (usize, usize), ow: usize, oc0: usize, out: &mut [f32]) {
+    unsafe fn tile<const M: usize, const P: usize>(
+        l: &Layer,
+        padded: &[f32],
+        pw: usize,
+        weights: &[f32],
+        bias: &[f32],
+        (oy, ox): (usize, usize),
+        ow: usize,
+        oc0: usize,
+        out: &mut [f32],
+    ) {
         let ic = l.in_ch;
         let step = l.stride * ic;
         let mut acc = [[_mm256_setzero_ps(); M]; P];
@@ -241,7 +307,9 @@ mod x86 {
             let iy = oy * l.stride + ky * l.dilation;
             for kx in 0..l.kernel {
                 let wk = weights.as_ptr().add((ky * l.kernel + kx) * ic * 8 * M);
-                let src = padded.as_ptr().add((iy * pw + ox * l.stride + kx * l.dilation) * ic);
+                let src = padded
+                    .as_ptr()
+                    .add((iy * pw + ox * l.stride + kx * l.dilation) * ic);
                 for i in 0..ic {
                     let mut w = [_mm256_setzero_ps(); M];
                     for (m, wv) in w.iter_mut().enumerate() {
@@ -364,7 +432,11 @@ mod onnx {
     }
 
     fn tensor(b: &[u8]) -> Result<Tensor, String> {
-        let mut t = Tensor { name: String::new(), dims: Vec::new(), values: Vec::new() };
+        let mut t = Tensor {
+            name: String::new(),
+            dims: Vec::new(),
+            values: Vec::new(),
+        };
         let mut data_type = 1;
         for (num, v) in fields(b)? {
             match num {
@@ -375,14 +447,20 @@ mod onnx {
                     }
                 }
                 4 => match v {
-                    Value::Bytes(raw) => t.values.extend(raw.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))),
+                    Value::Bytes(raw) => t.values.extend(
+                        raw.chunks_exact(4)
+                            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+                    ),
                     Value::Fixed32(x) => t.values.push(f32::from_bits(x)),
                     _ => return Err("bad float_data".into()),
                 },
                 8 => t.name = string(&v),
                 9 => {
                     if let Value::Bytes(raw) = v {
-                        t.values = raw.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+                        t.values = raw
+                            .chunks_exact(4)
+                            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                            .collect();
                     }
                 }
                 _ => {}
@@ -403,7 +481,12 @@ mod onnx {
     }
 
     fn node(b: &[u8]) -> Result<Node, String> {
-        let mut n = Node { op: String::new(), inputs: Vec::new(), outputs: Vec::new(), attrs: Vec::new() };
+        let mut n = Node {
+            op: String::new(),
+            inputs: Vec::new(),
+            outputs: Vec::new(),
+            attrs: Vec::new(),
+        };
         for (num, v) in fields(b)? {
             match num {
                 1 => n.inputs.push(string(&v)),
@@ -455,21 +538,45 @@ mod onnx {
                 }
             }
             match n.op.as_str() {
-                "Relu" if specs.last().is_some_and(|s| !s.relu) => specs.last_mut().unwrap().relu = true,
+                "Relu" if specs.last().is_some_and(|s| !s.relu) => {
+                    specs.last_mut().unwrap().relu = true
+                }
                 "Conv" => {
-                    let (Some(w), Some(b)) = (n.inputs.get(1).and_then(|i| find(i)), n.inputs.get(2).and_then(|i| find(i))) else { return Ok(None) };
-                    let attr = |name: &str| n.attrs.iter().find(|(a, _)| a == name).map(|(_, v)| v.clone());
+                    let (Some(w), Some(b)) = (
+                        n.inputs.get(1).and_then(|i| find(i)),
+                        n.inputs.get(2).and_then(|i| find(i)),
+                    ) else {
+                        return Ok(None);
+                    };
+                    let attr = |name: &str| {
+                        n.attrs
+                            .iter()
+                            .find(|(a, _)| a == name)
+                            .map(|(_, v)| v.clone())
+                    };
                     let square = |v: Option<Vec<i64>>, default: i64| -> Option<usize> {
                         let v = v.unwrap_or_else(|| vec![default]);
                         (v.iter().all(|x| *x == v[0]) && v[0] >= 0).then_some(v[0] as usize)
                     };
-                    let (Some(stride), Some(pad), Some(dilation), Some(group)) =
-                        (square(attr("strides"), 1), square(attr("pads"), 0), square(attr("dilations"), 1), square(attr("group"), 1))
-                    else {
+                    let (Some(stride), Some(pad), Some(dilation), Some(group)) = (
+                        square(attr("strides"), 1),
+                        square(attr("pads"), 0),
+                        square(attr("dilations"), 1),
+                        square(attr("group"), 1),
+                    ) else {
                         return Ok(None);
                     };
-                    let [o, i, kh, kw] = w.dims[..] else { return Ok(None) };
-                    if group != 1 || kh != kw || kh < 1 || stride < 1 || dilation < 1 || b.values.len() != o as usize || w.values.len() != (o * i * kh * kw) as usize {
+                    let [o, i, kh, kw] = w.dims[..] else {
+                        return Ok(None);
+                    };
+                    if group != 1
+                        || kh != kw
+                        || kh < 1
+                        || stride < 1
+                        || dilation < 1
+                        || b.values.len() != o as usize
+                        || w.values.len() != (o * i * kh * kw) as usize
+                    {
                         return Ok(None);
                     }
                     if specs.last().is_some_and(|s| s.out_ch != i as usize) {
@@ -508,41 +615,91 @@ mod tests {
     fn the_shipped_networks_match_opencv_dnn() {
         let models: [(&str, &[u8], usize, usize); 6] = [
             ("hubnet", include_bytes!("../models/hubnet.onnx"), 128, 192),
-            ("hubnet-still", include_bytes!("../models/hubnet-still.onnx"), 128, 192),
+            (
+                "hubnet-still",
+                include_bytes!("../models/hubnet-still.onnx"),
+                128,
+                192,
+            ),
             ("hubcrop", include_bytes!("../models/hubcrop.onnx"), 64, 64),
-            ("hubcrop-still", include_bytes!("../models/hubcrop-still.onnx"), 64, 64),
+            (
+                "hubcrop-still",
+                include_bytes!("../models/hubcrop-still.onnx"),
+                64,
+                64,
+            ),
             ("hubyaw", include_bytes!("../models/hubyaw.onnx"), 64, 64),
-            ("hubyaw-close", include_bytes!("../models/hubyaw-close.onnx"), 64, 64),
+            (
+                "hubyaw-close",
+                include_bytes!("../models/hubyaw-close.onnx"),
+                64,
+                64,
+            ),
         ];
         let Some(_) = ConvNet::from_onnx(models[0].1).unwrap() else {
             eprintln!("skipped: this CPU lacks AVX2/FMA, the dnn module runs the networks");
             return;
         };
         for (name, model, h, w) in models {
-            let mut net = ConvNet::from_onnx(model).unwrap().unwrap_or_else(|| panic!("{name}: not a Conv/Relu chain"));
+            let mut net = ConvNet::from_onnx(model)
+                .unwrap()
+                .unwrap_or_else(|| panic!("{name}: not a Conv/Relu chain"));
             // A smooth pattern with texture, as a frame would be.
-            let pixels: Vec<u8> = (0..h * w).map(|k| ((k % w) * 3 + (k / w) * 5 + ((k * 2654435761) >> 20) % 40) as u8).collect();
+            let pixels: Vec<u8> = (0..h * w)
+                .map(|k| ((k % w) * 3 + (k / w) * 5 + ((k * 2654435761) >> 20) % 40) as u8)
+                .collect();
             let ours = net.run(&pixels, h, w).unwrap().to_vec();
-            let img = Mat::new_rows_cols_with_data::<u8>(h as i32, w as i32, &pixels).unwrap().try_clone().unwrap();
-            let blob = dnn::blob_from_image(&img, 1.0 / 255.0, Size::new(w as i32, h as i32), Scalar::default(), false, false, opencv::core::CV_32F).unwrap();
+            let img = Mat::new_rows_cols_with_data::<u8>(h as i32, w as i32, &pixels)
+                .unwrap()
+                .try_clone()
+                .unwrap();
+            let blob = dnn::blob_from_image(
+                &img,
+                1.0 / 255.0,
+                Size::new(w as i32, h as i32),
+                Scalar::default(),
+                false,
+                false,
+                opencv::core::CV_32F,
+            )
+            .unwrap();
             let mut cv = dnn::read_net_from_onnx_buffer(&Vector::<u8>::from_slice(model)).unwrap();
             cv.set_input(&blob, "", 1.0, Scalar::default()).unwrap();
             let out = cv.forward_single("").unwrap();
             let theirs = out.data_typed::<f32>().unwrap();
             assert_eq!(ours.len(), theirs.len(), "{name}");
             let scale = theirs.iter().fold(1.0f32, |m, v| m.max(v.abs()));
-            let worst = ours.iter().zip(theirs).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
-            assert!(worst <= 1e-4 * scale, "{name}: largest difference {worst} (logits up to {scale})");
+            let worst = ours
+                .iter()
+                .zip(theirs)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0f32, f32::max);
+            assert!(
+                worst <= 1e-4 * scale,
+                "{name}: largest difference {worst} (logits up to {scale})"
+            );
         }
     }
 
     #[test]
     fn bad_models_and_inputs_are_errors() {
         assert!(ConvNet::from_onnx(b"\x3a\xff").is_err() || !vector_units());
-        let Some(mut net) = ConvNet::from_onnx(include_bytes!("../models/hubyaw.onnx")).unwrap() else { return };
+        let Some(mut net) = ConvNet::from_onnx(include_bytes!("../models/hubyaw.onnx")).unwrap()
+        else {
+            return;
+        };
         // The wrong number of pixels; an image smaller than the yaw network's 8×8 kernel needs.
-        assert!(matches!(net.run(&[0u8; 10], 4, 4), Err(DetectError::Model(_))));
-        assert!(matches!(net.run(&[0u8; 16], 4, 4), Err(DetectError::Model(_))));
-        assert_eq!(net.run(&[0u8; 64 * 64], 64, 64).unwrap().len(), heat::YAW_BINS);
+        assert!(matches!(
+            net.run(&[0u8; 10], 4, 4),
+            Err(DetectError::Model(_))
+        ));
+        assert!(matches!(
+            net.run(&[0u8; 16], 4, 4),
+            Err(DetectError::Model(_))
+        ));
+        assert_eq!(
+            net.run(&[0u8; 64 * 64], 64, 64).unwrap().len(),
+            heat::YAW_BINS
+        );
     }
 }

@@ -37,7 +37,11 @@ impl Segment {
     /// Undirected tilt from the image vertical in degrees, in (−90, 90]: 0 = vertical, positive
     /// when the upper end leans to the right (clockwise from up).
     pub fn tilt_from_vertical_deg(&self) -> f64 {
-        let (top, bottom) = if self.a[1] <= self.b[1] { (self.a, self.b) } else { (self.b, self.a) };
+        let (top, bottom) = if self.a[1] <= self.b[1] {
+            (self.a, self.b)
+        } else {
+            (self.b, self.a)
+        };
         let a = up_cw_deg([top[0] - bottom[0], top[1] - bottom[1]]);
         // a is in [0, 90] ∪ [270, 360) (upward direction) or exactly 90/270 for horizontals.
         let t = wrap180(a);
@@ -67,7 +71,11 @@ impl Segment {
     /// Direction angle (up-clockwise, [0, 360)) pointing from the end nearer to `p` toward the
     /// far end: the direction in which a blade "beams out" from a hub at `p`.
     pub fn angle_away_from(&self, p: P2) -> f64 {
-        let (near, far) = if dist(self.a, p) <= dist(self.b, p) { (self.a, self.b) } else { (self.b, self.a) };
+        let (near, far) = if dist(self.a, p) <= dist(self.b, p) {
+            (self.a, self.b)
+        } else {
+            (self.b, self.a)
+        };
         up_cw_deg([far[0] - near[0], far[1] - near[1]])
     }
 
@@ -112,7 +120,10 @@ impl Segment {
     /// Both end points multiplied by `k` (pyramid level to full resolution: `k = 2^levels`,
     /// because `pyrDown` centres destination pixel `i` on source pixel `2i`).
     pub fn scaled(&self, k: f64) -> Segment {
-        Segment { a: scale_point(self.a, k), b: scale_point(self.b, k) }
+        Segment {
+            a: scale_point(self.a, k),
+            b: scale_point(self.b, k),
+        }
     }
 }
 
@@ -185,7 +196,10 @@ pub fn roll_compensated_tilt_deg(s: &Segment, roll_deg: f64) -> f64 {
 
 /// Intersection of the infinite lines through two segments; `None` when (nearly) parallel.
 pub fn line_intersection(s: &Segment, t: &Segment) -> Option<P2> {
-    let (r, q) = ([s.b[0] - s.a[0], s.b[1] - s.a[1]], [t.b[0] - t.a[0], t.b[1] - t.a[1]]);
+    let (r, q) = (
+        [s.b[0] - s.a[0], s.b[1] - s.a[1]],
+        [t.b[0] - t.a[0], t.b[1] - t.a[1]],
+    );
     let den = r[0] * q[1] - r[1] * q[0];
     let norm = (r[0].hypot(r[1]) * q[0].hypot(q[1])).max(1e-12);
     // sin of the angle between the lines below ~0.06° means parallel for any practical purpose.
@@ -231,7 +245,9 @@ pub fn group_by_angle(angles: &[f64], tol_deg: f64) -> Vec<Vec<usize>> {
             b - a
         }
     };
-    let last = (0..n).max_by(|&i, &j| gap(i).total_cmp(&gap(j))).unwrap_or(n - 1);
+    let last = (0..n)
+        .max_by(|&i, &j| gap(i).total_cmp(&gap(j)))
+        .unwrap_or(n - 1);
     let start = (last + 1) % n;
     let mut groups: Vec<Vec<usize>> = Vec::new();
     let mut cur = vec![idx[start]];
@@ -267,13 +283,22 @@ pub fn vote_pairwise(angles: &[f64], target_deg: f64, tol_deg: f64) -> Vec<u32> 
 
 /// Which blades survive the vote (`votes < vote_limit`).
 pub fn vote_keep(angles: &[f64], target_deg: f64, tol_deg: f64, vote_limit: u32) -> Vec<bool> {
-    vote_pairwise(angles, target_deg, tol_deg).into_iter().map(|v| v < vote_limit).collect()
+    vote_pairwise(angles, target_deg, tol_deg)
+        .into_iter()
+        .map(|v| v < vote_limit)
+        .collect()
 }
 
 /// Keep the points that lie within `max_dx` horizontally of the (infinite) tower axis line at
 /// their own row and within `max_dy` vertically of `ref_point` (the thesis's temporary hub
 /// estimate, the tower top). Returns the kept points.
-pub fn filter_intersections(points: &[P2], axis: &Segment, ref_point: P2, max_dx: f64, max_dy: f64) -> Vec<P2> {
+pub fn filter_intersections(
+    points: &[P2],
+    axis: &Segment,
+    ref_point: P2,
+    max_dx: f64,
+    max_dy: f64,
+) -> Vec<P2> {
     points
         .iter()
         .copied()
@@ -290,7 +315,9 @@ pub fn mean_point(points: &[P2]) -> Option<P2> {
         return None;
     }
     let n = points.len() as f64;
-    let s = points.iter().fold([0.0, 0.0], |s, p| [s[0] + p[0], s[1] + p[1]]);
+    let s = points
+        .iter()
+        .fold([0.0, 0.0], |s, p| [s[0] + p[0], s[1] + p[1]]);
     Some([s[0] / n, s[1] / n])
 }
 
@@ -302,7 +329,11 @@ pub fn median(v: &[f64]) -> Option<f64> {
     let mut s = v.to_vec();
     s.sort_by(f64::total_cmp);
     let m = s.len() / 2;
-    Some(if s.len() % 2 == 1 { s[m] } else { 0.5 * (s[m - 1] + s[m]) })
+    Some(if s.len() % 2 == 1 {
+        s[m]
+    } else {
+        0.5 * (s[m - 1] + s[m])
+    })
 }
 
 /// Distance from `p` to the segment `a`–`b` (used for scoring against the hub→nose segment).
@@ -376,7 +407,9 @@ pub fn projected_overlap(s: &Segment, t: &Segment) -> f64 {
 pub fn lines_nearest_point(lines: &[(Segment, f64)]) -> Option<P2> {
     let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for (s, w) in lines {
-        let Some((n, c)) = line_normal(s) else { continue };
+        let Some((n, c)) = line_normal(s) else {
+            continue;
+        };
         a11 += w * n[0] * n[0];
         a12 += w * n[0] * n[1];
         a22 += w * n[1] * n[1];
@@ -485,7 +518,11 @@ mod tests {
         assert!(close(s.line_distance([3.0, 500.0]), 3.0, 1e-12));
         assert!(close(s.segment_distance([3.0, 104.0]), 5.0, 1e-12));
         assert!(close(s.angle_away_from([0.0, -5.0]), 180.0, 1e-9));
-        assert!(close(point_segment_distance([0.0, 0.0], [3.0, 4.0], [3.0, 10.0]), 5.0, 1e-12));
+        assert!(close(
+            point_segment_distance([0.0, 0.0], [3.0, 4.0], [3.0, 10.0]),
+            5.0,
+            1e-12
+        ));
         assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
     }
 
@@ -496,25 +533,57 @@ mod tests {
         let lower = Segment::new([300.0, 102.0], [100.0, 110.0]);
         let ax = band_axis(&upper, &lower).unwrap();
         // Axis along y = 100, spanning x 100..300, ordered like `upper`.
-        assert!(close(ax.a[1], 100.0, 1e-6) && close(ax.b[1], 100.0, 1e-6), "{ax:?}");
-        assert!(close(ax.a[0], 100.0, 0.5) && close(ax.b[0], 300.0, 0.5), "{ax:?}");
-        assert!(close(band_width_at(&upper, &lower, [100.0, 100.0]), 20.0, 0.1));
-        assert!(close(band_width_at(&upper, &lower, [300.0, 100.0]), 4.0, 0.1));
+        assert!(
+            close(ax.a[1], 100.0, 1e-6) && close(ax.b[1], 100.0, 1e-6),
+            "{ax:?}"
+        );
+        assert!(
+            close(ax.a[0], 100.0, 0.5) && close(ax.b[0], 300.0, 0.5),
+            "{ax:?}"
+        );
+        assert!(close(
+            band_width_at(&upper, &lower, [100.0, 100.0]),
+            20.0,
+            0.1
+        ));
+        assert!(close(
+            band_width_at(&upper, &lower, [300.0, 100.0]),
+            4.0,
+            0.1
+        ));
         // Perpendicular edges form no band.
-        assert!(band_axis(&Segment::new([0.0, 0.0], [10.0, 0.0]), &Segment::new([0.0, 0.0], [0.0, 10.0])).is_none());
+        assert!(band_axis(
+            &Segment::new([0.0, 0.0], [10.0, 0.0]),
+            &Segment::new([0.0, 0.0], [0.0, 10.0])
+        )
+        .is_none());
     }
 
     #[test]
     fn overlap_and_nearest_point_of_lines() {
         let s = Segment::new([0.0, 0.0], [100.0, 0.0]);
-        assert!(close(projected_overlap(&s, &Segment::new([50.0, 5.0], [150.0, 5.0])), 50.0, 1e-9));
-        assert!(close(projected_overlap(&s, &Segment::new([150.0, 5.0], [250.0, 5.0])), 0.0, 1e-9));
+        assert!(close(
+            projected_overlap(&s, &Segment::new([50.0, 5.0], [150.0, 5.0])),
+            50.0,
+            1e-9
+        ));
+        assert!(close(
+            projected_overlap(&s, &Segment::new([150.0, 5.0], [250.0, 5.0])),
+            0.0,
+            1e-9
+        ));
         let hub = [200.0, 120.0];
         let lines: Vec<(Segment, f64)> = [10.0, 130.0, 250.0]
             .iter()
             .map(|&a| {
                 let d = dir_from_up_cw(a);
-                (Segment::new([hub[0] + 30.0 * d[0], hub[1] + 30.0 * d[1]], [hub[0] + 90.0 * d[0], hub[1] + 90.0 * d[1]]), 1.0)
+                (
+                    Segment::new(
+                        [hub[0] + 30.0 * d[0], hub[1] + 30.0 * d[1]],
+                        [hub[0] + 90.0 * d[0], hub[1] + 90.0 * d[1]],
+                    ),
+                    1.0,
+                )
             })
             .collect();
         let p = lines_nearest_point(&lines).unwrap();

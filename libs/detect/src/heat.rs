@@ -62,8 +62,14 @@ impl Heatmap {
         }
         // Cell centres are at (i + 0.5) / cols.
         let (cx, cy) = (fx * self.cols as f64 - 0.5, fy * self.rows as f64 - 0.5);
-        let (x0, x1) = (((cx - radius).ceil().max(0.0)) as usize, ((cx + radius).floor().min(self.cols as f64 - 1.0)).max(0.0) as usize);
-        let (y0, y1) = (((cy - radius).ceil().max(0.0)) as usize, ((cy + radius).floor().min(self.rows as f64 - 1.0)).max(0.0) as usize);
+        let (x0, x1) = (
+            ((cx - radius).ceil().max(0.0)) as usize,
+            ((cx + radius).floor().min(self.cols as f64 - 1.0)).max(0.0) as usize,
+        );
+        let (y0, y1) = (
+            ((cy - radius).ceil().max(0.0)) as usize,
+            ((cy + radius).floor().min(self.rows as f64 - 1.0)).max(0.0) as usize,
+        );
         let mut best = 0.0f32;
         for y in y0..=y1 {
             for x in x0..=x1 {
@@ -81,7 +87,11 @@ impl Heatmap {
     /// 3×3 neighbourhood: the network was trained to a bump about a cell wide around the hub,
     /// so the neighbours' share says where in the cell the hub is.
     pub fn peak(&self) -> Option<([f64; 2], f64)> {
-        let (i, p) = self.p.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+        let (i, p) = self
+            .p
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))?;
         let (x, y) = (i % self.cols, i / self.cols);
         let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
         for ny in y.saturating_sub(1)..=(y + 1).min(self.rows - 1) {
@@ -92,7 +102,11 @@ impl Heatmap {
                 sw += w;
             }
         }
-        let (cx, cy) = if sw > 0.0 { (sx / sw, sy / sw) } else { (x as f64 + 0.5, y as f64 + 0.5) };
+        let (cx, cy) = if sw > 0.0 {
+            (sx / sw, sy / sw)
+        } else {
+            (x as f64 + 0.5, y as f64 + 0.5)
+        };
         Some(([cx / self.cols as f64, cy / self.rows as f64], *p as f64))
     }
 }
@@ -135,12 +149,18 @@ pub struct HubCropNet {
 impl HubCropNet {
     /// Load the shipped model; `direct` as for [`HubNet::new`].
     pub fn new(direct: bool) -> Result<HubCropNet, DetectError> {
-        Ok(HubCropNet { net: Runner::load(CROP_MODEL, direct)?, crop: Mat::default() })
+        Ok(HubCropNet {
+            net: Runner::load(CROP_MODEL, direct)?,
+            crop: Mat::default(),
+        })
     }
 
     /// Load the still photos' model.
     pub fn for_stills(direct: bool) -> Result<HubCropNet, DetectError> {
-        Ok(HubCropNet { net: Runner::load(STILL_CROP_MODEL, direct)?, crop: Mat::default() })
+        Ok(HubCropNet {
+            net: Runner::load(STILL_CROP_MODEL, direct)?,
+            crop: Mat::default(),
+        })
     }
 
     /// The hub near `centre` (working px) of the working level `working` (grey).
@@ -150,8 +170,14 @@ impl HubCropNet {
         warp_crop(working, centre, side, CROP_SIDE, &mut self.crop)?;
         let g = (CROP_SIDE / CROP_STRIDE) as usize;
         let map = probabilities(&mut self.net, &self.crop, (g, g), "hub crop network")?;
-        let Some(([fx, fy], p)) = map.peak() else { unreachable!("a non-empty map has a peak") };
-        Ok(CropPeak { hub: [x0 + fx * side, y0 + fy * side], p, at_centre: map.near(0.5, 0.5, 1.0) })
+        let Some(([fx, fy], p)) = map.peak() else {
+            unreachable!("a non-empty map has a peak")
+        };
+        Ok(CropPeak {
+            hub: [x0 + fx * side, y0 + fy * side],
+            p,
+            at_centre: map.near(0.5, 0.5, 1.0),
+        })
     }
 }
 
@@ -200,22 +226,39 @@ pub struct HubYawNet {
 impl HubYawNet {
     /// Load the shipped model (the whole approach, 3.5–46 m); `direct` as for [`HubNet::new`].
     pub fn new(direct: bool) -> Result<HubYawNet, DetectError> {
-        Ok(HubYawNet { net: Runner::load(YAW_MODEL, direct)?, window_m: YAW_WINDOW_M, crop: Mat::default() })
+        Ok(HubYawNet {
+            net: Runner::load(YAW_MODEL, direct)?,
+            window_m: YAW_WINDOW_M,
+            crop: Mat::default(),
+        })
     }
 
     /// Load the shipped close-range model (3.5–14 m, where the approach ends).
     pub fn close_range(direct: bool) -> Result<HubYawNet, DetectError> {
-        Ok(HubYawNet { net: Runner::load(YAW_CLOSE_MODEL, direct)?, window_m: YAW_CLOSE_WINDOW_M, crop: Mat::default() })
+        Ok(HubYawNet {
+            net: Runner::load(YAW_CLOSE_MODEL, direct)?,
+            window_m: YAW_CLOSE_WINDOW_M,
+            crop: Mat::default(),
+        })
     }
 
     /// The yaw around `hub` (working px) of the working level `working` (grey), seen from
     /// `distance_m` with the focal length `focal_px` (working px).
-    pub fn run(&mut self, working: &Mat, hub: [f64; 2], distance_m: f64, focal_px: f64) -> Result<YawReading, DetectError> {
+    pub fn run(
+        &mut self,
+        working: &Mat,
+        hub: [f64; 2],
+        distance_m: f64,
+        focal_px: f64,
+    ) -> Result<YawReading, DetectError> {
         let side = focal_px * self.window_m / distance_m;
         warp_crop(working, hub, side, YAW_SIDE, &mut self.crop)?;
         let logits = self.net.run(&self.crop)?;
         if logits.len() != YAW_BINS {
-            return Err(DetectError::BadImage(format!("yaw network gave {} values for {YAW_BINS} bins", logits.len())));
+            return Err(DetectError::BadImage(format!(
+                "yaw network gave {} values for {YAW_BINS} bins",
+                logits.len()
+            )));
         }
         Ok(yaw_of_logits(logits))
     }
@@ -228,15 +271,34 @@ pub fn yaw_of_logits(logits: &[f32]) -> YawReading {
     let sum: f64 = w.iter().sum();
     let n = logits.len().max(2) as f64;
     let centre = |i: usize| -YAW_MAX_DEG + 2.0 * YAW_MAX_DEG * i as f64 / (n - 1.0);
-    let mean = w.iter().enumerate().map(|(i, p)| p * centre(i)).sum::<f64>() / sum;
-    let var = w.iter().enumerate().map(|(i, p)| p * (centre(i) - mean).powi(2)).sum::<f64>() / sum;
-    YawReading { yaw_deg: mean, std_deg: var.max(0.0).sqrt() }
+    let mean = w
+        .iter()
+        .enumerate()
+        .map(|(i, p)| p * centre(i))
+        .sum::<f64>()
+        / sum;
+    let var = w
+        .iter()
+        .enumerate()
+        .map(|(i, p)| p * (centre(i) - mean).powi(2))
+        .sum::<f64>()
+        / sum;
+    YawReading {
+        yaw_deg: mean,
+        std_deg: var.max(0.0).sqrt(),
+    }
 }
 
 /// Cuts the `out_side`² square of side `side` (px) centred on `centre` out of `working`,
 /// bilinear: crop pixel u samples x0 + (u + 0.5)·s − 0.5 (pixel centres), as the training crops
 /// do; outside the frame the border repeats.
-fn warp_crop(working: &Mat, centre: [f64; 2], side: f64, out_side: i32, out: &mut Mat) -> Result<(), DetectError> {
+fn warp_crop(
+    working: &Mat,
+    centre: [f64; 2],
+    side: f64,
+    out_side: i32,
+    out: &mut Mat,
+) -> Result<(), DetectError> {
     let s = side / out_side as f64;
     let (x0, y0) = (centre[0] - side / 2.0, centre[1] - side / 2.0);
     let m = Mat::from_slice_2d(&[[s, 0.0, x0 + 0.5 * s - 0.5], [0.0, s, y0 + 0.5 * s - 0.5]])?;
@@ -270,7 +332,11 @@ impl Runner {
             }
         }
         let net = dnn::read_net_from_onnx_buffer(&Vector::<u8>::from_slice(model))?;
-        Ok(Runner::Dnn { net, blob: Mat::default(), out: Mat::default() })
+        Ok(Runner::Dnn {
+            net,
+            blob: Mat::default(),
+            out: Mat::default(),
+        })
     }
 
     /// The network's output for the grey image `input`, scaled to [0, 1].
@@ -286,7 +352,16 @@ impl Runner {
             }
             Runner::Dnn { net, blob, out } => {
                 let size = input.size()?;
-                dnn::blob_from_image_to(input, blob, 1.0 / 255.0, size, opencv::core::Scalar::default(), false, false, opencv::core::CV_32F)?;
+                dnn::blob_from_image_to(
+                    input,
+                    blob,
+                    1.0 / 255.0,
+                    size,
+                    opencv::core::Scalar::default(),
+                    false,
+                    false,
+                    opencv::core::CV_32F,
+                )?;
                 net.set_input(blob, "", 1.0, opencv::core::Scalar::default())?;
                 *out = net.forward_single("")?;
                 Ok(out.data_typed::<f32>()?)
@@ -298,12 +373,24 @@ impl Runner {
 /// Runs `net` on the grey image `input` (scaled to [0, 1]) and returns its `cols`×`rows` logits
 /// as probabilities; `what` names the network in the error when the model's output has another
 /// size.
-fn probabilities(net: &mut Runner, input: &Mat, (cols, rows): (usize, usize), what: &str) -> Result<Heatmap, DetectError> {
+fn probabilities(
+    net: &mut Runner,
+    input: &Mat,
+    (cols, rows): (usize, usize),
+    what: &str,
+) -> Result<Heatmap, DetectError> {
     let logits = net.run(input)?;
     if logits.len() != rows * cols {
-        return Err(DetectError::BadImage(format!("{what} gave {} values for {cols}x{rows} cells", logits.len())));
+        return Err(DetectError::BadImage(format!(
+            "{what} gave {} values for {cols}x{rows} cells",
+            logits.len()
+        )));
     }
-    Ok(Heatmap { cols, rows, p: logits.iter().map(|l| 1.0 / (1.0 + (-l).exp())).collect() })
+    Ok(Heatmap {
+        cols,
+        rows,
+        p: logits.iter().map(|l| 1.0 / (1.0 + (-l).exp())).collect(),
+    })
 }
 
 /// The loaded network and its buffers.
@@ -316,18 +403,27 @@ impl HubNet {
     /// Load the shipped model (video frames); `direct`: run it without the dnn module where
     /// the CPU allows (`detect.default.builtin_nets`).
     pub fn new(direct: bool) -> Result<HubNet, DetectError> {
-        Ok(HubNet { net: Runner::load(MODEL, direct)?, input: Mat::default() })
+        Ok(HubNet {
+            net: Runner::load(MODEL, direct)?,
+            input: Mat::default(),
+        })
     }
 
     /// Load the still photos' model.
     pub fn for_stills(direct: bool) -> Result<HubNet, DetectError> {
-        Ok(HubNet { net: Runner::load(STILL_MODEL, direct)?, input: Mat::default() })
+        Ok(HubNet {
+            net: Runner::load(STILL_MODEL, direct)?,
+            input: Mat::default(),
+        })
     }
 
     /// The heatmap of one working pyramid level (grey).
     pub fn run(&mut self, working: &Mat) -> Result<Heatmap, DetectError> {
         network_input(working, &mut self.input)?;
-        let (rows, cols) = ((NET_HEIGHT / NET_STRIDE) as usize, (NET_WIDTH / NET_STRIDE) as usize);
+        let (rows, cols) = (
+            (NET_HEIGHT / NET_STRIDE) as usize,
+            (NET_WIDTH / NET_STRIDE) as usize,
+        );
         probabilities(&mut self.net, &self.input, (cols, rows), "hub network")
     }
 }
@@ -346,10 +442,16 @@ mod tests {
         // Two equal neighbours: halfway, spread half a bin.
         logits[21] = 0.0;
         let r = yaw_of_logits(&logits);
-        assert!((r.yaw_deg - 11.25).abs() < 1e-6 && (r.std_deg - 1.25).abs() < 1e-6, "{r:?}");
+        assert!(
+            (r.yaw_deg - 11.25).abs() < 1e-6 && (r.std_deg - 1.25).abs() < 1e-6,
+            "{r:?}"
+        );
         // A flat distribution: centred, as wide as 33 evenly spaced points: 2.5°·√((33² − 1)/12) = 23.80°.
         let r = yaw_of_logits(&[0.0f32; YAW_BINS]);
-        assert!(r.yaw_deg.abs() < 1e-9 && (r.std_deg - 23.805).abs() < 0.01, "{r:?}");
+        assert!(
+            r.yaw_deg.abs() < 1e-9 && (r.std_deg - 23.805).abs() < 0.01,
+            "{r:?}"
+        );
         // Large logits do not overflow.
         let r = yaw_of_logits(&[1e4f32; YAW_BINS]);
         assert!(r.yaw_deg.is_finite() && r.std_deg.is_finite());
@@ -398,9 +500,21 @@ mod tests {
     #[test]
     fn the_shipped_model_loads_and_maps_the_whole_frame() {
         let mut net = HubNet::new(true).expect("the shipped model loads");
-        let img = Mat::new_rows_cols_with_default(270, 480, opencv::core::CV_8UC1, opencv::core::Scalar::all(100.0)).unwrap();
+        let img = Mat::new_rows_cols_with_default(
+            270,
+            480,
+            opencv::core::CV_8UC1,
+            opencv::core::Scalar::all(100.0),
+        )
+        .unwrap();
         let h = net.run(&img).unwrap();
-        assert_eq!((h.cols, h.rows), ((NET_WIDTH / NET_STRIDE) as usize, (NET_HEIGHT / NET_STRIDE) as usize));
+        assert_eq!(
+            (h.cols, h.rows),
+            (
+                (NET_WIDTH / NET_STRIDE) as usize,
+                (NET_HEIGHT / NET_STRIDE) as usize
+            )
+        );
         assert!(h.p.iter().all(|p| p.is_finite() && (0.0..=1.0).contains(p)));
         // A blank frame holds no hub.
         assert!(h.peak().unwrap().1 < 0.5, "{:?}", h.peak());

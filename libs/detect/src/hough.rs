@@ -71,10 +71,26 @@ impl OrientedHough {
     /// found. Buffers shorter than `width`·`height`, or sides beyond u16 (working images are at
     /// most a few hundred px), give no segments.
     #[allow(clippy::too_many_arguments)]
-    pub fn run(&mut self, edges: &[u8], dx: &[i16], dy: &[i16], width: usize, height: usize, s: &HoughSettings, out: &mut Vec<Segment>) {
+    pub fn run(
+        &mut self,
+        edges: &[u8],
+        dx: &[i16],
+        dy: &[i16],
+        width: usize,
+        height: usize,
+        s: &HoughSettings,
+        out: &mut Vec<Segment>,
+    ) {
         out.clear();
         let n = width * height;
-        if width == 0 || height == 0 || edges.len() < n || dx.len() < n || dy.len() < n || width > u16::MAX as usize || height > u16::MAX as usize {
+        if width == 0
+            || height == 0
+            || edges.len() < n
+            || dx.len() < n
+            || dy.len() < n
+            || width > u16::MAX as usize
+            || height > u16::MAX as usize
+        {
             return;
         }
         let theta = s.theta_deg.to_radians();
@@ -101,8 +117,16 @@ impl OrientedHough {
         let (cos_q, sin_q) = (&self.cos_q, &self.sin_q);
         let bin = move |x2: i64, y2: i64, t: usize| rho_bin(x2, y2, cos_q[t], sin_q[t], rho_round);
         // Bins each pixel votes for: 2·half + 1 around its gradient angle (all when ≥ 90°).
-        let half = if s.orientation_tol_deg >= 90.0 { num_angle } else { (s.orientation_tol_deg / s.theta_deg).round().max(0.0) as usize };
-        let (span, all) = if 2 * half + 1 >= num_angle { (num_angle, true) } else { (2 * half + 1, false) };
+        let half = if s.orientation_tol_deg >= 90.0 {
+            num_angle
+        } else {
+            (s.orientation_tol_deg / s.theta_deg).round().max(0.0) as usize
+        };
+        let (span, all) = if 2 * half + 1 >= num_angle {
+            (num_angle, true)
+        } else {
+            (2 * half + 1, false)
+        };
         self.acc.clear();
         self.acc.resize(num_angle * num_rho, 0);
         self.mask.clear();
@@ -173,15 +197,37 @@ impl OrientedHough {
             let (a, b) = (-self.sin[best_n], self.cos[best_n]);
             let x_major = a.abs() > b.abs();
             let (step_x, step_y, x0, y0) = if x_major {
-                (a.signum() as i64, ((b * (1i64 << SHIFT) as f64) / a.abs()).round() as i64, x as i64, ((y as i64) << SHIFT) + (1 << (SHIFT - 1)))
+                (
+                    a.signum() as i64,
+                    ((b * (1i64 << SHIFT) as f64) / a.abs()).round() as i64,
+                    x as i64,
+                    ((y as i64) << SHIFT) + (1 << (SHIFT - 1)),
+                )
             } else {
-                (((a * (1i64 << SHIFT) as f64) / b.abs()).round() as i64, b.signum() as i64, ((x as i64) << SHIFT) + (1 << (SHIFT - 1)), y as i64)
+                (
+                    ((a * (1i64 << SHIFT) as f64) / b.abs()).round() as i64,
+                    b.signum() as i64,
+                    ((x as i64) << SHIFT) + (1 << (SHIFT - 1)),
+                    y as i64,
+                )
             };
-            let pixel = |px: i64, py: i64| if x_major { (px, py >> SHIFT) } else { (px >> SHIFT, py) };
-            let inside = |(c, r): (i64, i64)| c >= 0 && r >= 0 && (c as usize) < width && (r as usize) < height;
+            let pixel = |px: i64, py: i64| {
+                if x_major {
+                    (px, py >> SHIFT)
+                } else {
+                    (px >> SHIFT, py)
+                }
+            };
+            let inside = |(c, r): (i64, i64)| {
+                c >= 0 && r >= 0 && (c as usize) < width && (r as usize) < height
+            };
             let mut ends = [(x as i64, y as i64); 2];
             for (k, end) in ends.iter_mut().enumerate() {
-                let (sx, sy) = if k == 0 { (step_x, step_y) } else { (-step_x, -step_y) };
+                let (sx, sy) = if k == 0 {
+                    (step_x, step_y)
+                } else {
+                    (-step_x, -step_y)
+                };
                 let (mut px, mut py, mut gap) = (x0, y0, 0);
                 loop {
                     let (c, r) = pixel(px, py);
@@ -201,10 +247,15 @@ impl OrientedHough {
                     py += sy;
                 }
             }
-            let good = ((ends[1].0 - ends[0].0).abs() as f64) >= min_length || ((ends[1].1 - ends[0].1).abs() as f64) >= min_length;
+            let good = ((ends[1].0 - ends[0].0).abs() as f64) >= min_length
+                || ((ends[1].1 - ends[0].1).abs() as f64) >= min_length;
             // Take the walked pixels off the mask; on a segment, withdraw the votes they cast.
             for (k, end) in ends.iter().enumerate() {
-                let (sx, sy) = if k == 0 { (step_x, step_y) } else { (-step_x, -step_y) };
+                let (sx, sy) = if k == 0 {
+                    (step_x, step_y)
+                } else {
+                    (-step_x, -step_y)
+                };
                 let (mut px, mut py) = (x0, y0);
                 loop {
                     let (c, r) = pixel(px, py);
@@ -235,7 +286,10 @@ impl OrientedHough {
                 }
             }
             if good {
-                out.push(Segment::new([ends[0].0 as f64, ends[0].1 as f64], [ends[1].0 as f64, ends[1].1 as f64]));
+                out.push(Segment::new(
+                    [ends[0].0 as f64, ends[0].1 as f64],
+                    [ends[1].0 as f64, ends[1].1 as f64],
+                ));
             }
         }
     }
@@ -266,9 +320,15 @@ fn normal_angle(gx: i16, gy: i16) -> f64 {
         return 0.0;
     }
     // atan of the smaller over the larger ratio, in [0, π/4].
-    let (t, swapped) = if ay <= ax { (ay / ax, false) } else { (ax / ay, true) };
+    let (t, swapped) = if ay <= ax {
+        (ay / ax, false)
+    } else {
+        (ax / ay, true)
+    };
     let t2 = t * t;
-    let mut a = t * (0.999_866 + t2 * (-0.330_299_5 + t2 * (0.180_141 + t2 * (-0.085_133 + t2 * 0.020_835_1))));
+    let mut a = t
+        * (0.999_866
+            + t2 * (-0.330_299_5 + t2 * (0.180_141 + t2 * (-0.085_133 + t2 * 0.020_835_1))));
     if swapped {
         a = FRAC_PI_2 - a;
     }
@@ -311,7 +371,13 @@ mod tests {
                             continue;
                         }
                         let exact = v as usize;
-                        let fixed = rho_bin(2 * x as i64 - w as i64, 2 * y as i64 - h as i64, cq, sq, rho_round);
+                        let fixed = rho_bin(
+                            2 * x as i64 - w as i64,
+                            2 * y as i64 - h as i64,
+                            cq,
+                            sq,
+                            rho_round,
+                        );
                         assert_eq!(fixed, exact, "pixel ({x}, {y}) angle {k} in {w}x{h}");
                     }
                 }
@@ -326,7 +392,9 @@ mod tests {
                 if gx == 0 && gy == 0 {
                     continue;
                 }
-                let exact = (gy as f64).atan2(gx as f64).rem_euclid(std::f64::consts::PI);
+                let exact = (gy as f64)
+                    .atan2(gx as f64)
+                    .rem_euclid(std::f64::consts::PI);
                 let fast = normal_angle(gx as i16, gy as i16);
                 // Equal modulo π (0 and π are the same normal).
                 let d = (fast - exact).abs();
@@ -337,7 +405,12 @@ mod tests {
     }
 
     /// An image with the given lines drawn (1 px, gradients along their normals) and noise.
-    fn scene(w: usize, h: usize, lines: &[([f64; 2], [f64; 2])], noise: usize) -> (Vec<u8>, Vec<i16>, Vec<i16>) {
+    fn scene(
+        w: usize,
+        h: usize,
+        lines: &[([f64; 2], [f64; 2])],
+        noise: usize,
+    ) -> (Vec<u8>, Vec<i16>, Vec<i16>) {
         let (mut e, mut gx, mut gy) = (vec![0u8; w * h], vec![0i16; w * h], vec![0i16; w * h]);
         for &(a, b) in lines {
             let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -345,7 +418,10 @@ mod tests {
             let (nx, ny) = (-dy / len, dx / len);
             for k in 0..=(len.ceil() as usize) {
                 let t = k as f64 / len;
-                let (x, y) = ((a[0] + t * dx).round() as usize, (a[1] + t * dy).round() as usize);
+                let (x, y) = (
+                    (a[0] + t * dx).round() as usize,
+                    (a[1] + t * dy).round() as usize,
+                );
                 if x < w && y < h {
                     e[y * w + x] = 255;
                     gx[y * w + x] = (nx * 200.0) as i16;
@@ -356,7 +432,9 @@ mod tests {
         // Scattered texture pixels with random gradients.
         let mut state = 12345u64;
         for _ in 0..noise {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let i = (state >> 33) as usize % (w * h);
             e[i] = 255;
             gx[i] = ((state >> 8) & 0xff) as i16 - 128;
@@ -366,12 +444,23 @@ mod tests {
     }
 
     fn settings(tol: f64) -> HoughSettings {
-        HoughSettings { rho: 1.0, theta_deg: 1.0, threshold: 20, min_length: 20.0, max_gap: 4.0, orientation_tol_deg: tol }
+        HoughSettings {
+            rho: 1.0,
+            theta_deg: 1.0,
+            threshold: 20,
+            min_length: 20.0,
+            max_gap: 4.0,
+            orientation_tol_deg: tol,
+        }
     }
 
     #[test]
     fn finds_every_line_among_texture_with_and_without_orientation() {
-        let lines = [([20.0, 30.0], [180.0, 90.0]), ([100.0, 10.0], [104.0, 140.0]), ([10.0, 140.0], [120.0, 145.0])];
+        let lines = [
+            ([20.0, 30.0], [180.0, 90.0]),
+            ([100.0, 10.0], [104.0, 140.0]),
+            ([10.0, 140.0], [120.0, 145.0]),
+        ];
         let (e, gx, gy) = scene(200, 150, &lines, 600);
         for tol in [10.0, 90.0] {
             let mut hough = OrientedHough::default();
@@ -381,8 +470,15 @@ mod tests {
                 // Covered by segments on it (the walk may split a digital line in pieces, as
                 // HoughLinesP does; the geometry merges collinear pieces).
                 let truth = Segment::new(a, b);
-                let on: f64 = out.iter().filter(|s| [s.a, s.b].iter().all(|p| truth.line_distance(*p) <= 1.5)).map(|s| s.length()).sum();
-                assert!(on >= 0.7 * truth.length(), "tol {tol}: {truth:?} covered {on:.0} px by {out:?}");
+                let on: f64 = out
+                    .iter()
+                    .filter(|s| [s.a, s.b].iter().all(|p| truth.line_distance(*p) <= 1.5))
+                    .map(|s| s.length())
+                    .sum();
+                assert!(
+                    on >= 0.7 * truth.length(),
+                    "tol {tol}: {truth:?} covered {on:.0} px by {out:?}"
+                );
             }
         }
     }
@@ -402,7 +498,12 @@ mod tests {
 
     #[test]
     fn same_input_same_segments() {
-        let (e, gx, gy) = scene(160, 120, &[([10.0, 10.0], [150.0, 100.0]), ([80.0, 5.0], [60.0, 115.0])], 300);
+        let (e, gx, gy) = scene(
+            160,
+            120,
+            &[([10.0, 10.0], [150.0, 100.0]), ([80.0, 5.0], [60.0, 115.0])],
+            300,
+        );
         let (mut a, mut b) = (Vec::new(), Vec::new());
         let mut hough = OrientedHough::default();
         hough.run(&e, &gx, &gy, 160, 120, &settings(10.0), &mut a);

@@ -12,7 +12,9 @@ pub(crate) fn check_view(image: &ImageView<'_>) -> Result<usize, DetectError> {
     let bpp = image.format.bytes_per_pixel();
     let (w, h) = (image.width as usize, image.height as usize);
     if w == 0 || h == 0 || w > i32::MAX as usize / 4 || h > i32::MAX as usize / 4 {
-        return Err(DetectError::BadImage(format!("image size {w}x{h} is empty or too large")));
+        return Err(DetectError::BadImage(format!(
+            "image size {w}x{h} is empty or too large"
+        )));
     }
     if image.stride < w * bpp {
         return Err(DetectError::BadImage(format!(
@@ -20,7 +22,10 @@ pub(crate) fn check_view(image: &ImageView<'_>) -> Result<usize, DetectError> {
             image.stride
         )));
     }
-    let need = image.stride.checked_mul(h).ok_or_else(|| DetectError::BadImage("stride * height overflows".into()))?;
+    let need = image
+        .stride
+        .checked_mul(h)
+        .ok_or_else(|| DetectError::BadImage("stride * height overflows".into()))?;
     if image.data.len() < need {
         return Err(DetectError::BadImage(format!(
             "buffer has {} bytes, stride {} * height {h} needs {need}",
@@ -29,7 +34,10 @@ pub(crate) fn check_view(image: &ImageView<'_>) -> Result<usize, DetectError> {
         )));
     }
     if image.stride > i32::MAX as usize {
-        return Err(DetectError::BadImage(format!("stride {} too large", image.stride)));
+        return Err(DetectError::BadImage(format!(
+            "stride {} too large",
+            image.stride
+        )));
     }
     Ok(bpp)
 }
@@ -48,7 +56,13 @@ pub(crate) fn mirror_into<'b>(image: &ImageView<'_>, buf: &'b mut Vec<u8>) -> Im
             d.copy_from_slice(s);
         }
     }
-    ImageView { width: image.width, height: image.height, stride: row, format: image.format, data: buf }
+    ImageView {
+        width: image.width,
+        height: image.height,
+        stride: row,
+        format: image.format,
+        data: buf,
+    }
 }
 
 /// Reusable buffers: full-resolution grey (Gaussian first step) and the pyramid levels. OpenCV's `create` reuses a
@@ -97,7 +111,12 @@ pub(crate) enum FirstStep {
 impl Pyramid {
     /// Wrap `image` without copying, convert to grey and halve it `levels` times, the first
     /// time as `first` says, then with `pyrDown`. Returns the working (smallest) level.
-    pub fn build(&mut self, image: &ImageView<'_>, levels: usize, first: FirstStep) -> Result<&Mat, DetectError> {
+    pub fn build(
+        &mut self,
+        image: &ImageView<'_>,
+        levels: usize,
+        first: FirstStep,
+    ) -> Result<&Mat, DetectError> {
         let bpp = check_view(image)?;
         let (w, h) = (image.width as i32, image.height as i32);
         let need = image.stride * image.height as usize;
@@ -119,10 +138,23 @@ impl Pyramid {
             match image.format {
                 PixelFormat::Bgr8 => {
                     let need = image.stride * (eh as usize - 1) + 3 * ew as usize;
-                    half_grey_bgr(&image.data[..need], image.stride, ew as usize, eh as usize, &mut self.levels[0])?;
+                    half_grey_bgr(
+                        &image.data[..need],
+                        image.stride,
+                        ew as usize,
+                        eh as usize,
+                        &mut self.levels[0],
+                    )?;
                 }
                 PixelFormat::Gray8 => {
-                    imgproc::resize(&even, &mut self.levels[0], half, 0.0, 0.0, imgproc::INTER_LINEAR_EXACT)?;
+                    imgproc::resize(
+                        &even,
+                        &mut self.levels[0],
+                        half,
+                        0.0,
+                        0.0,
+                        imgproc::INTER_LINEAR_EXACT,
+                    )?;
                 }
             }
             return self.finish(1, levels);
@@ -159,7 +191,13 @@ impl Pyramid {
 /// bytes) into `dst` (`w/2`×`h/2`): bit for bit OpenCV's `resize(INTER_LINEAR_EXACT)` to half
 /// size (each channel's rounded 2×2 mean) followed by `cvtColor(BGR2GRAY)`, in one pass over the
 /// frame without the half-size colour image in between.
-fn half_grey_bgr(src: &[u8], stride: usize, w: usize, h: usize, dst: &mut Mat) -> Result<(), DetectError> {
+fn half_grey_bgr(
+    src: &[u8],
+    stride: usize,
+    w: usize,
+    h: usize,
+    dst: &mut Mat,
+) -> Result<(), DetectError> {
     // SAFETY: every pixel is written below; `create` reuses the allocation when size and type match.
     unsafe { dst.create_rows_cols((h / 2) as i32, (w / 2) as i32, opencv::core::CV_8UC1)? };
     let (ow, oh) = (w / 2, h / 2);
@@ -167,7 +205,10 @@ fn half_grey_bgr(src: &[u8], stride: usize, w: usize, h: usize, dst: &mut Mat) -
     let rows = |first: usize, out: &mut [u8]| {
         for (k, o) in out.chunks_exact_mut(ow).enumerate() {
             let y = first + k;
-            let (top, bottom) = (&src[2 * y * stride..][..3 * w], &src[(2 * y + 1) * stride..][..3 * w]);
+            let (top, bottom) = (
+                &src[2 * y * stride..][..3 * w],
+                &src[(2 * y + 1) * stride..][..3 * w],
+            );
             #[cfg(target_arch = "x86_64")]
             if std::arch::is_x86_feature_detected!("avx2") {
                 // SAFETY: the CPU has AVX2 (checked just above).
@@ -220,7 +261,8 @@ unsafe fn half_grey_row_avx2(top: &[u8], bottom: &[u8], out: &mut [u8]) {
         [mask(1, 0), mask(1, 1), mask(1, 2)],
         [mask(2, 0), mask(2, 1), mask(2, 2)],
     ];
-    let m: [[__m256i; 3]; 3] = MASKS.map(|ch| ch.map(|k| _mm256_broadcastsi128_si256(_mm_loadu_si128(k.as_ptr().cast()))));
+    let m: [[__m256i; 3]; 3] =
+        MASKS.map(|ch| ch.map(|k| _mm256_broadcastsi128_si256(_mm_loadu_si128(k.as_ptr().cast()))));
     let ones8 = _mm256_set1_epi8(1);
     let two = _mm256_set1_epi16(2);
     // (B, G) pairs weighted 3735, 19235; (R, 1) pairs weighted 9798, 2^14 (the rounding).
@@ -232,23 +274,42 @@ unsafe fn half_grey_row_avx2(top: &[u8], bottom: &[u8], out: &mut [u8]) {
         // 2×2 sums of each channel, u16: lane 0 the first 8 output pixels, lane 1 the next 8.
         let sums = |row: &[u8]| -> [__m256i; 3] {
             let p = row[96 * i..][..96].as_ptr();
-            let load = |k: usize| _mm256_loadu2_m128i(p.add(48 + 16 * k).cast(), p.add(16 * k).cast());
+            let load =
+                |k: usize| _mm256_loadu2_m128i(p.add(48 + 16 * k).cast(), p.add(16 * k).cast());
             let v = [load(0), load(1), load(2)];
             [0, 1, 2].map(|c| {
                 let shuffled = |k: usize| _mm256_shuffle_epi8(v[k], m[c][k]);
-                _mm256_maddubs_epi16(_mm256_or_si256(_mm256_or_si256(shuffled(0), shuffled(1)), shuffled(2)), ones8)
+                _mm256_maddubs_epi16(
+                    _mm256_or_si256(_mm256_or_si256(shuffled(0), shuffled(1)), shuffled(2)),
+                    ones8,
+                )
             })
         };
         let (a, b) = (sums(top), sums(bottom));
-        let mean = |c: usize| _mm256_srli_epi16::<2>(_mm256_add_epi16(_mm256_add_epi16(a[c], b[c]), two));
+        let mean =
+            |c: usize| _mm256_srli_epi16::<2>(_mm256_add_epi16(_mm256_add_epi16(a[c], b[c]), two));
         let (bl, gr, rd) = (mean(0), mean(1), mean(2));
-        let grey = |bg: __m256i, r1: __m256i| _mm256_srli_epi32::<15>(_mm256_add_epi32(_mm256_madd_epi16(bg, w_bg), _mm256_madd_epi16(r1, w_r1)));
-        let lo = grey(_mm256_unpacklo_epi16(bl, gr), _mm256_unpacklo_epi16(rd, one16));
-        let hi = grey(_mm256_unpackhi_epi16(bl, gr), _mm256_unpackhi_epi16(rd, one16));
+        let grey = |bg: __m256i, r1: __m256i| {
+            _mm256_srli_epi32::<15>(_mm256_add_epi32(
+                _mm256_madd_epi16(bg, w_bg),
+                _mm256_madd_epi16(r1, w_r1),
+            ))
+        };
+        let lo = grey(
+            _mm256_unpacklo_epi16(bl, gr),
+            _mm256_unpacklo_epi16(rd, one16),
+        );
+        let hi = grey(
+            _mm256_unpackhi_epi16(bl, gr),
+            _mm256_unpackhi_epi16(rd, one16),
+        );
         // Per lane: 8 pixels in order in the low 8 bytes; gather both lanes' into 16 bytes.
         let px = _mm256_packus_epi16(_mm256_packs_epi32(lo, hi), _mm256_setzero_si256());
         let px = _mm256_permute4x64_epi64::<0b1000>(px);
-        _mm_storeu_si128(out[16 * i..][..16].as_mut_ptr().cast(), _mm256_castsi256_si128(px));
+        _mm_storeu_si128(
+            out[16 * i..][..16].as_mut_ptr().cast(),
+            _mm256_castsi256_si128(px),
+        );
     }
     let done = 16 * blocks;
     half_grey_row(&top[6 * done..], &bottom[6 * done..], &mut out[done..]);
@@ -257,8 +318,14 @@ unsafe fn half_grey_row_avx2(top: &[u8], bottom: &[u8], out: &mut [u8]) {
 /// One output row of [`half_grey_bgr`] from two BGR rows.
 #[inline(always)]
 fn half_grey_row(top: &[u8], bottom: &[u8], out: &mut [u8]) {
-    for ((o, a), b) in out.iter_mut().zip(top.chunks_exact(6)).zip(bottom.chunks_exact(6)) {
-        let mean = |c: usize| (u32::from(a[c]) + u32::from(a[c + 3]) + u32::from(b[c]) + u32::from(b[c + 3]) + 2) >> 2;
+    for ((o, a), b) in out
+        .iter_mut()
+        .zip(top.chunks_exact(6))
+        .zip(bottom.chunks_exact(6))
+    {
+        let mean = |c: usize| {
+            (u32::from(a[c]) + u32::from(a[c + 3]) + u32::from(b[c]) + u32::from(b[c + 3]) + 2) >> 2
+        };
         *o = crate::spinner::bgr_grey(mean(0) as u8, mean(1) as u8, mean(2) as u8);
     }
 }
@@ -298,13 +365,25 @@ fn area_taps(src_len: usize, dst_len: usize) -> Vec<AreaTap> {
         let s2 = (f2.floor() as usize).min(src_len - 1);
         let s1 = (f1.ceil() as usize).min(s2);
         if s1 as f64 - f1 > 1e-3 {
-            taps.push(AreaTap { dst: d, src: s1 - 1, alpha: ((s1 as f64 - f1) / cell) as f32 });
+            taps.push(AreaTap {
+                dst: d,
+                src: s1 - 1,
+                alpha: ((s1 as f64 - f1) / cell) as f32,
+            });
         }
         for s in s1..s2 {
-            taps.push(AreaTap { dst: d, src: s, alpha: (1.0 / cell) as f32 });
+            taps.push(AreaTap {
+                dst: d,
+                src: s,
+                alpha: (1.0 / cell) as f32,
+            });
         }
         if f2 - s2 as f64 > 1e-3 {
-            taps.push(AreaTap { dst: d, src: s2, alpha: ((f2 - s2 as f64).min(1.0).min(cell) / cell) as f32 });
+            taps.push(AreaTap {
+                dst: d,
+                src: s2,
+                alpha: ((f2 - s2 as f64).min(1.0).min(cell) / cell) as f32,
+            });
         }
     }
     taps
@@ -314,11 +393,29 @@ fn area_taps(src_len: usize, dst_len: usize) -> Vec<AreaTap> {
 /// `resize(INTER_AREA)` (its general, non-integer-ratio path, in the same float arithmetic),
 /// without its per-call table set-up and generic loops (0.27 ms for 480×270 → 192×128). Larger
 /// targets, integer ratios and other pixel types go to OpenCV.
-pub(crate) fn resize_area_grey(src: &Mat, dst: &mut Mat, width: i32, height: i32) -> Result<(), DetectError> {
+pub(crate) fn resize_area_grey(
+    src: &Mat,
+    dst: &mut Mat,
+    width: i32,
+    height: i32,
+) -> Result<(), DetectError> {
     let (sw, sh) = (src.cols(), src.rows());
     let integer_ratio = sw % width == 0 && sh % height == 0;
-    if src.typ() != opencv::core::CV_8UC1 || width <= 0 || height <= 0 || width > sw || height > sh || integer_ratio {
-        imgproc::resize(src, dst, Size::new(width, height), 0.0, 0.0, imgproc::INTER_AREA)?;
+    if src.typ() != opencv::core::CV_8UC1
+        || width <= 0
+        || height <= 0
+        || width > sw
+        || height > sh
+        || integer_ratio
+    {
+        imgproc::resize(
+            src,
+            dst,
+            Size::new(width, height),
+            0.0,
+            0.0,
+            imgproc::INTER_AREA,
+        )?;
         return Ok(());
     }
     #[cfg(target_arch = "x86_64")]
@@ -333,13 +430,23 @@ pub(crate) fn resize_area_grey(src: &Mat, dst: &mut Mat, width: i32, height: i32
 /// the same float operations, nothing fused).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn resize_area_grey_avx2(src: &Mat, dst: &mut Mat, width: i32, height: i32) -> Result<(), DetectError> {
+unsafe fn resize_area_grey_avx2(
+    src: &Mat,
+    dst: &mut Mat,
+    width: i32,
+    height: i32,
+) -> Result<(), DetectError> {
     resize_area_grey_here(src, dst, width, height)
 }
 
 /// [`resize_area_grey`] of a grey `src` to a smaller, non-integer-ratio size.
 #[inline(always)]
-fn resize_area_grey_here(src: &Mat, dst: &mut Mat, width: i32, height: i32) -> Result<(), DetectError> {
+fn resize_area_grey_here(
+    src: &Mat,
+    dst: &mut Mat,
+    width: i32,
+    height: i32,
+) -> Result<(), DetectError> {
     let (sw, sh) = (src.cols(), src.rows());
     let (w, h) = (width as usize, height as usize);
     let xtaps = area_taps(sw as usize, w);
@@ -405,7 +512,9 @@ fn resize_area_grey_here(src: &Mat, dst: &mut Mat, width: i32, height: i32) -> R
 /// # Safety
 /// Every index must be below `pixels.len()` (the caller checks once, not per row).
 unsafe fn weigh_row(pixels: &[f32], index: &[u32], weight: &[f32], row: &mut [f32]) {
-    debug_assert!(index.iter().all(|&i| (i as usize) < pixels.len()) && index.len() == weight.len());
+    debug_assert!(
+        index.iter().all(|&i| (i as usize) < pixels.len()) && index.len() == weight.len()
+    );
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above); the indices are the caller's promise.
@@ -431,7 +540,10 @@ unsafe fn weigh_row_avx2(pixels: &[f32], index: &[u32], weight: &[f32], row: &mu
         for j in 0..planes {
             let idx = _mm256_loadu_si256(index[j * w + 8 * b..][..8].as_ptr().cast());
             let wt = _mm256_loadu_ps(weight[j * w + 8 * b..][..8].as_ptr());
-            r = _mm256_add_ps(r, _mm256_mul_ps(_mm256_i32gather_ps::<4>(pixels.as_ptr(), idx), wt));
+            r = _mm256_add_ps(
+                r,
+                _mm256_mul_ps(_mm256_i32gather_ps::<4>(pixels.as_ptr(), idx), wt),
+            );
         }
         _mm256_storeu_ps(row[8 * b..][..8].as_mut_ptr(), r);
     }
@@ -492,7 +604,12 @@ mod tests {
 
     /// A `w`×`h` image of `pixel(x, y)` (its bytes) in a buffer of `stride` bytes a row, the
     /// padding 255.
-    fn padded(w: usize, h: usize, stride: usize, pixel: impl Fn(usize, usize) -> Vec<u8>) -> Vec<u8> {
+    fn padded(
+        w: usize,
+        h: usize,
+        stride: usize,
+        pixel: impl Fn(usize, usize) -> Vec<u8>,
+    ) -> Vec<u8> {
         let mut data = vec![255u8; stride * h];
         for y in 0..h {
             for x in 0..w {
@@ -508,7 +625,13 @@ mod tests {
         // 8x4 grey image in a buffer with stride 12: left half 0, right half 200; padding 255.
         let (w, h, stride) = (8usize, 4usize, 12usize);
         let data = padded(w, h, stride, |x, _| vec![if x < w / 2 { 0 } else { 200 }]);
-        let view = ImageView { width: w as u32, height: h as u32, stride, format: PixelFormat::Gray8, data: &data };
+        let view = ImageView {
+            width: w as u32,
+            height: h as u32,
+            stride,
+            format: PixelFormat::Gray8,
+            data: &data,
+        };
         let mut p = Pyramid::default();
         for first in [FirstStep::Gaussian, FirstStep::Box] {
             let m = p.build(&view, 1, first).unwrap();
@@ -524,8 +647,16 @@ mod tests {
         // 5x3 BGR (odd sizes: the last column and row are dropped), stride padded to 16 bytes.
         // Pixel (x, y) has B = 10x, G = 20y, R = 40: each 2x2 block's mean is that of its corners.
         let (w, h, stride) = (5usize, 3usize, 16usize);
-        let data = padded(w, h, stride, |x, y| vec![(10 * x) as u8, (20 * y) as u8, 40]);
-        let view = ImageView { width: w as u32, height: h as u32, stride, format: PixelFormat::Bgr8, data: &data };
+        let data = padded(w, h, stride, |x, y| {
+            vec![(10 * x) as u8, (20 * y) as u8, 40]
+        });
+        let view = ImageView {
+            width: w as u32,
+            height: h as u32,
+            stride,
+            format: PixelFormat::Bgr8,
+            data: &data,
+        };
         let mut p = Pyramid::default();
         let m = p.build(&view, 1, FirstStep::Box).unwrap();
         assert_eq!((m.cols(), m.rows()), (2, 1));
@@ -537,10 +668,23 @@ mod tests {
             assert!((got[x] as f64 - want).abs() <= 1.0, "{got:?} vs {want}");
         }
         // The same frame in grey takes the same first level (to rounding).
-        let grey_data: Vec<u8> = (0..h).flat_map(|y| (0..w).map(move |x| grey(10.0 * x as f64, 20.0 * y as f64, 40.0).round() as u8)).collect();
-        let gview = ImageView { width: w as u32, height: h as u32, stride: w, format: PixelFormat::Gray8, data: &grey_data };
+        let grey_data: Vec<u8> = (0..h)
+            .flat_map(|y| {
+                (0..w).map(move |x| grey(10.0 * x as f64, 20.0 * y as f64, 40.0).round() as u8)
+            })
+            .collect();
+        let gview = ImageView {
+            width: w as u32,
+            height: h as u32,
+            stride: w,
+            format: PixelFormat::Gray8,
+            data: &grey_data,
+        };
         let g = mat_to_vec(p.build(&gview, 1, FirstStep::Box).unwrap()).unwrap();
-        assert!(g.iter().zip(&got).all(|(a, b)| a.abs_diff(*b) <= 1), "{g:?} vs {got:?}");
+        assert!(
+            g.iter().zip(&got).all(|(a, b)| a.abs_diff(*b) <= 1),
+            "{g:?} vs {got:?}"
+        );
     }
 
     /// A `w`×`h` BGR image of pseudo-random colours (every rounding case of a conversion
@@ -560,14 +704,28 @@ mod tests {
         let roi = flat.roi(Rect::new(0, 0, 3 * w as i32, h as i32)).unwrap();
         let bgr = roi.reshape(3, h as i32).unwrap();
         let mut half = Mat::default();
-        imgproc::resize(&bgr, &mut half, Size::new(w as i32 / 2, h as i32 / 2), 0.0, 0.0, imgproc::INTER_LINEAR_EXACT).unwrap();
+        imgproc::resize(
+            &bgr,
+            &mut half,
+            Size::new(w as i32 / 2, h as i32 / 2),
+            0.0,
+            0.0,
+            imgproc::INTER_LINEAR_EXACT,
+        )
+        .unwrap();
         let got = mat_to_vec(&half.reshape(1, h as i32 / 2).unwrap().try_clone().unwrap()).unwrap();
         for y in 0..h / 2 {
             for x in 0..w / 2 {
                 for c in 0..3 {
-                    let at = |dx: usize, dy: usize| u32::from(data[(2 * y + dy) * stride + 3 * (2 * x + dx) + c]);
+                    let at = |dx: usize, dy: usize| {
+                        u32::from(data[(2 * y + dy) * stride + 3 * (2 * x + dx) + c])
+                    };
                     let want = (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1) + 2) / 4;
-                    assert_eq!(u32::from(got[(y * w / 2 + x) * 3 + c]), want, "pixel {x},{y} channel {c}");
+                    assert_eq!(
+                        u32::from(got[(y * w / 2 + x) * 3 + c]),
+                        want,
+                        "pixel {x},{y} channel {c}"
+                    );
                 }
             }
         }
@@ -576,21 +734,44 @@ mod tests {
     #[test]
     fn box_first_level_of_colour_frames_is_opencvs_resize_then_grey() {
         // Odd and even sizes, padded strides, every rounding case of both steps.
-        for (w, h, stride) in [(64usize, 48usize, 64 * 3 + 7), (251, 161, 251 * 3 + 5), (1920, 16, 1920 * 3), (640, 201, 640 * 3 + 1)] {
+        for (w, h, stride) in [
+            (64usize, 48usize, 64 * 3 + 7),
+            (251, 161, 251 * 3 + 5),
+            (1920, 16, 1920 * 3),
+            (640, 201, 640 * 3 + 1),
+        ] {
             let data = random_colours(w, h, stride);
             let flat = Mat::new_rows_cols_with_data::<u8>(h as i32, stride as i32, &data).unwrap();
             let (ew, eh) = (w / 2 * 2, h / 2 * 2);
             let even = flat.roi(Rect::new(0, 0, 3 * ew as i32, eh as i32)).unwrap();
             let bgr = even.reshape(3, eh as i32).unwrap();
             let (mut half, mut want) = (Mat::default(), Mat::default());
-            imgproc::resize(&bgr, &mut half, Size::new(w as i32 / 2, h as i32 / 2), 0.0, 0.0, imgproc::INTER_LINEAR_EXACT).unwrap();
+            imgproc::resize(
+                &bgr,
+                &mut half,
+                Size::new(w as i32 / 2, h as i32 / 2),
+                0.0,
+                0.0,
+                imgproc::INTER_LINEAR_EXACT,
+            )
+            .unwrap();
             imgproc::cvt_color_def(&half, &mut want, imgproc::COLOR_BGR2GRAY).unwrap();
-            let view = ImageView { width: w as u32, height: h as u32, stride, format: PixelFormat::Bgr8, data: &data };
+            let view = ImageView {
+                width: w as u32,
+                height: h as u32,
+                stride,
+                format: PixelFormat::Bgr8,
+                data: &data,
+            };
             let mut p = Pyramid::default();
             let got = mat_to_vec(p.build(&view, 1, FirstStep::Box).unwrap()).unwrap();
             let want = mat_to_vec(&want).unwrap();
             let differ = got.iter().zip(&want).filter(|(a, b)| a != b).count();
-            assert_eq!((got.len(), differ), (want.len(), 0), "{w}x{h}: {differ} pixels differ");
+            assert_eq!(
+                (got.len(), differ),
+                (want.len(), 0),
+                "{w}x{h}: {differ} pixels differ"
+            );
         }
     }
 
@@ -599,7 +780,13 @@ mod tests {
         // 40,000 colours.
         let (w, h, stride) = (251usize, 160usize, 251 * 3 + 5);
         let data = random_colours(w, h, stride);
-        let view = ImageView { width: w as u32, height: h as u32, stride, format: PixelFormat::Bgr8, data: &data };
+        let view = ImageView {
+            width: w as u32,
+            height: h as u32,
+            stride,
+            format: PixelFormat::Bgr8,
+            data: &data,
+        };
         let flat = Mat::new_rows_cols_with_data::<u8>(h as i32, stride as i32, &data).unwrap();
         let roi = flat.roi(Rect::new(0, 0, 3 * w as i32, h as i32)).unwrap();
         let bgr = roi.reshape(3, h as i32).unwrap();
@@ -607,28 +794,78 @@ mod tests {
         imgproc::cvt_color_def(&bgr, &mut grey, imgproc::COLOR_BGR2GRAY).unwrap();
         let want = mat_to_vec(&grey).unwrap();
         let plane = full_grey(&view);
-        let got: Vec<u8> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).map(|(x, y)| plane.grey(x, y)).collect();
-        let bad: Vec<_> = (0..got.len()).filter(|&i| got[i] != want[i]).map(|i| { let (x, y) = (i % w, i / w); (x, y, &data[y * stride + 3 * x..][..3], got[i], want[i]) }).take(12).collect();
-        assert!(bad.is_empty(), "{} differ: {bad:?}", (0..got.len()).filter(|&i| got[i] != want[i]).count());
+        let got: Vec<u8> = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| plane.grey(x, y))
+            .collect();
+        let bad: Vec<_> = (0..got.len())
+            .filter(|&i| got[i] != want[i])
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                (x, y, &data[y * stride + 3 * x..][..3], got[i], want[i])
+            })
+            .take(12)
+            .collect();
+        assert!(
+            bad.is_empty(),
+            "{} differ: {bad:?}",
+            (0..got.len()).filter(|&i| got[i] != want[i]).count()
+        );
         // Grey frames are read as they are.
-        let gview = ImageView { width: w as u32, height: h as u32, stride: w, format: PixelFormat::Gray8, data: &want };
+        let gview = ImageView {
+            width: w as u32,
+            height: h as u32,
+            stride: w,
+            format: PixelFormat::Gray8,
+            data: &want,
+        };
         let g = full_grey(&gview);
-        assert_eq!((0..h).flat_map(|y| (0..w).map(move |x| (x, y))).map(|(x, y)| g.grey(x, y)).collect::<Vec<_>>(), want);
+        assert_eq!(
+            (0..h)
+                .flat_map(|y| (0..w).map(move |x| (x, y)))
+                .map(|(x, y)| g.grey(x, y))
+                .collect::<Vec<_>>(),
+            want
+        );
     }
 
     #[test]
     fn area_resize_matches_opencv() {
         // The detector's case (480×270 → 192×128), the 640×480 camera's (320×240) and odd sizes.
-        for (sw, sh, w, h) in [(480, 270, 192, 128), (320, 240, 192, 128), (500, 281, 192, 128), (333, 201, 97, 64), (400, 256, 192, 128)] {
-            let data: Vec<u8> = (0..sw * sh).map(|i| ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56) as u8).collect();
-            let src = Mat::new_rows_cols_with_data::<u8>(sh, sw, &data).unwrap().try_clone().unwrap();
+        for (sw, sh, w, h) in [
+            (480, 270, 192, 128),
+            (320, 240, 192, 128),
+            (500, 281, 192, 128),
+            (333, 201, 97, 64),
+            (400, 256, 192, 128),
+        ] {
+            let data: Vec<u8> = (0..sw * sh)
+                .map(|i| ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56) as u8)
+                .collect();
+            let src = Mat::new_rows_cols_with_data::<u8>(sh, sw, &data)
+                .unwrap()
+                .try_clone()
+                .unwrap();
             let mut want = Mat::default();
-            imgproc::resize(&src, &mut want, Size::new(w, h), 0.0, 0.0, imgproc::INTER_AREA).unwrap();
+            imgproc::resize(
+                &src,
+                &mut want,
+                Size::new(w, h),
+                0.0,
+                0.0,
+                imgproc::INTER_AREA,
+            )
+            .unwrap();
             let mut got = Mat::default();
             resize_area_grey(&src, &mut got, w, h).unwrap();
             let (g, o) = (mat_to_vec(&got).unwrap(), mat_to_vec(&want).unwrap());
             let differ = g.iter().zip(&o).filter(|(a, b)| a != b).count();
-            assert_eq!(differ, 0, "{sw}x{sh} -> {w}x{h}: {differ} of {} pixels differ", o.len());
+            assert_eq!(
+                differ,
+                0,
+                "{sw}x{sh} -> {w}x{h}: {differ} of {} pixels differ",
+                o.len()
+            );
         }
         // Halves round to even, as `saturate_cast<uchar>(float)`; out of range saturates.
         let mut out = [0u8; 8];
@@ -640,11 +877,38 @@ mod tests {
     fn bad_buffers_are_errors() {
         let data = vec![0u8; 100];
         let mut p = Pyramid::default();
-        let short = ImageView { width: 10, height: 10, stride: 30, format: PixelFormat::Bgr8, data: &data };
-        assert!(matches!(p.build(&short, 1, FirstStep::Box), Err(DetectError::BadImage(_))));
-        let narrow = ImageView { width: 10, height: 2, stride: 20, format: PixelFormat::Bgr8, data: &data };
-        assert!(matches!(p.build(&narrow, 1, FirstStep::Box), Err(DetectError::BadImage(_))));
-        let empty = ImageView { width: 0, height: 2, stride: 20, format: PixelFormat::Gray8, data: &data };
-        assert!(matches!(p.build(&empty, 1, FirstStep::Box), Err(DetectError::BadImage(_))));
+        let short = ImageView {
+            width: 10,
+            height: 10,
+            stride: 30,
+            format: PixelFormat::Bgr8,
+            data: &data,
+        };
+        assert!(matches!(
+            p.build(&short, 1, FirstStep::Box),
+            Err(DetectError::BadImage(_))
+        ));
+        let narrow = ImageView {
+            width: 10,
+            height: 2,
+            stride: 20,
+            format: PixelFormat::Bgr8,
+            data: &data,
+        };
+        assert!(matches!(
+            p.build(&narrow, 1, FirstStep::Box),
+            Err(DetectError::BadImage(_))
+        ));
+        let empty = ImageView {
+            width: 0,
+            height: 2,
+            stride: 20,
+            format: PixelFormat::Gray8,
+            data: &data,
+        };
+        assert!(matches!(
+            p.build(&empty, 1, FirstStep::Box),
+            Err(DetectError::BadImage(_))
+        ));
     }
 }

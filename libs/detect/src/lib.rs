@@ -81,20 +81,30 @@ impl Hints {
     pub fn from_track(track: &TrackState, width: u32, height: u32, capture_ns: u64) -> Hints {
         let live = matches!(track.mode, TrackMode::Tracking | TrackMode::Coasting);
         let same_size = (track.image_width, track.image_height) == (width, height);
-        let Some(age_ns) = capture_ns.checked_sub(track.stamps.capture_ns) else { return Hints::default() };
+        let Some(age_ns) = capture_ns.checked_sub(track.stamps.capture_ns) else {
+            return Hints::default();
+        };
         if !live || !same_size || age_ns > MAX_HINT_AGE_NS {
             return Hints::default();
         }
         let dt = age_ns as f64 / 1e9;
-        let p = [track.hub_px[0] + track.hub_velocity_px_s[0] * dt, track.hub_px[1] + track.hub_velocity_px_s[1] * dt];
-        let inside = p.iter().all(|v| v.is_finite()) && p[0] >= 0.0 && p[1] >= 0.0 && p[0] < f64::from(width) && p[1] < f64::from(height);
+        let p = [
+            track.hub_px[0] + track.hub_velocity_px_s[0] * dt,
+            track.hub_px[1] + track.hub_velocity_px_s[1] * dt,
+        ];
+        let inside = p.iter().all(|v| v.is_finite())
+            && p[0] >= 0.0
+            && p[1] >= 0.0
+            && p[0] < f64::from(width)
+            && p[1] < f64::from(height);
         if !inside {
             return Hints::default();
         }
         Hints {
             roll_rad: None,
             predicted_hub_px: Some(p),
-            hub_distance_m: (track.distance_valid && track.distance_m.is_finite()).then_some(track.distance_m),
+            hub_distance_m: (track.distance_valid && track.distance_m.is_finite())
+                .then_some(track.distance_m),
         }
     }
 }
@@ -272,7 +282,10 @@ fn combine_views(seen: Output, mirrored: Output, how: StillMirror, agree_px: f64
     let total_us = a.timings.total_us + b.timings.total_us;
     let mirror_wins = b.detected && (!a.detected || b.confidence > a.confidence);
     let mut out = if a.detected && b.detected && geometry::dist(a.hub_px, b.hub_px) <= agree_px {
-        let mid = [(a.hub_px[0] + b.hub_px[0]) / 2.0, (a.hub_px[1] + b.hub_px[1]) / 2.0];
+        let mid = [
+            (a.hub_px[0] + b.hub_px[0]) / 2.0,
+            (a.hub_px[1] + b.hub_px[1]) / 2.0,
+        ];
         let mut out = if mirror_wins { mirrored } else { seen };
         let dx = mid[0] - out.detection.hub_px[0];
         out.detection.hub_px = mid;
@@ -296,24 +309,43 @@ fn combine_views(seen: Output, mirrored: Output, how: StillMirror, agree_px: f64
 
 /// Moves a detected hub to the hub crop network's peak around it (`default.hub_crop`), the
 /// nacelle's end measured from the old hub moved along.
-fn place_hub_by_crop(p: &params::DefaultParams, net: &mut heat::HubCropNet, small: &Mat, found: &mut Found) -> Result<(), DetectError> {
+fn place_hub_by_crop(
+    p: &params::DefaultParams,
+    net: &mut heat::HubCropNet,
+    small: &Mat,
+    found: &mut Found,
+) -> Result<(), DetectError> {
     if !found.detected {
         return Ok(());
     }
-    let circle_r = found.circle.filter(|c| geometry::dist(found.hub, [c[0], c[1]]) < 1e-9).map(|c| c[2]);
+    let circle_r = found
+        .circle
+        .filter(|c| geometry::dist(found.hub, [c[0], c[1]]) < 1e-9)
+        .map(|c| c[2]);
     if circle_r.is_some() && p.hub_crop_keep_spinner && p.hub_crop_spinner_escape_radii >= 10.0 {
         return Ok(());
     }
     let peak = net.run(small, found.hub)?;
     let h = opencv::prelude::MatTraitConst::rows(small) as f64;
     let shift = geometry::dist(peak.hub, found.hub);
-    if circle_r.is_some_and(|r| p.hub_crop_keep_spinner && shift <= (1.0 + p.hub_crop_spinner_escape_radii) * r) {
+    if circle_r.is_some_and(|r| {
+        p.hub_crop_keep_spinner && shift <= (1.0 + p.hub_crop_spinner_escape_radii) * r
+    }) {
         return Ok(());
     }
-    if peak.p < p.hub_crop_min || shift > p.hub_crop_max_shift_frac * h || shift < p.hub_crop_min_shift_frac * h {
+    if peak.p < p.hub_crop_min
+        || shift > p.hub_crop_max_shift_frac * h
+        || shift < p.hub_crop_min_shift_frac * h
+    {
         return Ok(());
     }
-    log::trace!("hub crop: {:?} -> {:?} ({:.2}, at the candidate {:.2})", found.hub, peak.hub, peak.p, peak.at_centre);
+    log::trace!(
+        "hub crop: {:?} -> {:?} ({:.2}, at the candidate {:.2})",
+        found.hub,
+        peak.hub,
+        peak.p,
+        peak.at_centre
+    );
     let dx = peak.hub[0] - found.hub[0];
     found.nacelle_end_dx = found.nacelle_end_dx.map(|d| d - dx);
     found.hub = peak.hub;
@@ -324,7 +356,12 @@ fn place_hub_by_crop(p: &params::DefaultParams, net: &mut heat::HubCropNet, smal
 /// networks' verdict (see `default.heat_verify_end_frac`): the lines that end near it, if any,
 /// include one oblique to both image axes, some such line lies within reach of it, and no long
 /// line passes through it.
-fn lines_allow_hub(p: &params::DefaultParams, lines: &[(Segment, LineKind)], hub: P2, h: f64) -> bool {
+fn lines_allow_hub(
+    p: &params::DefaultParams,
+    lines: &[(Segment, LineKind)],
+    hub: P2,
+    h: f64,
+) -> bool {
     // A mast's top or a field's corner, where the lines end along the vertical and the
     // horizontal only, is no rotor: three blades 120° apart always have one at least 30° from
     // both axes (20° under ±10° of roll).
@@ -332,13 +369,20 @@ fn lines_allow_hub(p: &params::DefaultParams, lines: &[(Segment, LineKind)], hub
         let o = s.orientation_deg();
         o.min(180.0 - o).min((o - 90.0).abs())
     };
-    let mut ending = lines.iter().map(|(s, _)| s).filter(|s| s.nearest_end(hub).1 <= p.heat_verify_end_frac * h).peekable();
+    let mut ending = lines
+        .iter()
+        .map(|(s, _)| s)
+        .filter(|s| s.nearest_end(hub).1 <= p.heat_verify_end_frac * h)
+        .peekable();
     if ending.peek().is_some() && !ending.any(|s| off_axes(s) > p.heat_verify_oblique_deg) {
         return false;
     }
     // Some blade in reach at all: a mast whose top the lines lost against the horizon leaves
     // only its own vertical and the level lines of the ground and the sea around.
-    if !lines.iter().any(|(s, _)| s.segment_distance(hub) <= p.heat_verify_blade_frac * h && off_axes(s) > p.heat_verify_oblique_deg) {
+    if !lines.iter().any(|(s, _)| {
+        s.segment_distance(hub) <= p.heat_verify_blade_frac * h
+            && off_axes(s) > p.heat_verify_oblique_deg
+    }) {
         return false;
     }
     // A long line running on through it: a mast or a wire.
@@ -350,28 +394,54 @@ fn lines_allow_hub(p: &params::DefaultParams, lines: &[(Segment, LineKind)], hub
 /// `default.heat_verify_min`): the heatmap's peak, placed and confirmed by the crop network;
 /// also over a detection the heatmap rates below `override_max` (`heat_override_max`, or
 /// `still_heat_override_max` for stills).
-fn verify_heat_peak(p: &params::DefaultParams, heat: &heat::Heatmap, net: &mut heat::HubCropNet, small: &Mat, override_max: f64, found: &mut Found) -> Result<(), DetectError> {
+fn verify_heat_peak(
+    p: &params::DefaultParams,
+    heat: &heat::Heatmap,
+    net: &mut heat::HubCropNet,
+    small: &Mat,
+    override_max: f64,
+    found: &mut Found,
+) -> Result<(), DetectError> {
     if p.heat_verify_min >= 1.0 {
         return Ok(());
     }
-    let (w, h) = (opencv::prelude::MatTraitConst::cols(small) as f64, opencv::prelude::MatTraitConst::rows(small) as f64);
-    if found.detected && heat.near(found.hub[0] / w, found.hub[1] / h, p.hub_heat_radius_cells) >= override_max {
+    let (w, h) = (
+        opencv::prelude::MatTraitConst::cols(small) as f64,
+        opencv::prelude::MatTraitConst::rows(small) as f64,
+    );
+    if found.detected
+        && heat.near(found.hub[0] / w, found.hub[1] / h, p.hub_heat_radius_cells) >= override_max
+    {
         return Ok(());
     }
-    let Some((f, heat_p)) = heat.peak().filter(|(_, prob)| *prob >= p.heat_verify_min) else { return Ok(()) };
+    let Some((f, heat_p)) = heat.peak().filter(|(_, prob)| *prob >= p.heat_verify_min) else {
+        return Ok(());
+    };
     let centre = [f[0] * w, f[1] * h];
     let peak = net.run(small, centre)?;
-    if peak.p < p.heat_verify_crop_min || geometry::dist(peak.hub, centre) > p.hub_crop_max_shift_frac * h {
+    if peak.p < p.heat_verify_crop_min
+        || geometry::dist(peak.hub, centre) > p.hub_crop_max_shift_frac * h
+    {
         return Ok(());
     }
     if !lines_allow_hub(p, &found.lines, peak.hub, h) {
         return Ok(());
     }
-    log::trace!("networks' verdict: hub at {:?} (heatmap {heat_p:.2}, crop {:.2})", peak.hub, peak.p);
+    log::trace!(
+        "networks' verdict: hub at {:?} (heatmap {heat_p:.2}, crop {:.2})",
+        peak.hub,
+        peak.p
+    );
     found.detected = true;
     found.hub = peak.hub;
     found.confidence = heat_p * peak.p;
-    (found.tower_top, found.tower_axis, found.tower_width, found.circle, found.nacelle_end_dx) = (None, None, None, None, None);
+    (
+        found.tower_top,
+        found.tower_axis,
+        found.tower_width,
+        found.circle,
+        found.nacelle_end_dx,
+    ) = (None, None, None, None, None);
     found.blade_angles.clear();
     Ok(())
 }
@@ -396,15 +466,28 @@ fn read_yaw(
     }
     let p = &config.default;
     let spinner_r_m = config.camera.spinner_diameter_m / 2.0;
-    let distance = hub_distance_m.or_else(|| found.circle.filter(|c| c[2] > 0.0).map(|c| spinner_r_m * (1.0 + (focal_small / c[2]).powi(2)).sqrt()));
-    let Some(d) = distance.filter(|d| (p.hub_yaw_min_distance_m..=p.hub_yaw_max_distance_m).contains(d)) else { return Ok(None) };
+    let distance = hub_distance_m.or_else(|| {
+        found
+            .circle
+            .filter(|c| c[2] > 0.0)
+            .map(|c| spinner_r_m * (1.0 + (focal_small / c[2]).powi(2)).sqrt())
+    });
+    let Some(d) =
+        distance.filter(|d| (p.hub_yaw_min_distance_m..=p.hub_yaw_max_distance_m).contains(d))
+    else {
+        return Ok(None);
+    };
     // Close in, the close-range model when there is one (see `hub_yaw_close`).
     let net = match close_net {
         Some(close) if d <= p.hub_yaw_close_max_distance_m => close,
         _ => net,
     };
     let r = net.run(small, found.hub, d, focal_small)?;
-    log::trace!("yaw network at {d:.1} m: {:+.1} ± {:.1} deg", r.yaw_deg, r.std_deg);
+    log::trace!(
+        "yaw network at {d:.1} m: {:+.1} ± {:.1} deg",
+        r.yaw_deg,
+        r.std_deg
+    );
     Ok(Some(r))
 }
 
@@ -435,13 +518,36 @@ impl Detector {
         config.validate()?;
         let on = |model: bool| config.mode == Mode::Default && model;
         let (d, direct) = (&config.default, config.default.builtin_nets);
-        let hubnet = on(d.hub_heat).then(|| heat::HubNet::new(direct)).transpose()?;
-        let hubnet_still = on(d.hub_heat && d.still_models).then(|| heat::HubNet::for_stills(direct)).transpose()?;
-        let hubcrop = on(d.hub_crop).then(|| heat::HubCropNet::new(direct)).transpose()?;
-        let hubcrop_still = on(d.hub_crop && d.still_models).then(|| heat::HubCropNet::for_stills(direct)).transpose()?;
-        let hubyaw = on(d.hub_yaw).then(|| heat::HubYawNet::new(direct)).transpose()?;
-        let hubyaw_close = on(d.hub_yaw && d.hub_yaw_close).then(|| heat::HubYawNet::close_range(direct)).transpose()?;
-        Ok(Detector { config, pyramid: image::Pyramid::default(), scratch: Scratch::default(), hubnet, hubnet_still, hubcrop, hubcrop_still, mirror_buf: Vec::new(), hubyaw, hubyaw_close })
+        let hubnet = on(d.hub_heat)
+            .then(|| heat::HubNet::new(direct))
+            .transpose()?;
+        let hubnet_still = on(d.hub_heat && d.still_models)
+            .then(|| heat::HubNet::for_stills(direct))
+            .transpose()?;
+        let hubcrop = on(d.hub_crop)
+            .then(|| heat::HubCropNet::new(direct))
+            .transpose()?;
+        let hubcrop_still = on(d.hub_crop && d.still_models)
+            .then(|| heat::HubCropNet::for_stills(direct))
+            .transpose()?;
+        let hubyaw = on(d.hub_yaw)
+            .then(|| heat::HubYawNet::new(direct))
+            .transpose()?;
+        let hubyaw_close = on(d.hub_yaw && d.hub_yaw_close)
+            .then(|| heat::HubYawNet::close_range(direct))
+            .transpose()?;
+        Ok(Detector {
+            config,
+            pyramid: image::Pyramid::default(),
+            scratch: Scratch::default(),
+            hubnet,
+            hubnet_still,
+            hubcrop,
+            hubcrop_still,
+            mirror_buf: Vec::new(),
+            hubyaw,
+            hubyaw_close,
+        })
     }
 
     /// The configuration in use.
@@ -464,7 +570,11 @@ impl Detector {
     /// turbine's blades are a pixel or two wide at the working size and vanish in the
     /// smoothing, and the rules and networks err differently on the mirror image; a photo has
     /// no frame rate to keep, so it can afford the ~8× time.
-    pub fn detect_still(&mut self, image: &ImageView<'_>, hints: &Hints) -> Result<Output, DetectError> {
+    pub fn detect_still(
+        &mut self,
+        image: &ImageView<'_>,
+        hints: &Hints,
+    ) -> Result<Output, DetectError> {
         let seen = self.detect_still_levels(image, hints)?;
         let how = self.config.default.still_mirror;
         if self.config.mode != Mode::Default || how == StillMirror::Off {
@@ -476,7 +586,9 @@ impl Detector {
         let view = image::mirror_into(image, &mut buf);
         let mirror_hints = Hints {
             roll_rad: hints.roll_rad.map(|r| -r),
-            predicted_hub_px: hints.predicted_hub_px.map(|p| [mirror_x(p[0], image.width), p[1]]),
+            predicted_hub_px: hints
+                .predicted_hub_px
+                .map(|p| [mirror_x(p[0], image.width), p[1]]),
             hub_distance_m: hints.hub_distance_m,
         };
         let mirrored = self.detect_still_levels(&view, &mirror_hints);
@@ -487,24 +599,35 @@ impl Detector {
         let mut out = combine_views(seen, mirrored, how, agree_px);
         // The hub may have moved: the yaw from the hub–tower gap follows it.
         if out.yaw_deg.is_some() {
-            out.yaw_deg = out.distance_m.map(|d| self.gap_yaw_deg(out.detection.hub_tower_gap_px, d, image.width));
+            out.yaw_deg = out
+                .distance_m
+                .map(|d| self.gap_yaw_deg(out.detection.hub_tower_gap_px, d, image.width));
         }
         Ok(out)
     }
 
     /// [`Detector::detect_still`] on one view: its working level and, with
     /// `still_finer_level`, one finer, the more confident detection winning.
-    fn detect_still_levels(&mut self, image: &ImageView<'_>, hints: &Hints) -> Result<Output, DetectError> {
+    fn detect_still_levels(
+        &mut self,
+        image: &ImageView<'_>,
+        hints: &Hints,
+    ) -> Result<Output, DetectError> {
         image::check_view(image)?;
         let levels = self.levels_for(image);
         let coarse = self.detect_at(image, hints, levels, true)?;
-        if self.config.mode != Mode::Default || !self.config.default.still_finer_level || levels < 2 {
+        if self.config.mode != Mode::Default || !self.config.default.still_finer_level || levels < 2
+        {
             return Ok(coarse);
         }
         let fine = self.detect_at(image, hints, levels - 1, true)?;
         let total_us = coarse.detection.timings.total_us + fine.detection.timings.total_us;
         let (c, f) = (&coarse.detection, &fine.detection);
-        let mut best = if f.detected && (!c.detected || f.confidence > c.confidence) { fine } else { coarse };
+        let mut best = if f.detected && (!c.detected || f.confidence > c.confidence) {
+            fine
+        } else {
+            coarse
+        };
         best.detection.timings.total_us = total_us;
         Ok(best)
     }
@@ -518,7 +641,11 @@ impl Detector {
 
     /// [`Detector::network_input`] for a video frame or, with `still`, a still photo (their
     /// pyramids differ: see `default.box_first_level`).
-    pub fn network_input_for(&mut self, image: &ImageView<'_>, still: bool) -> Result<Mat, DetectError> {
+    pub fn network_input_for(
+        &mut self,
+        image: &ImageView<'_>,
+        still: bool,
+    ) -> Result<Mat, DetectError> {
         let mut out = Mat::default();
         heat::network_input(&self.working_level_for(image, still)?, &mut out)?;
         Ok(out)
@@ -531,7 +658,11 @@ impl Detector {
     }
 
     /// [`Detector::working_level`] for a video frame or, with `still`, a still photo.
-    pub fn working_level_for(&mut self, image: &ImageView<'_>, still: bool) -> Result<Mat, DetectError> {
+    pub fn working_level_for(
+        &mut self,
+        image: &ImageView<'_>,
+        still: bool,
+    ) -> Result<Mat, DetectError> {
         image::check_view(image)?;
         let levels = self.levels_for(image);
         let first = self.first_step(still);
@@ -550,21 +681,42 @@ impl Detector {
     /// Pyramid steps down to the working size of the configured mode.
     fn levels_for(&self, image: &ImageView<'_>) -> usize {
         let (min_side, max_side) = match self.config.mode {
-            Mode::Thesis => (self.config.thesis.pyramid_min_side_px, self.config.thesis.pyramid_max_side_px),
-            Mode::Default => (self.config.default.pyramid_min_side_px, self.config.default.pyramid_max_side_px),
+            Mode::Thesis => (
+                self.config.thesis.pyramid_min_side_px,
+                self.config.thesis.pyramid_max_side_px,
+            ),
+            Mode::Default => (
+                self.config.default.pyramid_min_side_px,
+                self.config.default.pyramid_max_side_px,
+            ),
         };
         pyramid_levels(image.width, image.height, min_side, max_side)
     }
 
     /// Detect at `levels` pyramid steps down (a view already checked); `still`: a still photo
     /// (its own heatmap and ranking with `default.still_models`).
-    fn detect_at(&mut self, image: &ImageView<'_>, hints: &Hints, levels: usize, still: bool) -> Result<Output, DetectError> {
+    fn detect_at(
+        &mut self,
+        image: &ImageView<'_>,
+        hints: &Hints,
+        levels: usize,
+        still: bool,
+    ) -> Result<Output, DetectError> {
         let t0 = Instant::now();
         let k = (1u64 << levels) as f64;
         let expected = robust::Expected {
-            tower_width: hints.hub_distance_m.and_then(|d| self.expected_tower_width_px(d, image.width)).map(|w| w / k),
-            spinner_radius: hints.hub_distance_m.and_then(|d| self.expected_spinner_radius_px(d, image.width)).map(|r| r / k),
-            px_per_m: hints.hub_distance_m.filter(|d| *d > 0.0).map(|d| self.focal_px(image.width) / d / k),
+            tower_width: hints
+                .hub_distance_m
+                .and_then(|d| self.expected_tower_width_px(d, image.width))
+                .map(|w| w / k),
+            spinner_radius: hints
+                .hub_distance_m
+                .and_then(|d| self.expected_spinner_radius_px(d, image.width))
+                .map(|r| r / k),
+            px_per_m: hints
+                .hub_distance_m
+                .filter(|d| *d > 0.0)
+                .map(|d| self.focal_px(image.width) / d / k),
             optics: Some(robust::Optics {
                 focal_px: self.focal_px(image.width) / k,
                 spinner_radius_m: self.config.camera.spinner_diameter_m / 2.0,
@@ -584,37 +736,86 @@ impl Detector {
             hub_distance_m: hints.hub_distance_m,
         };
         let t = Instant::now();
-        let still_models = (still || self.config.default.still_models_for_frames) && self.hubnet_still.is_some();
-        let net = if still_models { &mut self.hubnet_still } else { &mut self.hubnet };
+        let still_models =
+            (still || self.config.default.still_models_for_frames) && self.hubnet_still.is_some();
+        let net = if still_models {
+            &mut self.hubnet_still
+        } else {
+            &mut self.hubnet
+        };
         let heatmap = match (net, self.config.mode) {
             (Some(net), Mode::Default) => Some(net.run(small)?),
             _ => None,
         };
         let heat_us = us_since(t);
-        let expected = robust::Expected { heat: heatmap.as_ref(), ..expected };
-        let still_params = still_models.then(|| params::DefaultParams { ranker: self.config.default.still_ranker.clone(), ..self.config.default.clone() });
+        let expected = robust::Expected {
+            heat: heatmap.as_ref(),
+            ..expected
+        };
+        let still_params = still_models.then(|| params::DefaultParams {
+            ranker: self.config.default.still_ranker.clone(),
+            ..self.config.default.clone()
+        });
         let mut found = match self.config.mode {
-            Mode::Thesis => thesis::run(&self.config.thesis, small, &mut self.scratch, &hints_small)?,
-            Mode::Default => robust::run(still_params.as_ref().unwrap_or(&self.config.default), small, &mut self.scratch, &hints_small, expected)?,
+            Mode::Thesis => {
+                thesis::run(&self.config.thesis, small, &mut self.scratch, &hints_small)?
+            }
+            Mode::Default => robust::run(
+                still_params.as_ref().unwrap_or(&self.config.default),
+                small,
+                &mut self.scratch,
+                &hints_small,
+                expected,
+            )?,
         };
         // The heatmap is part of recognising the hub among the lines' candidates.
         found.geometry_us += heat_us;
-        let crop_net = if still_models && self.hubcrop_still.is_some() { &mut self.hubcrop_still } else { &mut self.hubcrop };
-        if let Some(net) = crop_net.as_mut().filter(|_| self.config.mode == Mode::Default) {
+        let crop_net = if still_models && self.hubcrop_still.is_some() {
+            &mut self.hubcrop_still
+        } else {
+            &mut self.hubcrop
+        };
+        if let Some(net) = crop_net
+            .as_mut()
+            .filter(|_| self.config.mode == Mode::Default)
+        {
             let t = Instant::now();
             if hints.predicted_hub_px.is_none() || self.config.default.hub_crop_when_tracking {
                 place_hub_by_crop(&self.config.default, net, small, &mut found)?;
             }
             if let (None, Some(heat)) = (hints.predicted_hub_px, heatmap.as_ref()) {
-                let override_max = if still { self.config.default.still_heat_override_max } else { self.config.default.heat_override_max };
-                verify_heat_peak(&self.config.default, heat, net, small, override_max, &mut found)?;
+                let override_max = if still {
+                    self.config.default.still_heat_override_max
+                } else {
+                    self.config.default.heat_override_max
+                };
+                verify_heat_peak(
+                    &self.config.default,
+                    heat,
+                    net,
+                    small,
+                    override_max,
+                    &mut found,
+                )?;
             }
             found.geometry_us += us_since(t);
         }
-        let yaw_reading = match self.hubyaw.as_mut().filter(|_| self.config.mode == Mode::Default) {
+        let yaw_reading = match self
+            .hubyaw
+            .as_mut()
+            .filter(|_| self.config.mode == Mode::Default)
+        {
             Some(net) => {
                 let t = Instant::now();
-                let r = read_yaw(&self.config, net, self.hubyaw_close.as_mut(), small, &found, hints.hub_distance_m, focal_small)?;
+                let r = read_yaw(
+                    &self.config,
+                    net,
+                    self.hubyaw_close.as_mut(),
+                    small,
+                    &found,
+                    hints.hub_distance_m,
+                    focal_small,
+                )?;
                 found.geometry_us += us_since(t);
                 r
             }
@@ -638,7 +839,9 @@ impl Detector {
     /// `spinner_refine_rays`), and the hub with it when the hub is the circle's centre.
     fn refine_spinner(&self, found: &mut Found, image: &ImageView<'_>, k: f64) {
         let p = &self.config.default;
-        let (Some(c), true) = (found.circle, found.detected && p.spinner_refine_rays > 0) else { return };
+        let (Some(c), true) = (found.circle, found.detected && p.spinner_refine_rays > 0) else {
+            return;
+        };
         let plane = image::full_grey(image);
         let rf = spinner::Refinement {
             rays: p.spinner_refine_rays as usize,
@@ -648,7 +851,9 @@ impl Detector {
             min_inliers: p.spinner_refine_min_inliers,
             max_change: p.spinner_refine_max_change,
         };
-        let Some(r) = spinner::refine_circle(&plane, [c[0] * k, c[1] * k, c[2] * k], &rf) else { return };
+        let Some(r) = spinner::refine_circle(&plane, [c[0] * k, c[1] * k, c[2] * k], &rf) else {
+            return;
+        };
         let refined = [r[0] / k, r[1] / k, r[2] / k];
         if geometry::dist(found.hub, [c[0], c[1]]) < 1e-9 {
             // The nacelle's end was measured from the old hub.
@@ -664,14 +869,17 @@ impl Detector {
     /// approach cos ψ ≈ 1). `None` for a distance that is not a positive finite number.
     fn expected_tower_width_px(&self, hub_distance_m: f64, width: u32) -> Option<f64> {
         let c = &self.config.camera;
-        (hub_distance_m.is_finite() && hub_distance_m > 0.0)
-            .then(|| self.focal_px(width) * c.tower_top_diameter_m / (hub_distance_m + c.hub_tower_gap_m))
+        (hub_distance_m.is_finite() && hub_distance_m > 0.0).then(|| {
+            self.focal_px(width) * c.tower_top_diameter_m / (hub_distance_m + c.hub_tower_gap_m)
+        })
     }
 
     /// The spinner's radius seen from `hub_distance_m` in front of the hub, full-resolution px.
     /// `None` for a distance that is not a positive finite number.
     fn expected_spinner_radius_px(&self, hub_distance_m: f64, width: u32) -> Option<f64> {
-        (hub_distance_m.is_finite() && hub_distance_m > 0.0).then(|| self.focal_px(width) * self.config.camera.spinner_diameter_m / 2.0 / hub_distance_m)
+        (hub_distance_m.is_finite() && hub_distance_m > 0.0).then(|| {
+            self.focal_px(width) * self.config.camera.spinner_diameter_m / 2.0 / hub_distance_m
+        })
     }
 
     /// Focal length in full-resolution px.
@@ -689,13 +897,18 @@ impl Detector {
     /// p2|)). The hub sits in front of the tower, so a camera on the turbine's left (positive
     /// yaw) sees the hub to the LEFT of the tower axis: the sign is flipped.
     fn gap_yaw_deg(&self, gap_px: f64, distance_m: f64, width: u32) -> f64 {
-        let s = (gap_px * distance_m / (self.focal_px(width) * self.config.camera.hub_tower_gap_m)).clamp(-1.0, 1.0);
+        let s = (gap_px * distance_m / (self.focal_px(width) * self.config.camera.hub_tower_gap_m))
+            .clamp(-1.0, 1.0);
         -s.asin().to_degrees()
     }
 
     /// Scale a pipeline result to full resolution and derive distance and yaw.
     fn to_output(&self, f: &Found, k: f64, width: u32, height: u32) -> Output {
-        let mut d = Detection { image_width: width, image_height: height, ..Detection::default() };
+        let mut d = Detection {
+            image_width: width,
+            image_height: height,
+            ..Detection::default()
+        };
         d.detected = f.detected;
         d.confidence = f.confidence.clamp(0.0, 1.0);
         d.roll_used_deg = f.roll_used_deg;
@@ -728,11 +941,15 @@ impl Detector {
                 d.tower_width_px = w * k;
                 d.tower_width_row = row * k;
                 if d.tower_width_px > 0.0 {
-                    distance_m = Some(focal * self.config.camera.tower_top_diameter_m / d.tower_width_px);
+                    distance_m =
+                        Some(focal * self.config.camera.tower_top_diameter_m / d.tower_width_px);
                 }
             }
             if f.detected {
-                let axis_x = f.tower_axis.and_then(|a| a.x_at_y(f.hub[1])).unwrap_or(top[0]);
+                let axis_x = f
+                    .tower_axis
+                    .and_then(|a| a.x_at_y(f.hub[1]))
+                    .unwrap_or(top[0]);
                 d.hub_tower_gap_px = (f.hub[0] - axis_x) * k;
                 if let Some(dist) = distance_m {
                     yaw_deg = Some(self.gap_yaw_deg(d.hub_tower_gap_px, dist, width));
@@ -742,11 +959,31 @@ impl Detector {
         let lines = f
             .lines
             .iter()
-            .map(|(s, kind)| OverlayLine { a: geometry::scale_point(s.a, k), b: geometry::scale_point(s.b, k), kind: *kind })
+            .map(|(s, kind)| OverlayLine {
+                a: geometry::scale_point(s.a, k),
+                b: geometry::scale_point(s.b, k),
+                kind: *kind,
+            })
             .collect();
         let search_circle = f.search_circle.map(|c| [c[0] * k, c[1] * k, c[2] * k]);
-        let candidates = f.candidates.iter().map(|c| Considered { hub: geometry::scale_point(c.hub, k), ..c.clone() }).collect();
-        Output { detection: d, distance_m, yaw_deg, overlay: Overlay { lines, search_circle }, candidates }
+        let candidates = f
+            .candidates
+            .iter()
+            .map(|c| Considered {
+                hub: geometry::scale_point(c.hub, k),
+                ..c.clone()
+            })
+            .collect();
+        Output {
+            detection: d,
+            distance_m,
+            yaw_deg,
+            overlay: Overlay {
+                lines,
+                search_circle,
+            },
+            candidates,
+        }
     }
 }
 
@@ -767,23 +1004,56 @@ mod tests {
         let horizon_end = line([201.0, 102.0], [400.0, 104.0]);
         let blade = line([202.0, 98.0], [260.0, 40.0]);
         let far_away = line([20.0, 250.0], [120.0, 200.0]);
-        assert!(!lines_allow_hub(&p, &[], hub, h), "no lines at all: no blade");
-        assert!(!lines_allow_hub(&p, &[far_away], hub, h), "no line within reach");
-        assert!(lines_allow_hub(&p, &[blade, far_away], hub, h), "a blade alone");
-        assert!(!lines_allow_hub(&p, &[mast, far_away], hub, h), "a mast's top");
-        assert!(!lines_allow_hub(&p, &[mast, horizon_end], hub, h), "a corner of vertical and horizontal lines");
-        assert!(lines_allow_hub(&p, &[mast, blade], hub, h), "a tower and a blade");
+        assert!(
+            !lines_allow_hub(&p, &[], hub, h),
+            "no lines at all: no blade"
+        );
+        assert!(
+            !lines_allow_hub(&p, &[far_away], hub, h),
+            "no line within reach"
+        );
+        assert!(
+            lines_allow_hub(&p, &[blade, far_away], hub, h),
+            "a blade alone"
+        );
+        assert!(
+            !lines_allow_hub(&p, &[mast, far_away], hub, h),
+            "a mast's top"
+        );
+        assert!(
+            !lines_allow_hub(&p, &[mast, horizon_end], hub, h),
+            "a corner of vertical and horizontal lines"
+        );
+        assert!(
+            lines_allow_hub(&p, &[mast, blade], hub, h),
+            "a tower and a blade"
+        );
         // A mast (or wire) passing through: its ends are far from the point.
         let through = line([199.0, 20.0], [201.0, 260.0]);
-        assert!(!lines_allow_hub(&p, &[through, blade], hub, h), "a line through the point");
+        assert!(
+            !lines_allow_hub(&p, &[through, blade], hub, h),
+            "a line through the point"
+        );
         // Rolled 10°, the blade-like line stays oblique enough, the mast stays a mast.
-        let tilted_mast = line([200.0, 101.0], [200.0 + 159.0 * 10f64.to_radians().tan(), 260.0]);
-        assert!(!lines_allow_hub(&p, &[tilted_mast], hub, h), "a mast rolled 10°");
+        let tilted_mast = line(
+            [200.0, 101.0],
+            [200.0 + 159.0 * 10f64.to_radians().tan(), 260.0],
+        );
+        assert!(
+            !lines_allow_hub(&p, &[tilted_mast], hub, h),
+            "a mast rolled 10°"
+        );
         // A mast whose top the lines lost: its vertical below, level lines about, no blade.
         let mast_below = line([200.0, 160.0], [200.0, 260.0]);
         let level = line([120.0, 110.0], [180.0, 112.0]);
-        assert!(!lines_allow_hub(&p, &[mast_below, level], hub, h), "a mast's top lost against the horizon");
-        assert!(lines_allow_hub(&p, &[mast_below, level, blade], hub, h), "and with a blade");
+        assert!(
+            !lines_allow_hub(&p, &[mast_below, level], hub, h),
+            "a mast's top lost against the horizon"
+        );
+        assert!(
+            lines_allow_hub(&p, &[mast_below, level, blade], hub, h),
+            "and with a blade"
+        );
     }
 
     /// Close-range frames (seed 2026, not trained on) where the spinner fills the view and the
@@ -795,12 +1065,19 @@ mod tests {
         use hubtrack_render::dataset::synth_case;
         use hubtrack_render::{Camera, Renderer};
         let on = DetectConfig::default();
-        assert!(on.default.heat_verify_min < 1.0, "the verdict is on by default");
+        assert!(
+            on.default.heat_verify_min < 1.0,
+            "the verdict is on by default"
+        );
         let mut off = on.clone();
         off.default.heat_verify_min = 1.0;
         let (mut det_on, mut det_off) = (Detector::new(on).unwrap(), Detector::new(off).unwrap());
-        let mut renderers = [Renderer::new(Camera::gopro_hero3()), Renderer::new(Camera::usb_narrow())];
-        let (mut frames, mut hits_on, mut hits_off, mut fp_on, mut fp_off, mut negatives) = (0, 0, 0, 0, 0, 0);
+        let mut renderers = [
+            Renderer::new(Camera::gopro_hero3()),
+            Renderer::new(Camera::usb_narrow()),
+        ];
+        let (mut frames, mut hits_on, mut hits_off, mut fp_on, mut fp_off, mut negatives) =
+            (0, 0, 0, 0, 0, 0);
         for i in 0..200u64 {
             let negative = i % 4 == 3;
             let case = synth_case(2026, 2, i, negative);
@@ -808,15 +1085,34 @@ mod tests {
             let cam = *r.camera();
             let mut buf = vec![0u8; cam.frame_bytes()];
             let truth = r.render(&case.scene, &case.pose, &mut buf).unwrap();
-            let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
-            let hints = Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() };
-            let (a, b) = (det_on.detect(&view, &hints).unwrap().detection, det_off.detect(&view, &hints).unwrap().detection);
+            let view = ImageView {
+                width: cam.width,
+                height: cam.height,
+                stride: cam.width as usize * 3,
+                format: PixelFormat::Bgr8,
+                data: &buf,
+            };
+            let hints = Hints {
+                roll_rad: Some(case.pose.roll_deg.to_radians()),
+                ..Hints::default()
+            };
+            let (a, b) = (
+                det_on.detect(&view, &hints).unwrap().detection,
+                det_off.detect(&view, &hints).unwrap().detection,
+            );
             // A hit as `hubtrack eval` scores it: within 3 % of the height of the visible rotor
             // axis, from the hub's centre to the spinner's nose.
-            let axis = truth.hub_px.zip(truth.nose_px).filter(|_| truth.turbine_in_view && !negative);
+            let axis = truth
+                .hub_px
+                .zip(truth.nose_px)
+                .filter(|_| truth.turbine_in_view && !negative);
             match axis {
                 Some((hub, nose)) => {
-                    let hit = |d: &Detection| d.detected && geometry::point_segment_distance(d.hub_px, hub, nose) <= 0.03 * cam.height as f64;
+                    let hit = |d: &Detection| {
+                        d.detected
+                            && geometry::point_segment_distance(d.hub_px, hub, nose)
+                                <= 0.03 * cam.height as f64
+                    };
                     frames += 1;
                     hits_on += usize::from(hit(&a));
                     hits_off += usize::from(hit(&b));
@@ -830,9 +1126,18 @@ mod tests {
             }
         }
         eprintln!("close range: {hits_on} of {frames} hits with the verdict, {hits_off} without; negatives detected {fp_on} / {fp_off} of {negatives}");
-        assert!(frames >= 120 && negatives >= 40, "{frames} frames, {negatives} negatives");
-        assert!(hits_on >= hits_off + 7, "verdict: {hits_on} hits against {hits_off}");
-        assert!(fp_on <= fp_off, "verdict: {fp_on} negatives detected against {fp_off}");
+        assert!(
+            frames >= 120 && negatives >= 40,
+            "{frames} frames, {negatives} negatives"
+        );
+        assert!(
+            hits_on >= hits_off + 7,
+            "verdict: {hits_on} hits against {hits_off}"
+        );
+        assert!(
+            fp_on <= fp_off,
+            "verdict: {fp_on} negatives detected against {fp_off}"
+        );
     }
 
     /// Video frames take the box first pyramid level (`default.box_first_level`), still photos
@@ -841,10 +1146,29 @@ mod tests {
     fn video_frames_and_stills_take_their_own_first_pyramid_level() {
         // 128x96 BGR: vertical stripes 3 px wide (a box and a Gaussian halving differ on them).
         let (w, h) = (128usize, 96usize);
-        let data: Vec<u8> = (0..h).flat_map(|_| (0..w).flat_map(|x| if (x / 3) % 2 == 0 { [30u8, 60, 90] } else { [200, 180, 160] })).collect();
-        let view = ImageView { width: w as u32, height: h as u32, stride: 3 * w, format: PixelFormat::Bgr8, data: &data };
+        let data: Vec<u8> = (0..h)
+            .flat_map(|_| {
+                (0..w).flat_map(|x| {
+                    if (x / 3) % 2 == 0 {
+                        [30u8, 60, 90]
+                    } else {
+                        [200, 180, 160]
+                    }
+                })
+            })
+            .collect();
+        let view = ImageView {
+            width: w as u32,
+            height: h as u32,
+            stride: 3 * w,
+            format: PixelFormat::Bgr8,
+            data: &data,
+        };
         let cfg = |min_side: u32, max_side: u32, mode: Mode| {
-            let mut c = DetectConfig { mode, ..DetectConfig::default() };
+            let mut c = DetectConfig {
+                mode,
+                ..DetectConfig::default()
+            };
             (c.default.pyramid_min_side_px, c.default.pyramid_max_side_px) = (min_side, max_side);
             (c.thesis.pyramid_min_side_px, c.thesis.pyramid_max_side_px) = (min_side, max_side);
             c.default.hub_heat = false;
@@ -852,13 +1176,17 @@ mod tests {
             c.default.hub_yaw = false;
             c
         };
-        let level = |det: &mut Detector, still: bool| image::mat_to_vec(&det.working_level_for(&view, still).unwrap()).unwrap();
+        let level = |det: &mut Detector, still: bool| {
+            image::mat_to_vec(&det.working_level_for(&view, still).unwrap()).unwrap()
+        };
         let mut det = Detector::new(cfg(16, 40, Mode::Default)).unwrap();
         let (video, still) = (level(&mut det, false), level(&mut det, true));
         assert_eq!(video.len(), 32 * 24);
         assert_ne!(video, still);
         let mut reference = image::Pyramid::default();
-        let want = |p: &mut image::Pyramid, first| image::mat_to_vec(p.build(&view, 2, first).unwrap()).unwrap();
+        let want = |p: &mut image::Pyramid, first| {
+            image::mat_to_vec(p.build(&view, 2, first).unwrap()).unwrap()
+        };
         assert_eq!(video, want(&mut reference, image::FirstStep::Box));
         assert_eq!(still, want(&mut reference, image::FirstStep::Gaussian));
         let mut thesis = Detector::new(cfg(16, 40, Mode::Thesis)).unwrap();
@@ -883,26 +1211,50 @@ mod tests {
         let (small, hub) = (0..20u64)
             .find_map(|i| {
                 let case = synth_case(2026, 1, i, false);
-                let cam = if case.wide { Camera::gopro_hero3() } else { Camera::usb_narrow() };
+                let cam = if case.wide {
+                    Camera::gopro_hero3()
+                } else {
+                    Camera::usb_narrow()
+                };
                 let mut buf = vec![0u8; cam.frame_bytes()];
-                let truth = Renderer::new(cam).render(&case.scene, &case.pose, &mut buf).unwrap();
+                let truth = Renderer::new(cam)
+                    .render(&case.scene, &case.pose, &mut buf)
+                    .unwrap();
                 let hub = truth.hub_px.filter(|_| truth.turbine_in_view)?;
-                let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
+                let view = ImageView {
+                    width: cam.width,
+                    height: cam.height,
+                    stride: cam.width as usize * 3,
+                    format: PixelFormat::Bgr8,
+                    data: &buf,
+                };
                 let small = det.working_level(&view).unwrap();
                 let k = cam.height as f64 / opencv::prelude::MatTraitConst::rows(&small) as f64;
                 Some((small, [hub[0] / k, hub[1] / k]))
             })
             .unwrap();
         let h = opencv::prelude::MatTraitConst::rows(&small) as f64;
-        let at = |dx: f64, detected: bool| Found { detected, hub: [hub[0] + dx * h, hub[1]], ..Found::default() };
+        let at = |dx: f64, detected: bool| Found {
+            detected,
+            hub: [hub[0] + dx * h, hub[1]],
+            ..Found::default()
+        };
 
         let mut off = at(0.05, true);
         place_hub_by_crop(&p, &mut net, &small, &mut off).unwrap();
-        assert!(geometry::dist(off.hub, hub) < 0.03 * h, "moved to {:?}, hub {hub:?}", off.hub);
+        assert!(
+            geometry::dist(off.hub, hub) < 0.03 * h,
+            "moved to {:?}, hub {hub:?}",
+            off.hub
+        );
 
         let mut near = at(0.01, true);
         place_hub_by_crop(&p, &mut net, &small, &mut near).unwrap();
-        assert_eq!(near.hub, at(0.01, true).hub, "within the minimum shift the crossing stands");
+        assert_eq!(
+            near.hub,
+            at(0.01, true).hub,
+            "within the minimum shift the crossing stands"
+        );
 
         let mut undetected = at(0.05, false);
         place_hub_by_crop(&p, &mut net, &small, &mut undetected).unwrap();
@@ -910,21 +1262,39 @@ mod tests {
 
         let mut circle = at(0.05, true);
         circle.circle = Some([circle.hub[0], circle.hub[1], 5.0]);
-        let never = params::DefaultParams { hub_crop_spinner_escape_radii: 10.0, ..p.clone() };
+        let never = params::DefaultParams {
+            hub_crop_spinner_escape_radii: 10.0,
+            ..p.clone()
+        };
         place_hub_by_crop(&never, &mut net, &small, &mut circle).unwrap();
-        assert_eq!(circle.hub, at(0.05, true).hub, "a spinner circle's centre stays");
+        assert_eq!(
+            circle.hub,
+            at(0.05, true).hub,
+            "a spinner circle's centre stays"
+        );
 
         // With `hub_crop_spinner_escape_radii` a circle beside the hub (a blade root's) lets
         // the hub go to the network's peak beyond its rim; one round the peak keeps it.
-        let escape = params::DefaultParams { hub_crop_spinner_escape_radii: 0.0, ..p.clone() };
+        let escape = params::DefaultParams {
+            hub_crop_spinner_escape_radii: 0.0,
+            ..p.clone()
+        };
         let mut beside = at(0.05, true);
         beside.circle = Some([beside.hub[0], beside.hub[1], 0.02 * h]);
         place_hub_by_crop(&escape, &mut net, &small, &mut beside).unwrap();
-        assert!(geometry::dist(beside.hub, hub) < 0.03 * h, "moved to {:?}, hub {hub:?}", beside.hub);
+        assert!(
+            geometry::dist(beside.hub, hub) < 0.03 * h,
+            "moved to {:?}, hub {hub:?}",
+            beside.hub
+        );
         let mut round = at(0.05, true);
         round.circle = Some([round.hub[0], round.hub[1], 0.08 * h]);
         place_hub_by_crop(&escape, &mut net, &small, &mut round).unwrap();
-        assert_eq!(round.hub, at(0.05, true).hub, "the peak inside the circle: its centre stays");
+        assert_eq!(
+            round.hub,
+            at(0.05, true).hub,
+            "the peak inside the circle: its centre stays"
+        );
     }
 
     /// The still photos' crop network places the hub of photo-like views (from above, the
@@ -950,11 +1320,24 @@ mod tests {
             }
             let cam = photo_lenses()[if case.wide { 0 } else { 1 }];
             let mut buf = vec![0u8; cam.frame_bytes()];
-            let truth = Renderer::new(cam).render(&case.scene, &case.pose, &mut buf).unwrap();
-            let Some(hub) = truth.hub_px.filter(|_| truth.turbine_in_view) else { continue };
-            let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buf };
+            let truth = Renderer::new(cam)
+                .render(&case.scene, &case.pose, &mut buf)
+                .unwrap();
+            let Some(hub) = truth.hub_px.filter(|_| truth.turbine_in_view) else {
+                continue;
+            };
+            let view = ImageView {
+                width: cam.width,
+                height: cam.height,
+                stride: cam.width as usize * 3,
+                format: PixelFormat::Bgr8,
+                data: &buf,
+            };
             let small = det.working_level(&view).unwrap();
-            let (w, h) = (opencv::prelude::MatTraitConst::cols(&small) as f64, opencv::prelude::MatTraitConst::rows(&small) as f64);
+            let (w, h) = (
+                opencv::prelude::MatTraitConst::cols(&small) as f64,
+                opencv::prelude::MatTraitConst::rows(&small) as f64,
+            );
             let k = cam.height as f64 / h;
             let hub = [hub[0] / k, hub[1] / k];
             if hub[0] < 0.1 * h || hub[0] > w - 0.1 * h || hub[1] < 0.1 * h || hub[1] > 0.9 * h {
@@ -962,16 +1345,29 @@ mod tests {
             }
             for (dx, dy) in [(0.05, 0.0), (-0.05, 0.0), (0.0, 0.05), (0.0, -0.05)] {
                 tried += 1;
-                let off = Found { detected: true, hub: [hub[0] + dx * h, hub[1] + dy * h], ..Found::default() };
-                for (net, placed) in [(&mut video, &mut placed_video), (&mut still, &mut placed_still)] {
+                let off = Found {
+                    detected: true,
+                    hub: [hub[0] + dx * h, hub[1] + dy * h],
+                    ..Found::default()
+                };
+                for (net, placed) in [
+                    (&mut video, &mut placed_video),
+                    (&mut still, &mut placed_still),
+                ] {
                     let mut f = off.clone();
                     place_hub_by_crop(&p, net, &small, &mut f).unwrap();
                     *placed += usize::from(geometry::dist(f.hub, hub) < 0.03 * h);
                 }
             }
         }
-        assert_eq!(tried, 96, "too few photo-like views with the hub well inside the frame");
-        assert!(placed_still >= 50 && placed_still >= placed_video + 10, "placed: still network {placed_still}, video network {placed_video} of {tried}");
+        assert_eq!(
+            tried, 96,
+            "too few photo-like views with the hub well inside the frame"
+        );
+        assert!(
+            placed_still >= 50 && placed_still >= placed_video + 10,
+            "placed: still network {placed_still}, video network {placed_video} of {tried}"
+        );
     }
 
     /// The mirror image swaps columns pixel for pixel (stride padding dropped), and a detection
@@ -980,30 +1376,80 @@ mod tests {
     #[test]
     fn a_detection_in_the_mirror_image_maps_back_onto_the_photo() {
         // 3x2 BGR with 2 bytes of padding per row.
-        let data: Vec<u8> = vec![1, 2, 3, 4, 5, 6, 7, 8, 9, 0, 0, 11, 12, 13, 14, 15, 16, 17, 18, 19, 0, 0];
-        let view = ImageView { width: 3, height: 2, stride: 11, format: PixelFormat::Bgr8, data: &data };
+        let data: Vec<u8> = vec![
+            1, 2, 3, 4, 5, 6, 7, 8, 9, 0, 0, 11, 12, 13, 14, 15, 16, 17, 18, 19, 0, 0,
+        ];
+        let view = ImageView {
+            width: 3,
+            height: 2,
+            stride: 11,
+            format: PixelFormat::Bgr8,
+            data: &data,
+        };
         let mut buf = Vec::new();
         let m = image::mirror_into(&view, &mut buf);
         assert_eq!((m.width, m.height, m.stride), (3, 2, 9));
-        assert_eq!(m.data, &[7, 8, 9, 4, 5, 6, 1, 2, 3, 17, 18, 19, 14, 15, 16, 11, 12, 13]);
+        assert_eq!(
+            m.data,
+            &[7, 8, 9, 4, 5, 6, 1, 2, 3, 17, 18, 19, 14, 15, 16, 11, 12, 13]
+        );
 
-        let mut d = Detection { detected: true, hub_px: [100.0, 50.0], tower_found: true, tower_top_px: [110.0, 60.0], circle_found: true, circle: [101.0, 51.0, 7.0], hub_tower_gap_px: -10.0, nacelle_found: true, nacelle_end_dx_px: 4.0, yaw_net_deg: 3.0, roll_used_deg: 2.0, blade_count: 3, ..Detection::default() };
+        let mut d = Detection {
+            detected: true,
+            hub_px: [100.0, 50.0],
+            tower_found: true,
+            tower_top_px: [110.0, 60.0],
+            circle_found: true,
+            circle: [101.0, 51.0, 7.0],
+            hub_tower_gap_px: -10.0,
+            nacelle_found: true,
+            nacelle_end_dx_px: 4.0,
+            yaw_net_deg: 3.0,
+            roll_used_deg: 2.0,
+            blade_count: 3,
+            ..Detection::default()
+        };
         d.blade_angles_deg[..3].copy_from_slice(&[0.0, 60.0, 250.0]);
         let out = Output {
             detection: d,
             distance_m: Some(20.0),
             yaw_deg: Some(5.0),
-            overlay: Overlay { lines: vec![OverlayLine { a: [0.0, 1.0], b: [639.0, 2.0], kind: LineKind::Blade }], search_circle: Some([100.0, 50.0, 30.0]) },
-            candidates: vec![Considered { hub: [100.0, 50.0], confidence: 0.5, features: ranker::Features::default() }],
+            overlay: Overlay {
+                lines: vec![OverlayLine {
+                    a: [0.0, 1.0],
+                    b: [639.0, 2.0],
+                    kind: LineKind::Blade,
+                }],
+                search_circle: Some([100.0, 50.0, 30.0]),
+            },
+            candidates: vec![Considered {
+                hub: [100.0, 50.0],
+                confidence: 0.5,
+                features: ranker::Features::default(),
+            }],
         };
         let mut back = out.clone();
         mirror_output(&mut back, 640);
         let b = &back.detection;
-        assert_eq!((b.hub_px, b.tower_top_px, b.circle), ([539.0, 50.0], [529.0, 60.0], [538.0, 51.0, 7.0]));
-        assert_eq!((b.hub_tower_gap_px, b.nacelle_end_dx_px, b.yaw_net_deg, b.roll_used_deg), (10.0, -4.0, -3.0, -2.0));
+        assert_eq!(
+            (b.hub_px, b.tower_top_px, b.circle),
+            ([539.0, 50.0], [529.0, 60.0], [538.0, 51.0, 7.0])
+        );
+        assert_eq!(
+            (
+                b.hub_tower_gap_px,
+                b.nacelle_end_dx_px,
+                b.yaw_net_deg,
+                b.roll_used_deg
+            ),
+            (10.0, -4.0, -3.0, -2.0)
+        );
         assert_eq!(&b.blade_angles_deg[..3], &[0.0, 300.0, 110.0]);
         assert_eq!((back.yaw_deg, back.distance_m), (Some(-5.0), Some(20.0)));
-        assert_eq!((back.overlay.lines[0].a, back.overlay.lines[0].b), ([639.0, 1.0], [0.0, 2.0]));
+        assert_eq!(
+            (back.overlay.lines[0].a, back.overlay.lines[0].b),
+            ([639.0, 1.0], [0.0, 2.0])
+        );
         assert_eq!(back.candidates[0].hub, [539.0, 50.0]);
         mirror_output(&mut back, 640);
         assert_eq!(back, out);
@@ -1016,35 +1462,101 @@ mod tests {
     #[test]
     fn a_photo_and_its_mirror_image_combine_as_configured() {
         let view = |detected: bool, hub: [f64; 2], confidence: f64, us: f64| {
-            let mut d = Detection { detected, hub_px: hub, confidence, tower_found: true, hub_tower_gap_px: 0.0, ..Detection::default() };
+            let mut d = Detection {
+                detected,
+                hub_px: hub,
+                confidence,
+                tower_found: true,
+                hub_tower_gap_px: 0.0,
+                ..Detection::default()
+            };
             d.timings.total_us = us;
-            Output { detection: d, ..Output::default() }
+            Output {
+                detection: d,
+                ..Output::default()
+            }
         };
-        let (seen, mirrored) = (view(true, [100.0, 50.0], 0.6, 10.0), view(true, [104.0, 53.0], 0.8, 12.0));
+        let (seen, mirrored) = (
+            view(true, [100.0, 50.0], 0.6, 10.0),
+            view(true, [104.0, 53.0], 0.8, 12.0),
+        );
         for how in [StillMirror::Average, StillMirror::Either] {
             let out = combine_views(seen.clone(), mirrored.clone(), how, 6.0);
             assert_eq!(out.detection.hub_px, [102.0, 51.5]);
-            assert_eq!((out.detection.confidence, out.detection.hub_tower_gap_px), (0.8, -2.0), "the mirror's detection, the gap from the new hub");
+            assert_eq!(
+                (out.detection.confidence, out.detection.hub_tower_gap_px),
+                (0.8, -2.0),
+                "the mirror's detection, the gap from the new hub"
+            );
             assert_eq!(out.detection.timings.total_us, 22.0);
         }
         let far = view(true, [140.0, 50.0], 0.8, 12.0);
-        assert_eq!(combine_views(seen.clone(), far.clone(), StillMirror::Average, 6.0).detection.hub_px, [100.0, 50.0]);
-        assert_eq!(combine_views(seen.clone(), far.clone(), StillMirror::Either, 6.0).detection.hub_px, [140.0, 50.0]);
+        assert_eq!(
+            combine_views(seen.clone(), far.clone(), StillMirror::Average, 6.0)
+                .detection
+                .hub_px,
+            [100.0, 50.0]
+        );
+        assert_eq!(
+            combine_views(seen.clone(), far.clone(), StillMirror::Either, 6.0)
+                .detection
+                .hub_px,
+            [140.0, 50.0]
+        );
         let weak = view(true, [140.0, 50.0], 0.5, 12.0);
-        assert_eq!(combine_views(seen.clone(), weak, StillMirror::Either, 6.0).detection.hub_px, [100.0, 50.0]);
+        assert_eq!(
+            combine_views(seen.clone(), weak, StillMirror::Either, 6.0)
+                .detection
+                .hub_px,
+            [100.0, 50.0]
+        );
         let none = view(false, [0.0, 0.0], 0.3, 12.0);
-        assert!(combine_views(none.clone(), far.clone(), StillMirror::Either, 6.0).detection.detected);
-        assert!(!combine_views(none.clone(), far, StillMirror::Average, 6.0).detection.detected);
-        assert_eq!(combine_views(seen.clone(), none.clone(), StillMirror::Either, 6.0).detection.hub_px, [100.0, 50.0]);
+        assert!(
+            combine_views(none.clone(), far.clone(), StillMirror::Either, 6.0)
+                .detection
+                .detected
+        );
+        assert!(
+            !combine_views(none.clone(), far, StillMirror::Average, 6.0)
+                .detection
+                .detected
+        );
+        assert_eq!(
+            combine_views(seen.clone(), none.clone(), StillMirror::Either, 6.0)
+                .detection
+                .hub_px,
+            [100.0, 50.0]
+        );
         // `both`: only where the two views agree.
-        assert!(combine_views(seen.clone(), mirrored.clone(), StillMirror::Both, 6.0).detection.detected);
-        assert!(!combine_views(seen.clone(), none, StillMirror::Both, 6.0).detection.detected);
-        assert!(!combine_views(seen.clone(), view(true, [140.0, 50.0], 0.8, 12.0), StillMirror::Both, 6.0).detection.detected);
+        assert!(
+            combine_views(seen.clone(), mirrored.clone(), StillMirror::Both, 6.0)
+                .detection
+                .detected
+        );
+        assert!(
+            !combine_views(seen.clone(), none, StillMirror::Both, 6.0)
+                .detection
+                .detected
+        );
+        assert!(
+            !combine_views(
+                seen.clone(),
+                view(true, [140.0, 50.0], 0.8, 12.0),
+                StillMirror::Both,
+                6.0
+            )
+            .detection
+            .detected
+        );
     }
 
     #[test]
     fn full_resolution_mapping_distance_and_yaw_sign() {
-        let det = Detector::new(DetectConfig { mode: Mode::Thesis, ..DetectConfig::default() }).unwrap();
+        let det = Detector::new(DetectConfig {
+            mode: Mode::Thesis,
+            ..DetectConfig::default()
+        })
+        .unwrap();
         // Working image 480x270 (k = 4). Tower axis at x = 240, hub 5 px LEFT of it: a camera on
         // the turbine's left (positive relative yaw) sees the hub left of the tower.
         let f = Found {
@@ -1069,6 +1581,9 @@ mod tests {
         assert!((dist - focal * 2.2 / 40.0).abs() < 1e-9);
         let yaw = out.yaw_deg.unwrap();
         let expect = (20.0 * dist / (focal * 4.2)).asin().to_degrees();
-        assert!(yaw > 0.0 && (yaw - expect).abs() < 1e-9, "{yaw} vs {expect}");
+        assert!(
+            yaw > 0.0 && (yaw - expect).abs() < 1e-9,
+            "{yaw} vs {expect}"
+        );
     }
 }

@@ -17,13 +17,20 @@ use crate::tower::GradPlane;
 /// Signed offset, working px, from the hub to the nacelle's far end along the image row
 /// (positive: to the right), or `None` when neither side shows a clear vertical edge or both
 /// do. `px_per_m`: image scale at the hub's depth (working px per metre).
-pub(crate) fn nacelle_end(p: &DefaultParams, gx: &GradPlane<'_>, hub: P2, px_per_m: f64) -> Option<f64> {
+pub(crate) fn nacelle_end(
+    p: &DefaultParams,
+    gx: &GradPlane<'_>,
+    hub: P2,
+    px_per_m: f64,
+) -> Option<f64> {
     let half_rows = (p.nacelle_band_half_m * px_per_m).round() as i64;
     if half_rows < 1 || !(hub[0].is_finite() && hub[1].is_finite()) {
         return None;
     }
     let (x0, y0) = (hub[0].round() as i64, hub[1].round() as i64);
-    let rows: Vec<i64> = (y0 - half_rows..=y0 + half_rows).filter(|&y| y >= 0 && y < gx.height as i64).collect();
+    let rows: Vec<i64> = (y0 - half_rows..=y0 + half_rows)
+        .filter(|&y| y >= 0 && y < gx.height as i64)
+        .collect();
     if rows.len() < 3 {
         return None;
     }
@@ -48,9 +55,18 @@ pub(crate) fn nacelle_end(p: &DefaultParams, gx: &GradPlane<'_>, hub: P2, px_per
     };
     let (right, left) = (best(1), best(-1));
     let strength = |s: Option<(f64, i64)>| s.map_or(0.0, |s| s.0);
-    let (win, other) = if strength(right) >= strength(left) { (right?, strength(left)) } else { (left?, strength(right)) };
-    log::trace!("nacelle: best column {} ({:.0}), other side {other:.0}", win.1, win.0);
-    (win.0 >= p.nacelle_min_response && win.0 >= p.nacelle_min_ratio * other).then(|| win.1 as f64 - hub[0])
+    let (win, other) = if strength(right) >= strength(left) {
+        (right?, strength(left))
+    } else {
+        (left?, strength(right))
+    };
+    log::trace!(
+        "nacelle: best column {} ({:.0}), other side {other:.0}",
+        win.1,
+        win.0
+    );
+    (win.0 >= p.nacelle_min_response && win.0 >= p.nacelle_min_ratio * other)
+        .then(|| win.1 as f64 - hub[0])
 }
 
 #[cfg(test)]
@@ -76,22 +92,34 @@ mod tests {
         let (w, h) = (200usize, 100usize);
         let hub = [100.0, 50.0];
         let s = 5.0; // px per m: spinner radius 8 px
-        // Spinner disc, a nacelle reaching 30 px to the right, and an inclined blade edge on
-        // the left (inclined edges do not add up down a column).
+                     // Spinner disc, a nacelle reaching 30 px to the right, and an inclined blade edge on
+                     // the left (inclined edges do not add up down a column).
         let img = |x: usize, y: usize| {
             let (dx, dy) = (x as f64 - hub[0], y as f64 - hub[1]);
             let spinner = dx * dx + dy * dy <= 64.0;
             let nacelle = (0.0..=30.0).contains(&dx) && dy.abs() <= 8.0;
             let blade = dx < 0.0 && (dy + 0.58 * dx).abs() <= 4.0;
-            if spinner || nacelle || blade { 200.0 } else { 120.0 }
+            if spinner || nacelle || blade {
+                200.0
+            } else {
+                120.0
+            }
         };
         let data = sobel_x(w, h, img);
-        let g = GradPlane { data: &data, width: w, height: h };
+        let g = GradPlane {
+            data: &data,
+            width: w,
+            height: h,
+        };
         let dx = nacelle_end(&p, &g, hub, s).expect("nacelle found");
         assert!((dx - 30.0).abs() <= 1.5, "{dx}");
         // Mirrored: to the left.
         let data = sobel_x(w, h, |x, y| img(w - 1 - x, y));
-        let g = GradPlane { data: &data, width: w, height: h };
+        let g = GradPlane {
+            data: &data,
+            width: w,
+            height: h,
+        };
         let dx = nacelle_end(&p, &g, [w as f64 - 1.0 - hub[0], hub[1]], s).expect("nacelle found");
         assert!((dx + 30.0).abs() <= 1.5, "{dx}");
     }
@@ -101,9 +129,45 @@ mod tests {
         let p = DefaultParams::default();
         let (w, h) = (200usize, 100usize);
         let hub = [100.0, 50.0];
-        let spinner_only = sobel_x(w, h, |x, y| if (x as f64 - hub[0]).powi(2) + (y as f64 - hub[1]).powi(2) <= 64.0 { 200.0 } else { 120.0 });
-        assert_eq!(nacelle_end(&p, &GradPlane { data: &spinner_only, width: w, height: h }, hub, 5.0), None);
-        let both = sobel_x(w, h, |x, _| if (70..=130).contains(&x) { 200.0 } else { 120.0 });
-        assert_eq!(nacelle_end(&p, &GradPlane { data: &both, width: w, height: h }, hub, 5.0), None);
+        let spinner_only = sobel_x(w, h, |x, y| {
+            if (x as f64 - hub[0]).powi(2) + (y as f64 - hub[1]).powi(2) <= 64.0 {
+                200.0
+            } else {
+                120.0
+            }
+        });
+        assert_eq!(
+            nacelle_end(
+                &p,
+                &GradPlane {
+                    data: &spinner_only,
+                    width: w,
+                    height: h
+                },
+                hub,
+                5.0
+            ),
+            None
+        );
+        let both = sobel_x(w, h, |x, _| {
+            if (70..=130).contains(&x) {
+                200.0
+            } else {
+                120.0
+            }
+        });
+        assert_eq!(
+            nacelle_end(
+                &p,
+                &GradPlane {
+                    data: &both,
+                    width: w,
+                    height: h
+                },
+                hub,
+                5.0
+            ),
+            None
+        );
     }
 }

@@ -20,8 +20,8 @@ pub enum Mode {
     Default,
 }
 
-pub use hubtrack_types::params::ParamError;
 use hubtrack_types::params::Check;
+pub use hubtrack_types::params::ParamError;
 
 /// Whole detector configuration (`detect` section).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
@@ -66,7 +66,13 @@ pub struct CameraParams {
 impl Default for CameraParams {
     #[allow(clippy::approx_constant)] // 0.4343 is the GoPro lens (833.9 / 1920), not log10(e)
     fn default() -> Self {
-        CameraParams { hfov_deg: 118.0, focal_length_per_width: 0.4343, tower_top_diameter_m: 2.2, hub_tower_gap_m: 4.2, spinner_diameter_m: 3.2 }
+        CameraParams {
+            hfov_deg: 118.0,
+            focal_length_per_width: 0.4343,
+            tower_top_diameter_m: 2.2,
+            hub_tower_gap_m: 4.2,
+            spinner_diameter_m: 3.2,
+        }
     }
 }
 
@@ -1032,7 +1038,11 @@ impl FeatureWeights {
 
 impl Default for RankerParams {
     fn default() -> Self {
-        RankerParams { ranking: Ranking::Learned, min_score: -0.5, weights: FeatureWeights::default() }
+        RankerParams {
+            ranking: Ranking::Learned,
+            min_score: -0.5,
+            weights: FeatureWeights::default(),
+        }
     }
 }
 
@@ -1119,7 +1129,10 @@ impl RankerParams {
         c.closed("min_score", self.min_score, -50.0, 50.0)?;
         let weights = format!("{section}.weights");
         let w = Check::new(&weights);
-        for (name, v) in crate::ranker::FEATURE_NAMES.iter().zip(self.weights.to_array()) {
+        for (name, v) in crate::ranker::FEATURE_NAMES
+            .iter()
+            .zip(self.weights.to_array())
+        {
             w.closed(name, v, -100.0, 100.0)?;
         }
         Ok(())
@@ -1300,11 +1313,14 @@ impl Default for DefaultParams {
             ranker: RankerParams::default(),
             still_models: true,
             still_models_for_frames: false,
-            still_ranker: RankerParams { ranking: Ranking::Learned, min_score: -0.1, weights: FeatureWeights::still() },
+            still_ranker: RankerParams {
+                ranking: Ranking::Learned,
+                min_score: -0.1,
+                weights: FeatureWeights::still(),
+            },
         }
     }
 }
-
 
 impl DetectConfig {
     /// Check every parameter's range; the error names the first offending key.
@@ -1320,7 +1336,12 @@ impl CameraParams {
         let c = Check::new("detect.camera");
         c.closed("hfov_deg", self.hfov_deg, 1.0, 179.0)?;
         if self.focal_length_per_width != 0.0 {
-            c.closed("focal_length_per_width", self.focal_length_per_width, 0.05, 10.0)?;
+            c.closed(
+                "focal_length_per_width",
+                self.focal_length_per_width,
+                0.05,
+                10.0,
+            )?;
         }
         c.closed("tower_top_diameter_m", self.tower_top_diameter_m, 0.1, 30.0)?;
         c.closed("hub_tower_gap_m", self.hub_tower_gap_m, 0.1, 50.0)?;
@@ -1331,191 +1352,721 @@ impl CameraParams {
 impl ThesisParams {
     fn validate(&self) -> Result<(), ParamError> {
         let c = Check::new("detect.thesis");
-        c.closed("pyramid_min_side_px", self.pyramid_min_side_px as f64, 16.0, 4096.0)?;
-        c.closed("pyramid_max_side_px", self.pyramid_max_side_px as f64, 16.0, 4096.0)?;
-        c.less("pyramid_min_side_px", self.pyramid_min_side_px as f64, "pyramid_max_side_px", self.pyramid_max_side_px as f64)?;
+        c.closed(
+            "pyramid_min_side_px",
+            self.pyramid_min_side_px as f64,
+            16.0,
+            4096.0,
+        )?;
+        c.closed(
+            "pyramid_max_side_px",
+            self.pyramid_max_side_px as f64,
+            16.0,
+            4096.0,
+        )?;
+        c.less(
+            "pyramid_min_side_px",
+            self.pyramid_min_side_px as f64,
+            "pyramid_max_side_px",
+            self.pyramid_max_side_px as f64,
+        )?;
         c.closed("canny_low", self.canny_low, 0.0, 4096.0)?;
         c.closed("canny_high", self.canny_high, 0.0, 4096.0)?;
-        c.less("canny_low", self.canny_low, "canny_high", self.canny_high + f64::EPSILON)?;
+        c.less(
+            "canny_low",
+            self.canny_low,
+            "canny_high",
+            self.canny_high + f64::EPSILON,
+        )?;
         c.closed("hough_rho_px", self.hough_rho_px, 0.1, 10.0)?;
         c.closed("hough_theta_deg", self.hough_theta_deg, 0.05, 10.0)?;
-        c.closed("hough_threshold", self.hough_threshold as f64, 1.0, 10_000.0)?;
+        c.closed(
+            "hough_threshold",
+            self.hough_threshold as f64,
+            1.0,
+            10_000.0,
+        )?;
         c.closed("hough_min_length_px", self.hough_min_length_px, 1.0, 4096.0)?;
         c.closed("hough_max_gap_px", self.hough_max_gap_px, 0.0, 4096.0)?;
         c.closed("tower_max_tilt_deg", self.tower_max_tilt_deg, 0.0, 45.0)?;
         c.closed("tower_bottom_frac", self.tower_bottom_frac, 0.0, 1.0)?;
         c.closed("search_radius_frac", self.search_radius_frac, 0.01, 2.0)?;
         c.closed("blade_group_tol_deg", self.blade_group_tol_deg, 0.0, 60.0)?;
-        c.closed("blade_over_tower_tol_deg", self.blade_over_tower_tol_deg, 0.0, 90.0)?;
+        c.closed(
+            "blade_over_tower_tol_deg",
+            self.blade_over_tower_tol_deg,
+            0.0,
+            90.0,
+        )?;
         c.closed("vote_target_deg", self.vote_target_deg, 0.0, 180.0)?;
         c.closed("vote_tol_deg", self.vote_tol_deg, 0.0, 180.0)?;
         c.closed("vote_limit", self.vote_limit as f64, 1.0, 100.0)?;
         c.closed("hub_max_dx_frac", self.hub_max_dx_frac, 0.0, 10.0)?;
         c.closed("hub_max_dy_frac", self.hub_max_dy_frac, 0.0, 10.0)?;
-        c.closed("min_blades", self.min_blades as f64, 2.0, crate::MAX_BLADES_F)?;
-        c.closed("tower_width_below_top_frac", self.tower_width_below_top_frac, 0.0, 1.0)
+        c.closed(
+            "min_blades",
+            self.min_blades as f64,
+            2.0,
+            crate::MAX_BLADES_F,
+        )?;
+        c.closed(
+            "tower_width_below_top_frac",
+            self.tower_width_below_top_frac,
+            0.0,
+            1.0,
+        )
     }
 }
 
 impl DefaultParams {
     fn validate(&self) -> Result<(), ParamError> {
         let c = Check::new("detect.default");
-        c.closed("pyramid_min_side_px", self.pyramid_min_side_px as f64, 16.0, 4096.0)?;
-        c.closed("pyramid_max_side_px", self.pyramid_max_side_px as f64, 16.0, 4096.0)?;
-        c.less("pyramid_min_side_px", self.pyramid_min_side_px as f64, "pyramid_max_side_px", self.pyramid_max_side_px as f64)?;
-        c.closed("canny_high_percentile", self.canny_high_percentile, 0.0, 1.0)?;
+        c.closed(
+            "pyramid_min_side_px",
+            self.pyramid_min_side_px as f64,
+            16.0,
+            4096.0,
+        )?;
+        c.closed(
+            "pyramid_max_side_px",
+            self.pyramid_max_side_px as f64,
+            16.0,
+            4096.0,
+        )?;
+        c.less(
+            "pyramid_min_side_px",
+            self.pyramid_min_side_px as f64,
+            "pyramid_max_side_px",
+            self.pyramid_max_side_px as f64,
+        )?;
+        c.closed(
+            "canny_high_percentile",
+            self.canny_high_percentile,
+            0.0,
+            1.0,
+        )?;
         c.closed("canny_high_min", self.canny_high_min, 1.0, 4096.0)?;
         c.closed("canny_high_max", self.canny_high_max, 1.0, 4096.0)?;
-        c.less("canny_high_min", self.canny_high_min, "canny_high_max", self.canny_high_max + f64::EPSILON)?;
+        c.less(
+            "canny_high_min",
+            self.canny_high_min,
+            "canny_high_max",
+            self.canny_high_max + f64::EPSILON,
+        )?;
         c.closed("canny_low_ratio", self.canny_low_ratio, 0.05, 1.0)?;
         c.closed("hough_rho_px", self.hough_rho_px, 0.1, 10.0)?;
         c.closed("hough_theta_deg", self.hough_theta_deg, 0.05, 10.0)?;
-        c.closed("hough_threshold_frac", self.hough_threshold_frac, 0.001, 1.0)?;
-        c.closed("hough_min_length_frac", self.hough_min_length_frac, 0.001, 1.0)?;
+        c.closed(
+            "hough_threshold_frac",
+            self.hough_threshold_frac,
+            0.001,
+            1.0,
+        )?;
+        c.closed(
+            "hough_min_length_frac",
+            self.hough_min_length_frac,
+            0.001,
+            1.0,
+        )?;
         c.closed("hough_max_gap_frac", self.hough_max_gap_frac, 0.0, 1.0)?;
-        c.closed("hough_orientation_tol_deg", self.hough_orientation_tol_deg, 0.0, 90.0)?;
+        c.closed(
+            "hough_orientation_tol_deg",
+            self.hough_orientation_tol_deg,
+            0.0,
+            90.0,
+        )?;
         c.closed("max_segments", self.max_segments as f64, 2.0, 10_000.0)?;
         c.closed("merge_angle_deg", self.merge_angle_deg, 0.0, 30.0)?;
         c.closed("merge_offset_px", self.merge_offset_px, 0.0, 50.0)?;
         c.closed("merge_gap_frac", self.merge_gap_frac, 0.0, 1.0)?;
-        c.closed("horizon_min_length_frac", self.horizon_min_length_frac, 0.0, 2.0)?;
+        c.closed(
+            "horizon_min_length_frac",
+            self.horizon_min_length_frac,
+            0.0,
+            2.0,
+        )?;
         c.closed("horizon_max_tilt_deg", self.horizon_max_tilt_deg, 0.0, 45.0)?;
-        c.closed("horizon_band_min_taper", self.horizon_band_min_taper, 0.0, 100.0)?;
-        c.closed("candidate_min_length_frac", self.candidate_min_length_frac, 0.0, 2.0)?;
-        c.closed("candidate_min_angle_deg", self.candidate_min_angle_deg, 0.0, 90.0)?;
-        c.closed("candidate_end_reach_frac", self.candidate_end_reach_frac, 0.0, 10.0)?;
-        c.closed("candidate_inside_frac", self.candidate_inside_frac, 0.0, 0.5)?;
+        c.closed(
+            "horizon_band_min_taper",
+            self.horizon_band_min_taper,
+            0.0,
+            100.0,
+        )?;
+        c.closed(
+            "candidate_min_length_frac",
+            self.candidate_min_length_frac,
+            0.0,
+            2.0,
+        )?;
+        c.closed(
+            "candidate_min_angle_deg",
+            self.candidate_min_angle_deg,
+            0.0,
+            90.0,
+        )?;
+        c.closed(
+            "candidate_end_reach_frac",
+            self.candidate_end_reach_frac,
+            0.0,
+            10.0,
+        )?;
+        c.closed(
+            "candidate_inside_frac",
+            self.candidate_inside_frac,
+            0.0,
+            0.5,
+        )?;
         c.closed("cluster_radius_frac", self.cluster_radius_frac, 0.001, 1.0)?;
-        c.closed("support_line_dist_frac", self.support_line_dist_frac, 0.0, 1.0)?;
-        c.closed("support_end_dist_frac", self.support_end_dist_frac, 0.0, 2.0)?;
+        c.closed(
+            "support_line_dist_frac",
+            self.support_line_dist_frac,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "support_end_dist_frac",
+            self.support_end_dist_frac,
+            0.0,
+            2.0,
+        )?;
         c.closed("blade_group_tol_deg", self.blade_group_tol_deg, 0.0, 60.0)?;
-        c.closed("blade_min_separation_deg", self.blade_min_separation_deg, 0.0, 120.0)?;
-        c.closed("blade_max_separation_deg", self.blade_max_separation_deg, 120.0, 180.0)?;
+        c.closed(
+            "blade_min_separation_deg",
+            self.blade_min_separation_deg,
+            0.0,
+            120.0,
+        )?;
+        c.closed(
+            "blade_max_separation_deg",
+            self.blade_max_separation_deg,
+            120.0,
+            180.0,
+        )?;
         c.closed("blade_target_deg", self.blade_target_deg, 0.0, 180.0)?;
         c.closed("blade_sep_tol_deg", self.blade_sep_tol_deg, 0.0, 180.0)?;
         c.closed("tower_max_tilt_deg", self.tower_max_tilt_deg, 0.0, 45.0)?;
-        c.closed("tower_top_max_below_frac", self.tower_top_max_below_frac, 0.0, 2.0)?;
-        c.closed("tower_top_max_above_frac", self.tower_top_max_above_frac, 0.0, 2.0)?;
+        c.closed(
+            "tower_top_max_below_frac",
+            self.tower_top_max_below_frac,
+            0.0,
+            2.0,
+        )?;
+        c.closed(
+            "tower_top_max_above_frac",
+            self.tower_top_max_above_frac,
+            0.0,
+            2.0,
+        )?;
         c.closed("tower_max_dx_frac", self.tower_max_dx_frac, 0.0, 2.0)?;
-        c.closed("tower_top_max_below_radii", self.tower_top_max_below_radii, 0.0, 10.0)?;
+        c.closed(
+            "tower_top_max_below_radii",
+            self.tower_top_max_below_radii,
+            0.0,
+            10.0,
+        )?;
         c.closed("tower_max_dx_radii", self.tower_max_dx_radii, 0.0, 10.0)?;
         c.closed("tower_width_hint_tol", self.tower_width_hint_tol, 1.0, 10.0)?;
-        c.closed("tower_width_min_radii", self.tower_width_min_radii, 0.0, 10.0)?;
-        c.closed("tower_width_max_radii", self.tower_width_max_radii, 0.0, 10.0)?;
-        c.zero_or_closed("tower_width_spinner_tol", self.tower_width_spinner_tol, 1.0, 10.0)?;
-        c.closed("tower_one_edge_max_tilt_deg", self.tower_one_edge_max_tilt_deg, 0.0, 45.0)?;
-        c.closed("tower_one_edge_max_distance_m", self.tower_one_edge_max_distance_m, 0.0, 1000.0)?;
-        c.closed("tower_scan_start_frac", self.tower_scan_start_frac, 0.0, 1.0)?;
-        c.closed("tower_scan_start_radii", self.tower_scan_start_radii, 0.0, 10.0)?;
-        c.closed("tower_scan_min_salience", self.tower_scan_min_salience, 1.0, 100.0)?;
-        c.less("tower_width_min_radii", self.tower_width_min_radii, "tower_width_max_radii", self.tower_width_max_radii)?;
+        c.closed(
+            "tower_width_min_radii",
+            self.tower_width_min_radii,
+            0.0,
+            10.0,
+        )?;
+        c.closed(
+            "tower_width_max_radii",
+            self.tower_width_max_radii,
+            0.0,
+            10.0,
+        )?;
+        c.zero_or_closed(
+            "tower_width_spinner_tol",
+            self.tower_width_spinner_tol,
+            1.0,
+            10.0,
+        )?;
+        c.closed(
+            "tower_one_edge_max_tilt_deg",
+            self.tower_one_edge_max_tilt_deg,
+            0.0,
+            45.0,
+        )?;
+        c.closed(
+            "tower_one_edge_max_distance_m",
+            self.tower_one_edge_max_distance_m,
+            0.0,
+            1000.0,
+        )?;
+        c.closed(
+            "tower_scan_start_frac",
+            self.tower_scan_start_frac,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "tower_scan_start_radii",
+            self.tower_scan_start_radii,
+            0.0,
+            10.0,
+        )?;
+        c.closed(
+            "tower_scan_min_salience",
+            self.tower_scan_min_salience,
+            1.0,
+            100.0,
+        )?;
+        c.less(
+            "tower_width_min_radii",
+            self.tower_width_min_radii,
+            "tower_width_max_radii",
+            self.tower_width_max_radii,
+        )?;
         c.closed("roll_search_deg", self.roll_search_deg, 0.0, 45.0)?;
-        c.closed("prediction_radius_frac", self.prediction_radius_frac, 0.0, 2.0)?;
+        c.closed(
+            "prediction_radius_frac",
+            self.prediction_radius_frac,
+            0.0,
+            2.0,
+        )?;
         c.closed("prediction_bonus", self.prediction_bonus, 0.0, 1.0)?;
-        c.closed("spinner_size_match_tol", self.spinner_size_match_tol, 1.0, 10.0)?;
-        c.closed("spinner_size_match_bonus", self.spinner_size_match_bonus, 0.0, 1.0)?;
+        c.closed(
+            "spinner_size_match_tol",
+            self.spinner_size_match_tol,
+            1.0,
+            10.0,
+        )?;
+        c.closed(
+            "spinner_size_match_bonus",
+            self.spinner_size_match_bonus,
+            0.0,
+            1.0,
+        )?;
         c.closed("conf_two_blades", self.conf_two_blades, 0.0, 1.0)?;
         c.closed("conf_three_blades", self.conf_three_blades, 0.0, 1.0)?;
         c.closed("hidden_blade_tol_deg", self.hidden_blade_tol_deg, 0.0, 60.0)?;
         c.closed("conf_tower", self.conf_tower, 0.0, 1.0)?;
         c.closed("conf_geometry", self.conf_geometry, 0.0, 1.0)?;
         c.closed("conf_paired", self.conf_paired, 0.0, 1.0)?;
-        c.closed("conf_extra_blade_penalty", self.conf_extra_blade_penalty, 0.0, 1.0)?;
+        c.closed(
+            "conf_extra_blade_penalty",
+            self.conf_extra_blade_penalty,
+            0.0,
+            1.0,
+        )?;
         c.closed("min_confidence", self.min_confidence, 0.0, 1.0)?;
-        c.closed("tower_width_below_top_frac", self.tower_width_below_top_frac, 0.0, 1.0)?;
+        c.closed(
+            "tower_width_below_top_frac",
+            self.tower_width_below_top_frac,
+            0.0,
+            1.0,
+        )?;
         c.closed("tower_min_width_frac", self.tower_min_width_frac, 0.0, 1.0)?;
         c.closed("tower_max_width_frac", self.tower_max_width_frac, 0.0, 1.0)?;
-        c.closed("tower_partner_min_ratio", self.tower_partner_min_ratio, 0.0, 1.0)?;
-        c.closed("tower_partner_min_salience", self.tower_partner_min_salience, 0.0, 1000.0)?;
-        c.closed("tower_same_sign_partner_min_ratio", self.tower_same_sign_partner_min_ratio, 0.0, 1000.0)?;
+        c.closed(
+            "tower_partner_min_ratio",
+            self.tower_partner_min_ratio,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "tower_partner_min_salience",
+            self.tower_partner_min_salience,
+            0.0,
+            1000.0,
+        )?;
+        c.closed(
+            "tower_same_sign_partner_min_ratio",
+            self.tower_same_sign_partner_min_ratio,
+            0.0,
+            1000.0,
+        )?;
         c.closed("tower_ramp_min_frac", self.tower_ramp_min_frac, 0.0, 1.0)?;
         c.closed("tower_ramp_max_frac", self.tower_ramp_max_frac, 0.0, 1.0)?;
-        c.closed("tower_min_width_ratio", self.tower_min_width_ratio, 0.0, 10.0)?;
-        c.closed("tower_max_width_ratio", self.tower_max_width_ratio, 0.0, 10.0)?;
+        c.closed(
+            "tower_min_width_ratio",
+            self.tower_min_width_ratio,
+            0.0,
+            10.0,
+        )?;
+        c.closed(
+            "tower_max_width_ratio",
+            self.tower_max_width_ratio,
+            0.0,
+            10.0,
+        )?;
         c.closed("tower_taper", self.tower_taper, 0.0, 1.0)?;
-        c.less("tower_min_width_ratio", self.tower_min_width_ratio, "tower_max_width_ratio", self.tower_max_width_ratio)?;
-        c.closed("tower_blade_down_tol_deg", self.tower_blade_down_tol_deg, 0.0, 60.0)?;
-        c.closed("tower_blade_ray_tol_deg", self.tower_blade_ray_tol_deg, 0.0, 60.0)?;
-        c.closed("tower_blade_ray_min_deg", self.tower_blade_ray_min_deg, 0.0, 60.0)?;
-        c.closed("tower_blade_down_max_distance_m", self.tower_blade_down_max_distance_m, 0.0, 1000.0)?;
-        c.closed("tower_blade_axis_tol_frac", self.tower_blade_axis_tol_frac, 0.0, 1.0)?;
+        c.less(
+            "tower_min_width_ratio",
+            self.tower_min_width_ratio,
+            "tower_max_width_ratio",
+            self.tower_max_width_ratio,
+        )?;
+        c.closed(
+            "tower_blade_down_tol_deg",
+            self.tower_blade_down_tol_deg,
+            0.0,
+            60.0,
+        )?;
+        c.closed(
+            "tower_blade_ray_tol_deg",
+            self.tower_blade_ray_tol_deg,
+            0.0,
+            60.0,
+        )?;
+        c.closed(
+            "tower_blade_ray_min_deg",
+            self.tower_blade_ray_min_deg,
+            0.0,
+            60.0,
+        )?;
+        c.closed(
+            "tower_blade_down_max_distance_m",
+            self.tower_blade_down_max_distance_m,
+            0.0,
+            1000.0,
+        )?;
+        c.closed(
+            "tower_blade_axis_tol_frac",
+            self.tower_blade_axis_tol_frac,
+            0.0,
+            1.0,
+        )?;
         c.closed("nacelle_band_half_m", self.nacelle_band_half_m, 0.0, 20.0)?;
-        c.less("nacelle_min_offset_m", self.nacelle_min_offset_m, "nacelle_max_offset_m", self.nacelle_max_offset_m)?;
-        c.closed("nacelle_min_offset_m", self.nacelle_min_offset_m, 0.0, 100.0)?;
-        c.closed("nacelle_max_offset_m", self.nacelle_max_offset_m, 0.0, 100.0)?;
-        c.closed("nacelle_min_response", self.nacelle_min_response, 0.0, 4080.0)?;
+        c.less(
+            "nacelle_min_offset_m",
+            self.nacelle_min_offset_m,
+            "nacelle_max_offset_m",
+            self.nacelle_max_offset_m,
+        )?;
+        c.closed(
+            "nacelle_min_offset_m",
+            self.nacelle_min_offset_m,
+            0.0,
+            100.0,
+        )?;
+        c.closed(
+            "nacelle_max_offset_m",
+            self.nacelle_max_offset_m,
+            0.0,
+            100.0,
+        )?;
+        c.closed(
+            "nacelle_min_response",
+            self.nacelle_min_response,
+            0.0,
+            4080.0,
+        )?;
         c.closed("nacelle_min_ratio", self.nacelle_min_ratio, 1.0, 1000.0)?;
-        c.less("tower_min_width_frac", self.tower_min_width_frac, "tower_max_width_frac", self.tower_max_width_frac)?;
+        c.less(
+            "tower_min_width_frac",
+            self.tower_min_width_frac,
+            "tower_max_width_frac",
+            self.tower_max_width_frac,
+        )?;
         c.closed("pair_min_length_frac", self.pair_min_length_frac, 0.0, 2.0)?;
         c.closed("pair_max_angle_deg", self.pair_max_angle_deg, 0.0, 45.0)?;
-        c.closed("pair_min_overlap_frac", self.pair_min_overlap_frac, 0.0, 1.0)?;
+        c.closed(
+            "pair_min_overlap_frac",
+            self.pair_min_overlap_frac,
+            0.0,
+            1.0,
+        )?;
         c.closed("pair_min_width_px", self.pair_min_width_px, 0.0, 100.0)?;
         c.closed("pair_max_width_frac", self.pair_max_width_frac, 0.0, 1.0)?;
-        c.closed("pair_max_width_to_length", self.pair_max_width_to_length, 0.0, 10.0)?;
+        c.closed(
+            "pair_max_width_to_length",
+            self.pair_max_width_to_length,
+            0.0,
+            10.0,
+        )?;
         c.closed("axis_reach_widths", self.axis_reach_widths, 0.0, 20.0)?;
         c.closed("axis_line_dist_frac", self.axis_line_dist_frac, 0.0, 1.0)?;
         c.closed("axis_angle_tol_deg", self.axis_angle_tol_deg, 0.0, 45.0)?;
-        c.closed("axis_proposal_weight", self.axis_proposal_weight, 0.0, 100.0)?;
-        c.closed("spinner_candidates", self.spinner_candidates as f64, 0.0, 10.0)?;
+        c.closed(
+            "axis_proposal_weight",
+            self.axis_proposal_weight,
+            0.0,
+            100.0,
+        )?;
+        c.closed(
+            "spinner_candidates",
+            self.spinner_candidates as f64,
+            0.0,
+            10.0,
+        )?;
         c.closed("spinner_search_frac", self.spinner_search_frac, 0.01, 1.0)?;
-        c.closed("spinner_max_offset_frac", self.spinner_max_offset_frac, 0.0, 1.0)?;
-        c.closed("spinner_min_radius_px", self.spinner_min_radius_px, 1.0, 1000.0)?;
-        c.closed("spinner_max_radius_frac", self.spinner_max_radius_frac, 0.01, 1.0)?;
-        c.closed("spinner_hint_radius_lo", self.spinner_hint_radius_lo, 0.0, 1.0)?;
-        c.closed("spinner_hint_radius_hi", self.spinner_hint_radius_hi, 1.0, 100.0)?;
-        c.closed("blade_partner_min_width_px", self.blade_partner_min_width_px, 1.0, 100.0)?;
-        c.closed("blade_partner_max_width_frac", self.blade_partner_max_width_frac, 0.0, 1.0)?;
-        c.closed("blade_partner_samples", self.blade_partner_samples as f64, 2.0, 100.0)?;
-        c.closed("blade_partner_min_found_frac", self.blade_partner_min_found_frac, 0.0, 1.0)?;
-        c.closed("blade_partner_response_ratio", self.blade_partner_response_ratio, 0.0, 10.0)?;
-        c.closed("blade_partner_max_rms_px", self.blade_partner_max_rms_px, 0.0, 100.0)?;
-        c.closed("blade_partner_max_taper", self.blade_partner_max_taper, 0.0, 1.0)?;
+        c.closed(
+            "spinner_max_offset_frac",
+            self.spinner_max_offset_frac,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "spinner_min_radius_px",
+            self.spinner_min_radius_px,
+            1.0,
+            1000.0,
+        )?;
+        c.closed(
+            "spinner_max_radius_frac",
+            self.spinner_max_radius_frac,
+            0.01,
+            1.0,
+        )?;
+        c.closed(
+            "spinner_hint_radius_lo",
+            self.spinner_hint_radius_lo,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "spinner_hint_radius_hi",
+            self.spinner_hint_radius_hi,
+            1.0,
+            100.0,
+        )?;
+        c.closed(
+            "blade_partner_min_width_px",
+            self.blade_partner_min_width_px,
+            1.0,
+            100.0,
+        )?;
+        c.closed(
+            "blade_partner_max_width_frac",
+            self.blade_partner_max_width_frac,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "blade_partner_samples",
+            self.blade_partner_samples as f64,
+            2.0,
+            100.0,
+        )?;
+        c.closed(
+            "blade_partner_min_found_frac",
+            self.blade_partner_min_found_frac,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "blade_partner_response_ratio",
+            self.blade_partner_response_ratio,
+            0.0,
+            10.0,
+        )?;
+        c.closed(
+            "blade_partner_max_rms_px",
+            self.blade_partner_max_rms_px,
+            0.0,
+            100.0,
+        )?;
+        c.closed(
+            "blade_partner_max_taper",
+            self.blade_partner_max_taper,
+            0.0,
+            1.0,
+        )?;
         c.closed("spinner_cell_px", self.spinner_cell_px, 0.5, 20.0)?;
-        c.closed("spinner_radial_tol_deg", self.spinner_radial_tol_deg, 0.0, 90.0)?;
+        c.closed(
+            "spinner_radial_tol_deg",
+            self.spinner_radial_tol_deg,
+            0.0,
+            90.0,
+        )?;
         c.closed("spinner_min_coverage", self.spinner_min_coverage, 0.0, 1.0)?;
-        c.closed("spinner_hint_min_coverage", self.spinner_hint_min_coverage, 0.0, 1.0)?;
-        c.closed("spinner_nest_min_coverage_ratio", self.spinner_nest_min_coverage_ratio, 0.0, 10.0)?;
+        c.closed(
+            "spinner_hint_min_coverage",
+            self.spinner_hint_min_coverage,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "spinner_nest_min_coverage_ratio",
+            self.spinner_nest_min_coverage_ratio,
+            0.0,
+            10.0,
+        )?;
         c.closed("spinner_tie_ratio", self.spinner_tie_ratio, 0.0, 1.0)?;
-        c.closed("close_spinner_min_coverage", self.close_spinner_min_coverage, 0.0, 1.0)?;
-        c.closed("close_spinner_vote_every", self.close_spinner_vote_every as f64, 1.0, 16.0)?;
-        c.closed("spinner_vote_every", self.spinner_vote_every as f64, 1.0, 16.0)?;
+        c.closed(
+            "close_spinner_min_coverage",
+            self.close_spinner_min_coverage,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "close_spinner_vote_every",
+            self.close_spinner_vote_every as f64,
+            1.0,
+            16.0,
+        )?;
+        c.closed(
+            "spinner_vote_every",
+            self.spinner_vote_every as f64,
+            1.0,
+            16.0,
+        )?;
         c.closed("spinner_peaks", self.spinner_peaks as f64, 1.0, 64.0)?;
-        c.closed("close_spinner_peaks", self.close_spinner_peaks as f64, 1.0, 64.0)?;
-        c.closed("close_spinner_heat_min", self.close_spinner_heat_min, 0.0, 1.0)?;
-        c.closed("close_spinner_heat_box_frac", self.close_spinner_heat_box_frac, 0.01, 1.0)?;
-        c.closed("hub_heat_radius_cells", self.hub_heat_radius_cells, 0.0, 4.0)?;
-        c.closed("hub_heat_candidate_min", self.hub_heat_candidate_min, 0.0, 1.0)?;
+        c.closed(
+            "close_spinner_peaks",
+            self.close_spinner_peaks as f64,
+            1.0,
+            64.0,
+        )?;
+        c.closed(
+            "close_spinner_heat_min",
+            self.close_spinner_heat_min,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "close_spinner_heat_box_frac",
+            self.close_spinner_heat_box_frac,
+            0.01,
+            1.0,
+        )?;
+        c.closed(
+            "hub_heat_radius_cells",
+            self.hub_heat_radius_cells,
+            0.0,
+            4.0,
+        )?;
+        c.closed(
+            "hub_heat_candidate_min",
+            self.hub_heat_candidate_min,
+            0.0,
+            1.0,
+        )?;
         c.closed("hub_crop_min", self.hub_crop_min, 0.0, 1.0)?;
         c.closed("heat_verify_min", self.heat_verify_min, 0.0, 1.0)?;
         c.closed("heat_verify_crop_min", self.heat_verify_crop_min, 0.0, 1.0)?;
         c.closed("heat_verify_end_frac", self.heat_verify_end_frac, 0.0, 0.5)?;
-        c.closed("heat_verify_oblique_deg", self.heat_verify_oblique_deg, 0.0, 45.0)?;
-        c.closed("heat_verify_blade_frac", self.heat_verify_blade_frac, 0.0, 2.0)?;
+        c.closed(
+            "heat_verify_oblique_deg",
+            self.heat_verify_oblique_deg,
+            0.0,
+            45.0,
+        )?;
+        c.closed(
+            "heat_verify_blade_frac",
+            self.heat_verify_blade_frac,
+            0.0,
+            2.0,
+        )?;
         c.closed("heat_override_max", self.heat_override_max, 0.0, 1.0)?;
-        c.closed("still_heat_override_max", self.still_heat_override_max, 0.0, 1.0)?;
-        c.closed("still_mirror_agree_frac", self.still_mirror_agree_frac, 0.0, 0.5)?;
-        c.closed("hub_crop_max_shift_frac", self.hub_crop_max_shift_frac, 0.0, 0.15)?;
-        c.closed("hub_crop_min_shift_frac", self.hub_crop_min_shift_frac, 0.0, 0.15)?;
-        c.closed("hub_crop_spinner_escape_radii", self.hub_crop_spinner_escape_radii, 0.0, 10.0)?;
-        c.closed("hub_yaw_min_distance_m", self.hub_yaw_min_distance_m, 0.0, 100.0)?;
-        c.closed("hub_yaw_max_distance_m", self.hub_yaw_max_distance_m, 0.0, 100.0)?;
-        c.closed("hub_yaw_close_max_distance_m", self.hub_yaw_close_max_distance_m, 0.0, 14.0)?;
-        c.closed("spinner_max_convergence_radii", self.spinner_max_convergence_radii, 0.0, 100.0)?;
-        c.closed("spinner_convergence_tol_px", self.spinner_convergence_tol_px, 0.0, 100.0)?;
-        c.closed("spinner_min_kept_support", self.spinner_min_kept_support, 0.0, 1.0)?;
-        c.closed("spinner_kept_support_max_radius_px", self.spinner_kept_support_max_radius_px, 0.0, 1000.0)?;
-        c.closed("spinner_max_interior_density", self.spinner_max_interior_density, 0.0, 1.0)?;
+        c.closed(
+            "still_heat_override_max",
+            self.still_heat_override_max,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "still_mirror_agree_frac",
+            self.still_mirror_agree_frac,
+            0.0,
+            0.5,
+        )?;
+        c.closed(
+            "hub_crop_max_shift_frac",
+            self.hub_crop_max_shift_frac,
+            0.0,
+            0.15,
+        )?;
+        c.closed(
+            "hub_crop_min_shift_frac",
+            self.hub_crop_min_shift_frac,
+            0.0,
+            0.15,
+        )?;
+        c.closed(
+            "hub_crop_spinner_escape_radii",
+            self.hub_crop_spinner_escape_radii,
+            0.0,
+            10.0,
+        )?;
+        c.closed(
+            "hub_yaw_min_distance_m",
+            self.hub_yaw_min_distance_m,
+            0.0,
+            100.0,
+        )?;
+        c.closed(
+            "hub_yaw_max_distance_m",
+            self.hub_yaw_max_distance_m,
+            0.0,
+            100.0,
+        )?;
+        c.closed(
+            "hub_yaw_close_max_distance_m",
+            self.hub_yaw_close_max_distance_m,
+            0.0,
+            14.0,
+        )?;
+        c.closed(
+            "spinner_max_convergence_radii",
+            self.spinner_max_convergence_radii,
+            0.0,
+            100.0,
+        )?;
+        c.closed(
+            "spinner_convergence_tol_px",
+            self.spinner_convergence_tol_px,
+            0.0,
+            100.0,
+        )?;
+        c.closed(
+            "spinner_min_kept_support",
+            self.spinner_min_kept_support,
+            0.0,
+            1.0,
+        )?;
+        c.closed(
+            "spinner_kept_support_max_radius_px",
+            self.spinner_kept_support_max_radius_px,
+            0.0,
+            1000.0,
+        )?;
+        c.closed(
+            "spinner_max_interior_density",
+            self.spinner_max_interior_density,
+            0.0,
+            1.0,
+        )?;
         if self.spinner_refine_rays != 0 {
             c.count("spinner_refine_rays", self.spinner_refine_rays, 8, 720)?;
         }
         c.open_closed("spinner_refine_band", self.spinner_refine_band, 0.0, 0.9)?;
-        c.open_closed("spinner_refine_band_max_px", self.spinner_refine_band_max_px, 0.0, 1000.0)?;
-        c.open_closed("spinner_refine_inlier_px", self.spinner_refine_inlier_px, 0.0, 20.0)?;
-        c.open_closed("spinner_refine_min_inliers", self.spinner_refine_min_inliers, 0.0, 1.0)?;
-        c.open_closed("spinner_refine_max_change", self.spinner_refine_max_change, 0.0, 1.0)?;
+        c.open_closed(
+            "spinner_refine_band_max_px",
+            self.spinner_refine_band_max_px,
+            0.0,
+            1000.0,
+        )?;
+        c.open_closed(
+            "spinner_refine_inlier_px",
+            self.spinner_refine_inlier_px,
+            0.0,
+            20.0,
+        )?;
+        c.open_closed(
+            "spinner_refine_min_inliers",
+            self.spinner_refine_min_inliers,
+            0.0,
+            1.0,
+        )?;
+        c.open_closed(
+            "spinner_refine_max_change",
+            self.spinner_refine_max_change,
+            0.0,
+            1.0,
+        )?;
         c.closed("spinner_reach_radii", self.spinner_reach_radii, 0.0, 10.0)?;
         c.closed("conf_spinner", self.conf_spinner, 0.0, 1.0)?;
-        c.closed("close_spinner_radius_frac", self.close_spinner_radius_frac, 0.0, 1.0)?;
+        c.closed(
+            "close_spinner_radius_frac",
+            self.close_spinner_radius_frac,
+            0.0,
+            1.0,
+        )?;
         c.closed("conf_close_spinner", self.conf_close_spinner, 0.0, 1.0)?;
         c.closed("through_dist_frac", self.through_dist_frac, 0.0, 1.0)?;
         c.closed("through_margin_frac", self.through_margin_frac, 0.0, 2.0)?;
@@ -1523,7 +2074,12 @@ impl DefaultParams {
         c.closed("occluded_angle_deg", self.occluded_angle_deg, 0.0, 45.0)?;
         c.closed("occluded_offset_frac", self.occluded_offset_frac, 0.0, 1.0)?;
         c.closed("occluded_bend_deg", self.occluded_bend_deg, 0.0, 45.0)?;
-        c.closed("occluded_bent_max_tilt_deg", self.occluded_bent_max_tilt_deg, 0.0, 90.0)?;
+        c.closed(
+            "occluded_bent_max_tilt_deg",
+            self.occluded_bent_max_tilt_deg,
+            0.0,
+            90.0,
+        )?;
         self.ranker.validate("detect.default.ranker")?;
         self.still_ranker.validate("detect.default.still_ranker")
     }
@@ -1552,11 +2108,17 @@ mod tests {
         assert_eq!(e.key, "detect.thesis.canny_low");
         let mut c = DetectConfig::default();
         c.default.min_confidence = 2.0;
-        assert_eq!(c.validate().unwrap_err().key, "detect.default.min_confidence");
+        assert_eq!(
+            c.validate().unwrap_err().key,
+            "detect.default.min_confidence"
+        );
         assert!(serde_json::from_str::<DetectConfig>(r#"{"thesis":{"nope":1}}"#).is_err());
         let mut c = DetectConfig::default();
         c.default.ranker.weights.paired = f64::NAN;
-        assert_eq!(c.validate().unwrap_err().key, "detect.default.ranker.weights.paired");
+        assert_eq!(
+            c.validate().unwrap_err().key,
+            "detect.default.ranker.weights.paired"
+        );
     }
 
     #[test]

@@ -119,7 +119,11 @@ pub(crate) fn features(c: &Cues) -> Features {
     f[12] = flag(c.passes_through);
     f[13] = flag(c.near_prediction);
     f[14] = weights.iter().sum::<f64>() / h;
-    f[15] = if weights.len() >= 2 { weights.iter().copied().fold(f64::INFINITY, f64::min) / h } else { 0.0 };
+    f[15] = if weights.len() >= 2 {
+        weights.iter().copied().fold(f64::INFINITY, f64::min) / h
+    } else {
+        0.0
+    };
     f[16] = weights.first().map_or(0.0, |w| w / h);
     f[17] = separation_error(&c.blade_angles);
     f[18] = c.rejected_lines.min(10) as f64 / 10.0;
@@ -197,7 +201,9 @@ pub fn fit(frames: &[TrainingFrame], settings: &FitSettings) -> [f64; FEATURES] 
                 continue;
             }
             let scores: Vec<f64> = fr.features.iter().map(|f| score(&w, f)).collect();
-            let target = (0..scores.len()).filter(|&k| fr.on_hub[k]).max_by(|&a, &b| scores[a].total_cmp(&scores[b]));
+            let target = (0..scores.len())
+                .filter(|&k| fr.on_hub[k])
+                .max_by(|&a, &b| scores[a].total_cmp(&scores[b]));
             // Softmax with the "no hub" option at score 0, shifted for stability.
             let m = scores.iter().copied().fold(0.0, f64::max);
             probs.clear();
@@ -236,10 +242,17 @@ pub struct RankingOutcome {
 
 /// Scores a ranking (`weights`, `min_score`) on `frames`; `negative[i]` marks frame `i` as
 /// showing no turbine.
-pub fn assess(frames: &[TrainingFrame], negative: &[bool], weights: &[f64; FEATURES], min_score: f64) -> RankingOutcome {
+pub fn assess(
+    frames: &[TrainingFrame],
+    negative: &[bool],
+    weights: &[f64; FEATURES],
+    min_score: f64,
+) -> RankingOutcome {
     let mut o = RankingOutcome::default();
     for (fr, &neg) in frames.iter().zip(negative) {
-        let best = (0..fr.features.len()).map(|k| (k, score(weights, &fr.features[k]))).max_by(|a, b| a.1.total_cmp(&b.1));
+        let best = (0..fr.features.len())
+            .map(|k| (k, score(weights, &fr.features[k])))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
         let reported = best.filter(|(_, s)| *s >= min_score).map(|(k, _)| k);
         if neg {
             o.negatives += 1;
@@ -267,7 +280,14 @@ mod tests {
 
     #[test]
     fn features_are_scale_free() {
-        let cues = |h: f64| Cues { blades: 3, blade_weights: vec![0.5 * h, 0.3 * h, 0.2 * h], blade_angles: vec![0.0, 120.0, 240.0], spinner_radius: 0.05 * h, image_height: h, ..Cues::default() };
+        let cues = |h: f64| Cues {
+            blades: 3,
+            blade_weights: vec![0.5 * h, 0.3 * h, 0.2 * h],
+            blade_angles: vec![0.0, 120.0, 240.0],
+            spinner_radius: 0.05 * h,
+            image_height: h,
+            ..Cues::default()
+        };
         assert_eq!(features(&cues(270.0)), features(&cues(540.0)));
     }
 
@@ -279,7 +299,17 @@ mod tests {
         w[0] = 2.0;
         w[17] = -1.0;
         // No blades: bias 2 and separation error 1.
-        assert!((score(&w, &features(&Cues { image_height: 100.0, ..Cues::default() })) - 1.0).abs() < 1e-12);
+        assert!(
+            (score(
+                &w,
+                &features(&Cues {
+                    image_height: 100.0,
+                    ..Cues::default()
+                })
+            ) - 1.0)
+                .abs()
+                < 1e-12
+        );
     }
 
     /// Frames where the hub is the candidate with a spinner and more paired blades, among
@@ -298,12 +328,25 @@ mod tests {
         let mut negative = Vec::new();
         for i in 0..40 {
             let s = 1.0 + (i % 5) as f64 * 0.1;
-            frames.push(TrainingFrame { features: vec![cand(false, s + 0.5), cand(true, s), cand(false, s + 0.2)], on_hub: vec![false, true, false] });
+            frames.push(TrainingFrame {
+                features: vec![cand(false, s + 0.5), cand(true, s), cand(false, s + 0.2)],
+                on_hub: vec![false, true, false],
+            });
             negative.push(false);
-            frames.push(TrainingFrame { features: vec![cand(false, s + 0.5), cand(false, s)], on_hub: vec![false, false] });
+            frames.push(TrainingFrame {
+                features: vec![cand(false, s + 0.5), cand(false, s)],
+                on_hub: vec![false, false],
+            });
             negative.push(true);
         }
-        let w = fit(&frames, &FitSettings { l2: 1.0, iterations: 500, step: 1.0 });
+        let w = fit(
+            &frames,
+            &FitSettings {
+                l2: 1.0,
+                iterations: 500,
+                step: 1.0,
+            },
+        );
         assert!(w[9] > 1.0, "spinner weight {}", w[9]);
         let o = assess(&frames, &negative, &w, 0.0);
         assert_eq!((o.hits, o.frames_with_hub, o.reachable), (40, 40, 40));

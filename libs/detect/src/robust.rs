@@ -44,12 +44,12 @@ use opencv::core::{self, Mat};
 use opencv::imgproc;
 use opencv::prelude::*;
 
+use crate::blade::{partner_axis, Gradients, PartnerSearch};
 use crate::geometry::{self, Segment, P2};
+use crate::hough::HoughSettings;
 use crate::params::{DefaultParams, Ranking};
 use crate::spinner::{find_circles, CircleSearch, EdgePoint};
-use crate::blade::{partner_axis, Gradients, PartnerSearch};
 use crate::tower::{fit_tower, fit_tower_one_edge, scan_tower_edges, GradPlane};
-use crate::hough::HoughSettings;
 use crate::{us_since, Considered, DetectError, Found, Hints, LineKind, Scratch};
 
 /// Number of bins of the gradient-magnitude histogram: the Sobel 3×3 L1 magnitude of 8-bit
@@ -107,22 +107,44 @@ impl Optics {
     /// The tower width (working px) a spinner of radius `r` px implies: the spinner gives the
     /// hub's distance `f·R/r`, the tower stands `hub_tower_gap_m` farther. `None` for r ≤ 0.
     pub fn tower_width_for_spinner(&self, r: f64) -> Option<f64> {
-        (r > 0.0).then(|| self.focal_px * self.tower_top_diameter_m / (self.focal_px * self.spinner_radius_m / r + self.hub_tower_gap_m))
+        (r > 0.0).then(|| {
+            self.focal_px * self.tower_top_diameter_m
+                / (self.focal_px * self.spinner_radius_m / r + self.hub_tower_gap_m)
+        })
     }
 }
 
 /// Run the default pipeline on the working image, with the sizes `expected` from the tracker's
 /// distance (if any).
-pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints, expected: Expected<'_>) -> Result<Found, DetectError> {
+pub(crate) fn run(
+    p: &DefaultParams,
+    small: &Mat,
+    s: &mut Scratch,
+    hints: &Hints,
+    expected: Expected<'_>,
+) -> Result<Found, DetectError> {
     let t = Instant::now();
     imgproc::spatial_gradient(small, &mut s.dx, &mut s.dy, 3, core::BORDER_DEFAULT)?;
     let high = adaptive_high(p, &s.dx, &s.dy, &mut s.hist)?;
-    imgproc::canny_derivative(&s.dx, &s.dy, &mut s.edges, p.canny_low_ratio * high, high, false)?;
+    imgproc::canny_derivative(
+        &s.dx,
+        &s.dy,
+        &mut s.edges,
+        p.canny_low_ratio * high,
+        high,
+        false,
+    )?;
     let edge_count = core::count_non_zero(&s.edges)? as u32;
     let edges_us = us_since(t);
 
     let (ew, eh) = (s.edges.cols() as usize, s.edges.rows() as usize);
-    let img = EdgeImage { edges: s.edges.data_typed::<u8>()?, dx: s.dx.data_typed::<i16>()?, dy: s.dy.data_typed::<i16>()?, width: ew, height: eh };
+    let img = EdgeImage {
+        edges: s.edges.data_typed::<u8>()?,
+        dx: s.dx.data_typed::<i16>()?,
+        dy: s.dy.data_typed::<i16>()?,
+        width: ew,
+        height: eh,
+    };
     let h = eh as f64;
     let w = ew as f64;
     let settings = HoughSettings {
@@ -138,15 +160,27 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
     // (unless the tracker's distance rules close spinners out): then the searches around
     // candidates take theirs from the same list.
     let (close_min_r, close_max_r) = close_spinner_radii(p, h, expected.spinner_radius);
-    let share = hints.predicted_hub_px.is_none() && p.close_spinner_always && close_max_r > close_min_r;
-    let mut whole = EdgePointCache { points: &mut s.all_edge_points, ready: false, share };
+    let share =
+        hints.predicted_hub_px.is_none() && p.close_spinner_always && close_max_r > close_min_r;
+    let mut whole = EdgePointCache {
+        points: &mut s.all_edge_points,
+        ready: false,
+        share,
+    };
     std::thread::scope(|scope| {
         // The spinner around the tracker's predicted hub needs only the edges, so it is searched
         // on a second thread while this one runs Hough and the geometry; the first candidate
         // near the prediction takes its circles, as a candidate near an already searched one
         // does in `recognise`.
         let img = &img;
-        let mut ahead = hints.predicted_hub_px.map(|c| (c, scope.spawn(move || search_circles(p, img, c, h, expected.spinner_radius, &mut Vec::new(), None))));
+        let mut ahead = hints.predicted_hub_px.map(|c| {
+            (
+                c,
+                scope.spawn(move || {
+                    search_circles(p, img, c, h, expected.spinner_radius, &mut Vec::new(), None)
+                }),
+            )
+        });
         let t = Instant::now();
         hough.run(img.edges, img.dx, img.dy, ew, eh, &settings, segments);
         let hough_us = us_since(t);
@@ -154,20 +188,54 @@ pub(crate) fn run(p: &DefaultParams, small: &Mat, s: &mut Scratch, hints: &Hints
         let t = Instant::now();
         let line_count = segments.len() as u32;
         let segs = merge_collinear(p, segments, h);
-        log::trace!("hough {} merged {} high {high} longest {:?}", segments.len(), segs.len(), segs.iter().take(5).collect::<Vec<_>>());
+        log::trace!(
+            "hough {} merged {} high {high} longest {:?}",
+            segments.len(),
+            segs.len(),
+            segs.iter().take(5).collect::<Vec<_>>()
+        );
         let reuse = spinner_reuse_px(p, h);
         let mut search = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
             // Only before acquisition: with a tracker's prediction the search runs when nothing
             // else was found, and the heatmap's peak may then be what misled it.
             let heat = expected.heat.filter(|_| hints.predicted_hub_px.is_none());
-            let CircleQuery::Around(c) = q else { return Ok(search_close_circles(p, img, h, expected.spinner_radius, heat, &mut whole, pts)) };
+            let CircleQuery::Around(c) = q else {
+                return Ok(search_close_circles(
+                    p,
+                    img,
+                    h,
+                    expected.spinner_radius,
+                    heat,
+                    &mut whole,
+                    pts,
+                ));
+            };
             match ahead.take_if(|(q, _)| geometry::dist(*q, c) <= reuse) {
                 // A panic there is a bug here: carry it on.
                 Some((_, job)) => Ok(job.join().unwrap_or_else(|e| std::panic::resume_unwind(e))),
-                None => Ok(search_circles(p, img, c, h, expected.spinner_radius, pts, whole.shared(img))),
+                None => Ok(search_circles(
+                    p,
+                    img,
+                    c,
+                    h,
+                    expected.spinner_radius,
+                    pts,
+                    whole.shared(img),
+                )),
             }
         };
-        let grad = Gradients { x: GradPlane { data: img.dx, width: ew, height: eh }, y: GradPlane { data: img.dy, width: ew, height: eh } };
+        let grad = Gradients {
+            x: GradPlane {
+                data: img.dx,
+                width: ew,
+                height: eh,
+            },
+            y: GradPlane {
+                data: img.dy,
+                width: ew,
+                height: eh,
+            },
+        };
         let mut found = recognise(p, &segs, w, h, hints, &mut search, Some(&grad), expected)?;
         found.line_count = line_count;
         found.edge_count = edge_count;
@@ -191,7 +259,11 @@ impl EdgePointCache<'_> {
     /// Every edge point of `img`, in row order.
     fn all(&mut self, img: &EdgeImage<'_>) -> &[EdgePoint] {
         if !self.ready {
-            edge_points(img, [0, 0, img.width as i32, img.height as i32], self.points);
+            edge_points(
+                img,
+                [0, 0, img.width as i32, img.height as i32],
+                self.points,
+            );
             self.ready = true;
         }
         self.points
@@ -229,7 +301,15 @@ fn spinner_reuse_px(p: &DefaultParams, h: f64) -> f64 {
 /// searched, and only the edge pixels such circles can reach are collected.
 /// `all`: every edge point of the image in row order, to select the box's from (else they are
 /// collected from `img` into `pts`).
-fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expected: Option<f64>, pts: &mut Vec<EdgePoint>, all: Option<&[EdgePoint]>) -> Vec<[f64; 4]> {
+fn search_circles(
+    p: &DefaultParams,
+    img: &EdgeImage<'_>,
+    c: P2,
+    h: f64,
+    expected: Option<f64>,
+    pts: &mut Vec<EdgePoint>,
+    all: Option<&[EdgePoint]>,
+) -> Vec<[f64; 4]> {
     let (min_r, max_r) = spinner_radii(p, h, expected);
     let off = p.spinner_max_offset_frac * h;
     let half = (p.spinner_search_frac * h).min(off + max_r + p.spinner_cell_px);
@@ -246,13 +326,22 @@ fn search_circles(p: &DefaultParams, img: &EdgeImage<'_>, c: P2, h: f64, expecte
         None => edge_points(img, [x0, y0, x1, y1], pts),
     }
     let cs = CircleSearch {
-        roi: [(c[0] - off).max(0.0), (c[1] - off).max(0.0), (c[0] + off).min(cols as f64), (c[1] + off).min(rows as f64)],
+        roi: [
+            (c[0] - off).max(0.0),
+            (c[1] - off).max(0.0),
+            (c[0] + off).min(cols as f64),
+            (c[1] + off).min(rows as f64),
+        ],
         min_r,
         max_r,
         cell: p.spinner_cell_px,
         radial_cos: p.spinner_radial_tol_deg.to_radians().cos(),
         // With the size known, the radii searched are few and a weaker rim suffices.
-        min_coverage: if expected.is_some() { p.spinner_hint_min_coverage } else { p.spinner_min_coverage },
+        min_coverage: if expected.is_some() {
+            p.spinner_hint_min_coverage
+        } else {
+            p.spinner_min_coverage
+        },
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: p.spinner_peaks as usize,
         vote_every: p.spinner_vote_every as usize,
@@ -275,7 +364,10 @@ fn edge_points(img: &EdgeImage<'_>, [x0, y0, x1, y1]: [i32; 4], pts: &mut Vec<Ed
             // Plain sqrt: i16 components cannot overflow, and libm's hypot is several times slower.
             let m = (vx * vx + vy * vy).sqrt();
             if m > 0.0 {
-                pts.push(EdgePoint { p: [x as f64, y as f64], u: [vx / m, vy / m] });
+                pts.push(EdgePoint {
+                    p: [x as f64, y as f64],
+                    u: [vx / m, vy / m],
+                });
             }
         }
     }
@@ -321,10 +413,20 @@ fn search_close_circles(
     let (roi, pts): ([f64; 4], &[EdgePoint]) = match focus {
         Some([cx, cy]) => {
             let half = p.close_spinner_heat_box_frac * h;
-            let roi = [(cx - half).max(0.0), (cy - half).max(0.0), (cx + half).min(w), (cy + half).min(hh)];
+            let roi = [
+                (cx - half).max(0.0),
+                (cy - half).max(0.0),
+                (cx + half).min(w),
+                (cy + half).min(hh),
+            ];
             // The rims of circles centred in the box lie within max_r of it.
             let reach = max_r + 2.0;
-            let bounds = [(roi[0] - reach).floor() as i32, (roi[1] - reach).floor() as i32, (roi[2] + reach).ceil() as i32, (roi[3] + reach).ceil() as i32];
+            let bounds = [
+                (roi[0] - reach).floor() as i32,
+                (roi[1] - reach).floor() as i32,
+                (roi[2] + reach).ceil() as i32,
+                (roi[3] + reach).ceil() as i32,
+            ];
             select_points(whole.all(img), bounds, pts);
             (roi, pts)
         }
@@ -359,7 +461,10 @@ fn close_spinner_radii(p: &DefaultParams, h: f64, expected: Option<f64>) -> (f64
 fn spinner_radii(p: &DefaultParams, h: f64, expected: Option<f64>) -> (f64, f64) {
     let (lo, hi) = (p.spinner_min_radius_px, p.spinner_max_radius_frac * h);
     match expected.filter(|r| p.spinner_hint_radius_lo > 0.0 && r.is_finite() && *r > 0.0) {
-        Some(r) => (lo.max(p.spinner_hint_radius_lo * r), hi.min(p.spinner_hint_radius_hi * r)),
+        Some(r) => (
+            lo.max(p.spinner_hint_radius_lo * r),
+            hi.min(p.spinner_hint_radius_hi * r),
+        ),
         None => (lo, hi),
     }
 }
@@ -367,7 +472,12 @@ fn spinner_radii(p: &DefaultParams, h: f64, expected: Option<f64>) -> (f64, f64)
 /// High Canny threshold: the `canny_high_percentile` of the L1 gradient magnitude, clamped.
 /// Every other pixel of every other row is counted: 30 000 samples at 480×270 pin a percentile
 /// as well as all 130 000 do, at a quarter of the cost.
-fn adaptive_high(p: &DefaultParams, dx: &Mat, dy: &Mat, hist: &mut Vec<u32>) -> Result<f64, DetectError> {
+fn adaptive_high(
+    p: &DefaultParams,
+    dx: &Mat,
+    dy: &Mat,
+    hist: &mut Vec<u32>,
+) -> Result<f64, DetectError> {
     hist.clear();
     hist.resize(GRAD_BINS, 0);
     let mut n = 0u64;
@@ -431,7 +541,8 @@ fn merge_collinear_once(p: &DefaultParams, input: &[Segment], h: f64) -> Vec<Seg
             if da > p.merge_angle_deg {
                 continue;
             }
-            if m.line_distance(s.a) > p.merge_offset_px || m.line_distance(s.b) > p.merge_offset_px {
+            if m.line_distance(s.a) > p.merge_offset_px || m.line_distance(s.b) > p.merge_offset_px
+            {
                 continue;
             }
             let len = m.length().max(1e-9);
@@ -487,8 +598,17 @@ pub(crate) fn is_horizon(p: &DefaultParams, s: &Segment, w: f64, roll_deg: f64) 
 /// edges pair; a horizon is one line, a road or field strip a band of even width (rendered
 /// flights at 30 m lost the level blade as "horizon", and two blade roots at the tower top
 /// then outscored the hub).
-pub(crate) fn usable_lines(p: &DefaultParams, segs: &[Segment], w: f64, h: f64, roll_deg: f64) -> Vec<bool> {
-    let mut usable: Vec<bool> = segs.iter().map(|s| !is_horizon(p, s, w, roll_deg)).collect();
+pub(crate) fn usable_lines(
+    p: &DefaultParams,
+    segs: &[Segment],
+    w: f64,
+    h: f64,
+    roll_deg: f64,
+) -> Vec<bool> {
+    let mut usable: Vec<bool> = segs
+        .iter()
+        .map(|s| !is_horizon(p, s, w, roll_deg))
+        .collect();
     if p.horizon_band_min_taper > 0.0 && usable.iter().any(|u| !u) {
         for b in pair_edges(p, segs, &vec![true; segs.len()], h) {
             let taper = b.width[0].max(b.width[1]) / b.width[0].min(b.width[1]).max(1e-9);
@@ -503,9 +623,17 @@ pub(crate) fn usable_lines(p: &DefaultParams, segs: &[Segment], w: f64, h: f64, 
 
 /// Intersections of pairs of long, non-parallel segments that lie just beyond an end of both,
 /// with weight `min(len)`.
-pub(crate) fn proposals(p: &DefaultParams, segs: &[Segment], usable: &[bool], w: f64, h: f64) -> Vec<(P2, f64)> {
+pub(crate) fn proposals(
+    p: &DefaultParams,
+    segs: &[Segment],
+    usable: &[bool],
+    w: f64,
+    h: f64,
+) -> Vec<(P2, f64)> {
     let min_len = p.candidate_min_length_frac * h;
-    let long: Vec<usize> = (0..segs.len()).filter(|&i| usable[i] && segs[i].length() >= min_len).collect();
+    let long: Vec<usize> = (0..segs.len())
+        .filter(|&i| usable[i] && segs[i].length() >= min_len)
+        .collect();
     let near_end = |s: &Segment, x: P2| -> bool {
         let t = s.project_t(x);
         let len = s.length();
@@ -520,7 +648,9 @@ pub(crate) fn proposals(p: &DefaultParams, segs: &[Segment], usable: &[bool], w:
             if d.min(180.0 - d) < p.candidate_min_angle_deg {
                 continue;
             }
-            let Some(x) = geometry::line_intersection(a, b) else { continue };
+            let Some(x) = geometry::line_intersection(a, b) else {
+                continue;
+            };
             if x[0] < 0.0 || x[1] < 0.0 || x[0] > w - 1.0 || x[1] > h - 1.0 {
                 continue;
             }
@@ -546,7 +676,10 @@ pub(crate) struct BandAxis {
 impl BandAxis {
     /// Band width at the axis end nearer to `c`, and that end's distance to `c`.
     fn near_end(&self, c: P2) -> (f64, f64) {
-        let (da, db) = (geometry::dist(self.axis.a, c), geometry::dist(self.axis.b, c));
+        let (da, db) = (
+            geometry::dist(self.axis.a, c),
+            geometry::dist(self.axis.b, c),
+        );
         if da <= db {
             (self.width[0], da)
         } else {
@@ -558,16 +691,25 @@ impl BandAxis {
     /// `spinner_r` when a spinner was found, else judged from the band width).
     fn reach(&self, p: &DefaultParams, c: P2, h: f64, spinner_r: f64) -> f64 {
         let (w, _) = self.near_end(c);
-        (p.support_end_dist_frac * h).max(p.axis_reach_widths * w).max(p.spinner_reach_radii * spinner_r)
+        (p.support_end_dist_frac * h)
+            .max(p.axis_reach_widths * w)
+            .max(p.spinner_reach_radii * spinner_r)
     }
 }
 
 /// Pair the two edges of each blade (and of the tower): nearly parallel, overlapping along their
 /// direction, a slender band between them. Greedy by overlap, each edge in at most one pair.
-pub(crate) fn pair_edges(p: &DefaultParams, segs: &[Segment], usable: &[bool], h: f64) -> Vec<BandAxis> {
+pub(crate) fn pair_edges(
+    p: &DefaultParams,
+    segs: &[Segment],
+    usable: &[bool],
+    h: f64,
+) -> Vec<BandAxis> {
     let min_len = p.pair_min_length_frac * h;
     let max_w = p.pair_max_width_frac * h;
-    let idx: Vec<usize> = (0..segs.len()).filter(|&i| usable[i] && segs[i].length() >= min_len).collect();
+    let idx: Vec<usize> = (0..segs.len())
+        .filter(|&i| usable[i] && segs[i].length() >= min_len)
+        .collect();
     let mut cands: Vec<(f64, BandAxis)> = Vec::new();
     for (k, &i) in idx.iter().enumerate() {
         for &j in &idx[k + 1..] {
@@ -580,15 +722,27 @@ pub(crate) fn pair_edges(p: &DefaultParams, segs: &[Segment], usable: &[bool], h
             if overlap < p.pair_min_overlap_frac * s.length().min(t.length()) {
                 continue;
             }
-            let Some(axis) = geometry::band_axis(s, t) else { continue };
-            let width = [geometry::band_width_at(s, t, axis.a), geometry::band_width_at(s, t, axis.b)];
+            let Some(axis) = geometry::band_axis(s, t) else {
+                continue;
+            };
+            let width = [
+                geometry::band_width_at(s, t, axis.a),
+                geometry::band_width_at(s, t, axis.b),
+            ];
             if width.iter().any(|&w| w < p.pair_min_width_px || w > max_w) {
                 continue;
             }
             if 0.5 * (width[0] + width[1]) > p.pair_max_width_to_length * axis.length() {
                 continue;
             }
-            cands.push((overlap, BandAxis { axis, edges: [i, j], width }));
+            cands.push((
+                overlap,
+                BandAxis {
+                    axis,
+                    edges: [i, j],
+                    width,
+                },
+            ));
         }
     }
     cands.sort_by(|a, b| b.0.total_cmp(&a.0));
@@ -607,7 +761,12 @@ pub(crate) fn pair_edges(p: &DefaultParams, segs: &[Segment], usable: &[bool], h
 
 /// Intersections of pairs of band axes that lie beyond the nearer end of both within their
 /// reach, weighted `axis_proposal_weight · min(axis length)`.
-pub(crate) fn axis_proposals(p: &DefaultParams, axes: &[BandAxis], w: f64, h: f64) -> Vec<(P2, f64)> {
+pub(crate) fn axis_proposals(
+    p: &DefaultParams,
+    axes: &[BandAxis],
+    w: f64,
+    h: f64,
+) -> Vec<(P2, f64)> {
     let mut out = Vec::new();
     for (k, a) in axes.iter().enumerate() {
         for b in &axes[k + 1..] {
@@ -615,12 +774,17 @@ pub(crate) fn axis_proposals(p: &DefaultParams, axes: &[BandAxis], w: f64, h: f6
             if d.min(180.0 - d) < p.candidate_min_angle_deg {
                 continue;
             }
-            let Some(x) = geometry::line_intersection(&a.axis, &b.axis) else { continue };
+            let Some(x) = geometry::line_intersection(&a.axis, &b.axis) else {
+                continue;
+            };
             if x[0] < 0.0 || x[1] < 0.0 || x[0] > w - 1.0 || x[1] > h - 1.0 {
                 continue;
             }
             if axis_points_at(p, a, x, h, 0.0) && axis_points_at(p, b, x, h, 0.0) {
-                out.push((x, p.axis_proposal_weight * a.axis.length().min(b.axis.length())));
+                out.push((
+                    x,
+                    p.axis_proposal_weight * a.axis.length().min(b.axis.length()),
+                ));
             }
         }
     }
@@ -637,16 +801,26 @@ fn axis_points_at(p: &DefaultParams, a: &BandAxis, c: P2, h: f64, spinner_r: f64
     if d_end > a.reach(p, c, h, spinner_r) {
         return false;
     }
-    a.axis.line_distance(c) <= p.axis_line_dist_frac * h + p.axis_angle_tol_deg.to_radians().tan() * d_end
+    a.axis.line_distance(c)
+        <= p.axis_line_dist_frac * h + p.axis_angle_tol_deg.to_radians().tan() * d_end
 }
 
 /// Peaks of the proposal density: grid vote with `cell` size, 3×3 sum, then the weighted mean
 /// of the proposals around each local maximum.
-pub(crate) fn peaks(props: &[(P2, f64)], w: f64, h: f64, cell: f64, max_peaks: usize) -> Vec<(P2, f64)> {
+pub(crate) fn peaks(
+    props: &[(P2, f64)],
+    w: f64,
+    h: f64,
+    cell: f64,
+    max_peaks: usize,
+) -> Vec<(P2, f64)> {
     if props.is_empty() {
         return Vec::new();
     }
-    let (gw, gh) = ((w / cell).ceil() as usize + 1, (h / cell).ceil() as usize + 1);
+    let (gw, gh) = (
+        (w / cell).ceil() as usize + 1,
+        (h / cell).ceil() as usize + 1,
+    );
     let mut grid = vec![0.0f64; gw * gh];
     for (x, wt) in props {
         let (gx, gy) = ((x[0] / cell) as usize, (x[1] / cell) as usize);
@@ -664,14 +838,22 @@ pub(crate) fn peaks(props: &[(P2, f64)], w: f64, h: f64, cell: f64, max_peaks: u
             sm[y * gw + x] = s;
         }
     }
-    let mut cells: Vec<(usize, f64)> = sm.iter().copied().enumerate().filter(|(_, v)| *v > 0.0).collect();
+    let mut cells: Vec<(usize, f64)> = sm
+        .iter()
+        .copied()
+        .enumerate()
+        .filter(|(_, v)| *v > 0.0)
+        .collect();
     cells.sort_by(|a, b| b.1.total_cmp(&a.1));
     let mut out: Vec<(P2, f64)> = Vec::new();
     for (c, v) in cells {
         if out.len() >= max_peaks {
             break;
         }
-        let centre = [((c % gw) as f64 + 0.5) * cell, ((c / gw) as f64 + 0.5) * cell];
+        let centre = [
+            ((c % gw) as f64 + 0.5) * cell,
+            ((c / gw) as f64 + 0.5) * cell,
+        ];
         // Weighted mean of the proposals in the 3x3 neighbourhood.
         let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
         for (x, wt) in props {
@@ -722,7 +904,14 @@ struct Candidate {
 }
 
 /// Lines supporting a hub at `c`: near end within reach, line pointing at `c`.
-fn support_lines(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64, spinner_r: f64) -> Vec<usize> {
+fn support_lines(
+    p: &DefaultParams,
+    segs: &[Segment],
+    usable: &[bool],
+    c: P2,
+    h: f64,
+    spinner_r: f64,
+) -> Vec<usize> {
     // With a spinner of radius r at c, blade edges end at its rim and pass within r of c.
     let reach = (p.support_end_dist_frac * h).max(p.spinner_reach_radii * spinner_r);
     let tol0 = p.support_line_dist_frac * h;
@@ -742,7 +931,8 @@ fn support_lines(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h:
             if t > p.candidate_inside_frac && t < 1.0 - p.candidate_inside_frac {
                 return false;
             }
-            s.line_distance(c) <= (tol0 + tan * d_end).max(spinner_r) && !continues_beyond(p, segs, usable, i, c, h)
+            s.line_distance(c) <= (tol0 + tan * d_end).max(spinner_r)
+                && !continues_beyond(p, segs, usable, i, c, h)
         })
         .collect()
 }
@@ -750,13 +940,36 @@ fn support_lines(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h:
 /// Usable lines passing within the support reach of `c` that are neither among its supporting
 /// `lines` nor its `tower`: texture, wires, field borders around a false candidate.
 #[allow(clippy::too_many_arguments)]
-fn clutter_lines(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64, spinner_r: f64, lines: &[usize], tower: &[usize]) -> usize {
+fn clutter_lines(
+    p: &DefaultParams,
+    segs: &[Segment],
+    usable: &[bool],
+    c: P2,
+    h: f64,
+    spinner_r: f64,
+    lines: &[usize],
+    tower: &[usize],
+) -> usize {
     let reach = (p.support_end_dist_frac * h).max(p.spinner_reach_radii * spinner_r);
-    (0..segs.len()).filter(|i| usable[*i] && !lines.contains(i) && !tower.contains(i) && segs[*i].segment_distance(c) <= reach).count()
+    (0..segs.len())
+        .filter(|i| {
+            usable[*i]
+                && !lines.contains(i)
+                && !tower.contains(i)
+                && segs[*i].segment_distance(c) <= reach
+        })
+        .count()
 }
 
 /// Line `i` continues, nearly collinear, on the far side of `c`: it passes behind the hub.
-fn continues_beyond(p: &DefaultParams, segs: &[Segment], usable: &[bool], i: usize, c: P2, h: f64) -> bool {
+fn continues_beyond(
+    p: &DefaultParams,
+    segs: &[Segment],
+    usable: &[bool],
+    i: usize,
+    c: P2,
+    h: f64,
+) -> bool {
     let s = &segs[i];
     let off = p.occluded_offset_frac * h;
     let d = [s.b[0] - s.a[0], s.b[1] - s.a[1]];
@@ -764,14 +977,22 @@ fn continues_beyond(p: &DefaultParams, segs: &[Segment], usable: &[bool], i: usi
     let own = side(s.midpoint());
     // A near-horizontal line may be a horizon or field border, which the wide lens bends: its
     // continuation may drift off the straight extension, the more so the farther out.
-    let bend = if s.tilt_from_vertical_deg().abs() >= 90.0 - p.occluded_bent_max_tilt_deg { p.occluded_bend_deg.to_radians().tan() } else { 0.0 };
+    let bend = if s.tilt_from_vertical_deg().abs() >= 90.0 - p.occluded_bent_max_tilt_deg {
+        p.occluded_bend_deg.to_radians().tan()
+    } else {
+        0.0
+    };
     let tol = |q: P2| off + bend * geometry::dist(q, c);
     segs.iter().enumerate().any(|(j, t)| {
         if j == i || !usable[j] {
             return false;
         }
         // Cheap tests first: this runs for every supporting line against every segment.
-        if side(t.a) * own >= 0.0 || side(t.b) * own >= 0.0 || s.line_distance(t.a) > tol(t.a) || s.line_distance(t.b) > tol(t.b) {
+        if side(t.a) * own >= 0.0
+            || side(t.b) * own >= 0.0
+            || s.line_distance(t.a) > tol(t.a)
+            || s.line_distance(t.b) > tol(t.b)
+        {
             return false;
         }
         let da = (s.orientation_deg() - t.orientation_deg()).abs();
@@ -799,7 +1020,10 @@ fn group_blades(p: &DefaultParams, segs: &[Segment], lines: &[usize], c: P2) -> 
     blades.sort_by(|a, b| b.weight.total_cmp(&a.weight));
     let mut merged: Vec<Blade> = Vec::new();
     for b in blades {
-        if let Some(m) = merged.iter_mut().find(|m| geometry::ang_dist(m.angle_deg, b.angle_deg) < p.blade_min_separation_deg) {
+        if let Some(m) = merged
+            .iter_mut()
+            .find(|m| geometry::ang_dist(m.angle_deg, b.angle_deg) < p.blade_min_separation_deg)
+        {
             m.lines.extend(b.lines);
             m.weight += b.weight;
             if m.axis.is_none() {
@@ -815,7 +1039,14 @@ fn group_blades(p: &DefaultParams, segs: &[Segment], lines: &[usize], c: P2) -> 
 /// Tower lines for a hub at `c`: near vertical after roll, top end not far below `c`,
 /// horizontally close, extending downward. "Not far" scales with the spinner radius
 /// `spinner_r` (0: none) at close range, where the nacelle and tower grow past the fixed limits.
-fn tower_lines(p: &DefaultParams, segs: &[Segment], c: P2, h: f64, roll_deg: f64, spinner_r: f64) -> Vec<usize> {
+fn tower_lines(
+    p: &DefaultParams,
+    segs: &[Segment],
+    c: P2,
+    h: f64,
+    roll_deg: f64,
+    spinner_r: f64,
+) -> Vec<usize> {
     let max_below = (p.tower_top_max_below_frac * h).max(p.tower_top_max_below_radii * spinner_r);
     let max_dx = (p.tower_max_dx_frac * h).max(p.tower_max_dx_radii * spinner_r);
     (0..segs.len())
@@ -824,11 +1055,18 @@ fn tower_lines(p: &DefaultParams, segs: &[Segment], c: P2, h: f64, roll_deg: f64
             if geometry::roll_compensated_tilt_deg(s, roll_deg).abs() > p.tower_max_tilt_deg {
                 return false;
             }
-            let (top, bot) = if s.a[1] < s.b[1] { (s.a, s.b) } else { (s.b, s.a) };
+            let (top, bot) = if s.a[1] < s.b[1] {
+                (s.a, s.b)
+            } else {
+                (s.b, s.a)
+            };
             let below = top[1] - c[1];
             // The top may reach a little above the hub (the tower edge continues behind the
             // spinner in views from below) but must end near it and go down from there.
-            below >= -p.tower_top_max_above_frac * h && below <= max_below && bot[1] > c[1] && (top[0] - c[0]).abs() <= max_dx
+            below >= -p.tower_top_max_above_frac * h
+                && below <= max_below
+                && bot[1] > c[1]
+                && (top[0] - c[0]).abs() <= max_dx
         })
         .collect()
 }
@@ -884,7 +1122,10 @@ fn evaluate(
     let spinner_r = spinner.map_or(0.0, |k| k[2]);
     let mut lines = support_lines(p, segs, usable, c, h, spinner_r);
 
-    let supporting: Vec<&BandAxis> = axes.iter().filter(|a| axis_points_at(p, a, c, h, spinner_r)).collect();
+    let supporting: Vec<&BandAxis> = axes
+        .iter()
+        .filter(|a| axis_points_at(p, a, c, h, spinner_r))
+        .collect();
     for a in &supporting {
         for e in a.edges {
             if !lines.contains(&e) {
@@ -894,7 +1135,10 @@ fn evaluate(
     }
     let mut blades = group_blades(p, segs, &lines, c);
     for a in &supporting {
-        if let Some(b) = blades.iter_mut().find(|b| b.lines.contains(&a.edges[0]) && b.lines.contains(&a.edges[1])) {
+        if let Some(b) = blades
+            .iter_mut()
+            .find(|b| b.lines.contains(&a.edges[0]) && b.lines.contains(&a.edges[1]))
+        {
             if b.axis.is_none_or(|x| x.length() < a.axis.length()) {
                 b.axis = Some(a.axis);
             }
@@ -907,7 +1151,8 @@ fn evaluate(
     let down = 180.0 - roll_deg;
     let mut rejected = Vec::new();
     blades.retain(|b| {
-        let is_tower = geometry::ang_dist(b.angle_deg, down) <= p.tower_max_tilt_deg && b.lines.iter().all(|i| tower.contains(i));
+        let is_tower = geometry::ang_dist(b.angle_deg, down) <= p.tower_max_tilt_deg
+            && b.lines.iter().all(|i| tower.contains(i));
         if is_tower {
             rejected.extend(b.lines.iter().copied());
         }
@@ -921,8 +1166,14 @@ fn evaluate(
         let down_blade = blades
             .iter()
             .enumerate()
-            .filter(|(_, b)| geometry::ang_dist(b.angle_deg, down) <= p.tower_max_tilt_deg && b.lines.iter().any(|i| tower.contains(i)))
-            .min_by(|(_, a), (_, b)| geometry::ang_dist(a.angle_deg, down).total_cmp(&geometry::ang_dist(b.angle_deg, down)))
+            .filter(|(_, b)| {
+                geometry::ang_dist(b.angle_deg, down) <= p.tower_max_tilt_deg
+                    && b.lines.iter().any(|i| tower.contains(i))
+            })
+            .min_by(|(_, a), (_, b)| {
+                geometry::ang_dist(a.angle_deg, down)
+                    .total_cmp(&geometry::ang_dist(b.angle_deg, down))
+            })
             .map(|(k, _)| k);
         if let Some(k) = down_blade {
             rejected.extend(blades.remove(k).lines);
@@ -935,7 +1186,8 @@ fn evaluate(
         .filter(|&i| {
             (0..blades.len()).any(|j| {
                 j != i
-                    && geometry::ang_dist(blades[i].angle_deg, blades[j].angle_deg) >= p.blade_max_separation_deg
+                    && geometry::ang_dist(blades[i].angle_deg, blades[j].angle_deg)
+                        >= p.blade_max_separation_deg
                     && (points_down(&blades[i]) || !points_down(&blades[j]))
             })
         })
@@ -967,7 +1219,11 @@ fn evaluate(
         if rotor_geometry_ok(p, &blades) {
             conf += p.conf_geometry;
         }
-        let band = |b: &Blade| b.axis.is_some() || is_paired(segs, b, c) || (p.paired_by_partner && one_sided_axis(segs, b, c, partner).is_some());
+        let band = |b: &Blade| {
+            b.axis.is_some()
+                || is_paired(segs, b, c)
+                || (p.paired_by_partner && one_sided_axis(segs, b, c, partner).is_some())
+        };
         if blades.iter().filter(|b| band(b)).count() >= 2 {
             conf += p.conf_paired;
         }
@@ -993,29 +1249,54 @@ fn evaluate(
         tower_lines: tower.len(),
         hidden_blade_down: nb == 2 && !tower.is_empty() && hidden_blade_down(p, &blades, down),
         geometry_ok: nb >= 2 && rotor_geometry_ok(p, &blades),
-        paired: blades.iter().filter(|b| b.axis.is_some() || is_paired(segs, b, c)).count(),
+        paired: blades
+            .iter()
+            .filter(|b| b.axis.is_some() || is_paired(segs, b, c))
+            .count(),
         spinner_radius: spinner_r,
         passes_through: through,
-        near_prediction: hints.predicted_hub_px.is_some_and(|q| geometry::dist(q, c) <= p.prediction_radius_frac * h),
+        near_prediction: hints
+            .predicted_hub_px
+            .is_some_and(|q| geometry::dist(q, c) <= p.prediction_radius_frac * h),
         blade_weights: blades.iter().take(ROTOR_BLADES).map(|b| b.weight).collect(),
-        blade_angles: blades.iter().take(ROTOR_BLADES).map(|b| b.angle_deg).collect(),
+        blade_angles: blades
+            .iter()
+            .take(ROTOR_BLADES)
+            .map(|b| b.angle_deg)
+            .collect(),
         rejected_lines: rejected.len(),
         rule_score: conf,
         clutter_lines: clutter_lines(p, segs, usable, c, h, spinner_r, &lines, &tower),
         banded_blades: blades.iter().filter(|b| b.axis.is_some()).count(),
-        tower_top_below: tower.iter().flat_map(|&i| [segs[i].a[1], segs[i].b[1]]).min_by(f64::total_cmp).map(|top| top - c[1]),
+        tower_top_below: tower
+            .iter()
+            .flat_map(|&i| [segs[i].a[1], segs[i].b[1]])
+            .min_by(f64::total_cmp)
+            .map(|top| top - c[1]),
         image_lines: usable.iter().filter(|&&u| u).count(),
         image_height: h,
     };
     let features = crate::ranker::features(&cues);
-    Candidate { centre: c, blades, rejected, tower, confidence: conf.min(1.0), score: conf, support, spinner, features }
+    Candidate {
+        centre: c,
+        blades,
+        rejected,
+        tower,
+        confidence: conf.min(1.0),
+        score: conf,
+        support,
+        spinner,
+        features,
+    }
 }
 
 /// The rotor's third blade, not seen, would point straight down (`down`, degrees from up
 /// clockwise): opposite the bisector of the two seen blades, which are about 120° apart.
 fn hidden_blade_down(p: &DefaultParams, blades: &[Blade], down: f64) -> bool {
     let [a, b] = [blades[0].angle_deg, blades[1].angle_deg];
-    if p.hidden_blade_tol_deg <= 0.0 || (geometry::ang_dist(a, b) - p.blade_target_deg).abs() > p.blade_sep_tol_deg {
+    if p.hidden_blade_tol_deg <= 0.0
+        || (geometry::ang_dist(a, b) - p.blade_target_deg).abs() > p.blade_sep_tol_deg
+    {
         return false;
     }
     let third = geometry::circular_mean_deg(&[a, b], None) + 180.0;
@@ -1023,7 +1304,13 @@ fn hidden_blade_down(p: &DefaultParams, blades: &[Blade], down: f64) -> bool {
 }
 
 /// A long usable line passes through `c` (not ending near it): `c` lies on a tower, mast or wire.
-pub(crate) fn passes_through(p: &DefaultParams, segs: &[Segment], usable: &[bool], c: P2, h: f64) -> bool {
+pub(crate) fn passes_through(
+    p: &DefaultParams,
+    segs: &[Segment],
+    usable: &[bool],
+    c: P2,
+    h: f64,
+) -> bool {
     let min_len = p.candidate_min_length_frac * h;
     let margin = p.through_margin_frac * h;
     segs.iter().zip(usable).any(|(s, &u)| {
@@ -1039,8 +1326,21 @@ pub(crate) fn passes_through(p: &DefaultParams, segs: &[Segment], usable: &[bool
 /// least two blades of known axis, their axes alone (the edges meet at the spinner rim, the
 /// axes at its centre). A blade seen by one edge only has its axis from `partner` (the partner
 /// edge in the image, see `blade.rs`) when that finds one.
-fn refine(segs: &[Segment], blades: &[Blade], centre: P2, partner: &dyn Fn(&Segment, P2) -> Option<Segment>) -> Option<P2> {
-    let axes: Vec<(Segment, f64)> = blades.iter().take(ROTOR_BLADES).filter_map(|b| b.axis.or_else(|| one_sided_axis(segs, b, centre, partner)).map(|a| (a, 1.0))).collect();
+fn refine(
+    segs: &[Segment],
+    blades: &[Blade],
+    centre: P2,
+    partner: &dyn Fn(&Segment, P2) -> Option<Segment>,
+) -> Option<P2> {
+    let axes: Vec<(Segment, f64)> = blades
+        .iter()
+        .take(ROTOR_BLADES)
+        .filter_map(|b| {
+            b.axis
+                .or_else(|| one_sided_axis(segs, b, centre, partner))
+                .map(|a| (a, 1.0))
+        })
+        .collect();
     if axes.len() >= 2 {
         if let Some(x) = geometry::lines_nearest_point(&axes) {
             return Some(x);
@@ -1048,7 +1348,10 @@ fn refine(segs: &[Segment], blades: &[Blade], centre: P2, partner: &dyn Fn(&Segm
     }
     let mut lines: Vec<(Segment, f64)> = Vec::new();
     for bl in blades.iter().take(ROTOR_BLADES) {
-        if let Some(axis) = bl.axis.or_else(|| one_sided_axis(segs, bl, centre, partner)) {
+        if let Some(axis) = bl
+            .axis
+            .or_else(|| one_sided_axis(segs, bl, centre, partner))
+        {
             lines.push((axis, 1.0));
             continue;
         }
@@ -1059,7 +1362,13 @@ fn refine(segs: &[Segment], blades: &[Blade], centre: P2, partner: &dyn Fn(&Segm
             let m = s.midpoint();
             d[0] * (m[1] - centre[1]) - d[1] * (m[0] - centre[0]) > 0.0
         };
-        let tot = |right: bool| bl.lines.iter().filter(|&&i| side(&segs[i]) == right).map(|&i| segs[i].length()).sum::<f64>();
+        let tot = |right: bool| {
+            bl.lines
+                .iter()
+                .filter(|&&i| side(&segs[i]) == right)
+                .map(|&i| segs[i].length())
+                .sum::<f64>()
+        };
         let (tr, tl) = (tot(true), tot(false));
         let sides = (tr > 0.0) as u32 + (tl > 0.0) as u32;
         for &i in &bl.lines {
@@ -1073,11 +1382,19 @@ fn refine(segs: &[Segment], blades: &[Blade], centre: P2, partner: &dyn Fn(&Segm
 
 /// The axis of a blade whose lines all lie on one side of it (one edge seen), from the partner
 /// of its longest line.
-fn one_sided_axis(segs: &[Segment], b: &Blade, centre: P2, partner: &dyn Fn(&Segment, P2) -> Option<Segment>) -> Option<Segment> {
+fn one_sided_axis(
+    segs: &[Segment],
+    b: &Blade,
+    centre: P2,
+    partner: &dyn Fn(&Segment, P2) -> Option<Segment>,
+) -> Option<Segment> {
     if is_paired(segs, b, centre) {
         return None;
     }
-    let longest = b.lines.iter().max_by(|&&i, &&j| segs[i].length().total_cmp(&segs[j].length()))?;
+    let longest = b
+        .lines
+        .iter()
+        .max_by(|&&i, &&j| segs[i].length().total_cmp(&segs[j].length()))?;
     partner(&segs[*longest], centre)
 }
 
@@ -1086,7 +1403,9 @@ fn one_sided_axis(segs: &[Segment], b: &Blade, centre: P2, partner: &dyn Fn(&Seg
 /// blade merged with a tower edge), not the tower.
 fn axis_along_a_ray(axis: &Segment, hub: P2, rays: &[f64], tol: f64) -> bool {
     let mid = (axis.a[1] + axis.b[1]) / 2.0;
-    let Some(x) = axis.x_at_y(mid) else { return false };
+    let Some(x) = axis.x_at_y(mid) else {
+        return false;
+    };
     mid > hub[1]
         && rays.iter().any(|&a| {
             let d = geometry::dir_from_up_cw(a);
@@ -1116,7 +1435,9 @@ fn measure_tower(
     let down = 180.0 - roll_deg;
     let near_down = |a: f64| geometry::ang_dist(a, down) <= p.tower_blade_down_tol_deg;
     let blade_down = b.blades.iter().any(|bl| near_down(bl.angle_deg))
-        || b.blades.first().is_some_and(|bl| (0..3).any(|k| near_down(bl.angle_deg + 120.0 * k as f64)));
+        || b.blades
+            .first()
+            .is_some_and(|bl| (0..3).any(|k| near_down(bl.angle_deg + 120.0 * k as f64)));
     // Rays of blades `tower_blade_ray_min_deg`..`tower_blade_ray_tol_deg` from down: detected, or placed at 120°
     // steps from any detected blade (the first may be a stray line: `fly` seed 279 at 19 m,
     // blades 268°, 48°, 90° for a rotor at 288°, 48°, 168°).
@@ -1124,12 +1445,17 @@ fn measure_tower(
         .blades
         .iter()
         .flat_map(|bl| (0..3).map(move |k| bl.angle_deg + 120.0 * k as f64))
-        .filter(|&a| (p.tower_blade_ray_min_deg..=p.tower_blade_ray_tol_deg).contains(&geometry::ang_dist(a, down)))
+        .filter(|&a| {
+            (p.tower_blade_ray_min_deg..=p.tower_blade_ray_tol_deg)
+                .contains(&geometry::ang_dist(a, down))
+        })
         .collect();
     // Until its tip is in view, that blade hides the tower wholly or but for one edge: a band
     // below the hub is the blade, or the blade and one tower edge merged, and its width and gap
     // mislead (see `tower_blade_down_max_distance_m`).
-    if let Some(d) = hub_distance_m.filter(|d| blade_down && *d <= p.tower_blade_down_max_distance_m) {
+    if let Some(d) =
+        hub_distance_m.filter(|d| blade_down && *d <= p.tower_blade_down_max_distance_m)
+    {
         log::trace!("a blade points down at {d:.1} m: no tower measured");
         return None;
     }
@@ -1138,7 +1464,10 @@ fn measure_tower(
     // along a blade's ray halfway down (see `tower_blade_ray_tol_deg`).
     let tol = p.tower_blade_axis_tol_frac * h;
     let is_blade = |f: &crate::tower::TowerFit| {
-        let through_hub = f.axis.x_at_y(b.centre[1]).is_some_and(|x| (x - b.centre[0]).abs() <= tol);
+        let through_hub = f
+            .axis
+            .x_at_y(b.centre[1])
+            .is_some_and(|x| (x - b.centre[0]).abs() <= tol);
         (blade_down && through_hub) || axis_along_a_ray(&f.axis, b.centre, &down_rays, tol)
     };
     // Widths a tower band may have: about the expected one, and about the spinner's radius
@@ -1149,14 +1478,29 @@ fn measure_tower(
     }
     let spinner_r = b.spinner.map_or(0.0, |k| k[2]);
     if spinner_r > 0.0 {
-        window = (window.0.max(p.tower_width_min_radii * spinner_r), window.1.min(p.tower_width_max_radii * spinner_r));
+        window = (
+            window.0.max(p.tower_width_min_radii * spinner_r),
+            window.1.min(p.tower_width_max_radii * spinner_r),
+        );
         // ... and about the width the spinner's own distance implies (see
         // `tower_width_spinner_tol`).
-        if let Some(e) = optics.and_then(|o| o.tower_width_for_spinner(spinner_r)).filter(|_| p.tower_width_spinner_tol > 0.0) {
-            window = (window.0.max(e / p.tower_width_spinner_tol), window.1.min(e * p.tower_width_spinner_tol));
+        if let Some(e) = optics
+            .and_then(|o| o.tower_width_for_spinner(spinner_r))
+            .filter(|_| p.tower_width_spinner_tol > 0.0)
+        {
+            window = (
+                window.0.max(e / p.tower_width_spinner_tol),
+                window.1.min(e * p.tower_width_spinner_tol),
+            );
         }
     }
-    let both = |seeds: &[Segment]| seeds.iter().take(TOWER_SEEDS).filter_map(|s| fit_tower(p, g, s, window)).find(|f| !is_blade(f));
+    let both = |seeds: &[Segment]| {
+        seeds
+            .iter()
+            .take(TOWER_SEEDS)
+            .filter_map(|s| fit_tower(p, g, s, window))
+            .find(|f| !is_blade(f))
+    };
     // Only one edge in sight (the other behind a blade pointing down): with the width expected
     // from the tracker's distance, that edge places the axis on the hub's side of it (the
     // blade hangs from the hub; without one a lone edge may be the tower's near or far one).
@@ -1164,17 +1508,32 @@ fn measure_tower(
     // rendered flights, 15–25 m), and only with edges more upright than a blade's beside the
     // tower, most upright first.
     let one = |seeds: &[Segment]| {
-        let e = tower_width.filter(|_| blade_down && hub_distance_m.is_some_and(|d| d <= p.tower_one_edge_max_distance_m))?;
+        let e = tower_width.filter(|_| {
+            blade_down && hub_distance_m.is_some_and(|d| d <= p.tower_one_edge_max_distance_m)
+        })?;
         let tilt = |s: &Segment| geometry::roll_compensated_tilt_deg(s, roll_deg).abs();
-        let mut upright: Vec<&Segment> = seeds.iter().take(TOWER_SEEDS).filter(|s| tilt(s) <= p.tower_one_edge_max_tilt_deg).collect();
+        let mut upright: Vec<&Segment> = seeds
+            .iter()
+            .take(TOWER_SEEDS)
+            .filter(|s| tilt(s) <= p.tower_one_edge_max_tilt_deg)
+            .collect();
         upright.sort_by(|x, y| tilt(x).total_cmp(&tilt(y)));
-        upright.into_iter().filter_map(|s| fit_tower_one_edge(g, s, e, b.centre[0])).find(|f| !is_blade(f))
+        upright
+            .into_iter()
+            .filter_map(|s| fit_tower_one_edge(g, s, e, b.centre[0]))
+            .find(|f| !is_blade(f))
     };
     // Seeds: the tower lines in a window grown with the spinner (at close range the tower
     // top and edges lie beyond the fixed one).
-    let mut hough: Vec<Segment> = tower_lines(p, segs, b.centre, h, roll_deg, spinner_r).into_iter().map(|i| segs[i]).collect();
+    let mut hough: Vec<Segment> = tower_lines(p, segs, b.centre, h, roll_deg, spinner_r)
+        .into_iter()
+        .map(|i| segs[i])
+        .collect();
     hough.sort_by(|x, y| y.length().total_cmp(&x.length()));
-    let hough_top = hough.iter().flat_map(|s| [s.a[1], s.b[1]]).fold(f64::INFINITY, f64::min);
+    let hough_top = hough
+        .iter()
+        .flat_map(|s| [s.a[1], s.b[1]])
+        .fold(f64::INFINITY, f64::min);
     if let Some(fit) = both(&hough) {
         return Some((fit, hough_top));
     }
@@ -1184,10 +1543,18 @@ fn measure_tower(
     // The tower top (under the nacelle) is ~1.1 spinner radii below the hub centre.
     let top = b.centre[1] + (p.tower_scan_start_frac * h).max(p.tower_scan_start_radii * spinner_r);
     let max_dx = (p.tower_max_dx_frac * h).max(p.tower_max_dx_radii * spinner_r);
-    let scanned = scan_tower_edges(g, b.centre[0], top, max_dx, p.tower_max_tilt_deg + roll_deg.abs(), p.tower_scan_min_salience, TOWER_SEEDS)
-        .into_iter()
-        .filter(|s| geometry::roll_compensated_tilt_deg(s, roll_deg).abs() <= p.tower_max_tilt_deg)
-        .collect::<Vec<_>>();
+    let scanned = scan_tower_edges(
+        g,
+        b.centre[0],
+        top,
+        max_dx,
+        p.tower_max_tilt_deg + roll_deg.abs(),
+        p.tower_scan_min_salience,
+        TOWER_SEEDS,
+    )
+    .into_iter()
+    .filter(|s| geometry::roll_compensated_tilt_deg(s, roll_deg).abs() <= p.tower_max_tilt_deg)
+    .collect::<Vec<_>>();
     log::trace!("tower scan from row {top:.0}: seeds {scanned:?}");
     both(&scanned)
         .map(|fit| (fit, top))
@@ -1198,7 +1565,9 @@ fn measure_tower(
 /// How near a candidate must lie to the heatmap's peak to stand for it, working px: the
 /// `hub_heat_radius_cells` neighbourhood in the larger of the cell's two sides.
 fn heat_reach_px(p: &DefaultParams, heat: Option<&crate::heat::Heatmap>, w: f64, h: f64) -> f64 {
-    heat.filter(|m| m.cols > 0 && m.rows > 0).map_or(0.0, |m| p.hub_heat_radius_cells * (w / m.cols as f64).max(h / m.rows as f64))
+    heat.filter(|m| m.cols > 0 && m.rows > 0).map_or(0.0, |m| {
+        p.hub_heat_radius_cells * (w / m.cols as f64).max(h / m.rows as f64)
+    })
 }
 
 /// Steps after the Hough transform, on plain data (working px).
@@ -1245,7 +1614,8 @@ pub(crate) enum CircleQuery {
 }
 
 /// A spinner circle search: circles `[x, y, r, rim coverage]` (working px, best covered first).
-pub(crate) type CircleFinder<'a> = dyn FnMut(CircleQuery) -> Result<Vec<[f64; 4]>, DetectError> + 'a;
+pub(crate) type CircleFinder<'a> =
+    dyn FnMut(CircleQuery) -> Result<Vec<[f64; 4]>, DetectError> + 'a;
 
 /// The first circle near `cand` (within `spinner_max_offset_frac · h`) that at least two blades
 /// start from, evaluated as a spinner-centred candidate. A larger such circle around it wins:
@@ -1305,8 +1675,12 @@ fn spinner_candidate(
     // What the learned ranker sees of each circle: its rim, and where its blades' axes meet.
     for (c, cov) in with_blades.iter_mut() {
         c.features[crate::ranker::SPINNER_COVERAGE] = *cov;
-        if let Some(k) = c.spinner.filter(|k| k[2] > p.spinner_kept_support_max_radius_px) {
-            c.features[crate::ranker::SPINNER_AXES_OFFSET] = axes_meet_offset(segs, axes, c, partner).map_or(0.0, |off| (off / k[2]).min(2.0));
+        if let Some(k) = c
+            .spinner
+            .filter(|k| k[2] > p.spinner_kept_support_max_radius_px)
+        {
+            c.features[crate::ranker::SPINNER_AXES_OFFSET] =
+                axes_meet_offset(segs, axes, c, partner).map_or(0.0, |off| (off / k[2]).min(2.0));
         }
     }
     // Circles are best covered first. A near tie goes to the size the tracker's distance
@@ -1319,7 +1693,11 @@ fn spinner_candidate(
     };
     let pick = (0..with_blades.len())
         .filter(|&i| p.spinner_tie_ratio < 1.0 && with_blades[i].1 >= tie)
-        .min_by(|&i, &j| off(&with_blades[i].0).total_cmp(&off(&with_blades[j].0)).then(i.cmp(&j)))
+        .min_by(|&i, &j| {
+            off(&with_blades[i].0)
+                .total_cmp(&off(&with_blades[j].0))
+                .then(i.cmp(&j))
+        })
         .unwrap_or(0);
     let (first, first_cov) = with_blades.remove(pick);
     let inner = first.spinner?;
@@ -1329,9 +1707,24 @@ fn spinner_candidate(
     // radius, the hub 5 % of the image height off).
     let encloses = |(c, cov): &(Candidate, f64)| {
         *cov >= p.spinner_nest_min_coverage_ratio * first_cov
-            && c.spinner.is_some_and(|k| k[2] > inner[2] && geometry::dist([k[0], k[1]], [inner[0], inner[1]]) + inner[2] <= k[2] + SPINNER_NEST_TOL_PX)
+            && c.spinner.is_some_and(|k| {
+                k[2] > inner[2]
+                    && geometry::dist([k[0], k[1]], [inner[0], inner[1]]) + inner[2]
+                        <= k[2] + SPINNER_NEST_TOL_PX
+            })
     };
-    Some(with_blades.into_iter().filter(encloses).map(|(c, _)| c).max_by(|a, b| a.spinner.map_or(0.0, |k| k[2]).total_cmp(&b.spinner.map_or(0.0, |k| k[2]))).unwrap_or(first))
+    Some(
+        with_blades
+            .into_iter()
+            .filter(encloses)
+            .map(|(c, _)| c)
+            .max_by(|a, b| {
+                a.spinner
+                    .map_or(0.0, |k| k[2])
+                    .total_cmp(&b.spinner.map_or(0.0, |k| k[2]))
+            })
+            .unwrap_or(first),
+    )
 }
 
 /// How far from the centre of `c`'s spinner circle the axes of its (up to three) strongest
@@ -1340,13 +1733,33 @@ fn spinner_candidate(
 /// which is no test of a circle of that size; a blade's axis is its band's (one of whose edges
 /// it holds, whether or not the band points at this circle: that is the test) or its partner
 /// edge's.
-fn axes_meet_offset(segs: &[Segment], axes: &[BandAxis], c: &Candidate, partner: &dyn Fn(&Segment, P2) -> Option<Segment>) -> Option<f64> {
+fn axes_meet_offset(
+    segs: &[Segment],
+    axes: &[BandAxis],
+    c: &Candidate,
+    partner: &dyn Fn(&Segment, P2) -> Option<Segment>,
+) -> Option<f64> {
     let k = c.spinner?;
     let centre = [k[0], k[1]];
-    let band_axis = |b: &Blade| axes.iter().find(|a| a.edges.iter().any(|e| b.lines.contains(e))).map(|a| a.axis);
-    let known: Vec<(Segment, f64)> =
-        c.blades.iter().take(ROTOR_BLADES).filter_map(|b| b.axis.or_else(|| band_axis(b)).or_else(|| one_sided_axis(segs, b, centre, partner)).map(|a| (a, 1.0))).collect();
-    let meet = (known.len() >= 2).then(|| geometry::lines_nearest_point(&known)).flatten()?;
+    let band_axis = |b: &Blade| {
+        axes.iter()
+            .find(|a| a.edges.iter().any(|e| b.lines.contains(e)))
+            .map(|a| a.axis)
+    };
+    let known: Vec<(Segment, f64)> = c
+        .blades
+        .iter()
+        .take(ROTOR_BLADES)
+        .filter_map(|b| {
+            b.axis
+                .or_else(|| band_axis(b))
+                .or_else(|| one_sided_axis(segs, b, centre, partner))
+                .map(|a| (a, 1.0))
+        })
+        .collect();
+    let meet = (known.len() >= 2)
+        .then(|| geometry::lines_nearest_point(&known))
+        .flatten()?;
     Some(geometry::dist(meet, centre))
 }
 
@@ -1362,7 +1775,12 @@ fn kept_support(p: &DefaultParams, cand: &Candidate, circle: &Candidate) -> f64 
     let kept: f64 = own
         .iter()
         .map(|b| {
-            let seen: f64 = circle.blades.iter().filter(|c| geometry::ang_dist(c.angle_deg, b.angle_deg) <= p.blade_group_tol_deg).map(|c| c.weight).sum();
+            let seen: f64 = circle
+                .blades
+                .iter()
+                .filter(|c| geometry::ang_dist(c.angle_deg, b.angle_deg) <= p.blade_group_tol_deg)
+                .map(|c| c.weight)
+                .sum();
             seen.min(b.weight)
         })
         .sum();
@@ -1400,7 +1818,11 @@ pub(crate) fn recognise(
         Some(r) => r.to_degrees(),
         None => search_roll(p, segs),
     };
-    let mut found = Found { roll_used_deg: roll_deg, line_count: segs.len() as u32, ..Found::default() };
+    let mut found = Found {
+        roll_used_deg: roll_deg,
+        line_count: segs.len() as u32,
+        ..Found::default()
+    };
     let mut kinds = vec![LineKind::Other; segs.len()];
     let usable = usable_lines(p, segs, w, h, roll_deg);
     for (i, u) in usable.iter().enumerate() {
@@ -1411,10 +1833,17 @@ pub(crate) fn recognise(
     let axes = pair_edges(p, segs, &usable, h);
     let mut props = proposals(p, segs, &usable, w, h);
     let axis_props = axis_proposals(p, &axes, w, h);
-    log::trace!("axes {:?} axis proposals {:?}", axes.iter().map(|a| (a.axis, a.width)).collect::<Vec<_>>(), axis_props);
+    log::trace!(
+        "axes {:?} axis proposals {:?}",
+        axes.iter().map(|a| (a.axis, a.width)).collect::<Vec<_>>(),
+        axis_props
+    );
     props.extend(axis_props);
     let mut cands: Vec<Candidate> = Vec::new();
-    let mut centres: Vec<P2> = peaks(&props, w, h, p.cluster_radius_frac * h, MAX_PEAKS).into_iter().map(|(c, _)| c).collect();
+    let mut centres: Vec<P2> = peaks(&props, w, h, p.cluster_radius_frac * h, MAX_PEAKS)
+        .into_iter()
+        .map(|(c, _)| c)
+        .collect();
     if let Some(pred) = hints.predicted_hub_px {
         centres.push(pred);
     }
@@ -1422,20 +1851,34 @@ pub(crate) fn recognise(
     let heat_reach = heat_reach_px(p, expected.heat, w, h);
     if let Some((peak, prob)) = expected.heat.and_then(|m| m.peak()) {
         let c = [peak[0] * w, peak[1] * h];
-        if prob >= p.hub_heat_candidate_min && !centres.iter().any(|q| geometry::dist(*q, c) <= heat_reach) {
+        if prob >= p.hub_heat_candidate_min
+            && !centres.iter().any(|q| geometry::dist(*q, c) <= heat_reach)
+        {
             log::trace!("heatmap peak {c:?} ({prob:.2}) is a candidate");
             centres.push(c);
         }
     }
-    let heat_at = |c: P2| expected.heat.map_or(0.0, |m| m.near(c[0] / w, c[1] / h, p.hub_heat_radius_cells));
+    let heat_at = |c: P2| {
+        expected
+            .heat
+            .map_or(0.0, |m| m.near(c[0] / w, c[1] / h, p.hub_heat_radius_cells))
+    };
     for c in centres {
-        let mut cand = evaluate(p, segs, &usable, &axes, c, h, roll_deg, hints, None, &partner);
+        let mut cand = evaluate(
+            p, segs, &usable, &axes, c, h, roll_deg, hints, None, &partner,
+        );
         if cand.blades.len() >= 2 {
             if let Some(r) = refine(segs, &cand.blades, c, &partner) {
                 if geometry::dist(r, c) <= p.cluster_radius_frac * h * 2.0 {
                     // Re-evaluate at the refined point so blades and tower match the output.
-                    let again = evaluate(p, segs, &usable, &axes, r, h, roll_deg, hints, None, &partner);
-                    log::trace!("candidate {c:?} refined to {r:?}: conf {:.2} -> {:.2}", cand.confidence, again.confidence);
+                    let again = evaluate(
+                        p, segs, &usable, &axes, r, h, roll_deg, hints, None, &partner,
+                    );
+                    log::trace!(
+                        "candidate {c:?} refined to {r:?}: conf {:.2} -> {:.2}",
+                        cand.confidence,
+                        again.confidence
+                    );
                     if again.score >= cand.score {
                         cand = again;
                     }
@@ -1448,13 +1891,24 @@ pub(crate) fn recognise(
                 cand.centre,
                 cand.confidence,
                 cand.support,
-                cand.blades.iter().map(|b| (b.angle_deg.round(), b.weight.round(), b.lines.len())).collect::<Vec<_>>(),
+                cand.blades
+                    .iter()
+                    .map(|b| (b.angle_deg.round(), b.weight.round(), b.lines.len()))
+                    .collect::<Vec<_>>(),
                 cand.tower.len()
             );
         }
         cands.push(cand);
     }
-    cands.sort_by(|a, b| if better(a, b) { std::cmp::Ordering::Less } else if better(b, a) { std::cmp::Ordering::Greater } else { std::cmp::Ordering::Equal });
+    cands.sort_by(|a, b| {
+        if better(a, b) {
+            std::cmp::Ordering::Less
+        } else if better(b, a) {
+            std::cmp::Ordering::Greater
+        } else {
+            std::cmp::Ordering::Equal
+        }
+    });
     // Spinner step on the best few distinct candidates with at least two blades.
     // A candidate near an already searched one reuses its circles (the search box of the
     // first covers most of the second's).
@@ -1463,12 +1917,23 @@ pub(crate) fn recognise(
     let reuse = spinner_reuse_px(p, h);
     // The tracker's predicted hub is searched too, with or without blades: at close range the
     // blades leave the frame and only the spinner is left to see.
-    let predicted = |c: &Candidate| hints.predicted_hub_px.is_some_and(|q| geometry::dist(q, c.centre) < 1e-9);
-    for (k, cand) in cands.iter().filter(|c| c.blades.len() >= 2 || predicted(c)).enumerate() {
+    let predicted = |c: &Candidate| {
+        hints
+            .predicted_hub_px
+            .is_some_and(|q| geometry::dist(q, c.centre) < 1e-9)
+    };
+    for (k, cand) in cands
+        .iter()
+        .filter(|c| c.blades.len() >= 2 || predicted(c))
+        .enumerate()
+    {
         if k >= p.spinner_candidates && !predicted(cand) {
             continue;
         }
-        let circles = match searched.iter().find(|(q, _)| geometry::dist(*q, cand.centre) <= reuse) {
+        let circles = match searched
+            .iter()
+            .find(|(q, _)| geometry::dist(*q, cand.centre) <= reuse)
+        {
             Some((_, c)) => c.clone(),
             None => {
                 let c = search(CircleQuery::Around(cand.centre))?;
@@ -1477,7 +1942,20 @@ pub(crate) fn recognise(
             }
         };
         log::trace!("spinner search at {:?}: {:?}", cand.centre, circles);
-        if let Some(mut sc) = spinner_candidate(p, segs, &usable, &axes, cand, &cands, &circles, h, roll_deg, hints, expected.spinner_radius, &partner) {
+        if let Some(mut sc) = spinner_candidate(
+            p,
+            segs,
+            &usable,
+            &axes,
+            cand,
+            &cands,
+            &circles,
+            h,
+            roll_deg,
+            hints,
+            expected.spinner_radius,
+            &partner,
+        ) {
             // A circle of the size the tracker's distance expects is the spinner with more
             // certainty than blade lines meeting somewhere near it: at close range under an
             // overcast sky the lines of two blades met at the tower top, 0.15 h below the
@@ -1490,14 +1968,23 @@ pub(crate) fn recognise(
                     sc.confidence = (sc.confidence + p.spinner_size_match_bonus).min(1.0);
                 }
             }
-            log::trace!("spinner candidate {:?} conf {:.2} blades {}", sc.spinner, sc.confidence, sc.blades.len());
+            log::trace!(
+                "spinner candidate {:?} conf {:.2} blades {}",
+                sc.spinner,
+                sc.confidence,
+                sc.blades.len()
+            );
             extra.push(sc);
         }
     }
     let mut best: Option<Candidate> = None;
     for mut cand in cands.into_iter().chain(extra) {
         cand.features[crate::ranker::HUB_HEAT] = heat_at(cand.centre);
-        found.candidates.push(Considered { hub: cand.centre, confidence: cand.confidence, features: cand.features });
+        found.candidates.push(Considered {
+            hub: cand.centre,
+            confidence: cand.confidence,
+            features: cand.features,
+        });
         if best.as_ref().is_none_or(|b| preferred(p, &cand, b)) {
             best = Some(cand);
         }
@@ -1507,15 +1994,41 @@ pub(crate) fn recognise(
     // Not with a tracker's prediction: its neighbourhood was searched already, and a frame
     // missed while tracking would pay for the whole-image search.
     let always = p.close_spinner_always;
-    if hints.predicted_hub_px.is_none() && (always || best.as_ref().is_none_or(|b| !decision(p, b).0)) {
+    if hints.predicted_hub_px.is_none()
+        && (always || best.as_ref().is_none_or(|b| !decision(p, b).0))
+    {
         let min_r = p.close_spinner_radius_frac * h;
-        for k in search(CircleQuery::Close)?.into_iter().filter(|k| k[2] >= min_r) {
-            let mut cand = evaluate(p, segs, &usable, &axes, [k[0], k[1]], h, roll_deg, hints, Some([k[0], k[1], k[2]]), &partner);
+        for k in search(CircleQuery::Close)?
+            .into_iter()
+            .filter(|k| k[2] >= min_r)
+        {
+            let mut cand = evaluate(
+                p,
+                segs,
+                &usable,
+                &axes,
+                [k[0], k[1]],
+                h,
+                roll_deg,
+                hints,
+                Some([k[0], k[1], k[2]]),
+                &partner,
+            );
             cand.features[crate::ranker::SPINNER_COVERAGE] = k[3];
-            cand.features[crate::ranker::SPINNER_AXES_OFFSET] = axes_meet_offset(segs, &axes, &cand, &partner).map_or(0.0, |off| (off / k[2]).min(2.0));
+            cand.features[crate::ranker::SPINNER_AXES_OFFSET] =
+                axes_meet_offset(segs, &axes, &cand, &partner)
+                    .map_or(0.0, |off| (off / k[2]).min(2.0));
             cand.features[crate::ranker::HUB_HEAT] = heat_at(cand.centre);
-            log::trace!("close spinner {k:?}: conf {:.2} blades {}", cand.confidence, cand.blades.len());
-            found.candidates.push(Considered { hub: cand.centre, confidence: cand.confidence, features: cand.features });
+            log::trace!(
+                "close spinner {k:?}: conf {:.2} blades {}",
+                cand.confidence,
+                cand.blades.len()
+            );
+            found.candidates.push(Considered {
+                hub: cand.centre,
+                confidence: cand.confidence,
+                features: cand.features,
+            });
             if cand.blades.len() >= 2 && best.as_ref().is_none_or(|b| preferred(p, &cand, b)) {
                 best = Some(cand);
                 if !always {
@@ -1543,24 +2056,50 @@ pub(crate) fn recognise(
         found.search_circle = Some([b.centre[0], b.centre[1], p.support_end_dist_frac * h]);
         match grad {
             Some(g) => {
-                if let Some((fit, top_y)) = measure_tower(p, segs, &b, &g.x, tower_width, expected.optics.as_ref(), hints.hub_distance_m, roll_deg, h, found.detected) {
+                if let Some((fit, top_y)) = measure_tower(
+                    p,
+                    segs,
+                    &b,
+                    &g.x,
+                    tower_width,
+                    expected.optics.as_ref(),
+                    hints.hub_distance_m,
+                    roll_deg,
+                    h,
+                    found.detected,
+                ) {
                     let row = top_y + p.tower_width_below_top_frac * h;
                     found.tower_top = fit.axis.x_at_y(top_y).map(|x| [x, top_y]);
                     found.tower_axis = Some(fit.axis);
                     // A width that was assumed is no measurement of the distance.
-                    found.tower_width = if fit.one_edge { None } else { fit.width_at(row).map(|wd| (wd, row)) };
+                    found.tower_width = if fit.one_edge {
+                        None
+                    } else {
+                        fit.width_at(row).map(|wd| (wd, row))
+                    };
                 }
                 if found.detected {
-                    found.nacelle_end_dx = expected.px_per_m.and_then(|s| crate::nacelle::nacelle_end(p, &g.x, b.centre, s));
+                    found.nacelle_end_dx = expected
+                        .px_per_m
+                        .and_then(|s| crate::nacelle::nacelle_end(p, &g.x, b.centre, s));
                 }
             }
             None if !b.tower.is_empty() => {
-                let top = b.tower.iter().flat_map(|&i| [segs[i].a, segs[i].b]).min_by(|x, y| x[1].total_cmp(&y[1])).unwrap_or(b.centre);
+                let top = b
+                    .tower
+                    .iter()
+                    .flat_map(|&i| [segs[i].a, segs[i].b])
+                    .min_by(|x, y| x[1].total_cmp(&y[1]))
+                    .unwrap_or(b.centre);
                 let row = top[1] + p.tower_width_below_top_frac * h;
                 let axis = crate::thesis::tower_axis(segs, &b.tower);
-                found.tower_top = Some(axis.and_then(|a| a.x_at_y(top[1])).map_or(top, |x| [x, top[1]]));
+                found.tower_top = Some(
+                    axis.and_then(|a| a.x_at_y(top[1]))
+                        .map_or(top, |x| [x, top[1]]),
+                );
                 found.tower_axis = axis;
-                found.tower_width = crate::thesis::tower_width_at(segs, &b.tower, row, 1.0).map(|wd| (wd, row));
+                found.tower_width =
+                    crate::thesis::tower_width_at(segs, &b.tower, row, 1.0).map(|wd| (wd, row));
             }
             None => {}
         }
@@ -1590,12 +2129,18 @@ mod tests {
         let d = dir_from_up_cw(angle);
         Segment::new(
             [from[0] + d[0] * start, from[1] + d[1] * start],
-            [from[0] + d[0] * (start + len), from[1] + d[1] * (start + len)],
+            [
+                from[0] + d[0] * (start + len),
+                from[1] + d[1] * (start + len),
+            ],
         )
     }
 
     fn rotor(hub: P2, rot: f64) -> Vec<Segment> {
-        let mut v = vec![Segment::new([hub[0] - 3.0, 269.0], [hub[0] - 2.0, hub[1] + 8.0]), Segment::new([hub[0] + 3.0, 269.0], [hub[0] + 2.0, hub[1] + 8.0])];
+        let mut v = vec![
+            Segment::new([hub[0] - 3.0, 269.0], [hub[0] - 2.0, hub[1] + 8.0]),
+            Segment::new([hub[0] + 3.0, 269.0], [hub[0] + 2.0, hub[1] + 8.0]),
+        ];
         for a in [rot, rot + 120.0, rot + 240.0] {
             v.push(ray(hub, a - 3.0, 6.0, 70.0));
             v.push(ray(hub, a + 3.0, 6.0, 70.0));
@@ -1606,8 +2151,17 @@ mod tests {
     #[test]
     fn a_circle_keeps_the_blade_support_only_where_the_blades_radiate_from_it() {
         let p = DefaultParams::default();
-        let blade = |angle_deg: f64, weight: f64| Blade { lines: Vec::new(), angle_deg, weight, axis: None };
-        let cand = |blades: Vec<Blade>| Candidate { support: blades.iter().map(|b| b.weight).sum(), blades, ..Candidate::default() };
+        let blade = |angle_deg: f64, weight: f64| Blade {
+            lines: Vec::new(),
+            angle_deg,
+            weight,
+            axis: None,
+        };
+        let cand = |blades: Vec<Blade>| Candidate {
+            support: blades.iter().map(|b| b.weight).sum(),
+            blades,
+            ..Candidate::default()
+        };
         // The rotor's line candidate (seed-4 frame at 40 m, working px): blades at 309° and 67°.
         let rotor = cand(vec![blade(309.0, 325.0), blade(67.0, 198.0)]);
         // The spinner keeps both; the nacelle's rear beside it sees the same blades pass by,
@@ -1620,9 +2174,20 @@ mod tests {
         assert!((k - 257.0 / 523.0).abs() < 1e-9, "{k}");
         assert!(kept_support(&p, &rotor, &horizon) < 0.3);
         // Longer blades from the circle count no more than the candidate's own.
-        assert!((kept_support(&p, &rotor, &cand(vec![blade(309.0, 900.0), blade(67.0, 198.0)])) - 1.0).abs() < 1e-9);
+        assert!(
+            (kept_support(
+                &p,
+                &rotor,
+                &cand(vec![blade(309.0, 900.0), blade(67.0, 198.0)])
+            ) - 1.0)
+                .abs()
+                < 1e-9
+        );
         // A candidate with one blade (the tracker's prediction at close range) checks nothing.
-        assert_eq!(kept_support(&p, &cand(vec![blade(0.0, 100.0)]), &horizon), 1.0);
+        assert_eq!(
+            kept_support(&p, &cand(vec![blade(0.0, 100.0)]), &horizon),
+            1.0
+        );
     }
 
     #[test]
@@ -1633,7 +2198,20 @@ mod tests {
         // Horizon split by the tower: two long pieces ending at the tower.
         segs.push(Segment::new([0.0, 125.0], [196.0, 125.0]));
         segs.push(Segment::new([204.0, 125.0], [479.0, 125.0]));
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, Expected::default()).unwrap();
+        let f = recognise(
+            &p,
+            &segs,
+            480.0,
+            270.0,
+            &Hints {
+                roll_rad: Some(0.0),
+                ..Hints::default()
+            },
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 3.0, "{:?}", f.hub);
         assert_eq!(f.blade_angles.len(), 3);
@@ -1648,13 +2226,33 @@ mod tests {
         // tower lines' "blade" pointing down, and the second leans more than a tower line may.
         segs.push(ray(hub, 187.5, 8.0, 60.0));
         segs.push(ray(hub, 188.5, 8.0, 60.0));
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, Expected::default()).unwrap();
+        let f = recognise(
+            &p,
+            &segs,
+            480.0,
+            270.0,
+            &Hints {
+                roll_rad: Some(0.0),
+                ..Hints::default()
+            },
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 3.0, "{:?}", f.hub);
         let mut angles: Vec<f64> = f.blade_angles.iter().map(|a| a.round()).collect();
         angles.sort_by(f64::total_cmp);
-        assert_eq!(angles.len(), 3, "three blades, the tower is no blade: {angles:?}");
-        assert!(angles.iter().all(|a| geometry::ang_dist(*a, 180.0) > 30.0), "{angles:?}");
+        assert_eq!(
+            angles.len(),
+            3,
+            "three blades, the tower is no blade: {angles:?}"
+        );
+        assert!(
+            angles.iter().all(|a| geometry::ang_dist(*a, 180.0) > 30.0),
+            "{angles:?}"
+        );
     }
 
     #[test]
@@ -1680,7 +2278,12 @@ mod tests {
     #[allow(clippy::approx_constant)]
     fn a_spinner_implies_the_tower_width_from_its_own_distance() {
         // GoPro at 960 px wide (f = 417 px), the renderer's turbine.
-        let o = Optics { focal_px: 0.4343 * 960.0, spinner_radius_m: 1.6, tower_top_diameter_m: 2.2, hub_tower_gap_m: 4.2 };
+        let o = Optics {
+            focal_px: 0.4343 * 960.0,
+            spinner_radius_m: 1.6,
+            tower_top_diameter_m: 2.2,
+            hub_tower_gap_m: 4.2,
+        };
         let r_at = |d: f64| o.focal_px * 1.6 / d;
         // 38 m: the tower top, 42.2 m away, is 1.24 spinner radii wide; 5 m: 0.75.
         let far = o.tower_width_for_spinner(r_at(38.0)).unwrap() / r_at(38.0);
@@ -1690,7 +2293,10 @@ mod tests {
         // Seed 335 of `hubtrack fly` at 38 m: a band 0.6 r wide (the shading ramp) is outside
         // the default tolerance, the true 1.25 r inside.
         let tol = DefaultParams::default().tower_width_spinner_tol;
-        assert!(0.6 < far / tol && far / tol < 1.25 && 1.25 < far * tol, "{far} {tol}");
+        assert!(
+            0.6 < far / tol && far / tol < 1.25 && 1.25 < far * tol,
+            "{far} {tol}"
+        );
         assert!(o.tower_width_for_spinner(0.0).is_none());
     }
 
@@ -1709,7 +2315,11 @@ mod tests {
     #[test]
     fn collinear_pieces_merge() {
         let p = DefaultParams::default();
-        let segs = [Segment::new([100.0, 200.0], [100.0, 150.0]), Segment::new([100.5, 145.0], [101.0, 90.0]), Segment::new([0.0, 0.0], [50.0, 0.0])];
+        let segs = [
+            Segment::new([100.0, 200.0], [100.0, 150.0]),
+            Segment::new([100.5, 145.0], [101.0, 90.0]),
+            Segment::new([0.0, 0.0], [50.0, 0.0]),
+        ];
         let m = merge_collinear(&p, &segs, 270.0);
         assert_eq!(m.len(), 2);
         assert!(m[0].length() > 105.0, "{m:?}");
@@ -1735,14 +2345,40 @@ mod tests {
         let hub = [200.0, 100.0];
         // Blades at 60° and 300°: the third would point straight down, over the tower.
         let mut segs = rotor(hub, 60.0);
-        segs.retain(|s| geometry::ang_dist(s.angle_away_from(hub), 180.0) > 10.0 || s.tilt_from_vertical_deg().abs() < 1.0);
+        segs.retain(|s| {
+            geometry::ang_dist(s.angle_away_from(hub), 180.0) > 10.0
+                || s.tilt_from_vertical_deg().abs() < 1.0
+        });
         assert_eq!(segs.len(), 6, "tower edges and two blades");
-        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
-        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
+        let hints = Hints {
+            roll_rad: Some(0.0),
+            ..Hints::default()
+        };
+        let f = recognise(
+            &p,
+            &segs,
+            480.0,
+            270.0,
+            &hints,
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(f.detected && geometry::dist(f.hub, hub) < 3.0, "{f:?}");
         let with_rule = f.confidence;
         p.hidden_blade_tol_deg = 0.0;
-        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
+        let f = recognise(
+            &p,
+            &segs,
+            480.0,
+            270.0,
+            &hints,
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(f.confidence < with_rule, "{} vs {with_rule}", f.confidence);
     }
 
@@ -1755,14 +2391,37 @@ mod tests {
         for a in [30.0, 150.0, 270.0] {
             segs.push(ray(clutter, a, 6.0, 100.0));
         }
-        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+        let hints = Hints {
+            roll_rad: Some(0.0),
+            ..Hints::default()
+        };
         let p = DefaultParams::default();
         assert_eq!(p.ranker.ranking, Ranking::Learned);
-        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
+        let f = recognise(
+            &p,
+            &segs,
+            480.0,
+            270.0,
+            &hints,
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(f.detected && geometry::dist(f.hub, hub) < 3.0, "{f:?}");
-        assert!(f.candidates.iter().any(|c| geometry::dist(c.hub, clutter) < 5.0), "the crossing was a candidate: {:?}", f.candidates);
+        assert!(
+            f.candidates
+                .iter()
+                .any(|c| geometry::dist(c.hub, clutter) < 5.0),
+            "the crossing was a candidate: {:?}",
+            f.candidates
+        );
         // Reported as a probability, above the one the threshold stands for.
-        assert!(f.confidence > crate::ranker::logistic(p.ranker.min_score) && f.confidence < 1.0, "{}", f.confidence);
+        assert!(
+            f.confidence > crate::ranker::logistic(p.ranker.min_score) && f.confidence < 1.0,
+            "{}",
+            f.confidence
+        );
     }
 
     #[test]
@@ -1771,19 +2430,68 @@ mod tests {
         // A mast: its top above the candidate, two tower-like edges below, and a field border
         // crossing behind it in two pieces 175° apart (not collinear enough to be caught as a
         // line continuing behind the candidate).
-        let mut segs = vec![Segment::new([197.0, 269.0], [198.0, 128.0]), Segment::new([203.0, 269.0], [202.0, 128.0]), ray(c, 0.0, 6.0, 80.0)];
+        let mut segs = vec![
+            Segment::new([197.0, 269.0], [198.0, 128.0]),
+            Segment::new([203.0, 269.0], [202.0, 128.0]),
+            ray(c, 0.0, 6.0, 80.0),
+        ];
         segs.push(ray(c, 70.0, 6.0, 150.0));
         segs.push(ray(c, 245.0, 6.0, 150.0));
-        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
-        let off = DefaultParams { blade_max_separation_deg: 180.0, ..rules() };
-        let f = recognise(&off, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
-        assert!(f.detected, "without the rule the three lines pass for a rotor: {f:?}");
+        let hints = Hints {
+            roll_rad: Some(0.0),
+            ..Hints::default()
+        };
+        let off = DefaultParams {
+            blade_max_separation_deg: 180.0,
+            ..rules()
+        };
+        let f = recognise(
+            &off,
+            &segs,
+            480.0,
+            270.0,
+            &hints,
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
+        assert!(
+            f.detected,
+            "without the rule the three lines pass for a rotor: {f:?}"
+        );
         // The learned ranking refuses them without the rule: single edges far from 120° apart.
-        let learned = DefaultParams { blade_max_separation_deg: 180.0, ..DefaultParams::default() };
-        let f = recognise(&learned, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
+        let learned = DefaultParams {
+            blade_max_separation_deg: 180.0,
+            ..DefaultParams::default()
+        };
+        let f = recognise(
+            &learned,
+            &segs,
+            480.0,
+            270.0,
+            &hints,
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(!f.detected, "{f:?}");
-        let on = DefaultParams { blade_max_separation_deg: 170.0, ..off.clone() };
-        let f = recognise(&on, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
+        let on = DefaultParams {
+            blade_max_separation_deg: 170.0,
+            ..off.clone()
+        };
+        let f = recognise(
+            &on,
+            &segs,
+            480.0,
+            270.0,
+            &hints,
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(!f.detected, "{f:?}");
         // A rotor seen at 60° yaw (blades 0°, 120°, 240° on the rotor plane, horizontal
         // components halved): 139° apart at most, all kept.
@@ -1797,16 +2505,46 @@ mod tests {
             segs.push(ray(c, seen(a) - 3.0, 6.0, 70.0));
             segs.push(ray(c, seen(a) + 3.0, 6.0, 70.0));
         }
-        let f = recognise(&on, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
-        assert!(f.detected && geometry::dist(f.hub, c) < 3.0 && f.blade_angles.len() == 3, "{f:?}");
+        let f = recognise(
+            &on,
+            &segs,
+            480.0,
+            270.0,
+            &hints,
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
+        assert!(
+            f.detected && geometry::dist(f.hub, c) < 3.0 && f.blade_angles.len() == 3,
+            "{f:?}"
+        );
     }
 
     #[test]
     fn parallel_lines_alone_are_no_turbine() {
         let p = DefaultParams::default();
         // Power-line like: several long near-parallel sagging wires.
-        let segs: Vec<Segment> = (0..5).map(|k| Segment::new([0.0, 50.0 + 10.0 * k as f64], [479.0, 60.0 + 12.0 * k as f64])).collect();
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints::default(), &mut no_circles, None, Expected::default()).unwrap();
+        let segs: Vec<Segment> = (0..5)
+            .map(|k| {
+                Segment::new(
+                    [0.0, 50.0 + 10.0 * k as f64],
+                    [479.0, 60.0 + 12.0 * k as f64],
+                )
+            })
+            .collect();
+        let f = recognise(
+            &p,
+            &segs,
+            480.0,
+            270.0,
+            &Hints::default(),
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(!f.detected);
     }
 
@@ -1815,8 +2553,16 @@ mod tests {
     fn blade_edges(hub: P2, angle: f64, start: f64, len: f64, w0: f64, w1: f64) -> [Segment; 2] {
         let d = dir_from_up_cw(angle);
         let n = [-d[1], d[0]];
-        let at = |t: f64, off: f64| [hub[0] + d[0] * t + n[0] * off, hub[1] + d[1] * t + n[1] * off];
-        [Segment::new(at(start, w0), at(start + len, w1)), Segment::new(at(start, -w0), at(start + len, -w1))]
+        let at = |t: f64, off: f64| {
+            [
+                hub[0] + d[0] * t + n[0] * off,
+                hub[1] + d[1] * t + n[1] * off,
+            ]
+        };
+        [
+            Segment::new(at(start, w0), at(start + len, w1)),
+            Segment::new(at(start, -w0), at(start + len, -w1)),
+        ]
     }
 
     #[test]
@@ -1826,12 +2572,24 @@ mod tests {
         // Both edges of a blade lying level, 220 px long, narrowing from 20 to 6 px across.
         let blade = blade_edges([400.0, 120.0], 270.0, 10.0, 220.0, 10.0, 3.0);
         // A road of even width and the horizon itself.
-        let road = [Segment::new([10.0, 200.0], [300.0, 205.0]), Segment::new([10.0, 214.0], [300.0, 219.0])];
+        let road = [
+            Segment::new([10.0, 200.0], [300.0, 205.0]),
+            Segment::new([10.0, 214.0], [300.0, 219.0]),
+        ];
         let horizon = Segment::new([0.0, 160.0], [479.0, 162.0]);
         let segs = vec![blade[0], blade[1], road[0], road[1], horizon];
-        assert!(segs.iter().all(|s| is_horizon(&p, s, w, 0.0)), "all are horizon candidates");
-        assert_eq!(usable_lines(&p, &segs, w, h, 0.0), vec![true, true, false, false, false]);
-        let off = DefaultParams { horizon_band_min_taper: 0.0, ..p };
+        assert!(
+            segs.iter().all(|s| is_horizon(&p, s, w, 0.0)),
+            "all are horizon candidates"
+        );
+        assert_eq!(
+            usable_lines(&p, &segs, w, h, 0.0),
+            vec![true, true, false, false, false]
+        );
+        let off = DefaultParams {
+            horizon_band_min_taper: 0.0,
+            ..p
+        };
         assert_eq!(usable_lines(&off, &segs, w, h, 0.0), vec![false; 5]);
     }
 
@@ -1851,12 +2609,22 @@ mod tests {
         let axes = pair_edges(&p, &segs, &usable, 270.0);
         assert_eq!(axes.len(), 3, "{axes:?}");
         for a in &axes {
-            assert_eq!(a.edges[0] / 2, a.edges[1] / 2, "edges of different blades paired: {a:?}");
+            assert_eq!(
+                a.edges[0] / 2,
+                a.edges[1] / 2,
+                "edges of different blades paired: {a:?}"
+            );
             assert!(a.axis.line_distance(hub) < 1e-6, "{a:?}");
-            assert!((a.width[0] - 16.0).abs() < 0.5 || (a.width[1] - 16.0).abs() < 0.5, "{a:?}");
+            assert!(
+                (a.width[0] - 16.0).abs() < 0.5 || (a.width[1] - 16.0).abs() < 0.5,
+                "{a:?}"
+            );
         }
         let props = axis_proposals(&p, &axes, 480.0, 270.0);
-        assert!(!props.is_empty() && props.iter().all(|(x, _)| geometry::dist(*x, hub) < 1e-6), "{props:?}");
+        assert!(
+            !props.is_empty() && props.iter().all(|(x, _)| geometry::dist(*x, hub) < 1e-6),
+            "{props:?}"
+        );
     }
 
     #[test]
@@ -1869,7 +2637,20 @@ mod tests {
         for a in [40.0, 160.0, 280.0] {
             segs.extend(blade_edges(hub, a, 55.0, 120.0, 18.0, 9.0));
         }
-        let f = recognise(&p, &segs, 480.0, 270.0, &Hints { roll_rad: Some(0.0), ..Hints::default() }, &mut no_circles, None, Expected::default()).unwrap();
+        let f = recognise(
+            &p,
+            &segs,
+            480.0,
+            270.0,
+            &Hints {
+                roll_rad: Some(0.0),
+                ..Hints::default()
+            },
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(f.detected, "{f:?}");
         assert!(geometry::dist(f.hub, hub) < 2.0, "{:?}", f.hub);
     }
@@ -1878,7 +2659,10 @@ mod tests {
     fn tracker_distance_narrows_the_spinner_radii() {
         let p = DefaultParams::default();
         let all = spinner_radii(&p, 270.0, None);
-        assert_eq!(all, (p.spinner_min_radius_px, p.spinner_max_radius_frac * 270.0));
+        assert_eq!(
+            all,
+            (p.spinner_min_radius_px, p.spinner_max_radius_frac * 270.0)
+        );
         // Expected 20 px: 10..40 px, inside the configured limits.
         assert_eq!(spinner_radii(&p, 270.0, Some(20.0)), (10.0, 40.0));
         // Far away (expected 3 px): clipped to the limits, and empty: nothing to search.
@@ -1886,7 +2670,17 @@ mod tests {
         assert!(lo >= hi, "{lo} {hi}");
         // Nonsense distances and a disabled window fall back to all radii.
         assert_eq!(spinner_radii(&p, 270.0, Some(f64::NAN)), all);
-        assert_eq!(spinner_radii(&DefaultParams { spinner_hint_radius_lo: 0.0, ..p.clone() }, 270.0, Some(20.0)), all);
+        assert_eq!(
+            spinner_radii(
+                &DefaultParams {
+                    spinner_hint_radius_lo: 0.0,
+                    ..p.clone()
+                },
+                270.0,
+                Some(20.0)
+            ),
+            all
+        );
     }
 
     #[test]
@@ -1899,19 +2693,31 @@ mod tests {
         let mut a = 200.0f64;
         while a < 200.0 + 0.3 * 360.0 {
             let (s, co) = a.to_radians().sin_cos();
-            let (x, y) = ((c[0] + r * co).round() as usize, (c[1] + r * s).round() as usize);
+            let (x, y) = (
+                (c[0] + r * co).round() as usize,
+                (c[1] + r * s).round() as usize,
+            );
             edges[y * w + x] = 255;
             dx[y * w + x] = (200.0 * co).round() as i16;
             dy[y * w + x] = (200.0 * s).round() as i16;
             a += 0.25;
         }
-        let img = EdgeImage { edges: &edges, dx: &dx, dy: &dy, width: w, height: h };
+        let img = EdgeImage {
+            edges: &edges,
+            dx: &dx,
+            dy: &dy,
+            width: w,
+            height: h,
+        };
         assert!(p.spinner_hint_min_coverage < 0.3 && 0.3 < p.spinner_min_coverage);
         let blind = search_circles(&p, &img, c, h as f64, None, &mut Vec::new(), None);
         assert!(blind.is_empty(), "{blind:?}");
         let hinted = search_circles(&p, &img, c, h as f64, Some(r), &mut Vec::new(), None);
         let k = hinted.first().expect("found with the expected radius");
-        assert!(geometry::dist([k[0], k[1]], c) < 2.0 && (k[2] - r).abs() < 2.0, "{k:?}");
+        assert!(
+            geometry::dist([k[0], k[1]], c) < 2.0 && (k[2] - r).abs() < 2.0,
+            "{k:?}"
+        );
         // The box's points selected from the whole image's are the box's own, in the same
         // order, and find the same circles.
         let mut all = Vec::new();
@@ -1921,7 +2727,10 @@ mod tests {
         select_points(&all, [200, 100, 260, 180], &mut selected);
         assert!(!boxed.is_empty() && boxed.len() < all.len());
         assert_eq!(boxed, selected);
-        assert_eq!(search_circles(&p, &img, c, h as f64, Some(r), &mut Vec::new(), Some(&all)), hinted);
+        assert_eq!(
+            search_circles(&p, &img, c, h as f64, Some(r), &mut Vec::new(), Some(&all)),
+            hinted
+        );
     }
 
     #[test]
@@ -1934,27 +2743,70 @@ mod tests {
         for a in [20.0, 140.0, 260.0] {
             segs.push(blade_edges(hub, a, 30.0, 100.0, 6.0, 2.0)[0]);
         }
-        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
-        let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0, 1.0]]) };
-        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None, Expected::default()).unwrap();
+        let hints = Hints {
+            roll_rad: Some(0.0),
+            ..Hints::default()
+        };
+        let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
+            Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0, 1.0]])
+        };
+        let f = recognise(
+            &p,
+            &segs,
+            480.0,
+            270.0,
+            &hints,
+            &mut at_hub,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(f.detected && f.circle.is_some(), "{f:?}");
-        assert!(geometry::dist(f.hub, [hub[0] + 0.5, hub[1] - 0.5]) < 1e-9, "{:?}", f.hub);
+        assert!(
+            geometry::dist(f.hub, [hub[0] + 0.5, hub[1] - 0.5]) < 1e-9,
+            "{:?}",
+            f.hub
+        );
         // A circle far from every candidate is ignored.
-        let mut far_away = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(vec![[400.0, 240.0, 30.0, 1.0]]) };
-        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut far_away, None, Expected::default()).unwrap();
+        let mut far_away = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
+            Ok(vec![[400.0, 240.0, 30.0, 1.0]])
+        };
+        let g = recognise(
+            &p,
+            &segs,
+            480.0,
+            270.0,
+            &hints,
+            &mut far_away,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(g.circle.is_none(), "{g:?}");
         // The circle at the size the tracker's distance expects counts for more; at another
         // size it counts as before.
         let conf = |r_expected: f64| {
-            let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0, 1.0]]) };
-            let expected = Expected { spinner_radius: Some(r_expected), ..Expected::default() };
-            let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None, expected).unwrap();
+            let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
+                Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0, 1.0]])
+            };
+            let expected = Expected {
+                spinner_radius: Some(r_expected),
+                ..Expected::default()
+            };
+            let f =
+                recognise(&p, &segs, 480.0, 270.0, &hints, &mut at_hub, None, expected).unwrap();
             assert!(f.circle.is_some(), "{f:?}");
             f.confidence
         };
         let (base, matched, other) = (f.confidence, conf(32.0), conf(60.0));
-        assert!(base + p.spinner_size_match_bonus <= 1.0 + 1e-9, "room for the bonus: {base}");
-        assert!((matched - base - p.spinner_size_match_bonus).abs() < 1e-9, "{matched} vs {base}");
+        assert!(
+            base + p.spinner_size_match_bonus <= 1.0 + 1e-9,
+            "room for the bonus: {base}"
+        );
+        assert!(
+            (matched - base - p.spinner_size_match_bonus).abs() < 1e-9,
+            "{matched} vs {base}"
+        );
         assert!((other - base).abs() < 1e-9, "{other} vs {base}");
     }
 
@@ -1967,22 +2819,51 @@ mod tests {
         for a in [0.0, 120.0, 240.0] {
             segs.extend(blade_edges(hub, a, r, 100.0, 7.0, 3.0));
         }
-        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+        let hints = Hints {
+            roll_rad: Some(0.0),
+            ..Hints::default()
+        };
         // A round patch 1.2 radii beside the hub with a better covered rim than the spinner's
         // (the nacelle's front corner between two blade roots in a rendered flight).
         let beside = [hub[0] + 1.2 * r * 0.6, hub[1] + 1.2 * r * 0.8, r, 0.9];
         let spinner = [hub[0], hub[1], r, 0.6];
         let run = |p: &DefaultParams| {
-            let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(vec![beside, spinner]) };
-            recognise(p, &segs, 480.0, 270.0, &hints, &mut circles, None, Expected::default()).unwrap()
+            let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
+                Ok(vec![beside, spinner])
+            };
+            recognise(
+                p,
+                &segs,
+                480.0,
+                270.0,
+                &hints,
+                &mut circles,
+                None,
+                Expected::default(),
+            )
+            .unwrap()
         };
-        let off = DefaultParams { spinner_max_convergence_radii: 0.0, ..rules() };
+        let off = DefaultParams {
+            spinner_max_convergence_radii: 0.0,
+            ..rules()
+        };
         let f = run(&off);
-        assert!(f.circle.is_some_and(|k| geometry::dist([k[0], k[1]], [beside[0], beside[1]]) < 1e-9), "without the rule the better rim wins: {f:?}");
-        let on = DefaultParams { spinner_max_convergence_radii: 1.0, ..off.clone() };
+        assert!(
+            f.circle
+                .is_some_and(|k| geometry::dist([k[0], k[1]], [beside[0], beside[1]]) < 1e-9),
+            "without the rule the better rim wins: {f:?}"
+        );
+        let on = DefaultParams {
+            spinner_max_convergence_radii: 1.0,
+            ..off.clone()
+        };
         let f = run(&on);
         assert!(f.detected && geometry::dist(f.hub, hub) < 1.0, "{f:?}");
-        assert!(f.circle.is_some_and(|k| geometry::dist([k[0], k[1]], hub) < 1e-9), "{f:?}");
+        assert!(
+            f.circle
+                .is_some_and(|k| geometry::dist([k[0], k[1]], hub) < 1e-9),
+            "{f:?}"
+        );
     }
 
     #[test]
@@ -1993,28 +2874,60 @@ mod tests {
         for a in [20.0, 140.0, 260.0] {
             segs.push(blade_edges(hub, a, 30.0, 100.0, 6.0, 2.0)[0]);
         }
-        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+        let hints = Hints {
+            roll_rad: Some(0.0),
+            ..Hints::default()
+        };
         // The spinner (best covered) and a larger circle round it, 6 px off centre, as blade
         // edges crossing near the spinner draw one.
         let inner = [hub[0], hub[1], 30.0];
         let outer = [hub[0] + 4.0, hub[1] + 4.5, 36.5];
-        assert!(geometry::dist([outer[0], outer[1]], [inner[0], inner[1]]) + inner[2] <= outer[2] + SPINNER_NEST_TOL_PX, "nested");
+        assert!(
+            geometry::dist([outer[0], outer[1]], [inner[0], inner[1]]) + inner[2]
+                <= outer[2] + SPINNER_NEST_TOL_PX,
+            "nested"
+        );
         let circle = |outer_cov: f64| {
             let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
-                Ok(vec![[inner[0], inner[1], inner[2], 0.6], [outer[0], outer[1], outer[2], outer_cov]])
+                Ok(vec![
+                    [inner[0], inner[1], inner[2], 0.6],
+                    [outer[0], outer[1], outer[2], outer_cov],
+                ])
             };
-            recognise(&p, &segs, 480.0, 270.0, &hints, &mut circles, None, Expected::default()).unwrap().circle
+            recognise(
+                &p,
+                &segs,
+                480.0,
+                270.0,
+                &hints,
+                &mut circles,
+                None,
+                Expected::default(),
+            )
+            .unwrap()
+            .circle
         };
         let ratio = p.spinner_nest_min_coverage_ratio;
         assert!(ratio > 0.0 && ratio < 1.0);
-        assert_eq!(circle(0.6 * ratio - 0.05), Some(inner), "a weakly covered outer circle is no silhouette");
-        assert_eq!(circle(0.6 * ratio + 0.05), Some(outer), "the silhouette round a ring on the spinner's face");
+        assert_eq!(
+            circle(0.6 * ratio - 0.05),
+            Some(inner),
+            "a weakly covered outer circle is no silhouette"
+        );
+        assert_eq!(
+            circle(0.6 * ratio + 0.05),
+            Some(outer),
+            "the silhouette round a ring on the spinner's face"
+        );
     }
 
     #[test]
     fn a_near_tie_between_spinner_circles_goes_to_the_expected_size_else_to_the_prediction() {
         // Off by default (see the parameter); the value it was measured with.
-        let p = DefaultParams { spinner_tie_ratio: 0.8, ..DefaultParams::default() };
+        let p = DefaultParams {
+            spinner_tie_ratio: 0.8,
+            ..DefaultParams::default()
+        };
         let hub = [240.0, 120.0];
         let mut segs: Vec<Segment> = Vec::new();
         for a in [20.0, 140.0, 260.0] {
@@ -2024,27 +2937,69 @@ mod tests {
         // between two blade roots), both with blades at their rim.
         let spinner = [hub[0], hub[1], 28.0];
         let beside = [hub[0] + 10.0, hub[1] + 4.0, 20.0];
-        let circle_with = |p: &DefaultParams, beside_cov: f64, predicted: Option<P2>, expected_r: Option<f64>| {
-            let hints = Hints { roll_rad: Some(0.0), predicted_hub_px: predicted, ..Hints::default() };
-            let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
-                let mut v = vec![[spinner[0], spinner[1], spinner[2], 0.30], [beside[0], beside[1], beside[2], beside_cov]];
-                v.sort_by(|a, b| b[3].total_cmp(&a[3]));
-                Ok(v)
+        let circle_with =
+            |p: &DefaultParams, beside_cov: f64, predicted: Option<P2>, expected_r: Option<f64>| {
+                let hints = Hints {
+                    roll_rad: Some(0.0),
+                    predicted_hub_px: predicted,
+                    ..Hints::default()
+                };
+                let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
+                    let mut v = vec![
+                        [spinner[0], spinner[1], spinner[2], 0.30],
+                        [beside[0], beside[1], beside[2], beside_cov],
+                    ];
+                    v.sort_by(|a, b| b[3].total_cmp(&a[3]));
+                    Ok(v)
+                };
+                let expected = Expected {
+                    spinner_radius: expected_r,
+                    ..Expected::default()
+                };
+                recognise(p, &segs, 480.0, 270.0, &hints, &mut circles, None, expected)
+                    .unwrap()
+                    .circle
             };
-            let expected = Expected { spinner_radius: expected_r, ..Expected::default() };
-            recognise(p, &segs, 480.0, 270.0, &hints, &mut circles, None, expected).unwrap().circle
+        let circle = |beside_cov: f64, predicted: Option<P2>, expected_r: Option<f64>| {
+            circle_with(&p, beside_cov, predicted, expected_r)
         };
-        let circle = |beside_cov: f64, predicted: Option<P2>, expected_r: Option<f64>| circle_with(&p, beside_cov, predicted, expected_r);
         let tie = p.spinner_tie_ratio;
         let (close_call, clear_win) = (0.30 / tie - 0.02, 0.30 / tie + 0.02);
         let (at_spinner, at_beside) = ([hub[0] + 2.0, hub[1] - 3.0], [beside[0] - 1.0, beside[1]]);
-        assert_eq!(circle(close_call, None, None), Some(beside), "with no tracker the best covered circle");
-        assert_eq!(circle(close_call, Some(at_spinner), None), Some(spinner), "a near tie goes to the prediction");
-        assert_eq!(circle(close_call, Some(at_beside), Some(27.0)), Some(spinner), "... or to the expected size");
-        assert_eq!(circle(close_call, Some(at_spinner), Some(21.0)), Some(beside), "the size before the prediction");
-        assert_eq!(circle(clear_win, Some(at_spinner), Some(27.0)), Some(beside), "a clearly better rim wins anyway");
-        let off = DefaultParams { spinner_tie_ratio: 1.0, ..p.clone() };
-        assert_eq!(circle_with(&off, close_call, Some(at_spinner), Some(27.0)), Some(beside), "the rule off: the best covered");
+        assert_eq!(
+            circle(close_call, None, None),
+            Some(beside),
+            "with no tracker the best covered circle"
+        );
+        assert_eq!(
+            circle(close_call, Some(at_spinner), None),
+            Some(spinner),
+            "a near tie goes to the prediction"
+        );
+        assert_eq!(
+            circle(close_call, Some(at_beside), Some(27.0)),
+            Some(spinner),
+            "... or to the expected size"
+        );
+        assert_eq!(
+            circle(close_call, Some(at_spinner), Some(21.0)),
+            Some(beside),
+            "the size before the prediction"
+        );
+        assert_eq!(
+            circle(clear_win, Some(at_spinner), Some(27.0)),
+            Some(beside),
+            "a clearly better rim wins anyway"
+        );
+        let off = DefaultParams {
+            spinner_tie_ratio: 1.0,
+            ..p.clone()
+        };
+        assert_eq!(
+            circle_with(&off, close_call, Some(at_spinner), Some(27.0)),
+            Some(beside),
+            "the rule off: the best covered"
+        );
     }
 
     #[test]
@@ -2053,13 +3008,48 @@ mod tests {
         let (hub, r) = ([300.0, 150.0], 40.0);
         // Two blades seen by one edge each, starting at the rim of a close spinner: no
         // candidate from them alone.
-        let segs: Vec<Segment> = [30.0, 150.0].iter().map(|&a| blade_edges(hub, a, r, 200.0, 12.0, 6.0)[0]).collect();
-        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
-        let f = recognise(&p, &segs, 480.0, 270.0, &hints, &mut no_circles, None, Expected::default()).unwrap();
+        let segs: Vec<Segment> = [30.0, 150.0]
+            .iter()
+            .map(|&a| blade_edges(hub, a, r, 200.0, 12.0, 6.0)[0])
+            .collect();
+        let hints = Hints {
+            roll_rad: Some(0.0),
+            ..Hints::default()
+        };
+        let f = recognise(
+            &p,
+            &segs,
+            480.0,
+            270.0,
+            &hints,
+            &mut no_circles,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
         assert!(!f.detected, "{f:?}");
-        let mut close = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(if q == CircleQuery::Close { vec![[hub[0], hub[1], r, 1.0]] } else { vec![] }) };
-        let g = recognise(&p, &segs, 480.0, 270.0, &hints, &mut close, None, Expected::default()).unwrap();
-        assert!(g.detected && g.circle.is_some() && geometry::dist(g.hub, hub) < 1e-9, "{g:?}");
+        let mut close = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
+            Ok(if q == CircleQuery::Close {
+                vec![[hub[0], hub[1], r, 1.0]]
+            } else {
+                vec![]
+            })
+        };
+        let g = recognise(
+            &p,
+            &segs,
+            480.0,
+            270.0,
+            &hints,
+            &mut close,
+            None,
+            Expected::default(),
+        )
+        .unwrap();
+        assert!(
+            g.detected && g.circle.is_some() && geometry::dist(g.hub, hub) < 1e-9,
+            "{g:?}"
+        );
     }
 
     #[test]
@@ -2067,8 +3057,15 @@ mod tests {
         let (spinner_hub, r) = ([360.0, 150.0], 40.0);
         // A rotor detected from its lines, and a close spinner with two one-edge blades elsewhere.
         let mut segs = rotor([120.0, 100.0], 10.0);
-        segs.extend([30.0, 150.0].iter().map(|&a| blade_edges(spinner_hub, a, r, 100.0, 12.0, 6.0)[0]));
-        let hints = Hints { roll_rad: Some(0.0), ..Hints::default() };
+        segs.extend(
+            [30.0, 150.0]
+                .iter()
+                .map(|&a| blade_edges(spinner_hub, a, r, 100.0, 12.0, 6.0)[0]),
+        );
+        let hints = Hints {
+            roll_rad: Some(0.0),
+            ..Hints::default()
+        };
         let run = |p: &DefaultParams, hints: &Hints| {
             let asked = std::cell::Cell::new(0);
             let mut close = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
@@ -2078,20 +3075,42 @@ mod tests {
                 }
                 Ok(vec![])
             };
-            let f = recognise(p, &segs, 480.0, 270.0, hints, &mut close, None, Expected::default()).unwrap();
+            let f = recognise(
+                p,
+                &segs,
+                480.0,
+                270.0,
+                hints,
+                &mut close,
+                None,
+                Expected::default(),
+            )
+            .unwrap();
             (f, asked.get())
         };
         let always = DefaultParams::default();
         assert!(always.close_spinner_always);
         let (f, asked) = run(&always, &hints);
         assert!(f.detected && asked == 1, "{asked} {f:?}");
-        assert!(f.candidates.iter().any(|c| geometry::dist(c.hub, spinner_hub) < 1e-9), "{:?}", f.candidates);
+        assert!(
+            f.candidates
+                .iter()
+                .any(|c| geometry::dist(c.hub, spinner_hub) < 1e-9),
+            "{:?}",
+            f.candidates
+        );
         // Only as a fallback: something was detected, so no whole-image search.
-        let fallback = DefaultParams { close_spinner_always: false, ..always.clone() };
+        let fallback = DefaultParams {
+            close_spinner_always: false,
+            ..always.clone()
+        };
         let (f, asked) = run(&fallback, &hints);
         assert!(f.detected && asked == 0, "{asked} {f:?}");
         // With a tracker's prediction never (its neighbourhood is searched instead).
-        let tracked = Hints { predicted_hub_px: Some([120.0, 100.0]), ..hints };
+        let tracked = Hints {
+            predicted_hub_px: Some([120.0, 100.0]),
+            ..hints
+        };
         assert_eq!(run(&always, &tracked).1, 0);
     }
 
@@ -2100,7 +3119,10 @@ mod tests {
         let p = DefaultParams::default();
         let c = [200.0, 120.0];
         // A field border interrupted by the turbine: two collinear pieces either side of c.
-        let segs = vec![Segment::new([60.0, 100.0], [190.0, 118.6]), Segment::new([212.0, 121.7], [400.0, 148.6])];
+        let segs = vec![
+            Segment::new([60.0, 100.0], [190.0, 118.6]),
+            Segment::new([212.0, 121.7], [400.0, 148.6]),
+        ];
         let usable = vec![true; segs.len()];
         assert!(continues_beyond(&p, &segs, &usable, 0, c, 270.0));
         assert!(support_lines(&p, &segs, &usable, c, 270.0, 0.0).is_empty());
@@ -2114,16 +3136,31 @@ mod tests {
         // 2° away from the left piece's extension (7 px off it at its far end).
         let right_dir = (8.0_f64 - 2.0).to_radians();
         let segs = vec![
-            Segment::new([60.0, 120.0 - 140.0 * 8f64.to_radians().tan()], [190.0, 120.0 - 10.0 * 8f64.to_radians().tan()]),
-            Segment::new([212.0, 120.0 + 12.0 * 8f64.to_radians().tan()], [212.0 + 190.0 * right_dir.cos(), 120.0 + 12.0 * 8f64.to_radians().tan() + 190.0 * right_dir.sin()]),
+            Segment::new(
+                [60.0, 120.0 - 140.0 * 8f64.to_radians().tan()],
+                [190.0, 120.0 - 10.0 * 8f64.to_radians().tan()],
+            ),
+            Segment::new(
+                [212.0, 120.0 + 12.0 * 8f64.to_radians().tan()],
+                [
+                    212.0 + 190.0 * right_dir.cos(),
+                    120.0 + 12.0 * 8f64.to_radians().tan() + 190.0 * right_dir.sin(),
+                ],
+            ),
         ];
         let usable = vec![true; segs.len()];
         assert!(continues_beyond(&p, &segs, &usable, 0, c, 270.0));
         // Straight lines only (no bend allowed): the far end is too far off.
-        let straight = DefaultParams { occluded_bend_deg: 0.0, ..p.clone() };
+        let straight = DefaultParams {
+            occluded_bend_deg: 0.0,
+            ..p.clone()
+        };
         assert!(!continues_beyond(&straight, &segs, &usable, 0, c, 270.0));
         // A blade pointing up, nearly in line with a tower edge below: no bend allowance.
-        let up = vec![Segment::new([200.0, 20.0], [201.0, 110.0]), Segment::new([203.0, 135.0], [210.0, 265.0])];
+        let up = vec![
+            Segment::new([200.0, 20.0], [201.0, 110.0]),
+            Segment::new([203.0, 135.0], [210.0, 265.0]),
+        ];
         assert!(!continues_beyond(&p, &up, &[true, true], 0, c, 270.0));
     }
 }

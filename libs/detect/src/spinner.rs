@@ -101,9 +101,18 @@ fn vote_centres(points: &[EdgePoint], cs: &CircleSearch) -> (Vec<u32>, usize, us
             // to a huge one). The rounding differs from f64 steps by < 1e-8 cell after
             // hundreds of steps.
             let r0 = cs.min_r + k0 as f64 * cs.cell;
-            let (cx, cy) = ((e.p[0] + r0 * v[0] - x0) / cs.cell, (e.p[1] + r0 * v[1] - y0) / cs.cell);
-            let (mut fx, mut fy) = ((cx * FIXED_ONE).floor() as i64, (cy * FIXED_ONE).floor() as i64);
-            let (dx, dy) = ((v[0] * FIXED_ONE).round() as i64, (v[1] * FIXED_ONE).round() as i64);
+            let (cx, cy) = (
+                (e.p[0] + r0 * v[0] - x0) / cs.cell,
+                (e.p[1] + r0 * v[1] - y0) / cs.cell,
+            );
+            let (mut fx, mut fy) = (
+                (cx * FIXED_ONE).floor() as i64,
+                (cy * FIXED_ONE).floor() as i64,
+            );
+            let (dx, dy) = (
+                (v[0] * FIXED_ONE).round() as i64,
+                (v[1] * FIXED_ONE).round() as i64,
+            );
             for _ in k0..=k1 {
                 let (gx, gy) = ((fx >> 32) as usize, (fy >> 32) as usize);
                 if gx < gw && gy < gh {
@@ -119,7 +128,13 @@ fn vote_centres(points: &[EdgePoint], cs: &CircleSearch) -> (Vec<u32>, usize, us
 
 /// The strongest centres of the vote `acc` and the circles around them (see [`find_circles`]).
 #[inline(always)]
-fn peaks_and_rims(points: &[EdgePoint], cs: &CircleSearch, acc: &[u32], gw: usize, gh: usize) -> Vec<[f64; 4]> {
+fn peaks_and_rims(
+    points: &[EdgePoint],
+    cs: &CircleSearch,
+    acc: &[u32],
+    gw: usize,
+    gh: usize,
+) -> Vec<[f64; 4]> {
     let [x0, y0, ..] = cs.roi;
     // 3x3 sums (a row pass, then a column pass), then the strongest peaks at least min_r
     // apart (repeated arg-max, no sort).
@@ -149,7 +164,10 @@ fn peaks_and_rims(points: &[EdgePoint], cs: &CircleSearch, acc: &[u32], gw: usiz
         if v == 0 {
             break;
         }
-        let c = [x0 + ((i % gw) as f64 + 0.5) * cs.cell, y0 + ((i / gw) as f64 + 0.5) * cs.cell];
+        let c = [
+            x0 + ((i % gw) as f64 + 0.5) * cs.cell,
+            y0 + ((i / gw) as f64 + 0.5) * cs.cell,
+        ];
         centres.push(c);
         // Suppress the neighbourhood of this peak.
         let rad = (cs.min_r / cs.cell).ceil() as usize;
@@ -163,7 +181,10 @@ fn peaks_and_rims(points: &[EdgePoint], cs: &CircleSearch, acc: &[u32], gw: usiz
     // Points in row order (as the detector collects them) let each rim read only the rows it
     // can reach.
     let sorted = points.is_sorted_by(|a, b| a.p[1] <= b.p[1]);
-    let mut out: Vec<[f64; 4]> = centres.into_iter().filter_map(|c| rim(points, sorted, c, cs)).collect();
+    let mut out: Vec<[f64; 4]> = centres
+        .into_iter()
+        .filter_map(|c| rim(points, sorted, c, cs))
+        .collect();
     out.sort_by(|a, b| b[3].total_cmp(&a[3]));
     out
 }
@@ -183,7 +204,10 @@ fn rim(points: &[EdgePoint], sorted: bool, c: P2, cs: &CircleSearch) -> Option<[
         let (vx, vy) = (e.p[0] - c[0], e.p[1] - c[1]);
         let d2 = vx * vx + vy * vy;
         let d = d2.sqrt();
-        let ok = (d2 >= lo2) & (d2 <= hi2) & (d2 != 0.0) & ((vx * e.u[0] + vy * e.u[1]).abs() / d >= cs.radial_cos);
+        let ok = (d2 >= lo2)
+            & (d2 <= hi2)
+            & (d2 != 0.0)
+            & ((vx * e.u[0] + vy * e.u[1]).abs() / d >= cs.radial_cos);
         (ok, d)
     };
     // The radial points with their distances, kept for the rim fit below (one pass over all
@@ -221,12 +245,21 @@ fn rim(points: &[EdgePoint], sorted: bool, c: P2, cs: &CircleSearch) -> Option<[
     }
     // Kåsa fit on the rim points: x² + y² + D x + E y + F = 0, least squares.
     let tol = (0.1 * best_r).max(1.5);
-    let rim_pts: Vec<P2> = ring.iter().filter(|(_, d)| (d - best_r).abs() <= tol).map(|(p, _)| *p).collect();
-    let fit = fit_circle(&rim_pts).filter(|f| crate::geometry::dist([f[0], f[1]], c) <= tol + cs.cell && (f[2] - best_r).abs() <= tol);
+    let rim_pts: Vec<P2> = ring
+        .iter()
+        .filter(|(_, d)| (d - best_r).abs() <= tol)
+        .map(|(p, _)| *p)
+        .collect();
+    let fit = fit_circle(&rim_pts).filter(|f| {
+        crate::geometry::dist([f[0], f[1]], c) <= tol + cs.cell && (f[2] - best_r).abs() <= tol
+    });
     let [x, y, r] = fit.unwrap_or([c[0], c[1], best_r]);
     let inner2 = (INNER_FRAC * r).powi(2);
     let inner = INNER_FRAC * r + 1.0;
-    let inside = rows_between(points, sorted, y - inner, y + inner).iter().filter(|e| (e.p[0] - x).powi(2) + (e.p[1] - y).powi(2) < inner2).count();
+    let inside = rows_between(points, sorted, y - inner, y + inner)
+        .iter()
+        .filter(|e| (e.p[0] - x).powi(2) + (e.p[1] - y).powi(2) < inner2)
+        .count();
     if inside as f64 > cs.max_interior_density * std::f64::consts::PI * inner2 {
         return None;
     }
@@ -241,31 +274,60 @@ fn rim(points: &[EdgePoint], sorted: bool, c: P2, cs: &CircleSearch) -> Option<[
 /// square root and division of every point were most of the rim search's time.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn radial_ring_avx2(band: &[EdgePoint], c: P2, lo2: f64, hi2: f64, radial_cos: f64, ring: &mut [(P2, f64)]) -> (usize, usize) {
+unsafe fn radial_ring_avx2(
+    band: &[EdgePoint],
+    c: P2,
+    lo2: f64,
+    hi2: f64,
+    radial_cos: f64,
+    ring: &mut [(P2, f64)],
+) -> (usize, usize) {
     use std::arch::x86_64::*;
     debug_assert!(ring.len() >= band.len());
     let groups = band.len() / 4;
     let (cx, cy) = (_mm256_set1_pd(c[0]), _mm256_set1_pd(c[1]));
-    let (lo, hi, cos, zero) = (_mm256_set1_pd(lo2), _mm256_set1_pd(hi2), _mm256_set1_pd(radial_cos), _mm256_setzero_pd());
+    let (lo, hi, cos, zero) = (
+        _mm256_set1_pd(lo2),
+        _mm256_set1_pd(hi2),
+        _mm256_set1_pd(radial_cos),
+        _mm256_setzero_pd(),
+    );
     let sign = _mm256_set1_pd(-0.0);
     let mut n = 0;
     let mut d_lanes = [0.0f64; 4];
     for (g, quad) in band.chunks_exact(4).enumerate() {
         // `EdgePoint` is four f64 (p.x, p.y, u.x, u.y): load four points and transpose.
         let base = quad.as_ptr() as *const f64;
-        let (r0, r1, r2, r3) = (_mm256_loadu_pd(base), _mm256_loadu_pd(base.add(4)), _mm256_loadu_pd(base.add(8)), _mm256_loadu_pd(base.add(12)));
+        let (r0, r1, r2, r3) = (
+            _mm256_loadu_pd(base),
+            _mm256_loadu_pd(base.add(4)),
+            _mm256_loadu_pd(base.add(8)),
+            _mm256_loadu_pd(base.add(12)),
+        );
         let (t0, t1) = (_mm256_unpacklo_pd(r0, r1), _mm256_unpackhi_pd(r0, r1));
         let (t2, t3) = (_mm256_unpacklo_pd(r2, r3), _mm256_unpackhi_pd(r2, r3));
-        let (px, ux) = (_mm256_permute2f128_pd(t0, t2, 0x20), _mm256_permute2f128_pd(t0, t2, 0x31));
-        let (py, uy) = (_mm256_permute2f128_pd(t1, t3, 0x20), _mm256_permute2f128_pd(t1, t3, 0x31));
+        let (px, ux) = (
+            _mm256_permute2f128_pd(t0, t2, 0x20),
+            _mm256_permute2f128_pd(t0, t2, 0x31),
+        );
+        let (py, uy) = (
+            _mm256_permute2f128_pd(t1, t3, 0x20),
+            _mm256_permute2f128_pd(t1, t3, 0x31),
+        );
         let (vx, vy) = (_mm256_sub_pd(px, cx), _mm256_sub_pd(py, cy));
         let d2 = _mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy));
         let d = _mm256_sqrt_pd(d2);
         let dot = _mm256_add_pd(_mm256_mul_pd(vx, ux), _mm256_mul_pd(vy, uy));
         let q = _mm256_div_pd(_mm256_andnot_pd(sign, dot), d);
         let ok = _mm256_and_pd(
-            _mm256_and_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(d2, lo), _mm256_cmp_pd::<_CMP_LE_OQ>(d2, hi)),
-            _mm256_and_pd(_mm256_cmp_pd::<_CMP_NEQ_UQ>(d2, zero), _mm256_cmp_pd::<_CMP_GE_OQ>(q, cos)),
+            _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_GE_OQ>(d2, lo),
+                _mm256_cmp_pd::<_CMP_LE_OQ>(d2, hi),
+            ),
+            _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_NEQ_UQ>(d2, zero),
+                _mm256_cmp_pd::<_CMP_GE_OQ>(q, cos),
+            ),
         );
         let bits = _mm256_movemask_pd(ok) as usize;
         _mm256_storeu_pd(d_lanes.as_mut_ptr(), d);
@@ -297,8 +359,12 @@ pub(crate) fn fit_circle(pts: &[P2]) -> Option<[f64; 3]> {
         return None;
     }
     let n = pts.len() as f64;
-    let (mx, my) = (pts.iter().map(|p| p[0]).sum::<f64>() / n, pts.iter().map(|p| p[1]).sum::<f64>() / n);
-    let (mut suu, mut suv, mut svv, mut suuu, mut svvv, mut suvv, mut svuu) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    let (mx, my) = (
+        pts.iter().map(|p| p[0]).sum::<f64>() / n,
+        pts.iter().map(|p| p[1]).sum::<f64>() / n,
+    );
+    let (mut suu, mut suv, mut svv, mut suuu, mut svvv, mut suvv, mut svuu) =
+        (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     for p in pts {
         let (u, v) = (p[0] - mx, p[1] - my);
         suu += u * u;
@@ -354,10 +420,14 @@ impl GreyPlane<'_> {
 
     /// Bilinear intensity at `(x, y)`; `None` outside the image.
     fn at(&self, x: f64, y: f64) -> Option<f64> {
-        if !(x >= 0.0 && y >= 0.0 && x <= (self.width - 1) as f64 && y <= (self.height - 1) as f64) {
+        if !(x >= 0.0 && y >= 0.0 && x <= (self.width - 1) as f64 && y <= (self.height - 1) as f64)
+        {
             return None;
         }
-        let (x0, y0) = ((x.floor() as usize).min(self.width.saturating_sub(2)), (y.floor() as usize).min(self.height.saturating_sub(2)));
+        let (x0, y0) = (
+            (x.floor() as usize).min(self.width.saturating_sub(2)),
+            (y.floor() as usize).min(self.height.saturating_sub(2)),
+        );
         let (fx, fy) = (x - x0 as f64, y - y0 as f64);
         let px = |xx: usize, yy: usize| f64::from(self.grey(xx, yy));
         let top = px(x0, y0) * (1.0 - fx) + px(x0 + 1, y0) * fx;
@@ -397,7 +467,8 @@ pub(crate) fn refine_circle(img: &GreyPlane<'_>, c: [f64; 3], rf: &Refinement) -
     let first = refine_once(img, c, rf)?;
     let second = refine_once(img, first, rf).unwrap_or(first);
     let moved = crate::geometry::dist([second[0], second[1]], [c[0], c[1]]);
-    (moved <= rf.max_change * c[2] && (second[2] - c[2]).abs() <= rf.max_change * c[2]).then_some(second)
+    (moved <= rf.max_change * c[2] && (second[2] - c[2]).abs() <= rf.max_change * c[2])
+        .then_some(second)
 }
 
 /// One pass of [`refine_circle`].
@@ -414,21 +485,31 @@ fn refine_once(img: &GreyPlane<'_>, c: [f64; 3], rf: &Refinement) -> Option<[f64
         let t = std::f64::consts::TAU * k as f64 / rf.rays as f64;
         let (ux, uy) = (t.cos(), t.sin());
         let n = ((hi - lo) / STEP).floor() as usize;
-        let profile: Option<Vec<f64>> = (0..=n + 2).map(|i| {
-            let s = lo + (i as f64 - 1.0) * STEP;
-            img.at(cx + s * ux, cy + s * uy)
-        }).collect();
+        let profile: Option<Vec<f64>> = (0..=n + 2)
+            .map(|i| {
+                let s = lo + (i as f64 - 1.0) * STEP;
+                img.at(cx + s * ux, cy + s * uy)
+            })
+            .collect();
         let Some(profile) = profile else { continue };
         // Central differences; the steepest step and a parabola through its neighbours.
-        let d: Vec<f64> = (1..profile.len() - 1).map(|i| (profile[i + 1] - profile[i - 1]).abs()).collect();
-        let Some((i, &peak)) = d.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) else { continue };
+        let d: Vec<f64> = (1..profile.len() - 1)
+            .map(|i| (profile[i + 1] - profile[i - 1]).abs())
+            .collect();
+        let Some((i, &peak)) = d.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) else {
+            continue;
+        };
         // A step at the end of the band is where the search stopped, not a rim.
         if peak <= 0.0 || i == 0 || i + 1 == d.len() {
             continue;
         }
         let (a, b) = (d[i - 1], d[i + 1]);
         let den = a - 2.0 * peak + b;
-        let frac = if den < 0.0 { (0.5 * (a - b) / den).clamp(-0.5, 0.5) } else { 0.0 };
+        let frac = if den < 0.0 {
+            (0.5 * (a - b) / den).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        };
         let s = lo + (i as f64 + frac) * STEP;
         pts.push([cx + s * ux, cy + s * uy]);
     }
@@ -440,19 +521,28 @@ fn refine_once(img: &GreyPlane<'_>, c: [f64; 3], rf: &Refinement) -> Option<[f64
     let mut fit = fit_circle(&pts)?;
     let mut kept = pts.clone();
     for _ in 0..4 {
-        let res: Vec<f64> = pts.iter().map(|p| (crate::geometry::dist(*p, [fit[0], fit[1]]) - fit[2]).abs()).collect();
+        let res: Vec<f64> = pts
+            .iter()
+            .map(|p| (crate::geometry::dist(*p, [fit[0], fit[1]]) - fit[2]).abs())
+            .collect();
         let mut sorted = res.clone();
         sorted.sort_by(f64::total_cmp);
         let mad = sorted[sorted.len() / 2] * 1.4826;
         let tol = rf.inlier_px.max(2.5 * mad);
-        kept = pts.iter().zip(&res).filter(|(_, e)| **e <= tol).map(|(p, _)| *p).collect();
+        kept = pts
+            .iter()
+            .zip(&res)
+            .filter(|(_, e)| **e <= tol)
+            .map(|(p, _)| *p)
+            .collect();
         if kept.len() < need.max(3) {
             return None;
         }
         fit = fit_circle(&kept)?;
     }
     let moved = crate::geometry::dist([fit[0], fit[1]], [cx, cy]);
-    (kept.len() >= need && moved <= rf.max_change * r && (fit[2] - r).abs() <= rf.max_change * r).then_some(fit)
+    (kept.len() >= need && moved <= rf.max_change * r && (fit[2] - r).abs() <= rf.max_change * r)
+        .then_some(fit)
 }
 
 #[cfg(test)]
@@ -470,7 +560,10 @@ mod tests {
                 let v = [sign * e.u[0], sign * e.u[1]];
                 let mut r = cs.min_r;
                 while r <= cs.max_r {
-                    let (cx, cy) = ((e.p[0] + r * v[0] - x0) / cs.cell, (e.p[1] + r * v[1] - y0) / cs.cell);
+                    let (cx, cy) = (
+                        (e.p[0] + r * v[0] - x0) / cs.cell,
+                        (e.p[1] + r * v[1] - y0) / cs.cell,
+                    );
                     if cx >= 0.0 && cy >= 0.0 && (cx as usize) < gw && (cy as usize) < gh {
                         acc[cy as usize * gw + cx as usize] += 1;
                     }
@@ -489,9 +582,20 @@ mod tests {
         pts.sort_by(|a, b| a.p[1].total_cmp(&b.p[1]));
         let window = rows_between(&pts, true, 38.0, 82.0);
         assert!(window.iter().all(|e| (38.0..=82.0).contains(&e.p[1])));
-        assert_eq!(window.len(), pts.iter().filter(|e| (38.0..=82.0).contains(&e.p[1])).count());
-        assert_eq!(rows_between(&unsorted, false, 38.0, 82.0).len(), unsorted.len());
-        let (a, b) = (find_circles(&pts, &search()), find_circles(&unsorted, &search()));
+        assert_eq!(
+            window.len(),
+            pts.iter()
+                .filter(|e| (38.0..=82.0).contains(&e.p[1]))
+                .count()
+        );
+        assert_eq!(
+            rows_between(&unsorted, false, 38.0, 82.0).len(),
+            unsorted.len()
+        );
+        let (a, b) = (
+            find_circles(&pts, &search()),
+            find_circles(&unsorted, &search()),
+        );
         assert!(!a.is_empty());
         assert_eq!(a.len(), b.len());
         for (x, y) in a.iter().zip(&b) {
@@ -505,21 +609,35 @@ mod tests {
         // the test is the same every run): rays that start outside, leave, or run along it.
         let mut state = 12345u64;
         let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         let points: Vec<EdgePoint> = (0..3000)
             .map(|_| {
                 let t = next() * std::f64::consts::TAU;
-                EdgePoint { p: [(next() * 200.0 - 40.0).round(), (next() * 160.0 - 30.0).round()], u: [t.cos(), t.sin()] }
+                EdgePoint {
+                    p: [
+                        (next() * 200.0 - 40.0).round(),
+                        (next() * 160.0 - 30.0).round(),
+                    ],
+                    u: [t.cos(), t.sin()],
+                }
             })
             .collect();
-        let cs = CircleSearch { roi: [10.0, 5.0, 130.0, 95.0], ..search() };
+        let cs = CircleSearch {
+            roi: [10.0, 5.0, 130.0, 95.0],
+            ..search()
+        };
         let (acc, gw, gh) = vote_centres(&points, &cs);
         let reference = vote_reference(&points, &cs);
         assert_eq!((gw, gh), (60, 45));
         let differing = acc.iter().zip(&reference).filter(|(a, b)| a != b).count();
-        assert!(acc.iter().sum::<u32>() > 10_000, "the rays must reach the box");
+        assert!(
+            acc.iter().sum::<u32>() > 10_000,
+            "the rays must reach the box"
+        );
         assert_eq!(differing, 0, "{differing} cells differ from the f64 vote");
     }
 
@@ -535,15 +653,24 @@ mod tests {
         }
         let mut state = 777u64;
         let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         let c = [50.0, 40.0];
         let band: Vec<EdgePoint> = (0..4003)
             .map(|i| {
                 let t = next() * std::f64::consts::TAU;
-                let p = if i % 97 == 0 { c } else { [(next() * 100.0).round(), (next() * 80.0).round()] };
-                EdgePoint { p, u: [t.cos(), t.sin()] }
+                let p = if i % 97 == 0 {
+                    c
+                } else {
+                    [(next() * 100.0).round(), (next() * 80.0).round()]
+                };
+                EdgePoint {
+                    p,
+                    u: [t.cos(), t.sin()],
+                }
             })
             .collect();
         let (lo2, hi2, cos) = (3.0f64.powi(2), 31.0f64.powi(2), 0.9);
@@ -554,7 +681,10 @@ mod tests {
                 let (vx, vy) = (e.p[0] - c[0], e.p[1] - c[1]);
                 let d2 = vx * vx + vy * vy;
                 let d = d2.sqrt();
-                let ok = (d2 >= lo2) & (d2 <= hi2) & (d2 != 0.0) & ((vx * e.u[0] + vy * e.u[1]).abs() / d >= cos);
+                let ok = (d2 >= lo2)
+                    & (d2 <= hi2)
+                    & (d2 != 0.0)
+                    & ((vx * e.u[0] + vy * e.u[1]).abs() / d >= cos);
                 ok.then_some((e.p, d))
             })
             .collect();
@@ -574,7 +704,10 @@ mod tests {
             while a < a1 {
                 let t = a.to_radians();
                 let u = [t.cos(), t.sin()];
-                v.push(EdgePoint { p: [(c[0] + r * u[0]).round(), (c[1] + r * u[1]).round()], u });
+                v.push(EdgePoint {
+                    p: [(c[0] + r * u[0]).round(), (c[1] + r * u[1]).round()],
+                    u,
+                });
                 a += 360.0 / (2.0 * std::f64::consts::PI * r);
             }
         }
@@ -582,7 +715,17 @@ mod tests {
     }
 
     fn search() -> CircleSearch {
-        CircleSearch { roi: [0.0, 0.0, 120.0, 120.0], min_r: 4.0, max_r: 40.0, cell: 2.0, radial_cos: 0.9, min_coverage: 0.4, max_interior_density: 0.05, max_peaks: 3, vote_every: 1 }
+        CircleSearch {
+            roi: [0.0, 0.0, 120.0, 120.0],
+            min_r: 4.0,
+            max_r: 40.0,
+            cell: 2.0,
+            radial_cos: 0.9,
+            min_coverage: 0.4,
+            max_interior_density: 0.05,
+            max_peaks: 3,
+            vote_every: 1,
+        }
     }
 
     #[test]
@@ -591,22 +734,39 @@ mod tests {
         // Three blade roots hide three 50° stretches of the rim.
         let mut pts = rim_points(c, 20.0, &[(0.0, 70.0), (120.0, 190.0), (240.0, 310.0)]);
         // A straight blade edge nearby must not make a circle.
-        pts.extend((0..40).map(|k| EdgePoint { p: [90.0 + k as f64, 20.0], u: [0.0, 1.0] }));
+        pts.extend((0..40).map(|k| EdgePoint {
+            p: [90.0 + k as f64, 20.0],
+            u: [0.0, 1.0],
+        }));
         let found = find_circles(&pts, &search());
         assert!(!found.is_empty());
         let f = found[0];
         assert!(crate::geometry::dist([f[0], f[1]], c) < 1.0, "{f:?}");
         assert!((f[2] - 20.0).abs() < 1.0 && f[3] > 0.5, "{f:?}");
         // Half the points voting find the same circle, its coverage counted with all of them.
-        let half = find_circles(&pts, &CircleSearch { vote_every: 2, ..search() });
+        let half = find_circles(
+            &pts,
+            &CircleSearch {
+                vote_every: 2,
+                ..search()
+            },
+        );
         assert_eq!(half.first(), Some(&f), "{half:?}");
     }
 
     #[test]
     fn lines_and_sparse_arcs_are_rejected() {
         // Two crossing straight edges: no rim.
-        let mut pts: Vec<EdgePoint> = (0..100).map(|k| EdgePoint { p: [10.0 + k as f64, 60.0], u: [0.0, 1.0] }).collect();
-        pts.extend((0..100).map(|k| EdgePoint { p: [60.0, 10.0 + k as f64], u: [1.0, 0.0] }));
+        let mut pts: Vec<EdgePoint> = (0..100)
+            .map(|k| EdgePoint {
+                p: [10.0 + k as f64, 60.0],
+                u: [0.0, 1.0],
+            })
+            .collect();
+        pts.extend((0..100).map(|k| EdgePoint {
+            p: [60.0, 10.0 + k as f64],
+            u: [1.0, 0.0],
+        }));
         assert!(find_circles(&pts, &search()).is_empty());
         // A 60° arc covers a sixth of its rim: below min_coverage.
         let arc = rim_points([60.0, 60.0], 25.0, &[(0.0, 60.0)]);
@@ -624,13 +784,24 @@ mod tests {
         for y in (46..75).step_by(3) {
             for x in (46..75).step_by(3) {
                 let t = ((x * 7 + y * 13) % 360) as f64;
-                cluttered.push(EdgePoint { p: [x as f64, y as f64], u: [t.to_radians().cos(), t.to_radians().sin()] });
+                cluttered.push(EdgePoint {
+                    p: [x as f64, y as f64],
+                    u: [t.to_radians().cos(), t.to_radians().sin()],
+                });
             }
         }
         let inner = (INNER_FRAC * 20.0_f64).powi(2) * std::f64::consts::PI;
-        let inside = cluttered.iter().filter(|e| crate::geometry::dist(e.p, c).powi(2) < (INNER_FRAC * 20.0_f64).powi(2)).count();
-        assert!(inside as f64 > search().max_interior_density * inner, "the clutter must exceed the limit");
-        assert!(find_circles(&cluttered, &search()).iter().all(|f| crate::geometry::dist([f[0], f[1]], c) > 2.0));
+        let inside = cluttered
+            .iter()
+            .filter(|e| crate::geometry::dist(e.p, c).powi(2) < (INNER_FRAC * 20.0_f64).powi(2))
+            .count();
+        assert!(
+            inside as f64 > search().max_interior_density * inner,
+            "the clutter must exceed the limit"
+        );
+        assert!(find_circles(&cluttered, &search())
+            .iter()
+            .all(|f| crate::geometry::dist([f[0], f[1]], c) > 2.0));
     }
 
     /// A disc on a background, a blade of the disc's shade leaving it, and a coarse circle a
@@ -646,7 +817,10 @@ mod tests {
                 let mut inside = 0;
                 for sy in 0..4 {
                     for sx in 0..4 {
-                        let (px, py) = (x as f64 + (sx as f64 + 0.5) / 4.0 - 0.5, y as f64 + (sy as f64 + 0.5) / 4.0 - 0.5);
+                        let (px, py) = (
+                            x as f64 + (sx as f64 + 0.5) / 4.0 - 0.5,
+                            y as f64 + (sy as f64 + 0.5) / 4.0 - 0.5,
+                        );
                         let disc = (px - c[0]).hypot(py - c[1]) <= r;
                         let blade = px < c[0] && (py - c[1]).abs() <= 6.0;
                         inside += i32::from(disc || blade);
@@ -655,22 +829,54 @@ mod tests {
                 data[y * w + x] = (90 + (170 - 90) * inside / 16) as u8;
             }
         }
-        let img = GreyPlane { data: &data, width: w, height: h, stride: w, channels: 1 };
-        let rf = Refinement { rays: 64, band: 0.35, band_max_px: 8.0, inlier_px: 1.0, min_inliers: 0.5, max_change: 0.3 };
+        let img = GreyPlane {
+            data: &data,
+            width: w,
+            height: h,
+            stride: w,
+            channels: 1,
+        };
+        let rf = Refinement {
+            rays: 64,
+            band: 0.35,
+            band_max_px: 8.0,
+            inlier_px: 1.0,
+            min_inliers: 0.5,
+            max_change: 0.3,
+        };
         let f = refine_circle(&img, [c[0] - 4.0, c[1] + 2.5, r - 2.0], &rf).expect("refined");
-        assert!(crate::geometry::dist([f[0], f[1]], c) < 0.3 && (f[2] - r).abs() < 0.3, "{f:?}");
+        assert!(
+            crate::geometry::dist([f[0], f[1]], c) < 0.3 && (f[2] - r).abs() < 0.3,
+            "{f:?}"
+        );
         // A flat image has no rim.
         let flat = vec![90u8; w * h];
-        assert!(refine_circle(&GreyPlane { data: &flat, width: w, height: h, stride: w, channels: 1 }, [c[0], c[1], r], &rf).is_none());
+        assert!(refine_circle(
+            &GreyPlane {
+                data: &flat,
+                width: w,
+                height: h,
+                stride: w,
+                channels: 1
+            },
+            [c[0], c[1], r],
+            &rf
+        )
+        .is_none());
     }
 
     #[test]
     fn kasa_fit_is_exact_on_a_circle() {
-        let pts: Vec<P2> = (0..12).map(|k| {
-            let t = (k as f64 * 30.0).to_radians();
-            [5.0 + 7.0 * t.cos(), -3.0 + 7.0 * t.sin()]
-        }).collect();
+        let pts: Vec<P2> = (0..12)
+            .map(|k| {
+                let t = (k as f64 * 30.0).to_radians();
+                [5.0 + 7.0 * t.cos(), -3.0 + 7.0 * t.sin()]
+            })
+            .collect();
         let f = fit_circle(&pts).unwrap();
-        assert!((f[0] - 5.0).abs() < 1e-9 && (f[1] + 3.0).abs() < 1e-9 && (f[2] - 7.0).abs() < 1e-9, "{f:?}");
+        assert!(
+            (f[0] - 5.0).abs() < 1e-9 && (f[1] + 3.0).abs() < 1e-9 && (f[2] - 7.0).abs() < 1e-9,
+            "{f:?}"
+        );
     }
 }

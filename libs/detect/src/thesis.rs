@@ -17,7 +17,12 @@ use crate::params::ThesisParams;
 use crate::{us_since, DetectError, Found, Hints, LineKind, Scratch};
 
 /// Run the thesis pipeline on the working image.
-pub(crate) fn run(p: &ThesisParams, small: &Mat, s: &mut Scratch, hints: &Hints) -> Result<Found, DetectError> {
+pub(crate) fn run(
+    p: &ThesisParams,
+    small: &Mat,
+    s: &mut Scratch,
+    hints: &Hints,
+) -> Result<Found, DetectError> {
     let t = Instant::now();
     imgproc::canny(small, &mut s.edges, p.canny_low, p.canny_high, 3, false)?;
     let edge_count = core::count_non_zero(&s.edges)? as u32;
@@ -36,7 +41,13 @@ pub(crate) fn run(p: &ThesisParams, small: &Mat, s: &mut Scratch, hints: &Hints)
     let hough_us = us_since(t);
     let t = Instant::now();
     let roll_deg = hints.roll_rad.unwrap_or(0.0).to_degrees();
-    let mut found = recognise(p, &s.segments, small.cols() as f64, small.rows() as f64, roll_deg);
+    let mut found = recognise(
+        p,
+        &s.segments,
+        small.cols() as f64,
+        small.rows() as f64,
+        roll_deg,
+    );
     found.edge_count = edge_count;
     found.edges_us = edges_us;
     found.hough_us = hough_us;
@@ -46,12 +57,18 @@ pub(crate) fn run(p: &ThesisParams, small: &Mat, s: &mut Scratch, hints: &Hints)
 
 /// Indices of the tower lines: within `tower_max_tilt_deg` of vertical after roll compensation
 /// and with an end point in the lowest `tower_bottom_frac` of the image.
-pub(crate) fn tower_lines(p: &ThesisParams, segs: &[Segment], height: f64, roll_deg: f64) -> Vec<usize> {
+pub(crate) fn tower_lines(
+    p: &ThesisParams,
+    segs: &[Segment],
+    height: f64,
+    roll_deg: f64,
+) -> Vec<usize> {
     let bottom = height * (1.0 - p.tower_bottom_frac);
     segs.iter()
         .enumerate()
         .filter(|(_, s)| {
-            geometry::roll_compensated_tilt_deg(s, roll_deg).abs() <= p.tower_max_tilt_deg && s.a[1].max(s.b[1]) >= bottom
+            geometry::roll_compensated_tilt_deg(s, roll_deg).abs() <= p.tower_max_tilt_deg
+                && s.a[1].max(s.b[1]) >= bottom
         })
         .map(|(i, _)| i)
         .collect()
@@ -62,8 +79,14 @@ pub(crate) fn tower_axis(segs: &[Segment], idx: &[usize]) -> Option<Segment> {
     if idx.is_empty() {
         return None;
     }
-    let top = idx.iter().map(|&i| segs[i].a[1].min(segs[i].b[1])).fold(f64::INFINITY, f64::min);
-    let bot = idx.iter().map(|&i| segs[i].a[1].max(segs[i].b[1])).fold(f64::NEG_INFINITY, f64::max);
+    let top = idx
+        .iter()
+        .map(|&i| segs[i].a[1].min(segs[i].b[1]))
+        .fold(f64::INFINITY, f64::min);
+    let bot = idx
+        .iter()
+        .map(|&i| segs[i].a[1].max(segs[i].b[1]))
+        .fold(f64::NEG_INFINITY, f64::max);
     let (mut xt, mut xb, mut n) = (0.0, 0.0, 0.0);
     for &i in idx {
         if let (Some(a), Some(b)) = (segs[i].x_at_y(top), segs[i].x_at_y(bot)) {
@@ -80,7 +103,12 @@ pub(crate) fn tower_axis(segs: &[Segment], idx: &[usize]) -> Option<Segment> {
 
 /// Tower width at `row`: horizontal distance between the outermost tower lines there (their
 /// infinite extensions). `None` with fewer than two distinct lines.
-pub(crate) fn tower_width_at(segs: &[Segment], idx: &[usize], row: f64, min_width: f64) -> Option<f64> {
+pub(crate) fn tower_width_at(
+    segs: &[Segment],
+    idx: &[usize],
+    row: f64,
+    min_width: f64,
+) -> Option<f64> {
     let xs: Vec<f64> = idx.iter().filter_map(|&i| segs[i].x_at_y(row)).collect();
     if xs.len() < 2 {
         return None;
@@ -99,22 +127,39 @@ pub(crate) struct Blade {
 
 /// Blade lines (non-tower lines with an end point within `radius` of `centre`, i.e. starting or
 /// ending there; lines only passing through are ignored), grouped by angle.
-pub(crate) fn blades_around(p: &ThesisParams, segs: &[Segment], tower: &[usize], centre: P2, radius: f64) -> Vec<Blade> {
-    let cand: Vec<usize> =
-        (0..segs.len()).filter(|i| !tower.contains(i) && segs[*i].nearest_end(centre).1 <= radius).collect();
-    let angles: Vec<f64> = cand.iter().map(|&i| segs[i].angle_away_from(centre)).collect();
+pub(crate) fn blades_around(
+    p: &ThesisParams,
+    segs: &[Segment],
+    tower: &[usize],
+    centre: P2,
+    radius: f64,
+) -> Vec<Blade> {
+    let cand: Vec<usize> = (0..segs.len())
+        .filter(|i| !tower.contains(i) && segs[*i].nearest_end(centre).1 <= radius)
+        .collect();
+    let angles: Vec<f64> = cand
+        .iter()
+        .map(|&i| segs[i].angle_away_from(centre))
+        .collect();
     geometry::group_by_angle(&angles, p.blade_group_tol_deg)
         .into_iter()
         .map(|g| {
             let a: Vec<f64> = g.iter().map(|&k| angles[k]).collect();
-            Blade { lines: g.iter().map(|&k| cand[k]).collect(), angle_deg: geometry::circular_mean_deg(&a, None) }
+            Blade {
+                lines: g.iter().map(|&k| cand[k]).collect(),
+                angle_deg: geometry::circular_mean_deg(&a, None),
+            }
         })
         .collect()
 }
 
 /// The thesis's false-blade elimination: remove a blade pointing down over the tower, then
 /// vote. Returns (kept, rejected).
-pub(crate) fn eliminate(p: &ThesisParams, blades: Vec<Blade>, roll_deg: f64) -> (Vec<Blade>, Vec<Blade>) {
+pub(crate) fn eliminate(
+    p: &ThesisParams,
+    blades: Vec<Blade>,
+    roll_deg: f64,
+) -> (Vec<Blade>, Vec<Blade>) {
     let (mut kept, mut rejected): (Vec<Blade>, Vec<Blade>) = (Vec::new(), Vec::new());
     // "Down" in the image of a rolled camera is 180° minus the roll (content rotated CCW).
     let down = 180.0 - roll_deg;
@@ -156,9 +201,19 @@ pub(crate) fn blade_intersections(segs: &[Segment], blades: &[Blade]) -> Vec<P2>
 }
 
 /// Steps after the Hough transform, on plain data.
-pub(crate) fn recognise(p: &ThesisParams, segs: &[Segment], width: f64, height: f64, roll_deg: f64) -> Found {
+pub(crate) fn recognise(
+    p: &ThesisParams,
+    segs: &[Segment],
+    width: f64,
+    height: f64,
+    roll_deg: f64,
+) -> Found {
     let _ = width;
-    let mut found = Found { roll_used_deg: roll_deg, line_count: segs.len() as u32, ..Found::default() };
+    let mut found = Found {
+        roll_used_deg: roll_deg,
+        line_count: segs.len() as u32,
+        ..Found::default()
+    };
     let mut kinds = vec![LineKind::Other; segs.len()];
     let tower = tower_lines(p, segs, height, roll_deg);
     for &i in &tower {
@@ -178,7 +233,10 @@ pub(crate) fn recognise(p: &ThesisParams, segs: &[Segment], width: f64, height: 
         .min_by(|a, b| a[1].total_cmp(&b[1]))
         .unwrap_or([0.0, 0.0]);
     let axis = tower_axis(segs, &tower);
-    found.tower_top = Some(axis.and_then(|a| a.x_at_y(top[1])).map_or(top, |x| [x, top[1]]));
+    found.tower_top = Some(
+        axis.and_then(|a| a.x_at_y(top[1]))
+            .map_or(top, |x| [x, top[1]]),
+    );
     found.tower_axis = axis;
     let row = top[1] + p.tower_width_below_top_frac * height;
     // Two edges closer than 1 px are the same edge seen twice, not a tower.
@@ -205,7 +263,13 @@ pub(crate) fn recognise(p: &ThesisParams, segs: &[Segment], width: f64, height: 
     }
     let pts = blade_intersections(segs, &blades);
     let axis_line = axis.unwrap_or(Segment::new(top, [top[0], top[1] + 1.0]));
-    let kept = geometry::filter_intersections(&pts, &axis_line, top, p.hub_max_dx_frac * radius, p.hub_max_dy_frac * radius);
+    let kept = geometry::filter_intersections(
+        &pts,
+        &axis_line,
+        top,
+        p.hub_max_dx_frac * radius,
+        p.hub_max_dy_frac * radius,
+    );
     if let Some(hub) = geometry::mean_point(&kept) {
         found.detected = true;
         found.hub = hub;
@@ -213,7 +277,6 @@ pub(crate) fn recognise(p: &ThesisParams, segs: &[Segment], width: f64, height: 
     }
     found
 }
-
 
 /// Run HoughLinesP on `edges` into `out` (working px).
 #[allow(clippy::too_many_arguments)]
@@ -228,9 +291,21 @@ fn hough_segments(
     max_gap: f64,
 ) -> Result<(), DetectError> {
     lines.clear();
-    imgproc::hough_lines_p(edges, lines, rho, theta_deg.to_radians(), threshold.max(1), min_len, max_gap)?;
+    imgproc::hough_lines_p(
+        edges,
+        lines,
+        rho,
+        theta_deg.to_radians(),
+        threshold.max(1),
+        min_len,
+        max_gap,
+    )?;
     out.clear();
-    out.extend(lines.iter().map(|l| Segment::new([l[0] as f64, l[1] as f64], [l[2] as f64, l[3] as f64])));
+    out.extend(
+        lines
+            .iter()
+            .map(|l| Segment::new([l[0] as f64, l[1] as f64], [l[2] as f64, l[3] as f64])),
+    );
     Ok(())
 }
 
@@ -243,7 +318,10 @@ mod tests {
         let d = dir_from_up_cw(angle);
         Segment::new(
             [from[0] + d[0] * start, from[1] + d[1] * start],
-            [from[0] + d[0] * (start + len), from[1] + d[1] * (start + len)],
+            [
+                from[0] + d[0] * (start + len),
+                from[1] + d[1] * (start + len),
+            ],
         )
     }
 
@@ -257,7 +335,10 @@ mod tests {
             let r = (-roll).to_radians();
             let f = |p: P2| {
                 let (x, y) = (p[0] - hub[0], p[1] - hub[1]);
-                [hub[0] + x * r.cos() - y * r.sin(), hub[1] + x * r.sin() + y * r.cos()]
+                [
+                    hub[0] + x * r.cos() - y * r.sin(),
+                    hub[1] + x * r.sin() + y * r.cos(),
+                ]
             };
             Segment::new(f(s.a), f(s.b))
         };
@@ -291,7 +372,11 @@ mod tests {
         let f = recognise(&p, &segs, 480.0, 270.0, 0.0);
         assert!(f.detected);
         assert_eq!(f.blade_angles.len(), 3);
-        assert!((f.hub[0] - 240.0).abs() < 2.0 && (f.hub[1] - 114.0).abs() < 2.0, "{:?}", f.hub);
+        assert!(
+            (f.hub[0] - 240.0).abs() < 2.0 && (f.hub[1] - 114.0).abs() < 2.0,
+            "{:?}",
+            f.hub
+        );
         let w = f.tower_width.unwrap().0;
         assert!((w - 6.0).abs() < 1.5, "{w}");
     }
@@ -317,16 +402,29 @@ mod tests {
         assert!(f.detected);
         assert_eq!(f.blade_angles.len(), 3, "{:?}", f.blade_angles);
         assert!(f.lines.iter().any(|(_, k)| *k == LineKind::Rejected));
-        assert!((f.hub[0] - 240.0).abs() < 2.0 && (f.hub[1] - 114.0).abs() < 2.0, "{:?}", f.hub);
+        assert!(
+            (f.hub[0] - 240.0).abs() < 2.0 && (f.hub[1] - 114.0).abs() < 2.0,
+            "{:?}",
+            f.hub
+        );
     }
 
     #[test]
     fn downward_blade_over_tower_removed() {
         let p = ThesisParams::default();
         let blades = vec![
-            Blade { lines: vec![], angle_deg: 0.0 },
-            Blade { lines: vec![], angle_deg: 120.0 },
-            Blade { lines: vec![], angle_deg: 178.0 },
+            Blade {
+                lines: vec![],
+                angle_deg: 0.0,
+            },
+            Blade {
+                lines: vec![],
+                angle_deg: 120.0,
+            },
+            Blade {
+                lines: vec![],
+                angle_deg: 178.0,
+            },
         ];
         let (kept, rej) = eliminate(&p, blades, 0.0);
         assert_eq!(kept.len(), 2);

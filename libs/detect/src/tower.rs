@@ -79,7 +79,12 @@ impl TowerFit {
 /// Finds the tower's second edge from `seed` (one tower edge, from its top down) and fits both;
 /// `None` when no edge of the opposite gradient sign runs beside it at a tower-like width.
 /// `window` (working px, min and max) narrows the tower-like widths further.
-pub(crate) fn fit_tower(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, window: (f64, f64)) -> Option<TowerFit> {
+pub(crate) fn fit_tower(
+    p: &DefaultParams,
+    g: &GradPlane<'_>,
+    seed: &Segment,
+    window: (f64, f64),
+) -> Option<TowerFit> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
@@ -92,12 +97,22 @@ pub(crate) fn fit_tower(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, wi
 /// twice the width; integer sums, the same results).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn fit_tower_avx2(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, window: (f64, f64)) -> Option<TowerFit> {
+unsafe fn fit_tower_avx2(
+    p: &DefaultParams,
+    g: &GradPlane<'_>,
+    seed: &Segment,
+    window: (f64, f64),
+) -> Option<TowerFit> {
     fit_tower_here(p, g, seed, window)
 }
 
 #[inline(always)]
-fn fit_tower_here(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, window: (f64, f64)) -> Option<TowerFit> {
+fn fit_tower_here(
+    p: &DefaultParams,
+    g: &GradPlane<'_>,
+    seed: &Segment,
+    window: (f64, f64),
+) -> Option<TowerFit> {
     let h = g.height as f64;
     let top = seed.a[1].min(seed.b[1]).max(0.0);
     let seed_bottom = seed.a[1].max(seed.b[1]);
@@ -108,14 +123,25 @@ fn fit_tower_here(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, window: 
     // extended down), the same rows the partner is measured on.
     let best_near = |x: f64, y: i64| {
         let xi = x.round() as i64;
-        (-1..=1).map(|d| g.at(xi + d, y)).max_by(|a, b| a.abs().total_cmp(&b.abs())).unwrap_or(0.0)
+        (-1..=1)
+            .map(|d| g.at(xi + d, y))
+            .max_by(|a, b| a.abs().total_cmp(&b.abs()))
+            .unwrap_or(0.0)
     };
-    let sum: f64 = rows.iter().filter(|&&y| (y as f64) <= seed_bottom).filter_map(|&y| Some(best_near(x0(y)?, y))).sum();
+    let sum: f64 = rows
+        .iter()
+        .filter(|&&y| (y as f64) <= seed_bottom)
+        .filter_map(|&y| Some(best_near(x0(y)?, y)))
+        .sum();
     if sum == 0.0 {
         return None;
     }
     let sign = sum.signum();
-    let strength = rows.iter().filter_map(|&y| Some((best_near(x0(y)?, y) * sign).max(0.0))).sum::<f64>() / rows.len().max(1) as f64;
+    let strength = rows
+        .iter()
+        .filter_map(|&y| Some((best_near(x0(y)?, y) * sign).max(0.0)))
+        .sum::<f64>()
+        / rows.len().max(1) as f64;
     if strength <= 0.0 {
         return None;
     }
@@ -133,10 +159,20 @@ fn fit_tower_here(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, window: 
     if wmax < wmin || rows.is_empty() {
         return None;
     }
-    let search = PartnerSearch { g, rows: &rows, x0: &x0, wmin, wmax };
+    let search = PartnerSearch {
+        g,
+        rows: &rows,
+        x0: &x0,
+        wmin,
+        wmax,
+    };
     let opposite = search.best(-sign)?;
     // The same-sign search only behind a ramp (it costs as much as the first).
-    let same = if opposite.is_ramp(p.tower_ramp_min_frac) { search.best(sign) } else { None };
+    let same = if opposite.is_ramp(p.tower_ramp_min_frac) {
+        search.best(sign)
+    } else {
+        None
+    };
     let beyond_ramp = |s: &Partner| {
         opposite.off_top.signum() == s.off_top.signum()
             && s.off_top.abs() > opposite.off_top.abs()
@@ -146,7 +182,13 @@ fn fit_tower_here(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, window: 
         Some(s) if beyond_ramp(&s) => (sign, s),
         _ => (-sign, opposite),
     };
-    let Partner { response, off_top, off_bot, background, .. } = found;
+    let Partner {
+        response,
+        off_top,
+        off_bot,
+        background,
+        ..
+    } = found;
     log::trace!(
         "tower partner of {seed:?} (sign {sign}, partner {partner_sign}; opposite {:.0} ({:.0} farther out, {:.0} nearer), same {:.0}): offsets {off_top}..{off_bot} px, response {response:.0}, seed {strength:.0}, background {background:.1}",
         opposite.response,
@@ -154,33 +196,71 @@ fn fit_tower_here(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, window: 
         opposite.response_in,
         same.map_or(0.0, |s| s.response),
     );
-    if response < p.tower_partner_min_ratio * strength || response < p.tower_partner_min_salience * background {
+    if response < p.tower_partner_min_ratio * strength
+        || response < p.tower_partner_min_salience * background
+    {
         return None;
     }
     let (y_top, y_bot) = (rows[0] as f64, *rows.last()? as f64);
-    let frac = |y: i64| if y_bot > y_top { (y as f64 - y_top) / (y_bot - y_top) } else { 0.0 };
+    let frac = |y: i64| {
+        if y_bot > y_top {
+            (y as f64 - y_top) / (y_bot - y_top)
+        } else {
+            0.0
+        }
+    };
     let offset = |y: i64| off_top as f64 + (off_bot - off_top) as f64 * frac(y);
 
     let seed_fit = fit_edge(g, &rows, x0, sign)?;
     let partner_fit = fit_edge(g, &rows, |y| x0(y).map(|x| x + offset(y)), partner_sign)?;
     // Each edge moves outward to the end of its shading ramp, if it is one.
     let out = off_top.signum() as f64; // from the seed toward the partner
-    // Within the width window: half the room left to its upper end for each edge.
+                                       // Within the width window: half the room left to its upper end for each edge.
     let room = (window.1 - off_top.abs().max(off_bot.abs()) as f64) / 2.0;
-    let max_ramp = (off_top.abs() as f64 * p.tower_ramp_max_frac).min(room).floor().max(0.0) as i64;
-    let seed_fit = to_ramp_end(g, &rows, seed_fit, sign, -out, p.tower_ramp_min_frac, max_ramp);
-    let partner_fit = to_ramp_end(g, &rows, partner_fit, partner_sign, out, p.tower_ramp_min_frac, max_ramp);
-    let (left, right) = if off_top > 0 { (seed_fit, partner_fit) } else { (partner_fit, seed_fit) };
+    let max_ramp = (off_top.abs() as f64 * p.tower_ramp_max_frac)
+        .min(room)
+        .floor()
+        .max(0.0) as i64;
+    let seed_fit = to_ramp_end(
+        g,
+        &rows,
+        seed_fit,
+        sign,
+        -out,
+        p.tower_ramp_min_frac,
+        max_ramp,
+    );
+    let partner_fit = to_ramp_end(
+        g,
+        &rows,
+        partner_fit,
+        partner_sign,
+        out,
+        p.tower_ramp_min_frac,
+        max_ramp,
+    );
+    let (left, right) = if off_top > 0 {
+        (seed_fit, partner_fit)
+    } else {
+        (partner_fit, seed_fit)
+    };
     let bottom = h - 1.0;
     let mid = |y: f64| Some((left.x_at_y(y)? + right.x_at_y(y)?) / 2.0);
     let axis = Segment::new([mid(top)?, top], [mid(bottom)?, bottom]);
-    let fit = TowerFit { edges: [left, right], axis, one_edge: false };
+    let fit = TowerFit {
+        edges: [left, right],
+        axis,
+        one_edge: false,
+    };
     // A blade pointing down is a band too, but narrows toward its tip; the tower does not.
     // It widens downward by its own taper only (its rows are at about the same depth).
     let top_width = fit.width_at(top)?.max(1e-9);
     let taper = fit.width_at(bottom)? / top_width;
     let max_taper = p.tower_max_width_ratio * (1.0 + p.tower_taper * (bottom - top) / top_width);
-    log::trace!("tower band {:?}: width ratio bottom/top {taper:.2} (max {max_taper:.2})", fit.axis);
+    log::trace!(
+        "tower band {:?}: width ratio bottom/top {taper:.2} (max {max_taper:.2})",
+        fit.axis
+    );
     (taper >= p.tower_min_width_ratio && taper <= max_taper).then_some(fit)
 }
 
@@ -192,7 +272,15 @@ fn fit_tower_here(p: &DefaultParams, g: &GradPlane<'_>, seed: &Segment, window: 
 /// gradient (a tower edge keeps its sign all the way down); the `max_seeds` strongest local
 /// maxima, each at least `min_salience` times the mean score, are returned as segments (top
 /// first). `max_tilt_deg` bounds the tilt from the image vertical (roll included).
-pub(crate) fn scan_tower_edges(g: &GradPlane<'_>, hub_x: f64, top: f64, max_dx: f64, max_tilt_deg: f64, min_salience: f64, max_seeds: usize) -> Vec<Segment> {
+pub(crate) fn scan_tower_edges(
+    g: &GradPlane<'_>,
+    hub_x: f64,
+    top: f64,
+    max_dx: f64,
+    max_tilt_deg: f64,
+    min_salience: f64,
+    max_seeds: usize,
+) -> Vec<Segment> {
     let y0 = top.max(0.0).ceil() as i64;
     let y1 = g.height as i64 - 1;
     if y1 - y0 < EDGE_MIN_POINTS as i64 || max_dx <= 0.0 {
@@ -202,7 +290,10 @@ pub(crate) fn scan_tower_edges(g: &GradPlane<'_>, hub_x: f64, top: f64, max_dx: 
     let max_drift = (max_tilt_deg.to_radians().tan() * n).round() as i64;
     let x_lo = (hub_x - max_dx).floor().max(0.0) as i64;
     let x_hi = (hub_x + max_dx).ceil().min(g.width as f64 - 1.0) as i64;
-    let (nx, nd) = ((x_hi - x_lo + 1).max(0) as usize, (2 * max_drift + 1) as usize);
+    let (nx, nd) = (
+        (x_hi - x_lo + 1).max(0) as usize,
+        (2 * max_drift + 1) as usize,
+    );
     let mut score = vec![0.0f64; nx * nd];
     // For each drift, every start column is summed at once along the row (contiguous,
     // vectorised); integer sums are exact, so equal to summing the f64 values.
@@ -218,7 +309,10 @@ pub(crate) fn scan_tower_edges(g: &GradPlane<'_>, hub_x: f64, top: f64, max_dx: 
                 continue;
             }
             let row = &g.row(y)[(first + i_lo as i64) as usize..];
-            acc[i_lo..i_hi].iter_mut().zip(row).for_each(|(a, &v)| *a += v as i32);
+            acc[i_lo..i_hi]
+                .iter_mut()
+                .zip(row)
+                .for_each(|(a, &v)| *a += v as i32);
         }
         for (i, a) in acc.iter().enumerate() {
             score[i * nd + j] = (*a as f64 / n).abs();
@@ -233,7 +327,8 @@ pub(crate) fn scan_tower_edges(g: &GradPlane<'_>, hub_x: f64, top: f64, max_dx: 
                 continue;
             }
             // A local maximum over neighbouring positions and drifts.
-            let is_max = (i.saturating_sub(2)..(i + 3).min(nx)).all(|a| (j.saturating_sub(2)..(j + 3).min(nd)).all(|b| score[a * nd + b] <= v));
+            let is_max = (i.saturating_sub(2)..(i + 3).min(nx))
+                .all(|a| (j.saturating_sub(2)..(j + 3).min(nd)).all(|b| score[a * nd + b] <= v));
             if is_max {
                 peaks.push((v, i, j));
             }
@@ -255,26 +350,47 @@ pub(crate) fn scan_tower_edges(g: &GradPlane<'_>, hub_x: f64, top: f64, max_dx: 
 /// hides behind a blade pointing down, which at close range covers the tower's near half. The
 /// tower lies on the side of `seed` toward `hub_x` (the blade that hides it hangs from the
 /// hub). `None` when the edge cannot be fitted.
-pub(crate) fn fit_tower_one_edge(g: &GradPlane<'_>, seed: &Segment, width: f64, hub_x: f64) -> Option<TowerFit> {
+pub(crate) fn fit_tower_one_edge(
+    g: &GradPlane<'_>,
+    seed: &Segment,
+    width: f64,
+    hub_x: f64,
+) -> Option<TowerFit> {
     let h = g.height as f64;
     let top = seed.a[1].min(seed.b[1]).max(0.0);
     let seed_bottom = seed.a[1].max(seed.b[1]);
     let rows: Vec<i64> = (top.ceil() as i64..g.height as i64 - 1).collect();
     let x0 = |y: i64| seed.x_at_y(y as f64);
-    let sum: f64 = rows.iter().filter(|&&y| (y as f64) <= seed_bottom).filter_map(|&y| Some(g.at(x0(y)?.round() as i64, y))).sum();
+    let sum: f64 = rows
+        .iter()
+        .filter(|&&y| (y as f64) <= seed_bottom)
+        .filter_map(|&y| Some(g.at(x0(y)?.round() as i64, y)))
+        .sum();
     // `width > 0.0` is false for NaN too.
     if sum == 0.0 || width.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let edge = fit_edge(g, &rows, x0, sum.signum())?;
-    let side = if hub_x >= seed.x_at_y(top)? { 1.0 } else { -1.0 };
+    let side = if hub_x >= seed.x_at_y(top)? {
+        1.0
+    } else {
+        -1.0
+    };
     let shift = |s: &Segment, dx: f64| Segment::new([s.a[0] + dx, s.a[1]], [s.b[0] + dx, s.b[1]]);
     let other = shift(&edge, side * width);
-    let (left, right) = if side > 0.0 { (edge, other) } else { (other, edge) };
+    let (left, right) = if side > 0.0 {
+        (edge, other)
+    } else {
+        (other, edge)
+    };
     let bottom = h - 1.0;
     let mid = |y: f64| Some((left.x_at_y(y)? + right.x_at_y(y)?) / 2.0);
     let axis = Segment::new([mid(top)?, top], [mid(bottom)?, bottom]);
-    Some(TowerFit { edges: [left, right], axis, one_edge: true })
+    Some(TowerFit {
+        edges: [left, right],
+        axis,
+        one_edge: true,
+    })
 }
 
 /// The best partner edge of one gradient sign: mean response along its path, signed offsets
@@ -328,7 +444,10 @@ impl<F: Fn(i64) -> Option<f64>> PartnerSearch<'_, F> {
                 let o_hi = ((g.width as i64 - first).max(0) as usize).min(span);
                 if o_lo < o_hi {
                     let src = &g.row(y)[(first + o_lo as i64) as usize..];
-                    resp[k * span + o_lo..k * span + o_hi].iter_mut().zip(src).for_each(|(r, &v)| *r = (isign * v as i32).max(0));
+                    resp[k * span + o_lo..k * span + o_hi]
+                        .iter_mut()
+                        .zip(src)
+                        .for_each(|(r, &v)| *r = (isign * v as i32).max(0));
                 }
             }
         }
@@ -349,11 +468,15 @@ impl<F: Fn(i64) -> Option<f64>> PartnerSearch<'_, F> {
                     if side > 0 {
                         // Index reach + o_top + st for o_top = wmin.. : ascending.
                         let lo = (reach + wmin + st) as usize;
-                        acc.iter_mut().zip(&row[lo..lo + n_top]).for_each(|(a, v)| *a += v);
+                        acc.iter_mut()
+                            .zip(&row[lo..lo + n_top])
+                            .for_each(|(a, v)| *a += v);
                     } else {
                         // Index reach − o_top − st: descending with o_top.
                         let hi = (reach - wmin - st) as usize;
-                        acc.iter_mut().zip(row[hi + 1 - n_top..=hi].iter().rev()).for_each(|(a, v)| *a += v);
+                        acc.iter_mut()
+                            .zip(row[hi + 1 - n_top..=hi].iter().rev())
+                            .for_each(|(a, v)| *a += v);
                     }
                 }
             }
@@ -392,7 +515,14 @@ impl<F: Fn(i64) -> Option<f64>> PartnerSearch<'_, F> {
         let (response_out, response_in) = (probe(RAMP_PROBE_PX), probe(-RAMP_PROBE_PX));
         // The background: the mean response over all offsets (texture, other edges).
         let background = resp.iter().map(|&v| v as f64).sum::<f64>() / resp.len() as f64;
-        Some(Partner { response, off_top: side * o_top, off_bot: side * o_bot, background, response_out, response_in })
+        Some(Partner {
+            response,
+            off_top: side * o_top,
+            off_bot: side * o_bot,
+            background,
+            response_out,
+            response_in,
+        })
     }
 }
 
@@ -400,7 +530,12 @@ impl<F: Fn(i64) -> Option<f64>> PartnerSearch<'_, F> {
 /// on each row, and the line `x = a + b·y` through them (least squares, outliers dropped once).
 /// Rows where the edge is hidden (response below `EDGE_POINT_MIN_OF_TYPICAL` of its typical
 /// response) give no point.
-fn fit_edge(g: &GradPlane<'_>, rows: &[i64], predict: impl Fn(i64) -> Option<f64>, sign: f64) -> Option<Segment> {
+fn fit_edge(
+    g: &GradPlane<'_>,
+    rows: &[i64],
+    predict: impl Fn(i64) -> Option<f64>,
+    sign: f64,
+) -> Option<Segment> {
     let mut peaks: Vec<(f64, P2)> = Vec::new();
     for &y in rows {
         let Some(x) = predict(y) else { continue };
@@ -418,15 +553,27 @@ fn fit_edge(g: &GradPlane<'_>, rows: &[i64], predict: impl Fn(i64) -> Option<f64
         // Parabola through the peak and its neighbours.
         let (l, r) = (sign * g.at(bx - 1, y), sign * g.at(bx + 1, y));
         let den = l - 2.0 * bv + r;
-        let sub = if den < 0.0 { (0.5 * (l - r) / den).clamp(-0.5, 0.5) } else { 0.0 };
+        let sub = if den < 0.0 {
+            (0.5 * (l - r) / den).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        };
         peaks.push((bv, [bx as f64 + sub, y as f64]));
     }
     let mut vs: Vec<f64> = peaks.iter().map(|(v, _)| *v).collect();
     vs.sort_by(|a, b| a.total_cmp(b));
     let typical = *vs.get(vs.len() * 3 / 4)?;
-    let pts: Vec<P2> = peaks.iter().filter(|(v, _)| *v >= EDGE_POINT_MIN_OF_TYPICAL * typical).map(|(_, q)| *q).collect();
+    let pts: Vec<P2> = peaks
+        .iter()
+        .filter(|(v, _)| *v >= EDGE_POINT_MIN_OF_TYPICAL * typical)
+        .map(|(_, q)| *q)
+        .collect();
     let line = fit_x_of_y(&pts)?;
-    let kept: Vec<P2> = pts.iter().copied().filter(|q| (line.0 + line.1 * q[1] - q[0]).abs() <= EDGE_OUTLIER_PX).collect();
+    let kept: Vec<P2> = pts
+        .iter()
+        .copied()
+        .filter(|q| (line.0 + line.1 * q[1] - q[0]).abs() <= EDGE_OUTLIER_PX)
+        .collect();
     let (a, b) = fit_x_of_y(&kept)?;
     let (y0, y1) = (kept.first()?[1], kept.last()?[1]);
     Some(Segment::new([a + b * y0, y0], [a + b * y1, y1]))
@@ -440,13 +587,28 @@ fn fit_edge(g: &GradPlane<'_>, rows: &[i64], predict: impl Fn(i64) -> Option<f64
 /// edge fit lands) lies inside the tower: widths read 0.7× the truth in such renders. A sharp
 /// edge's response halves within a pixel, so it stays in place. `min_frac` ≥ 1 or `max_k` 0:
 /// `line` unchanged.
-fn to_ramp_end(g: &GradPlane<'_>, rows: &[i64], line: Segment, sign: f64, outward: f64, min_frac: f64, max_k: i64) -> Segment {
-    let along = |dx: f64| -> f64 { rows.iter().filter_map(|&y| Some(sign * g.at((line.x_at_y(y as f64)? + dx).round() as i64, y))).sum() };
+fn to_ramp_end(
+    g: &GradPlane<'_>,
+    rows: &[i64],
+    line: Segment,
+    sign: f64,
+    outward: f64,
+    min_frac: f64,
+    max_k: i64,
+) -> Segment {
+    let along = |dx: f64| -> f64 {
+        rows.iter()
+            .filter_map(|&y| Some(sign * g.at((line.x_at_y(y as f64)? + dx).round() as i64, y)))
+            .sum()
+    };
     let base = along(0.0);
     if base <= 0.0 || min_frac >= 1.0 {
         return line;
     }
-    let k = (1..=max_k).take_while(|&k| along(outward * k as f64) >= min_frac * base).last().unwrap_or(0);
+    let k = (1..=max_k)
+        .take_while(|&k| along(outward * k as f64) >= min_frac * base)
+        .last()
+        .unwrap_or(0);
     let dx = outward * k as f64;
     Segment::new([line.a[0] + dx, line.a[1]], [line.b[0] + dx, line.b[1]])
 }
@@ -458,7 +620,9 @@ fn round_steps(delta: i64, last: i64) -> Vec<i64> {
     if last <= 0 {
         return vec![0; (last + 1).max(1) as usize];
     }
-    (0..=last).map(|k| (2 * delta * k + last).div_euclid(2 * last)).collect()
+    (0..=last)
+        .map(|k| (2 * delta * k + last).div_euclid(2 * last))
+        .collect()
 }
 
 /// Least-squares `x = a + b·y`; `None` with fewer than `EDGE_MIN_POINTS` points or no spread in y.
@@ -507,7 +671,9 @@ mod tests {
         let mut out = vec![0i16; w * h];
         for y in 1..h - 1 {
             for x in 1..w - 1 {
-                let p = |dx: i64, dy: i64| img[(y as i64 + dy) as usize * w + (x as i64 + dx) as usize] as i32;
+                let p = |dx: i64, dy: i64| {
+                    img[(y as i64 + dy) as usize * w + (x as i64 + dx) as usize] as i32
+                };
                 let v = (p(1, -1) + 2 * p(1, 0) + p(1, 1)) - (p(-1, -1) + 2 * p(-1, 0) + p(-1, 1));
                 out[y * w + x] = v as i16;
             }
@@ -521,26 +687,45 @@ mod tests {
         let (left, width, tilt) = (80.3, 24.0, 0.02);
         let img = image(w, h, left, width, tilt);
         let gx = sobel_x(&img, w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         // Hough found only the left edge, from row 40 to 100.
         let seed = Segment::new([left + tilt * 40.0, 40.0], [left + tilt * 100.0, 100.0]);
-        let fit = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("partner found");
+        let fit =
+            fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("partner found");
         for y in [40.0, 100.0, 150.0] {
             let axis = fit.axis.x_at_y(y).unwrap();
             let truth = left + tilt * y + width / 2.0;
             // Pixel-centre sampling of the rendered band quantises each edge by up to 0.5 px.
-            assert!((axis - truth).abs() < 1.0, "axis at row {y}: {axis} vs {truth}");
+            assert!(
+                (axis - truth).abs() < 1.0,
+                "axis at row {y}: {axis} vs {truth}"
+            );
             assert!((fit.width_at(y).unwrap() - width).abs() < 1.0);
         }
         // The same from the right edge.
-        let seed = Segment::new([left + width + tilt * 100.0, 100.0], [left + width + tilt * 150.0, 150.0]);
-        let fit2 = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("partner found from the right");
+        let seed = Segment::new(
+            [left + width + tilt * 100.0, 100.0],
+            [left + width + tilt * 150.0, 150.0],
+        );
+        let fit2 = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH)
+            .expect("partner found from the right");
         assert!((fit2.axis.x_at_y(120.0).unwrap() - fit.axis.x_at_y(120.0).unwrap()).abs() < 0.6);
     }
 
     /// A vertical tower `width` px wide from `left` on uniform `ground`, its shade across the
     /// tower given by `shade(t)` for t = 0 (left limb) .. 1 (right limb).
-    fn shaded_tower_image(w: usize, h: usize, left: f64, width: f64, ground: u8, shade: impl Fn(f64) -> f64) -> Vec<u8> {
+    fn shaded_tower_image(
+        w: usize,
+        h: usize,
+        left: f64,
+        width: f64,
+        ground: u8,
+        shade: impl Fn(f64) -> f64,
+    ) -> Vec<u8> {
         let mut img = vec![ground; w * h];
         for y in 0..h {
             for x in 0..w {
@@ -559,7 +744,9 @@ mod tests {
     fn side_lit_image(w: usize, h: usize, left: f64, width: f64) -> Vec<u8> {
         let (ground, lit) = (60.0, 215.0);
         // Flat for the first 40 %, then linearly down to the ground level.
-        shaded_tower_image(w, h, left, width, ground as u8, |t| lit - (lit - ground) * ((t - 0.4) / 0.6).max(0.0))
+        shaded_tower_image(w, h, left, width, ground as u8, |t| {
+            lit - (lit - ground) * ((t - 0.4) / 0.6).max(0.0)
+        })
     }
 
     #[test]
@@ -568,14 +755,31 @@ mod tests {
         let (left, width) = (80.0, 14.0);
         let img = side_lit_image(w, h, left, width);
         let gx = sobel_x(&img, w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         let seed = Segment::new([left, 40.0], [left, 150.0]);
-        let ramp = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("tower with the ramp");
-        let steepest = DefaultParams { tower_ramp_min_frac: 1.0, ..DefaultParams::default() };
+        let ramp = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH)
+            .expect("tower with the ramp");
+        let steepest = DefaultParams {
+            tower_ramp_min_frac: 1.0,
+            ..DefaultParams::default()
+        };
         let fixed = fit_tower(&steepest, &g, &seed, ANY_WIDTH).expect("tower without");
-        let (with, without) = (ramp.width_at(100.0).unwrap(), fixed.width_at(100.0).unwrap());
-        assert!(without < width - 2.0, "the steepest point lies inside the tower: {without}");
-        assert!(with > without + 1.5 && (with - width).abs() < (without - width).abs(), "ramp end {with} vs steepest {without}, truth {width}");
+        let (with, without) = (
+            ramp.width_at(100.0).unwrap(),
+            fixed.width_at(100.0).unwrap(),
+        );
+        assert!(
+            without < width - 2.0,
+            "the steepest point lies inside the tower: {without}"
+        );
+        assert!(
+            with > without + 1.5 && (with - width).abs() < (without - width).abs(),
+            "ramp end {with} vs steepest {without}, truth {width}"
+        );
         assert!(with <= width + 1.0, "never beyond the silhouette: {with}");
     }
 
@@ -585,7 +789,9 @@ mod tests {
     fn limbs_around_ground_image(w: usize, h: usize, left: f64, width: f64) -> Vec<u8> {
         let (ground, dark, lit) = (120, 60.0, 170.0);
         // Dark for the first 30 %, then a ramp up to the lit limb.
-        shaded_tower_image(w, h, left, width, ground, |t| dark + (lit - dark) * ((t - 0.3) / 0.7).max(0.0))
+        shaded_tower_image(w, h, left, width, ground, |t| {
+            dark + (lit - dark) * ((t - 0.3) / 0.7).max(0.0)
+        })
     }
 
     #[test]
@@ -594,21 +800,32 @@ mod tests {
         let (left, width) = (80.0, 24.0);
         let img = limbs_around_ground_image(w, h, left, width);
         let gx = sobel_x(&img, w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         // From either limb the opposite-sign response is the ramp inside; the partner is the
         // other limb's edge of the same sign beyond it.
         for seed_x in [left, left + width] {
             let seed = Segment::new([seed_x, 40.0], [seed_x, 150.0]);
             let fit = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("tower");
             let got = fit.width_at(100.0).unwrap();
-            assert!((got - width).abs() <= 1.5, "seed at {seed_x}: width {got}, truth {width}");
+            assert!(
+                (got - width).abs() <= 1.5,
+                "seed at {seed_x}: width {got}, truth {width}"
+            );
             assert!((fit.axis.x_at_y(100.0).unwrap() - (left + width / 2.0)).abs() <= 1.0);
         }
         // Opposite signs only, from the lit limb: the band ends at the dark end of the ramp,
         // inside the tower.
-        let opposite_only = DefaultParams { tower_same_sign_partner_min_ratio: 1000.0, ..DefaultParams::default() };
+        let opposite_only = DefaultParams {
+            tower_same_sign_partner_min_ratio: 1000.0,
+            ..DefaultParams::default()
+        };
         let seed = Segment::new([left + width, 40.0], [left + width, 150.0]);
-        let inside = fit_tower(&opposite_only, &g, &seed, ANY_WIDTH).map_or(0.0, |f| f.width_at(100.0).unwrap());
+        let inside = fit_tower(&opposite_only, &g, &seed, ANY_WIDTH)
+            .map_or(0.0, |f| f.width_at(100.0).unwrap());
         assert!(inside < width - 4.0, "opposite-sign band {inside}");
     }
 
@@ -622,17 +839,34 @@ mod tests {
         let img: Vec<u8> = (0..w * h)
             .map(|i| {
                 let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64);
-                if (x - 100.0).abs() < half(y) { 200 } else { 40 }
+                if (x - 100.0).abs() < half(y) {
+                    200
+                } else {
+                    40
+                }
             })
             .collect();
         let gx = sobel_x(&img, w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         let seed = Segment::new([100.0 - half(20.0), 20.0], [100.0 - half(150.0), 150.0]);
         let p = DefaultParams::default();
         let fit = fit_tower(&p, &g, &seed, ANY_WIDTH).expect("tapered tower");
         assert!((fit.width_at(100.0).unwrap() - 2.0 * half(100.0)).abs() < 1.0);
         // Without the taper model the same band widens too much for a tower.
-        assert!(fit_tower(&DefaultParams { tower_taper: 0.0, ..p }, &g, &seed, ANY_WIDTH).is_none());
+        assert!(fit_tower(
+            &DefaultParams {
+                tower_taper: 0.0,
+                ..p
+            },
+            &g,
+            &seed,
+            ANY_WIDTH
+        )
+        .is_none());
     }
 
     #[test]
@@ -642,27 +876,49 @@ mod tests {
         let img: Vec<u8> = (0..w * h)
             .map(|i| {
                 let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64);
-                if x > 80.0 && x < 116.0 - 20.0 * y / h as f64 { 200 } else { 40 }
+                if x > 80.0 && x < 116.0 - 20.0 * y / h as f64 {
+                    200
+                } else {
+                    40
+                }
             })
             .collect();
         let gx = sobel_x(&img, w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         let seed = Segment::new([80.0, 20.0], [80.0, 120.0]);
         assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_none());
         // The same band widening downward that fast is a tower edge beside a blade's edge.
-        let flipped: Vec<u8> = (0..w * h).map(|i| img[(h - 1 - i / w) * w + i % w]).collect();
+        let flipped: Vec<u8> = (0..w * h)
+            .map(|i| img[(h - 1 - i / w) * w + i % w])
+            .collect();
         let gx = sobel_x(&flipped, w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_none());
         // A band widening as a tapered tower does (30 → 33 px) is accepted.
         let tower: Vec<u8> = (0..w * h)
             .map(|i| {
                 let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64);
-                if x > 80.0 && x < 110.0 + 3.0 * y / h as f64 { 200 } else { 40 }
+                if x > 80.0 && x < 110.0 + 3.0 * y / h as f64 {
+                    200
+                } else {
+                    40
+                }
             })
             .collect();
         let gx = sobel_x(&tower, w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_some());
     }
 
@@ -670,9 +926,15 @@ mod tests {
     fn a_lone_edge_is_no_tower() {
         // A step: bright right half, no opposite edge anywhere.
         let (w, h) = (200, 160);
-        let img: Vec<u8> = (0..w * h).map(|i| if i % w >= 90 { 200 } else { 40 }).collect();
+        let img: Vec<u8> = (0..w * h)
+            .map(|i| if i % w >= 90 { 200 } else { 40 })
+            .collect();
         let gx = sobel_x(&img, w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         let seed = Segment::new([90.0, 40.0], [90.0, 120.0]);
         assert!(fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).is_none());
     }
@@ -686,7 +948,13 @@ mod tests {
             (0..w * h)
                 .map(|i| {
                     let x = (i % w) as f64 + 0.5;
-                    if x > 96.0 && x < 130.0 { blade } else if x > 80.0 && x < 100.0 { tower } else { 0 }
+                    if x > 96.0 && x < 130.0 {
+                        blade
+                    } else if x > 80.0 && x < 100.0 {
+                        tower
+                    } else {
+                        0
+                    }
                 })
                 .collect()
         };
@@ -695,16 +963,32 @@ mod tests {
         // A blade darker than the tower: the tower's visible right boundary (x 96) is an edge
         // of the opposite sign, but weaker than the blade's outer one.
         let gx = sobel_x(&scene(220, 150), w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         let wide = fit_tower(&p, &g, &seed, ANY_WIDTH).expect("some band");
-        assert!((wide.width_at(60.0).unwrap() - 50.0).abs() < 1.5, "{:?}", wide.width_at(60.0));
+        assert!(
+            (wide.width_at(60.0).unwrap() - 50.0).abs() < 1.5,
+            "{:?}",
+            wide.width_at(60.0)
+        );
         // Expecting ~18 px (from a tracker's distance), the partner is the boundary at 96.
         let fit = fit_tower(&p, &g, &seed, (12.0, 27.0)).expect("tower band");
-        assert!((fit.width_at(60.0).unwrap() - 16.0).abs() < 1.5, "{:?}", fit.width_at(60.0));
+        assert!(
+            (fit.width_at(60.0).unwrap() - 16.0).abs() < 1.5,
+            "{:?}",
+            fit.width_at(60.0)
+        );
         // A blade brighter than the tower leaves no opposite edge at a tower-like width: no
         // tower rather than the wrong band.
         let gx = sobel_x(&scene(120, 200), w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         assert!(fit_tower(&p, &g, &seed, ANY_WIDTH).is_some());
         assert!(fit_tower(&p, &g, &seed, (12.0, 27.0)).is_none());
     }
@@ -713,16 +997,36 @@ mod tests {
     fn one_edge_and_the_expected_width_place_the_axis_toward_the_hub() {
         // Tower x 80..100, its right half hidden behind a blade of the same shade (no edge).
         let (w, h) = (200, 160);
-        let img: Vec<u8> = (0..w * h).map(|i| if (i % w) as f64 + 0.5 > 80.0 && (i % w) < 140 { 200 } else { 40 }).collect();
+        let img: Vec<u8> = (0..w * h)
+            .map(|i| {
+                if (i % w) as f64 + 0.5 > 80.0 && (i % w) < 140 {
+                    200
+                } else {
+                    40
+                }
+            })
+            .collect();
         let gx = sobel_x(&img, w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         let seed = Segment::new([80.0, 20.0], [80.0, 120.0]);
         let fit = fit_tower_one_edge(&g, &seed, 20.0, 120.0).expect("edge fitted");
         assert!(fit.one_edge);
-        assert!((fit.axis.x_at_y(60.0).unwrap() - 90.0).abs() < 1.0, "{:?}", fit.axis);
+        assert!(
+            (fit.axis.x_at_y(60.0).unwrap() - 90.0).abs() < 1.0,
+            "{:?}",
+            fit.axis
+        );
         // With the hub on the other side the tower is placed there.
         let fit = fit_tower_one_edge(&g, &seed, 20.0, 40.0).unwrap();
-        assert!((fit.axis.x_at_y(60.0).unwrap() - 70.0).abs() < 1.0, "{:?}", fit.axis);
+        assert!(
+            (fit.axis.x_at_y(60.0).unwrap() - 70.0).abs() < 1.0,
+            "{:?}",
+            fit.axis
+        );
     }
 
     #[test]
@@ -734,19 +1038,35 @@ mod tests {
             .map(|i| {
                 let (x, y): (usize, usize) = (i % w, i / w);
                 let edge = 100 + (y.saturating_sub(60)) * 4 / 100;
-                if x >= edge && x < edge + 20 { 180 } else { 50 }
+                if x >= edge && x < edge + 20 {
+                    180
+                } else {
+                    50
+                }
             })
             .collect();
         let gx = sobel_x(&img, w, h);
-        let g = GradPlane { data: &gx, width: w, height: h };
+        let g = GradPlane {
+            data: &gx,
+            width: w,
+            height: h,
+        };
         let seeds = scan_tower_edges(&g, 110.0, 60.0, 40.0, 8.0, 3.0, 4);
         assert!(seeds.len() >= 2, "{seeds:?}");
         // Both tower edges are found, with their drift.
-        let near = |x_top: f64| seeds.iter().any(|s| (s.a[0] - x_top).abs() <= 1.0 && ((s.b[0] - s.a[0]) - 4.0).abs() <= 1.5);
+        let near = |x_top: f64| {
+            seeds
+                .iter()
+                .any(|s| (s.a[0] - x_top).abs() <= 1.0 && ((s.b[0] - s.a[0]) - 4.0).abs() <= 1.5)
+        };
         assert!(near(100.0) && near(120.0), "{seeds:?}");
         // Nothing but texture: no seeds.
         let flat = vec![0i16; w * h];
-        let g = GradPlane { data: &flat, width: w, height: h };
+        let g = GradPlane {
+            data: &flat,
+            width: w,
+            height: h,
+        };
         assert!(scan_tower_edges(&g, 110.0, 60.0, 40.0, 8.0, 3.0, 4).is_empty());
     }
 
@@ -757,8 +1077,16 @@ mod tests {
                 let steps = round_steps(delta, last);
                 assert_eq!(steps.len() as i64, last + 1);
                 for (k, st) in steps.iter().enumerate() {
-                    let exact = if last > 0 { 30.0 + delta as f64 * k as f64 / last as f64 } else { 30.0 };
-                    assert_eq!(30 + st, exact.round() as i64, "delta {delta} k {k} last {last}");
+                    let exact = if last > 0 {
+                        30.0 + delta as f64 * k as f64 / last as f64
+                    } else {
+                        30.0
+                    };
+                    assert_eq!(
+                        30 + st,
+                        exact.round() as i64,
+                        "delta {delta} k {k} last {last}"
+                    );
                 }
             }
         }

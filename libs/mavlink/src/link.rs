@@ -196,10 +196,8 @@ impl Link {
     pub fn open(endpoint: &Endpoint) -> Result<Link, LinkError> {
         let transport = match endpoint {
             Endpoint::UdpIn(addr) => Transport::Udp {
-                socket: UdpSocket::bind(addr).map_err(|cause| LinkError::Bind {
-                    addr: *addr,
-                    cause,
-                })?,
+                socket: UdpSocket::bind(addr)
+                    .map_err(|cause| LinkError::Bind { addr: *addr, cause })?,
                 peer: None,
                 follow_peer: true,
             },

@@ -33,12 +33,22 @@ fn time(ns: u64) -> Value {
 pub fn to_json(overlay: &DetectOverlay, timestamp_ns: u64) -> Value {
     let ts = time(timestamp_ns);
     let mut points = Vec::new();
-    for kind in [OverlayKind::Other, OverlayKind::Rejected, OverlayKind::Tower, OverlayKind::Blade] {
+    for kind in [
+        OverlayKind::Other,
+        OverlayKind::Rejected,
+        OverlayKind::Tower,
+        OverlayKind::Blade,
+    ] {
         let pts: Vec<Value> = overlay
             .segments()
             .iter()
             .filter(|s| s.kind == kind)
-            .flat_map(|s| [json!({"x": s.a[0], "y": s.a[1]}), json!({"x": s.b[0], "y": s.b[1]})])
+            .flat_map(|s| {
+                [
+                    json!({"x": s.a[0], "y": s.a[1]}),
+                    json!({"x": s.b[0], "y": s.b[1]}),
+                ]
+            })
             .collect();
         if !pts.is_empty() {
             points.push(json!({
@@ -51,7 +61,10 @@ pub fn to_json(overlay: &DetectOverlay, timestamp_ns: u64) -> Value {
     if d.detected && d.nacelle_found {
         // The nacelle's far end: a vertical tick beside the hub, as long as the hub marker.
         let x = d.hub_px[0] + d.nacelle_end_dx_px;
-        let pts = [json!({"x": x, "y": d.hub_px[1] - HUB_MARKER_PX}), json!({"x": x, "y": d.hub_px[1] + HUB_MARKER_PX})];
+        let pts = [
+            json!({"x": x, "y": d.hub_px[1] - HUB_MARKER_PX}),
+            json!({"x": x, "y": d.hub_px[1] + HUB_MARKER_PX}),
+        ];
         points.push(json!({
             "timestamp": ts, "type": LINE_LIST, "points": pts, "outline_color": {"r": 1.0, "g": 0.5, "b": 0.0, "a": 1.0},
             "outline_colors": [], "fill_color": {"r": 0, "g": 0, "b": 0, "a": 0}, "thickness": THICKNESS_PX
@@ -64,17 +77,37 @@ pub fn to_json(overlay: &DetectOverlay, timestamp_ns: u64) -> Value {
     };
     if overlay.search_circle[2] > 0.0 {
         let [x, y, r] = overlay.search_circle;
-        circles.push(circle(x as f64, y as f64, 2.0 * r as f64, json!({"r": 0.2, "g": 0.8, "b": 0.2, "a": 0.5})));
+        circles.push(circle(
+            x as f64,
+            y as f64,
+            2.0 * r as f64,
+            json!({"r": 0.2, "g": 0.8, "b": 0.2, "a": 0.5}),
+        ));
     }
     if d.tower_found {
-        circles.push(circle(d.tower_top_px[0], d.tower_top_px[1], TOWER_TOP_MARKER_PX, json!({"r": 0.1, "g": 0.3, "b": 1.0, "a": 1.0})));
+        circles.push(circle(
+            d.tower_top_px[0],
+            d.tower_top_px[1],
+            TOWER_TOP_MARKER_PX,
+            json!({"r": 0.1, "g": 0.3, "b": 1.0, "a": 1.0}),
+        ));
     }
     if d.circle_found {
-        circles.push(circle(d.circle[0], d.circle[1], 2.0 * d.circle[2], json!({"r": 1.0, "g": 0.0, "b": 1.0, "a": 1.0})));
+        circles.push(circle(
+            d.circle[0],
+            d.circle[1],
+            2.0 * d.circle[2],
+            json!({"r": 1.0, "g": 0.0, "b": 1.0, "a": 1.0}),
+        ));
     }
     let mut texts = Vec::new();
     if d.detected {
-        circles.push(circle(d.hub_px[0], d.hub_px[1], HUB_MARKER_PX, json!({"r": 1.0, "g": 1.0, "b": 0.0, "a": 1.0})));
+        circles.push(circle(
+            d.hub_px[0],
+            d.hub_px[1],
+            HUB_MARKER_PX,
+            json!({"r": 1.0, "g": 1.0, "b": 0.0, "a": 1.0}),
+        ));
         texts.push(json!({
             "timestamp": ts, "position": {"x": d.hub_px[0] + HUB_MARKER_PX, "y": d.hub_px[1]},
             "text": format!("hub {:.2}", d.confidence), "font_size": 24.0,
@@ -87,7 +120,8 @@ pub fn to_json(overlay: &DetectOverlay, timestamp_ns: u64) -> Value {
 /// A JSON schema for the subset of `foxglove.ImageAnnotations` written here.
 pub fn json_schema() -> Vec<u8> {
     let color = json!({"type": "object", "properties": {"r": {"type": "number"}, "g": {"type": "number"}, "b": {"type": "number"}, "a": {"type": "number"}}});
-    let point = json!({"type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}}});
+    let point =
+        json!({"type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}}});
     let time = json!({"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}});
     let schema = json!({
         "title": SCHEMA_NAME,
@@ -118,15 +152,31 @@ mod tests {
     fn overlay_becomes_line_lists_and_markers() {
         let mut o = DetectOverlay::default();
         o.segment_count = 3;
-        o.segments[0] = OverlaySegment { a: [1.0, 2.0], b: [3.0, 4.0], kind: OverlayKind::Tower };
-        o.segments[1] = OverlaySegment { a: [5.0, 6.0], b: [7.0, 8.0], kind: OverlayKind::Blade };
-        o.segments[2] = OverlaySegment { a: [0.0, 0.0], b: [9.0, 9.0], kind: OverlayKind::Blade };
+        o.segments[0] = OverlaySegment {
+            a: [1.0, 2.0],
+            b: [3.0, 4.0],
+            kind: OverlayKind::Tower,
+        };
+        o.segments[1] = OverlaySegment {
+            a: [5.0, 6.0],
+            b: [7.0, 8.0],
+            kind: OverlayKind::Blade,
+        };
+        o.segments[2] = OverlaySegment {
+            a: [0.0, 0.0],
+            b: [9.0, 9.0],
+            kind: OverlayKind::Blade,
+        };
         o.detection.detected = true;
         o.detection.hub_px = [100.0, 50.0];
         let v = to_json(&o, 1_500_000_000);
         let points = v["points"].as_array().unwrap();
         assert_eq!(points.len(), 2, "one LINE_LIST per kind present");
-        assert_eq!(points[1]["points"].as_array().unwrap().len(), 4, "two blade segments, two points each");
+        assert_eq!(
+            points[1]["points"].as_array().unwrap().len(),
+            4,
+            "two blade segments, two points each"
+        );
         assert_eq!(v["circles"][0]["position"]["x"], 100.0);
         assert_eq!(v["circles"][0]["timestamp"]["sec"], 1);
     }

@@ -60,7 +60,10 @@ fn stamped(s: &Stamps) -> bool {
 
 /// Reads `path` (complete, cut or damaged: whatever is readable).
 pub fn read(path: &Path) -> Result<Channels, ReadError> {
-    let io = |cause| RecordError::Io { path: path.into(), cause };
+    let io = |cause| RecordError::Io {
+        path: path.into(),
+        cause,
+    };
     let mut file = std::fs::File::open(path).map_err(io)?;
     let mut magic = [0u8; 8];
     if file.read_exact(&mut magic).is_err() || &magic != crate::reader::MCAP_MAGIC {
@@ -81,12 +84,14 @@ pub fn read(path: &Path) -> Result<Channels, ReadError> {
         let topic = m.channel.topic.as_str();
         let mut unstamped = || *c.unstamped.entry(topic.to_string()).or_insert(0) += 1;
         match ChannelKind::from_topic(topic) {
-            Some(ChannelKind::FrameHeader) => match serde_json::from_slice::<FrameHeader>(&m.data) {
-                Ok(h) if h.capture_ns > 0 && h.publish_ns > 0 => {
-                    c.frames.insert(h.seq, h);
+            Some(ChannelKind::FrameHeader) => {
+                match serde_json::from_slice::<FrameHeader>(&m.data) {
+                    Ok(h) if h.capture_ns > 0 && h.publish_ns > 0 => {
+                        c.frames.insert(h.seq, h);
+                    }
+                    _ => unstamped(),
                 }
-                _ => unstamped(),
-            },
+            }
             Some(ChannelKind::Detection) => match serde_json::from_slice::<Detection>(&m.data) {
                 Ok(d) if stamped(&d.stamps) => {
                     c.detections.insert(d.stamps.seq, d);
@@ -110,7 +115,11 @@ pub fn read(path: &Path) -> Result<Channels, ReadError> {
             None => *c.unknown_topics.entry(topic.to_string()).or_insert(0) += 1,
         }
     }
-    if c.frames.is_empty() && c.detections.is_empty() && c.tracks.is_empty() && c.setpoints.is_empty() {
+    if c.frames.is_empty()
+        && c.detections.is_empty()
+        && c.tracks.is_empty()
+        && c.setpoints.is_empty()
+    {
         let mut detail = String::new();
         if let Some(e) = &c.read_error {
             detail += &format!("; reading stopped: {e}");
@@ -119,9 +128,16 @@ pub fn read(path: &Path) -> Result<Channels, ReadError> {
             detail += &format!("; unstamped: {:?}", c.unstamped);
         }
         if !c.unknown_topics.is_empty() {
-            detail += &format!("; unknown topics: {:?}", c.unknown_topics.keys().collect::<Vec<_>>());
+            detail += &format!(
+                "; unknown topics: {:?}",
+                c.unknown_topics.keys().collect::<Vec<_>>()
+            );
         }
-        return Err(ReadError::NoStamps { path: path.into(), messages: c.messages, detail });
+        return Err(ReadError::NoStamps {
+            path: path.into(),
+            messages: c.messages,
+            detail,
+        });
     }
     Ok(c)
 }

@@ -19,7 +19,13 @@ use std::path::{Path, PathBuf};
 pub const SIGN_MIN_DEG: f64 = 3.0;
 
 /// Bands of truth distance reported, metres `[lo, hi)`, far to near.
-pub const BANDS_M: [(f64, f64); 5] = [(30.0, f64::INFINITY), (20.0, 30.0), (10.0, 20.0), (5.0, 10.0), (0.0, 5.0)];
+pub const BANDS_M: [(f64, f64); 5] = [
+    (30.0, f64::INFINITY),
+    (20.0, 30.0),
+    (10.0, 20.0),
+    (5.0, 10.0),
+    (0.0, 5.0),
+];
 
 /// Median and 90th percentile.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -105,7 +111,9 @@ pub enum FlightError {
     #[error(transparent)]
     Read(#[from] ReadError),
     /// No frame header carries truth.
-    #[error("{path} has no frames with truth: record a simulated flight (`hubtrack fly --record FILE`)")]
+    #[error(
+        "{path} has no frames with truth: record a simulated flight (`hubtrack fly --record FILE`)"
+    )]
     NoTruth {
         /// The file.
         path: PathBuf,
@@ -129,7 +137,10 @@ fn spread(mut v: Vec<f64>) -> Option<Spread> {
         return None;
     }
     v.sort_by(f64::total_cmp);
-    Some(Spread { p50: quantile(&v, 0.5), p90: quantile(&v, 0.9) })
+    Some(Spread {
+        p50: quantile(&v, 0.5),
+        p90: quantile(&v, 0.9),
+    })
 }
 
 /// One frame's truth with what the pipeline made of it.
@@ -141,7 +152,11 @@ struct Sample<'a> {
 
 fn band(name: String, samples: &[&Sample<'_>]) -> Band {
     let n = samples.len();
-    let dets: Vec<&Detection> = samples.iter().filter_map(|s| s.detection).filter(|d| d.detected).collect();
+    let dets: Vec<&Detection> = samples
+        .iter()
+        .filter_map(|s| s.detection)
+        .filter(|d| d.detected)
+        .collect();
     let hub_error = samples
         .iter()
         .filter_map(|s| {
@@ -159,20 +174,37 @@ fn band(name: String, samples: &[&Sample<'_>]) -> Band {
             (y.abs() >= SIGN_MIN_DEG).then_some((d.nacelle_end_dx_px > 0.0) == (y > 0.0))
         })
         .collect();
-    let tracks: Vec<(&FrameHeader, &TrackState)> = samples.iter().filter_map(|s| Some((s.header, s.track?))).collect();
+    let tracks: Vec<(&FrameHeader, &TrackState)> = samples
+        .iter()
+        .filter_map(|s| Some((s.header, s.track?)))
+        .collect();
     let mut ratios: Vec<f64> = tracks
         .iter()
         .filter(|(h, t)| t.distance_valid && h.truth.distance_m > 0.0)
         .map(|(h, t)| t.distance_m / h.truth.distance_m)
         .collect();
     ratios.sort_by(f64::total_cmp);
-    let yaws: Vec<(f64, f64)> = tracks.iter().filter(|(_, t)| t.yaw_valid).map(|(h, t)| (h.truth.relative_yaw_deg, t.yaw_deg)).collect();
-    let signed: Vec<&(f64, f64)> = yaws.iter().filter(|(truth, _)| truth.abs() >= SIGN_MIN_DEG).collect();
+    let yaws: Vec<(f64, f64)> = tracks
+        .iter()
+        .filter(|(_, t)| t.yaw_valid)
+        .map(|(h, t)| (h.truth.relative_yaw_deg, t.yaw_deg))
+        .collect();
+    let signed: Vec<&(f64, f64)> = yaws
+        .iter()
+        .filter(|(truth, _)| truth.abs() >= SIGN_MIN_DEG)
+        .collect();
     let nets: Vec<(f64, f64)> = samples
         .iter()
-        .filter_map(|s| s.detection.filter(|d| d.detected && d.yaw_net_valid).map(|d| (s.header.truth.relative_yaw_deg, d.yaw_net_deg)))
+        .filter_map(|s| {
+            s.detection
+                .filter(|d| d.detected && d.yaw_net_valid)
+                .map(|d| (s.header.truth.relative_yaw_deg, d.yaw_net_deg))
+        })
         .collect();
-    let nets_signed: Vec<&(f64, f64)> = nets.iter().filter(|(truth, _)| truth.abs() >= SIGN_MIN_DEG).collect();
+    let nets_signed: Vec<&(f64, f64)> = nets
+        .iter()
+        .filter(|(truth, _)| truth.abs() >= SIGN_MIN_DEG)
+        .collect();
     Band {
         name,
         frames: n as u64,
@@ -181,16 +213,50 @@ fn band(name: String, samples: &[&Sample<'_>]) -> Band {
         tower_pct: pct(dets.iter().filter(|d| d.tower_found).count(), n),
         circle_pct: pct(dets.iter().filter(|d| d.circle_found).count(), n),
         nacelle_pct: pct(nacelle_sides.len(), n),
-        nacelle_side_ok_pct: (!nacelle_sides.is_empty()).then(|| pct(nacelle_sides.iter().filter(|ok| **ok).count(), nacelle_sides.len())),
+        nacelle_side_ok_pct: (!nacelle_sides.is_empty()).then(|| {
+            pct(
+                nacelle_sides.iter().filter(|ok| **ok).count(),
+                nacelle_sides.len(),
+            )
+        }),
         distance_valid_pct: pct(ratios.len(), n),
-        distance_ratio: (!ratios.is_empty()).then(|| [quantile(&ratios, 0.1), quantile(&ratios, 0.5), quantile(&ratios, 0.9)]),
+        distance_ratio: (!ratios.is_empty()).then(|| {
+            [
+                quantile(&ratios, 0.1),
+                quantile(&ratios, 0.5),
+                quantile(&ratios, 0.9),
+            ]
+        }),
         yaw_valid_pct: pct(yaws.len(), n),
-        yaw_error_deg: spread(yaws.iter().map(|(truth, est)| (est - truth).abs()).collect()),
-        yaw_wrong_sign_pct: (!signed.is_empty()).then(|| pct(signed.iter().filter(|(truth, est)| truth * est < 0.0).count(), signed.len())),
+        yaw_error_deg: spread(
+            yaws.iter()
+                .map(|(truth, est)| (est - truth).abs())
+                .collect(),
+        ),
+        yaw_wrong_sign_pct: (!signed.is_empty()).then(|| {
+            pct(
+                signed
+                    .iter()
+                    .filter(|(truth, est)| truth * est < 0.0)
+                    .count(),
+                signed.len(),
+            )
+        }),
         net_valid_pct: pct(nets.len(), n),
-        net_error_deg: spread(nets.iter().map(|(truth, est)| (est - truth).abs()).collect()),
-        net_wrong_sign_pct: (!nets_signed.is_empty())
-            .then(|| pct(nets_signed.iter().filter(|(truth, est)| truth * est < 0.0).count(), nets_signed.len())),
+        net_error_deg: spread(
+            nets.iter()
+                .map(|(truth, est)| (est - truth).abs())
+                .collect(),
+        ),
+        net_wrong_sign_pct: (!nets_signed.is_empty()).then(|| {
+            pct(
+                nets_signed
+                    .iter()
+                    .filter(|(truth, est)| truth * est < 0.0)
+                    .count(),
+                nets_signed.len(),
+            )
+        }),
     }
 }
 
@@ -213,23 +279,36 @@ pub fn analyze(path: &Path) -> Result<FlightReport, FlightError> {
         .frames
         .iter()
         .filter(|(_, h)| h.truth.valid && h.truth.turbine_in_view)
-        .map(|(seq, header)| Sample { header, detection: c.detections.get(seq), track: c.tracks.get(seq) })
+        .map(|(seq, header)| Sample {
+            header,
+            detection: c.detections.get(seq),
+            track: c.tracks.get(seq),
+        })
         .collect();
     if samples.is_empty() {
         return Err(FlightError::NoTruth { path: path.into() });
     }
     let mut bands = Vec::new();
     for (lo, hi) in BANDS_M {
-        let inside: Vec<&Sample<'_>> = samples.iter().filter(|s| (lo..hi).contains(&s.header.truth.distance_m)).collect();
+        let inside: Vec<&Sample<'_>> = samples
+            .iter()
+            .filter(|s| (lo..hi).contains(&s.header.truth.distance_m))
+            .collect();
         if !inside.is_empty() {
-            let name = if hi.is_finite() { format!("{lo:.0}-{hi:.0} m") } else { format!("{lo:.0}+ m") };
+            let name = if hi.is_finite() {
+                format!("{lo:.0}-{hi:.0} m")
+            } else {
+                format!("{lo:.0}+ m")
+            };
             bands.push(band(name, &inside));
         }
     }
     bands.push(band("all".into(), &samples.iter().collect::<Vec<_>>()));
     let mut task_frames = BTreeMap::new();
     for s in c.setpoints.values() {
-        *task_frames.entry(task_name(s.task).to_string()).or_insert(0) += 1;
+        *task_frames
+            .entry(task_name(s.task).to_string())
+            .or_insert(0) += 1;
     }
     let last = samples.last().map(|s| LastFrame {
         seq: s.header.seq,
@@ -238,13 +317,23 @@ pub fn analyze(path: &Path) -> Result<FlightReport, FlightError> {
         track_distance_m: s.track.filter(|t| t.distance_valid).map(|t| t.distance_m),
         track_yaw_deg: s.track.filter(|t| t.yaw_valid).map(|t| t.yaw_deg),
     });
-    Ok(FlightReport { path: path.into(), bands, task_frames, last, read_error: c.read_error })
+    Ok(FlightReport {
+        path: path.into(),
+        bands,
+        task_frames,
+        last,
+        read_error: c.read_error,
+    })
 }
 
 /// Prints the report as a table.
 pub fn print(r: &FlightReport) {
     let opt = |v: Option<f64>, w: usize| v.map_or(format!("{:>w$}", "-"), |v| format!("{v:>w$.1}"));
-    let sp = |v: Option<Spread>| v.map_or(format!("{:>11}", "-"), |s| format!("{:>5.1} {:>5.1}", s.p50, s.p90));
+    let sp = |v: Option<Spread>| {
+        v.map_or(format!("{:>11}", "-"), |s| {
+            format!("{:>5.1} {:>5.1}", s.p50, s.p90)
+        })
+    };
     println!(
         "{:<9}{:>7}{:>6} {:>11}{:>6}{:>6}{:>6}{:>6} | {:>6} {:>17} | {:>6} {:>11} {:>6} | {:>6} {:>11} {:>6}",
         "truth", "frames", "det%", "hub err %h", "tow%", "circ%", "nac%", "side%", "dist%", "dist/truth", "yaw%", "|yaw err|°", "wrong%", "net%", "|net err|°", "wrong%"
@@ -254,7 +343,9 @@ pub fn print(r: &FlightReport) {
         "", "", "", "p50   p90", "", "", "", "", "", "p10   p50   p90", "", "p50   p90", "", "", "p50   p90", ""
     );
     for b in &r.bands {
-        let ratio = b.distance_ratio.map_or(format!("{:>17}", "-"), |q| format!("{:>5.2} {:>5.2} {:>5.2}", q[0], q[1], q[2]));
+        let ratio = b.distance_ratio.map_or(format!("{:>17}", "-"), |q| {
+            format!("{:>5.2} {:>5.2} {:>5.2}", q[0], q[1], q[2])
+        });
         println!(
             "{:<9}{:>7}{:>6.1} {}{:>6.1}{:>6.1}{:>6.1}{} | {:>6.1} {} | {:>6.1} {} {} | {:>6.1} {} {}",
             b.name,
@@ -279,11 +370,17 @@ pub fn print(r: &FlightReport) {
         "side% = nacelle ends on the side the true yaw puts the nacelle; wrong% = valid yaws (the track's, the yaw network's) of the wrong sign; both where the true |yaw| >= {SIGN_MIN_DEG:.0}°"
     );
     if !r.task_frames.is_empty() {
-        let tasks: Vec<String> = r.task_frames.iter().map(|(t, n)| format!("{t} {n}")).collect();
+        let tasks: Vec<String> = r
+            .task_frames
+            .iter()
+            .map(|(t, n)| format!("{t} {n}"))
+            .collect();
         println!("frames per task: {}", tasks.join(", "));
     }
     if let Some(l) = r.last {
-        let est = |v: Option<f64>, unit: &str| v.map_or("invalid".to_string(), |v| format!("{v:+.1}{unit}"));
+        let est = |v: Option<f64>, unit: &str| {
+            v.map_or("invalid".to_string(), |v| format!("{v:+.1}{unit}"))
+        };
         println!(
             "last frame {}: truth {:.2} m, yaw {:+.1}°; track {}, yaw {}",
             l.seq,
@@ -306,7 +403,12 @@ mod tests {
 
     fn stamps(seq: u64) -> Stamps {
         let base = 1_000_000_000 + seq * 50_000_000;
-        Stamps { seq, capture_ns: base, recv_ns: base + 1_000_000, publish_ns: base + 2_000_000 }
+        Stamps {
+            seq,
+            capture_ns: base,
+            recv_ns: base + 1_000_000,
+            publish_ns: base + 2_000_000,
+        }
     }
 
     #[test]
@@ -318,17 +420,29 @@ mod tests {
         // wrong sign), 35 m and +9° after; the detector's hub is 10 px off in a 1000 px image,
         // its nacelle end on the left (the wrong side) in every frame.
         for seq in 0..20u64 {
-            let mut h = FrameHeader { seq, capture_ns: stamps(seq).capture_ns, publish_ns: stamps(seq).publish_ns, height: 1000, ..Default::default() };
+            let mut h = FrameHeader {
+                seq,
+                capture_ns: stamps(seq).capture_ns,
+                publish_ns: stamps(seq).publish_ns,
+                height: 1000,
+                ..Default::default()
+            };
             h.truth.valid = true;
             h.truth.turbine_in_view = true;
             h.truth.hub_px = [500.0, 500.0];
             h.truth.distance_m = 35.0;
             h.truth.relative_yaw_deg = 10.0;
             rec.write_frame(&h, None, 1).unwrap();
-            let mut d = Detection { stamps: stamps(seq), detected: true, hub_px: [510.0, 500.0], ..Default::default() };
+            let mut d = Detection {
+                stamps: stamps(seq),
+                detected: true,
+                hub_px: [510.0, 500.0],
+                ..Default::default()
+            };
             d.nacelle_found = true;
             d.nacelle_end_dx_px = -30.0;
-            rec.write_json(ChannelKind::Detection, seq, 1, 1, &d).unwrap();
+            rec.write_json(ChannelKind::Detection, seq, 1, 1, &d)
+                .unwrap();
             let early = seq < 10;
             let t = TrackState {
                 stamps: stamps(seq),
@@ -343,7 +457,12 @@ mod tests {
         }
         rec.finish().unwrap();
         let r = analyze(&path).unwrap();
-        assert_eq!(r.bands.len(), 2, "{:?}", r.bands.iter().map(|b| &b.name).collect::<Vec<_>>());
+        assert_eq!(
+            r.bands.len(),
+            2,
+            "{:?}",
+            r.bands.iter().map(|b| &b.name).collect::<Vec<_>>()
+        );
         let b = &r.bands[0];
         assert_eq!((b.name.as_str(), b.frames), ("30+ m", 20));
         assert_eq!(b.detected_pct, 100.0);
@@ -353,9 +472,18 @@ mod tests {
         assert_eq!((q[0], q[2]), (1.0, 2.0));
         assert_eq!(b.yaw_wrong_sign_pct, Some(50.0));
         assert_eq!(b.yaw_error_deg.unwrap().p90, 18.0);
-        assert_eq!(r.bands[1], Band { name: "all".into(), ..b.clone() });
+        assert_eq!(
+            r.bands[1],
+            Band {
+                name: "all".into(),
+                ..b.clone()
+            }
+        );
         let last = r.last.unwrap();
-        assert_eq!((last.seq, last.track_distance_m, last.track_yaw_deg), (19, Some(35.0), Some(9.0)));
+        assert_eq!(
+            (last.seq, last.track_distance_m, last.track_yaw_deg),
+            (19, Some(35.0), Some(9.0))
+        );
     }
 
     #[test]
@@ -363,7 +491,12 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("camera.mcap");
         let mut rec = Recording::create(&path, &RecordingOptions::default()).unwrap();
-        let h = FrameHeader { seq: 0, capture_ns: 5, publish_ns: 6, ..Default::default() };
+        let h = FrameHeader {
+            seq: 0,
+            capture_ns: 5,
+            publish_ns: 6,
+            ..Default::default()
+        };
         rec.write_frame(&h, None, 1).unwrap();
         rec.finish().unwrap();
         let e = analyze(&path).unwrap_err();

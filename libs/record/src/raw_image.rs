@@ -60,7 +60,12 @@ pub fn descriptor_set() -> Vec<u8> {
         message_type: vec![DescriptorProto {
             name: Some("RawImage".into()),
             field: vec![
-                field("timestamp", F_TIMESTAMP as i32, Type::Message, Some(".google.protobuf.Timestamp")),
+                field(
+                    "timestamp",
+                    F_TIMESTAMP as i32,
+                    Type::Message,
+                    Some(".google.protobuf.Timestamp"),
+                ),
                 field("frame_id", F_FRAME_ID as i32, Type::String, None),
                 field("width", F_WIDTH as i32, Type::Fixed32, None),
                 field("height", F_HEIGHT as i32, Type::Fixed32, None),
@@ -73,7 +78,10 @@ pub fn descriptor_set() -> Vec<u8> {
         syntax: Some("proto3".into()),
         ..Default::default()
     };
-    FileDescriptorSet { file: vec![timestamp, raw_image] }.encode_to_vec()
+    FileDescriptorSet {
+        file: vec![timestamp, raw_image],
+    }
+    .encode_to_vec()
 }
 
 fn put_varint(out: &mut Vec<u8>, mut v: u64) {
@@ -191,7 +199,11 @@ mod tests {
         assert_eq!(decoded.data, pixels);
         let ts = decoded.timestamp.unwrap();
         assert_eq!((ts.seconds, ts.nanos), (1_763_000_000, 123_456_789));
-        assert_eq!(decoded.encode_to_vec(), ours, "byte-identical to prost's encoding");
+        assert_eq!(
+            decoded.encode_to_vec(),
+            ours,
+            "byte-identical to prost's encoding"
+        );
     }
 
     #[test]

@@ -36,17 +36,28 @@ pub fn is_finished(path: &Path) -> std::io::Result<bool> {
 /// disk) into a new, complete and indexed `output`. Reading goes through the file linearly without
 /// needing its footer and stops at the first record it cannot parse; everything before is kept.
 pub fn recover(input: &Path, output: &Path) -> Result<RecoverReport, RecordError> {
-    let file = std::fs::File::open(input).map_err(|cause| RecordError::Io { path: input.into(), cause })?;
-    let out_file = std::fs::File::create(output).map_err(|cause| RecordError::Io { path: output.into(), cause })?;
-    let mut out = mcap::Writer::new(BufWriter::new(out_file))
-        .map_err(|e| RecordError::Mcap { path: output.into(), message: e.to_string() })?;
+    let file = std::fs::File::open(input).map_err(|cause| RecordError::Io {
+        path: input.into(),
+        cause,
+    })?;
+    let out_file = std::fs::File::create(output).map_err(|cause| RecordError::Io {
+        path: output.into(),
+        cause,
+    })?;
+    let mut out = mcap::Writer::new(BufWriter::new(out_file)).map_err(|e| RecordError::Mcap {
+        path: output.into(),
+        message: e.to_string(),
+    })?;
     let mut messages = 0;
     let mut stopped_by = None;
     let options = LinearReaderOptions::default().with_skip_end_magic(true);
     for message in mcap::io::MessageReader::new_with_options(BufReader::new(file), options) {
         match message {
             Ok(m) => {
-                out.write(&m).map_err(|e| RecordError::Mcap { path: output.into(), message: e.to_string() })?;
+                out.write(&m).map_err(|e| RecordError::Mcap {
+                    path: output.into(),
+                    message: e.to_string(),
+                })?;
                 messages += 1;
             }
             Err(e) => {
@@ -55,9 +66,19 @@ pub fn recover(input: &Path, output: &Path) -> Result<RecoverReport, RecordError
             }
         }
     }
-    out.finish().map_err(|e| RecordError::Mcap { path: output.into(), message: e.to_string() })?;
-    let input_complete = is_finished(input).map_err(|cause| RecordError::Io { path: input.into(), cause })?;
-    Ok(RecoverReport { messages, input_complete, stopped_by })
+    out.finish().map_err(|e| RecordError::Mcap {
+        path: output.into(),
+        message: e.to_string(),
+    })?;
+    let input_complete = is_finished(input).map_err(|cause| RecordError::Io {
+        path: input.into(),
+        cause,
+    })?;
+    Ok(RecoverReport {
+        messages,
+        input_complete,
+        stopped_by,
+    })
 }
 
 #[cfg(test)]
@@ -67,13 +88,33 @@ mod tests {
     use hubtrack_types::FrameHeader;
 
     fn write_sample(path: &Path, frames: u64) {
-        let mut rec = Recording::create(path, &RecordingOptions { compression: None, chunk_size: 1024 }).unwrap();
+        let mut rec = Recording::create(
+            path,
+            &RecordingOptions {
+                compression: None,
+                chunk_size: 1024,
+            },
+        )
+        .unwrap();
         for seq in 0..frames {
             // Frames large enough that the data section dominates the file, as in real recordings.
-            let h = FrameHeader { seq, width: 100, height: 10, stride: 300, ..Default::default() };
-            rec.write_frame(&h, Some(&[seq as u8; 3000]), 1000 + seq).unwrap();
-            rec.write_json(ChannelKind::Recorder, seq, 1000 + seq, 1000 + seq, &crate::writer::RecorderStats::default())
+            let h = FrameHeader {
+                seq,
+                width: 100,
+                height: 10,
+                stride: 300,
+                ..Default::default()
+            };
+            rec.write_frame(&h, Some(&[seq as u8; 3000]), 1000 + seq)
                 .unwrap();
+            rec.write_json(
+                ChannelKind::Recorder,
+                seq,
+                1000 + seq,
+                1000 + seq,
+                &crate::writer::RecorderStats::default(),
+            )
+            .unwrap();
             rec.flush().unwrap();
         }
         rec.finish().unwrap();
@@ -92,7 +133,10 @@ mod tests {
         assert!(!report.input_complete);
         assert!(report.messages < 30, "{report:?}");
         // Each frame is 3 messages (image, header, stats) flushed into its own chunk.
-        assert!(report.messages >= 9 && report.messages.is_multiple_of(3), "{report:?}");
+        assert!(
+            report.messages >= 9 && report.messages.is_multiple_of(3),
+            "{report:?}"
+        );
         assert!(report.messages < 30, "{report:?}");
         // The recovered file is complete: the indexed reader accepts it.
         let data = std::fs::read(&out).unwrap();
@@ -100,7 +144,10 @@ mod tests {
         assert_eq!(n as u64, report.messages);
         // And the complete file recovers in full.
         let report = recover(&full, &dir.path().join("again.mcap")).unwrap();
-        assert_eq!((report.messages, report.input_complete, report.stopped_by), (30, true, None));
+        assert_eq!(
+            (report.messages, report.input_complete, report.stopped_by),
+            (30, true, None)
+        );
     }
 }
 
@@ -118,7 +165,10 @@ pub struct FileInfo {
 /// Counts the messages of every topic. A finished file is read through its summary; a cut one
 /// linearly, as far as it is readable.
 pub fn inspect(path: &Path) -> Result<FileInfo, RecordError> {
-    let io = |cause| RecordError::Io { path: path.into(), cause };
+    let io = |cause| RecordError::Io {
+        path: path.into(),
+        cause,
+    };
     let size_bytes = std::fs::metadata(path).map_err(io)?.len();
     let finished = is_finished(path).map_err(io)?;
     let mut topic_counts = std::collections::BTreeMap::new();
@@ -136,7 +186,11 @@ pub fn inspect(path: &Path) -> Result<FileInfo, RecordError> {
                         *topic_counts.entry(ch.topic.clone()).or_insert(0) += n;
                     }
                 }
-                return Ok(FileInfo { size_bytes, finished, topic_counts });
+                return Ok(FileInfo {
+                    size_bytes,
+                    finished,
+                    topic_counts,
+                });
             }
         }
     }
@@ -148,5 +202,9 @@ pub fn inspect(path: &Path) -> Result<FileInfo, RecordError> {
             Err(_) => break,
         }
     }
-    Ok(FileInfo { size_bytes, finished, topic_counts })
+    Ok(FileInfo {
+        size_bytes,
+        finished,
+        topic_counts,
+    })
 }

@@ -103,7 +103,9 @@ impl ChannelKind {
 }
 
 /// The recorder's counters, written to `/recorder` periodically and at the end.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 pub struct RecorderStats {
     /// Frames received from shared memory.
     pub frames_received: u64,
@@ -133,7 +135,10 @@ pub struct RecordingOptions {
 
 impl Default for RecordingOptions {
     fn default() -> Self {
-        RecordingOptions { compression: Some(mcap::Compression::Lz4), chunk_size: 4 << 20 }
+        RecordingOptions {
+            compression: Some(mcap::Compression::Lz4),
+            chunk_size: 4 << 20,
+        }
     }
 }
 
@@ -150,7 +155,10 @@ pub struct Recording {
 }
 
 fn mcap_err(path: &Path, e: impl std::fmt::Display) -> RecordError {
-    RecordError::Mcap { path: path.into(), message: e.to_string() }
+    RecordError::Mcap {
+        path: path.into(),
+        message: e.to_string(),
+    }
 }
 
 /// Foxglove's name for a pixel format.
@@ -165,9 +173,15 @@ impl Recording {
     /// Creates the file (its folder too) and registers every channel with its schema.
     pub fn create(path: &Path, options: &RecordingOptions) -> Result<Recording, RecordError> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|cause| RecordError::Io { path: dir.into(), cause })?;
+            std::fs::create_dir_all(dir).map_err(|cause| RecordError::Io {
+                path: dir.into(),
+                cause,
+            })?;
         }
-        let file = File::create(path).map_err(|cause| RecordError::Io { path: path.into(), cause })?;
+        let file = File::create(path).map_err(|cause| RecordError::Io {
+            path: path.into(),
+            cause,
+        })?;
         let mut writer = WriteOptions::new()
             .profile(PROFILE)
             .library(concat!("hubtrack-record ", env!("CARGO_PKG_VERSION")))
@@ -177,25 +191,37 @@ impl Recording {
             .map_err(|e| mcap_err(path, e))?;
         let no_meta = BTreeMap::new();
         let image_schema = writer
-            .add_schema(raw_image::SCHEMA_NAME, "protobuf", &raw_image::descriptor_set())
+            .add_schema(
+                raw_image::SCHEMA_NAME,
+                "protobuf",
+                &raw_image::descriptor_set(),
+            )
             .map_err(|e| mcap_err(path, e))?;
-        let frames_channel =
-            writer.add_channel(image_schema, FRAMES_TOPIC, "protobuf", &no_meta).map_err(|e| mcap_err(path, e))?;
+        let frames_channel = writer
+            .add_channel(image_schema, FRAMES_TOPIC, "protobuf", &no_meta)
+            .map_err(|e| mcap_err(path, e))?;
         let overlay_schema = writer
-            .add_schema(crate::annotations::SCHEMA_NAME, "jsonschema", &crate::annotations::json_schema())
+            .add_schema(
+                crate::annotations::SCHEMA_NAME,
+                "jsonschema",
+                &crate::annotations::json_schema(),
+            )
             .map_err(|e| mcap_err(path, e))?;
-        let overlay_channel =
-            writer.add_channel(overlay_schema, OVERLAY_TOPIC, "json", &no_meta).map_err(|e| mcap_err(path, e))?;
+        let overlay_channel = writer
+            .add_channel(overlay_schema, OVERLAY_TOPIC, "json", &no_meta)
+            .map_err(|e| mcap_err(path, e))?;
         let mut json_channels = BTreeMap::new();
         for kind in ChannelKind::ALL {
             let schema = writer
                 .add_schema(kind.schema_name(), "jsonschema", &kind.json_schema())
                 .map_err(|e| mcap_err(path, e))?;
-            let id = writer.add_channel(schema, kind.topic(), "json", &no_meta).map_err(|e| mcap_err(path, e))?;
+            let id = writer
+                .add_channel(schema, kind.topic(), "json", &no_meta)
+                .map_err(|e| mcap_err(path, e))?;
             json_channels.insert(kind, id);
         }
-        let realtime_offset_ns =
-            hubtrack_types::time::realtime_ns() as i128 - hubtrack_types::time::monotonic_ns() as i128;
+        let realtime_offset_ns = hubtrack_types::time::realtime_ns() as i128
+            - hubtrack_types::time::monotonic_ns() as i128;
         Ok(Recording {
             path: path.into(),
             writer,
@@ -219,7 +245,12 @@ impl Recording {
 
     /// Writes one frame's pixels to `/frames` (skipped when `pixels` is `None`) and its header to
     /// `/frames/header`. `log_time` is the wall-clock receive time.
-    pub fn write_frame(&mut self, header: &FrameHeader, pixels: Option<&[u8]>, log_time: u64) -> Result<(), RecordError> {
+    pub fn write_frame(
+        &mut self,
+        header: &FrameHeader,
+        pixels: Option<&[u8]>,
+        log_time: u64,
+    ) -> Result<(), RecordError> {
         let sequence = header.seq as u32;
         let publish_time = header.capture_realtime_ns;
         if let Some(pixels) = pixels {
@@ -232,25 +263,51 @@ impl Recording {
                 step: header.stride,
             };
             raw_image::encode(&meta, pixels, &mut self.scratch);
-            let h = MessageHeader { channel_id: self.frames_channel, sequence, log_time, publish_time };
-            self.writer.write_to_known_channel(&h, &self.scratch).map_err(|e| mcap_err(&self.path, e))?;
+            let h = MessageHeader {
+                channel_id: self.frames_channel,
+                sequence,
+                log_time,
+                publish_time,
+            };
+            self.writer
+                .write_to_known_channel(&h, &self.scratch)
+                .map_err(|e| mcap_err(&self.path, e))?;
         }
-        self.write_json(ChannelKind::FrameHeader, header.seq, log_time, publish_time, header)
+        self.write_json(
+            ChannelKind::FrameHeader,
+            header.seq,
+            log_time,
+            publish_time,
+            header,
+        )
     }
 
     /// Writes the detector overlay of a frame as `foxglove.ImageAnnotations`. `image_time_ns` is
     /// the frame's capture wall-clock time (Foxglove matches annotations to images by it).
-    pub fn write_overlay(&mut self, overlay: &hubtrack_types::DetectOverlay, image_time_ns: u64, log_time: u64) -> Result<(), RecordError> {
+    pub fn write_overlay(
+        &mut self,
+        overlay: &hubtrack_types::DetectOverlay,
+        image_time_ns: u64,
+        log_time: u64,
+    ) -> Result<(), RecordError> {
         self.scratch.clear();
-        serde_json::to_writer(&mut self.scratch, &crate::annotations::to_json(overlay, image_time_ns))
-            .map_err(|e| RecordError::Encode { channel: OVERLAY_TOPIC.into(), message: e.to_string() })?;
+        serde_json::to_writer(
+            &mut self.scratch,
+            &crate::annotations::to_json(overlay, image_time_ns),
+        )
+        .map_err(|e| RecordError::Encode {
+            channel: OVERLAY_TOPIC.into(),
+            message: e.to_string(),
+        })?;
         let h = MessageHeader {
             channel_id: self.overlay_channel,
             sequence: overlay.stamps.seq as u32,
             log_time,
             publish_time: self.to_realtime(overlay.stamps.publish_ns),
         };
-        self.writer.write_to_known_channel(&h, &self.scratch).map_err(|e| mcap_err(&self.path, e))
+        self.writer
+            .write_to_known_channel(&h, &self.scratch)
+            .map_err(|e| mcap_err(&self.path, e))
     }
 
     /// Writes a JSON message to a hubtrack channel.
@@ -263,10 +320,19 @@ impl Recording {
         value: &T,
     ) -> Result<(), RecordError> {
         self.scratch.clear();
-        serde_json::to_writer(&mut self.scratch, value)
-            .map_err(|e| RecordError::Encode { channel: kind.topic().into(), message: e.to_string() })?;
-        let h = MessageHeader { channel_id: self.json_channels[&kind], sequence: seq as u32, log_time, publish_time };
-        self.writer.write_to_known_channel(&h, &self.scratch).map_err(|e| mcap_err(&self.path, e))
+        serde_json::to_writer(&mut self.scratch, value).map_err(|e| RecordError::Encode {
+            channel: kind.topic().into(),
+            message: e.to_string(),
+        })?;
+        let h = MessageHeader {
+            channel_id: self.json_channels[&kind],
+            sequence: seq as u32,
+            log_time,
+            publish_time,
+        };
+        self.writer
+            .write_to_known_channel(&h, &self.scratch)
+            .map_err(|e| mcap_err(&self.path, e))
     }
 
     /// Closes the current chunk and hands everything to the OS: after a crash, the file is

@@ -15,9 +15,29 @@ fn main() {
     let base = Scene::default_clear();
     let variants: Vec<(&str, Scene)> = vec![
         ("default (noise on)", base.clone()),
-        ("no effects", Scene { noise_sigma: 0.0, ..base.clone() }),
-        ("clouds + sea", Scene { sky: Sky::Clouds, ground: Ground::Sea, ..base.clone() }),
-        ("overcast + hills", Scene { sky: Sky::Overcast, ground: Ground::Hills, ..base.clone() }),
+        (
+            "no effects",
+            Scene {
+                noise_sigma: 0.0,
+                ..base.clone()
+            },
+        ),
+        (
+            "clouds + sea",
+            Scene {
+                sky: Sky::Clouds,
+                ground: Ground::Sea,
+                ..base.clone()
+            },
+        ),
+        (
+            "overcast + hills",
+            Scene {
+                sky: Sky::Overcast,
+                ground: Ground::Hills,
+                ..base.clone()
+            },
+        ),
         (
             "all extras",
             Scene {
@@ -27,12 +47,37 @@ fn main() {
                 ..base.clone()
             },
         ),
-        ("blur", Scene { blur: true, ..base.clone() }),
-        ("jpeg q75", Scene { jpeg_quality: Some(75), ..base.clone() }),
-        ("blur + jpeg q75", Scene { blur: true, jpeg_quality: Some(75), ..base.clone() }),
+        (
+            "blur",
+            Scene {
+                blur: true,
+                ..base.clone()
+            },
+        ),
+        (
+            "jpeg q75",
+            Scene {
+                jpeg_quality: Some(75),
+                ..base.clone()
+            },
+        ),
+        (
+            "blur + jpeg q75",
+            Scene {
+                blur: true,
+                jpeg_quality: Some(75),
+                ..base.clone()
+            },
+        ),
     ];
-    let cameras = [("gopro 1920x1080", Camera::gopro_hero3()), ("usb 640x480", Camera::usb_narrow())];
-    println!("{:<22} {:<17} {:>10} {:>10}", "scene variant", "camera", "median ms", "p99 ms");
+    let cameras = [
+        ("gopro 1920x1080", Camera::gopro_hero3()),
+        ("usb 640x480", Camera::usb_narrow()),
+    ];
+    println!(
+        "{:<22} {:<17} {:>10} {:>10}",
+        "scene variant", "camera", "median ms", "p99 ms"
+    );
     for (cam_name, cam) in cameras {
         let mut r = Renderer::new(cam);
         let mut buf = vec![0u8; cam.frame_bytes()];
@@ -44,7 +89,11 @@ fn main() {
                     roll_deg: 2.0,
                     ..CameraPose::looking_at_hub(120.0 - i as f64, 5.0, -10.0)
                 };
-                let s = Scene { rotor_angle_deg: i as f64 * 3.0, frame: i as u64, ..scene.clone() };
+                let s = Scene {
+                    rotor_angle_deg: i as f64 * 3.0,
+                    frame: i as u64,
+                    ..scene.clone()
+                };
                 let t0 = Instant::now();
                 let truth = r.render(&s, &pose, &mut buf);
                 let dt = t0.elapsed().as_secs_f64() * 1e3;

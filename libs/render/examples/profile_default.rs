@@ -8,10 +8,26 @@ use hubtrack_render::{Camera, CameraPose, Distractor, Ground, Renderer, Scene, S
 fn scene_for(variant: &str) -> Scene {
     let base = Scene::default_clear();
     match variant {
-        "sea" => Scene { sky: Sky::Clouds, ground: Ground::Sea, ..base },
-        "hills" => Scene { sky: Sky::Overcast, ground: Ground::Hills, ..base },
-        "extras" => Scene { second_turbine: true, propellers_in_view: true, distractor: Distractor::PowerLines, ..base },
-        "jpeg" => Scene { jpeg_quality: Some(75), ..base },
+        "sea" => Scene {
+            sky: Sky::Clouds,
+            ground: Ground::Sea,
+            ..base
+        },
+        "hills" => Scene {
+            sky: Sky::Overcast,
+            ground: Ground::Hills,
+            ..base
+        },
+        "extras" => Scene {
+            second_turbine: true,
+            propellers_in_view: true,
+            distractor: Distractor::PowerLines,
+            ..base
+        },
+        "jpeg" => Scene {
+            jpeg_quality: Some(75),
+            ..base
+        },
         "blur" => Scene { blur: true, ..base },
         _ => base,
     }
@@ -30,8 +46,15 @@ fn main() {
     let mut times = vec![Vec::with_capacity(n); variants.len()];
     for i in 0..n {
         for (k, v) in variants.iter().enumerate() {
-            let pose = CameraPose { roll_deg: 2.0, ..CameraPose::looking_at_hub(120.0 - (i % 50) as f64, 5.0, -10.0) };
-            let s = Scene { rotor_angle_deg: i as f64 * 3.0, frame: i as u64, ..scene_for(v) };
+            let pose = CameraPose {
+                roll_deg: 2.0,
+                ..CameraPose::looking_at_hub(120.0 - (i % 50) as f64, 5.0, -10.0)
+            };
+            let s = Scene {
+                rotor_angle_deg: i as f64 * 3.0,
+                frame: i as u64,
+                ..scene_for(v)
+            };
             let t0 = std::time::Instant::now();
             if let Err(e) = r.render(&s, &pose, &mut buf) {
                 eprintln!("render failed: {e}");

@@ -12,7 +12,10 @@ use std::path::Path;
 use hubtrack_render::{Camera, CameraPose, Distractor, Ground, Renderer, Scene, Sky, Truth};
 
 fn write_png(path: &Path, cam: &Camera, bgr: &[u8]) -> Result<(), Box<dyn std::error::Error>> {
-    let rgb: Vec<u8> = bgr.chunks_exact(3).flat_map(|p| [p[2], p[1], p[0]]).collect();
+    let rgb: Vec<u8> = bgr
+        .chunks_exact(3)
+        .flat_map(|p| [p[2], p[1], p[0]])
+        .collect();
     let mut enc = png::Encoder::new(BufWriter::new(File::create(path)?), cam.width, cam.height);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
@@ -43,48 +46,105 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let base = Scene::default_clear();
 
     let frames: Vec<(&str, Camera, Scene, CameraPose)> = vec![
-        ("front_far", gopro, base.clone(), CameraPose::looking_at_hub(150.0, 0.0, -20.0)),
+        (
+            "front_far",
+            gopro,
+            base.clone(),
+            CameraPose::looking_at_hub(150.0, 0.0, -20.0),
+        ),
         (
             "oblique_close",
             gopro,
-            Scene { rotor_angle_deg: 35.0, sun_azimuth_deg: -50.0, ..base.clone() },
-            CameraPose { yaw_deg: 5.0, roll_deg: 4.0, ..CameraPose::looking_at_hub(30.0, 28.0, 6.0) },
+            Scene {
+                rotor_angle_deg: 35.0,
+                sun_azimuth_deg: -50.0,
+                ..base.clone()
+            },
+            CameraPose {
+                yaw_deg: 5.0,
+                roll_deg: 4.0,
+                ..CameraPose::looking_at_hub(30.0, 28.0, 6.0)
+            },
         ),
         (
             "overcast_horizon",
             gopro,
-            Scene { sky: Sky::Overcast, rotor_angle_deg: 60.0, seed: 7, ..base.clone() },
+            Scene {
+                sky: Sky::Overcast,
+                rotor_angle_deg: 60.0,
+                seed: 7,
+                ..base.clone()
+            },
             CameraPose::front(90.0),
         ),
         (
             "no_turbine",
             gopro,
-            Scene { turbine_present: false, distractor: Distractor::Mast, sky: Sky::Clouds, seed: 3, ..base.clone() },
+            Scene {
+                turbine_present: false,
+                distractor: Distractor::Mast,
+                sky: Sky::Clouds,
+                seed: 3,
+                ..base.clone()
+            },
             CameraPose::looking_at_hub(120.0, 10.0, -15.0),
         ),
         (
             "sea_clouds",
             gopro,
-            Scene { sky: Sky::Clouds, ground: Ground::Sea, sun_azimuth_deg: 170.0, sun_elevation_deg: 25.0, seed: 11, second_turbine: true, ..base.clone() },
+            Scene {
+                sky: Sky::Clouds,
+                ground: Ground::Sea,
+                sun_azimuth_deg: 170.0,
+                sun_elevation_deg: 25.0,
+                seed: 11,
+                second_turbine: true,
+                ..base.clone()
+            },
             CameraPose::looking_at_hub(80.0, -20.0, -10.0),
         ),
         (
             "hills_powerlines",
             gopro,
-            Scene { ground: Ground::Hills, distractor: Distractor::PowerLines, second_turbine: true, propellers_in_view: true, seed: 5, rotor_angle_deg: 90.0, ..base.clone() },
-            CameraPose { pitch_deg: -8.0, ..CameraPose::looking_at_hub(200.0, 30.0, 10.0) },
+            Scene {
+                ground: Ground::Hills,
+                distractor: Distractor::PowerLines,
+                second_turbine: true,
+                propellers_in_view: true,
+                seed: 5,
+                rotor_angle_deg: 90.0,
+                ..base.clone()
+            },
+            CameraPose {
+                pitch_deg: -8.0,
+                ..CameraPose::looking_at_hub(200.0, 30.0, 10.0)
+            },
         ),
         (
             "usb_close_effects",
             usb,
-            Scene { blur: true, jpeg_quality: Some(60), noise_sigma: 3.0, rotor_angle_deg: 10.0, ..base.clone() },
+            Scene {
+                blur: true,
+                jpeg_quality: Some(60),
+                noise_sigma: 3.0,
+                rotor_angle_deg: 10.0,
+                ..base.clone()
+            },
             CameraPose::looking_at_hub(60.0, 10.0, -5.0),
         ),
         (
             "tower_edge_distortion",
             gopro,
-            Scene { nacelle_yaw_deg: 20.0, blade_pitch_deg: 80.0, ..base.clone() },
-            CameraPose { yaw_deg: 52.0, pitch_deg: -25.0, ..CameraPose::looking_at_hub(60.0, 0.0, -10.0) },
+            Scene {
+                nacelle_yaw_deg: 20.0,
+                blade_pitch_deg: 80.0,
+                ..base.clone()
+            },
+            CameraPose {
+                yaw_deg: 52.0,
+                pitch_deg: -25.0,
+                ..CameraPose::looking_at_hub(60.0, 0.0, -10.0)
+            },
         ),
     ];
 

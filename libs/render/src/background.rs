@@ -92,12 +92,26 @@ impl Node {
     #[inline(always)]
     fn to_arr(self) -> [f32; 16] {
         let (d, a, b) = (self.d, self.a, self.b);
-        [d[0], d[1], d[2], self.du, self.dv, a[0], a[1], a[2], b[0], b[1], b[2], self.k, self.foot, self.u, self.v, self.f]
+        [
+            d[0], d[1], d[2], self.du, self.dv, a[0], a[1], a[2], b[0], b[1], b[2], self.k,
+            self.foot, self.u, self.v, self.f,
+        ]
     }
 
     #[inline(always)]
     fn from_arr(v: [f32; 16]) -> Node {
-        Node { d: [v[0], v[1], v[2]], du: v[3], dv: v[4], a: [v[5], v[6], v[7]], b: [v[8], v[9], v[10]], k: v[11], foot: v[12], u: v[13], v: v[14], f: v[15] }
+        Node {
+            d: [v[0], v[1], v[2]],
+            du: v[3],
+            dv: v[4],
+            a: [v[5], v[6], v[7]],
+            b: [v[8], v[9], v[10]],
+            k: v[11],
+            foot: v[12],
+            u: v[13],
+            v: v[14],
+            f: v[15],
+        }
     }
 
     /// Linear interpolation of every field (written over a flat array so it vectorises).
@@ -135,13 +149,20 @@ impl LandNode {
         const FIX: f32 = 65536.0;
         let level = mip_level(n.foot / GROUND_TEXEL_M);
         let l2 = level.saturating_sub(MACRO_SHIFT);
-        let (u, v) = ((n.u as f64 * 256.0) as i64 as i32, (n.v as f64 * 256.0) as i64 as i32);
+        let (u, v) = (
+            (n.u as f64 * 256.0) as i64 as i32,
+            (n.v as f64 * 256.0) as i64 as i32,
+        );
         let sh = 8 + MACRO_SHIFT + l2;
         let m = tex.grass.view(l2).get(u >> sh, v >> sh) as f32;
         LandNode {
             u,
             v,
-            hz: [(n.b[0] * n.f * FIX) as i32, (n.b[1] * n.f * FIX) as i32, (n.b[2] * n.f * FIX) as i32],
+            hz: [
+                (n.b[0] * n.f * FIX) as i32,
+                (n.b[1] * n.f * FIX) as i32,
+                (n.b[2] * n.f * FIX) as i32,
+            ],
             g: ((1.0 - n.f) * m * (131_072.0 / 128.0)) as i32,
             level,
             foot: n.foot,
@@ -151,12 +172,18 @@ impl LandNode {
     /// Interpolate between two grid rows; `t` in 0..GRID.
     #[inline(always)]
     fn lerp(&self, o: &LandNode, t: i32) -> LandNode {
-        let l = |a: i32, b: i32| a.wrapping_add(((b.wrapping_sub(a) as i64 * t as i64) >> GRID_LOG2) as i32);
+        let l = |a: i32, b: i32| {
+            a.wrapping_add(((b.wrapping_sub(a) as i64 * t as i64) >> GRID_LOG2) as i32)
+        };
         let foot = self.foot + (o.foot - self.foot) * (t as f32 / GRID as f32);
         LandNode {
             u: l(self.u, o.u),
             v: l(self.v, o.v),
-            hz: [l(self.hz[0], o.hz[0]), l(self.hz[1], o.hz[1]), l(self.hz[2], o.hz[2])],
+            hz: [
+                l(self.hz[0], o.hz[0]),
+                l(self.hz[1], o.hz[1]),
+                l(self.hz[2], o.hz[2]),
+            ],
             g: l(self.g, o.g),
             level: mip_level(foot / GROUND_TEXEL_M),
             foot,
@@ -185,8 +212,16 @@ impl SkyNode {
     fn new(n: &Node) -> SkyNode {
         const FIX: f32 = 65536.0;
         SkyNode {
-            a: [(n.a[0] * FIX) as i32, (n.a[1] * FIX) as i32, (n.a[2] * FIX) as i32],
-            b: [n.b[0].min(255.0) as i32, n.b[1].min(255.0) as i32, n.b[2].min(255.0) as i32],
+            a: [
+                (n.a[0] * FIX) as i32,
+                (n.a[1] * FIX) as i32,
+                (n.a[2] * FIX) as i32,
+            ],
+            b: [
+                n.b[0].min(255.0) as i32,
+                n.b[1].min(255.0) as i32,
+                n.b[2].min(255.0) as i32,
+            ],
             k: (n.k * FIX) as i32,
             u: (n.u as f64 * 256.0) as i64 as i32,
             v: (n.v as f64 * 256.0) as i64 as i32,
@@ -197,10 +232,20 @@ impl SkyNode {
     /// Interpolate between two grid rows; `t` in 0..GRID.
     #[inline(always)]
     fn lerp(&self, o: &SkyNode, t: i32) -> SkyNode {
-        let l = |a: i32, b: i32| a.wrapping_add(((b.wrapping_sub(a) as i64 * t as i64) >> GRID_LOG2) as i32);
+        let l = |a: i32, b: i32| {
+            a.wrapping_add(((b.wrapping_sub(a) as i64 * t as i64) >> GRID_LOG2) as i32)
+        };
         SkyNode {
-            a: [l(self.a[0], o.a[0]), l(self.a[1], o.a[1]), l(self.a[2], o.a[2])],
-            b: [l(self.b[0], o.b[0]), l(self.b[1], o.b[1]), l(self.b[2], o.b[2])],
+            a: [
+                l(self.a[0], o.a[0]),
+                l(self.a[1], o.a[1]),
+                l(self.a[2], o.a[2]),
+            ],
+            b: [
+                l(self.b[0], o.b[0]),
+                l(self.b[1], o.b[1]),
+                l(self.b[2], o.b[2]),
+            ],
             k: l(self.k, o.k),
             u: l(self.u, o.u),
             v: l(self.v, o.v),
@@ -336,11 +381,19 @@ impl Background {
             *n = eval_node(&ctx, [dw[0] as f32, dw[1] as f32, dw[2] as f32]);
         }
         for (l, n) in self.sky_nodes.iter_mut().zip(&self.nodes) {
-            *l = if n.d[2] > 0.0 { SkyNode::new(n) } else { SkyNode::default() };
+            *l = if n.d[2] > 0.0 {
+                SkyNode::new(n)
+            } else {
+                SkyNode::default()
+            };
         }
         if ctx.ground != Ground::Sea {
             for (l, n) in self.land_nodes.iter_mut().zip(&self.nodes) {
-                *l = if n.d[2] < 0.0 { LandNode::new(n, &self.tex) } else { LandNode::default() };
+                *l = if n.d[2] < 0.0 {
+                    LandNode::new(n, &self.tex)
+                } else {
+                    LandNode::default()
+                };
             }
         }
         let cw = self.gw - 1;
@@ -353,7 +406,9 @@ impl Background {
                     &self.nodes[(j + 1) * self.gw + i + 1],
                 ];
                 // Footprint spread over the cell says how non-linear the plane mapping is.
-                let (fmin, fmax) = c.iter().fold((f32::MAX, 0f32), |(a, b), n| (a.min(n.foot), b.max(n.foot)));
+                let (fmin, fmax) = c
+                    .iter()
+                    .fold((f32::MAX, 0f32), |(a, b), n| (a.min(n.foot), b.max(n.foot)));
                 let linear = fmax <= fmin * MAX_CELL_FOOT_RATIO;
                 let kind = if c.iter().all(|n| n.d[2] > 0.0) {
                     let clouds = ctx.has_clouds && c.iter().any(|n| n.k > 0.0);
@@ -422,10 +477,16 @@ impl Background {
                 let tex = &self.tex;
                 let (l0, l1) = (&self.land_row[i], &self.land_row[i + 1]);
                 match self.cells[j * cw + i] {
-                    CellKind::Sky => sky_int_span(&ctx, tex, seg, &self.sky_row[i], &self.sky_row[i + 1]),
+                    CellKind::Sky => {
+                        sky_int_span(&ctx, tex, seg, &self.sky_row[i], &self.sky_row[i + 1])
+                    }
                     CellKind::SkyPersp => sky_span(&ctx, tex, seg, n0, n1, true),
-                    CellKind::Ground if ctx.ground != Ground::Sea => land_span(&ctx, tex, seg, l0, l1, None),
-                    CellKind::GroundPersp if ctx.ground != Ground::Sea => land_span(&ctx, tex, seg, l0, l1, Some((n0, n1))),
+                    CellKind::Ground if ctx.ground != Ground::Sea => {
+                        land_span(&ctx, tex, seg, l0, l1, None)
+                    }
+                    CellKind::GroundPersp if ctx.ground != Ground::Sea => {
+                        land_span(&ctx, tex, seg, l0, l1, Some((n0, n1)))
+                    }
                     CellKind::Ground => sea_span(&ctx, tex, seg, n0, n1, false),
                     CellKind::GroundPersp => sea_span(&ctx, tex, seg, n0, n1, true),
                     CellKind::Exact => exact_span(&ctx, tex, seg, n0, n1),
@@ -440,7 +501,8 @@ impl Background {
         let tex_angle = if scene.ground == Ground::Sea {
             // Wave crests (the texture's long axis) run across the wind, which blows along the
             // rotor axis: perpendicular to the usual line of sight, as seen on real sea.
-            std::f64::consts::FRAC_PI_2 - scene.nacelle_yaw_deg.to_radians() + rng.range(-0.25, 0.25)
+            std::f64::consts::FRAC_PI_2 - scene.nacelle_yaw_deg.to_radians()
+                + rng.range(-0.25, 0.25)
         } else {
             rng.range(0.0, std::f64::consts::TAU)
         };
@@ -461,7 +523,8 @@ impl Background {
             Sky::Clear => 1.0,
             Sky::Clouds => 0.92,
             Sky::Overcast => 0.78,
-        } * (0.75 + 0.25 * (scene.sun_elevation_deg.to_radians().sin() as f32).clamp(0.0, 1.0) / 0.7);
+        } * (0.75
+            + 0.25 * (scene.sun_elevation_deg.to_radians().sin() as f32).clamp(0.0, 1.0) / 0.7);
         // Field colours (0..255 RGB): greens, dry grass, wheat, ploughed soil.
         let mut base_pal: [[f32; 3]; PALETTE_N] = [
             [84.0, 122.0, 52.0],
@@ -473,13 +536,19 @@ impl Background {
             [94.0, 128.0, 56.0],
             [116.0, 134.0, 68.0],
         ];
-        let tint = [rng.range(0.92, 1.08) as f32, rng.range(0.95, 1.05) as f32, rng.range(0.9, 1.1) as f32];
+        let tint = [
+            rng.range(0.92, 1.08) as f32,
+            rng.range(0.95, 1.05) as f32,
+            rng.range(0.9, 1.1) as f32,
+        ];
         for p in base_pal.iter_mut() {
             for c in 0..3 {
                 p[c] *= tint[c] * ground_light;
             }
         }
-        let mean = base_pal.iter().fold([0f32; 3], |a, p| [a[0] + p[0] / 8.0, a[1] + p[1] / 8.0, a[2] + p[2] / 8.0]);
+        let mean = base_pal.iter().fold([0f32; 3], |a, p| {
+            [a[0] + p[0] / 8.0, a[1] + p[1] / 8.0, a[2] + p[2] / 8.0]
+        });
         let mut palette = [[[0f32; 3]; PALETTE_N]; crate::texture::TEX_LEVELS];
         for (l, pal) in palette.iter_mut().enumerate() {
             // Ground texels are 0.5 m; fields are >= 128 m: fade contrast once a pixel covers ~16 m.
@@ -504,7 +573,8 @@ impl Background {
                 Sky::Clouds => {
                     let c = coverage as f64;
                     cloud_alpha[n] = crate::math::smoothstep(c, c + 0.22, v) as f32;
-                    cloud_shade[n] = (1.0 - 0.22 * crate::math::smoothstep(c + 0.08, c + 0.45, v)) as f32;
+                    cloud_shade[n] =
+                        (1.0 - 0.22 * crate::math::smoothstep(c + 0.08, c + 0.45, v)) as f32;
                 }
                 Sky::Overcast => {
                     cloud_alpha[n] = (0.55 * crate::math::smoothstep(0.25, 0.85, v)) as f32;
@@ -531,7 +601,12 @@ impl Background {
             eye_v,
             cloud_eye_u,
             cloud_eye_v,
-            ground_tpm: 1.0 / if scene.ground == Ground::Sea { WAVE_TEXEL_M } else { GROUND_TEXEL_M },
+            ground_tpm: 1.0
+                / if scene.ground == Ground::Sea {
+                    WAVE_TEXEL_M
+                } else {
+                    GROUND_TEXEL_M
+                },
             glow_lut: glow_lut(glow_strength),
             fog_lut: fog_lut(),
             inv_visibility: 1.0 / visibility_m(scene.sky) as f32,
@@ -549,7 +624,9 @@ impl Background {
             field_seed: (hash64(scene.seed ^ 0xF1E1D) >> 32) as u32,
             cloud_mip_bias: if scene.sky == Sky::Overcast { 2 } else { 0 },
             cloud_alpha_q: cloud_alpha.map(|a| (a * 256.0 + 0.5) as u32),
-            cloud_ash_q: std::array::from_fn(|i| (cloud_alpha[i] * cloud_shade[i] * 256.0 + 0.5) as u32),
+            cloud_ash_q: std::array::from_fn(|i| {
+                (cloud_alpha[i] * cloud_shade[i] * 256.0 + 0.5) as u32
+            }),
             cloud_alpha,
             cloud_shade,
             cloud_col,
@@ -572,9 +649,27 @@ fn visibility_m(sky: Sky) -> f64 {
 fn sky_palette(sky: Sky) -> ([[f32; 3]; SKY_LUT_N], [f32; 3], f32, [f32; 3]) {
     // (horizon, zenith, exponent) in 0..255 RGB.
     let (hor, zen, ex, glow, cloud) = match sky {
-        Sky::Clear => ([188.0, 208.0, 228.0], [62.0, 112.0, 192.0], 3.0, 1.0, [245.0, 245.0, 243.0]),
-        Sky::Clouds => ([192.0, 210.0, 228.0], [78.0, 128.0, 200.0], 2.5, 0.8, [246.0, 246.0, 244.0]),
-        Sky::Overcast => ([172.0, 176.0, 182.0], [204.0, 207.0, 212.0], 1.5, 0.15, [150.0, 154.0, 160.0]),
+        Sky::Clear => (
+            [188.0, 208.0, 228.0],
+            [62.0, 112.0, 192.0],
+            3.0,
+            1.0,
+            [245.0, 245.0, 243.0],
+        ),
+        Sky::Clouds => (
+            [192.0, 210.0, 228.0],
+            [78.0, 128.0, 200.0],
+            2.5,
+            0.8,
+            [246.0, 246.0, 244.0],
+        ),
+        Sky::Overcast => (
+            [172.0, 176.0, 182.0],
+            [204.0, 207.0, 212.0],
+            1.5,
+            0.15,
+            [150.0, 154.0, 160.0],
+        ),
     };
     let mut lut = [[0f32; 3]; SKY_LUT_N];
     for (i, e) in lut.iter_mut().enumerate() {
@@ -641,7 +736,12 @@ fn eval_node(ctx: &FrameCtx, d: [f32; 3]) -> Node {
     let horiz = (du * du + dv * dv).sqrt().max(1e-9);
     let cos_sun = (d[0] * ctx.sun[0] + d[1] * ctx.sun[1] + d[2] * ctx.sun[2]) * inv_len;
     let g = glow(ctx, cos_sun);
-    let mut n = Node { d, du, dv, ..Node::default() };
+    let mut n = Node {
+        d,
+        du,
+        dv,
+        ..Node::default()
+    };
     if d[2] > 0.0 {
         let sky = lut_sky(&ctx.sky_lut, s);
         // Clamped so the fixed-point gradient kernel never overflows a byte.
@@ -659,7 +759,11 @@ fn eval_node(ctx: &FrameCtx, d: [f32; 3]) -> Node {
             n.v = (ctx.cloud_eye_v + t * dv) / CLOUD_TEXEL_M;
             // Clouds are lit from the sun side: brighter toward the sun.
             let lit = 0.92 + 0.25 * g / ctx.glow_strength.max(1e-3);
-            n.b = [ctx.cloud_col[0] * lit, ctx.cloud_col[1] * lit, ctx.cloud_col[2] * lit];
+            n.b = [
+                ctx.cloud_col[0] * lit,
+                ctx.cloud_col[1] * lit,
+                ctx.cloud_col[2] * lit,
+            ];
         }
     } else {
         let t = (-ctx.eye_z / d[2]).min(FAR_M / horiz);
@@ -667,7 +771,11 @@ fn eval_node(ctx: &FrameCtx, d: [f32; 3]) -> Node {
         let f = fog(ctx, dist);
         let hz = 0.5 * g;
         n.f = f;
-        n.b = [ctx.haze[0] + ctx.glow_col[0] * hz, ctx.haze[1] + ctx.glow_col[1] * hz, ctx.haze[2] + ctx.glow_col[2] * hz];
+        n.b = [
+            ctx.haze[0] + ctx.glow_col[0] * hz,
+            ctx.haze[1] + ctx.glow_col[1] * hz,
+            ctx.haze[2] + ctx.glow_col[2] * hz,
+        ];
         let graze = (-s).max(1e-3);
         n.foot = dist / ctx.f_px / graze.sqrt();
         n.u = (ctx.eye_u + t * du) * ctx.ground_tpm;
@@ -740,7 +848,10 @@ impl UvGen for Affine {
 
     #[inline(always)]
     fn predict(&self, k: i32) -> Option<(i32, i32)> {
-        Some((self.u.wrapping_add(self.du.wrapping_mul(k)) >> 8, self.v.wrapping_add(self.dv.wrapping_mul(k)) >> 8))
+        Some((
+            self.u.wrapping_add(self.du.wrapping_mul(k)) >> 8,
+            self.v.wrapping_add(self.dv.wrapping_mul(k)) >> 8,
+        ))
     }
 }
 
@@ -764,7 +875,10 @@ impl UvGen for AffineI {
 
     #[inline(always)]
     fn predict(&self, k: i32) -> Option<(i32, i32)> {
-        Some((self.u.wrapping_add(self.du.wrapping_mul(k)) >> 8, self.v.wrapping_add(self.dv.wrapping_mul(k)) >> 8))
+        Some((
+            self.u.wrapping_add(self.du.wrapping_mul(k)) >> 8,
+            self.v.wrapping_add(self.dv.wrapping_mul(k)) >> 8,
+        ))
     }
 }
 
@@ -788,10 +902,22 @@ struct Persp {
 
 impl Persp {
     /// Coordinates in texels of mip `level` (`texels_per_m` refers to level 0).
-    fn new(ctx: &FrameCtx, n0: &Node, n1: &Node, dh: f32, texels_per_m: f32, clouds: bool, level: u32) -> Persp {
+    fn new(
+        ctx: &FrameCtx,
+        n0: &Node,
+        n1: &Node,
+        dh: f32,
+        texels_per_m: f32,
+        clouds: bool,
+        level: u32,
+    ) -> Persp {
         let inv = 1.0 / GRID as f32;
         let texels_per_m = texels_per_m / (1u32 << level) as f32;
-        let (eu, ev) = if clouds { (ctx.cloud_eye_u, ctx.cloud_eye_v) } else { (ctx.eye_u, ctx.eye_v) };
+        let (eu, ev) = if clouds {
+            (ctx.cloud_eye_u, ctx.cloud_eye_v)
+        } else {
+            (ctx.eye_u, ctx.eye_v)
+        };
         let horiz = |n: &Node| (n.du * n.du + n.dv * n.dv).sqrt();
         Persp {
             dz: n0.d[2],
@@ -812,7 +938,10 @@ impl Persp {
     #[inline(always)]
     fn next_uvd(&mut self) -> ((i32, i32), f32) {
         let t = (self.dh / self.dz).clamp(0.0, self.tmax);
-        let r = ((self.eu + t * self.du) as i32, (self.ev + t * self.dv) as i32);
+        let r = (
+            (self.eu + t * self.du) as i32,
+            (self.ev + t * self.dv) as i32,
+        );
         let h2 = (self.du * self.du + self.dv * self.dv) * (self.inv_tpm * self.inv_tpm);
         let dist = t * (h2 + self.dz * self.dz).sqrt();
         self.dz += self.ddz;
@@ -853,8 +982,16 @@ fn sky_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node
         // Plain gradient: 16.16 fixed-point colour steps (node colours are clamped to 0..255).
         const ONE: f32 = 65536.0;
         let inv = ONE / GRID as f32;
-        let mut c = [(n0.a[0] * ONE) as i32, (n0.a[1] * ONE) as i32, (n0.a[2] * ONE) as i32];
-        let dc = [((n1.a[0] - n0.a[0]) * inv) as i32, ((n1.a[1] - n0.a[1]) * inv) as i32, ((n1.a[2] - n0.a[2]) * inv) as i32];
+        let mut c = [
+            (n0.a[0] * ONE) as i32,
+            (n0.a[1] * ONE) as i32,
+            (n0.a[2] * ONE) as i32,
+        ];
+        let dc = [
+            ((n1.a[0] - n0.a[0]) * inv) as i32,
+            ((n1.a[1] - n0.a[1]) * inv) as i32,
+            ((n1.a[2] - n0.a[2]) * inv) as i32,
+        ];
         for px in seg.chunks_exact_mut(3) {
             px[0] = (c[2] >> 16) as u8;
             px[1] = (c[1] >> 16) as u8;
@@ -866,16 +1003,33 @@ fn sky_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node
     let level = mip_level(n0.foot.min(n1.foot) / CLOUD_TEXEL_M);
     let view = tex.clouds.view(level);
     if persp {
-        let g = Persp::new(ctx, n0, n1, CLOUD_BASE_M as f32 - ctx.eye_z, 1.0 / CLOUD_TEXEL_M, true, level);
+        let g = Persp::new(
+            ctx,
+            n0,
+            n1,
+            CLOUD_BASE_M as f32 - ctx.eye_z,
+            1.0 / CLOUD_TEXEL_M,
+            true,
+            level,
+        );
         cloud_pixels(ctx, view, seg, n0, n1, g);
     } else {
         cloud_pixels(ctx, view, seg, n0, n1, Affine::new(n0, n1, level));
     }
 }
 
-fn cloud_pixels<G: UvGen>(ctx: &FrameCtx, view: TexView, seg: &mut [u8], n0: &Node, n1: &Node, mut gen: G) {
-    let flat = (0..3).all(|c| (n1.a[c] - n0.a[c]).abs() < MAX_FLAT_SKY_STEP && (n1.b[c] - n0.b[c]).abs() < MAX_FLAT_SKY_STEP)
-        && (n1.k - n0.k).abs() < MAX_FLAT_CLOUD_K_STEP;
+fn cloud_pixels<G: UvGen>(
+    ctx: &FrameCtx,
+    view: TexView,
+    seg: &mut [u8],
+    n0: &Node,
+    n1: &Node,
+    mut gen: G,
+) {
+    let flat = (0..3).all(|c| {
+        (n1.a[c] - n0.a[c]).abs() < MAX_FLAT_SKY_STEP
+            && (n1.b[c] - n0.b[c]).abs() < MAX_FLAT_SKY_STEP
+    }) && (n1.k - n0.k).abs() < MAX_FLAT_CLOUD_K_STEP;
     if flat {
         // Integer path: colour = (sky · (256 - alpha) + cloud · alpha · shade) / 256 with
         // per-segment sky/cloud colours and fade, per-texel alpha from the tables.
@@ -896,7 +1050,11 @@ fn cloud_pixels<G: UvGen>(ctx: &FrameCtx, view: TexView, seg: &mut [u8], n0: &No
     }
     let inv = 1.0 / GRID as f32;
     let mut a = n0.a;
-    let da = [(n1.a[0] - a[0]) * inv, (n1.a[1] - a[1]) * inv, (n1.a[2] - a[2]) * inv];
+    let da = [
+        (n1.a[0] - a[0]) * inv,
+        (n1.a[1] - a[1]) * inv,
+        (n1.a[2] - a[2]) * inv,
+    ];
     let mut k = n0.k;
     let dk = (n1.k - k) * inv;
     let b = n0.b;
@@ -906,7 +1064,12 @@ fn cloud_pixels<G: UvGen>(ctx: &FrameCtx, view: TexView, seg: &mut [u8], n0: &No
         let al = ctx.cloud_alpha[c] * k;
         let sh = ctx.cloud_shade[c] * al;
         let ia = 1.0 - al;
-        store(px, a[0] * ia + b[0] * sh, a[1] * ia + b[1] * sh, a[2] * ia + b[2] * sh);
+        store(
+            px,
+            a[0] * ia + b[0] * sh,
+            a[1] * ia + b[1] * sh,
+            a[2] * ia + b[2] * sh,
+        );
         a = [a[0] + da[0], a[1] + da[1], a[2] + da[2]];
         k += dk;
     }
@@ -933,7 +1096,8 @@ fn sky_int_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], s0: &SkyNode, s1
         }
         return;
     }
-    let level = (mip_level(s0.foot.min(s1.foot) / CLOUD_TEXEL_M) + ctx.cloud_mip_bias).min(crate::texture::TEX_LEVELS as u32 - 1);
+    let level = (mip_level(s0.foot.min(s1.foot) / CLOUD_TEXEL_M) + ctx.cloud_mip_bias)
+        .min(crate::texture::TEX_LEVELS as u32 - 1);
     let view = tex.clouds.view(level);
     let mut g = AffineI {
         u: s0.u >> level,
@@ -1016,13 +1180,23 @@ fn sea_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node
     let mut sw = s0;
     let dsw = (s1 - s0) * inv;
     let (mut a, mut b) = (n0.a, n0.b);
-    let da = [(n1.a[0] - a[0]) * inv, (n1.a[1] - a[1]) * inv, (n1.a[2] - a[2]) * inv];
-    let db = [(n1.b[0] - b[0]) * inv, (n1.b[1] - b[1]) * inv, (n1.b[2] - b[2]) * inv];
+    let da = [
+        (n1.a[0] - a[0]) * inv,
+        (n1.a[1] - a[1]) * inv,
+        (n1.a[2] - a[2]) * inv,
+    ];
+    let db = [
+        (n1.b[0] - b[0]) * inv,
+        (n1.b[1] - b[1]) * inv,
+        (n1.b[2] - b[2]) * inv,
+    ];
     let (mut k, mut f) = (n0.k, n0.f);
     let (dk, df) = ((n1.k - k) * inv, (n1.f - f) * inv);
     let mut affine = Affine::new(n0, n1, level);
-    let flat = (0..3).all(|c| (n1.a[c] - n0.a[c]).abs() < MAX_FLAT_HAZE_STEP_LEVELS && (n1.b[c] - n0.b[c]).abs() < MAX_FLAT_HAZE_STEP_LEVELS)
-        && (n1.f - n0.f).abs() < MAX_FLAT_FOG_STEP
+    let flat = (0..3).all(|c| {
+        (n1.a[c] - n0.a[c]).abs() < MAX_FLAT_HAZE_STEP_LEVELS
+            && (n1.b[c] - n0.b[c]).abs() < MAX_FLAT_HAZE_STEP_LEVELS
+    }) && (n1.f - n0.f).abs() < MAX_FLAT_FOG_STEP
         && (n1.k - n0.k).abs() < MAX_FLAT_HAZE_STEP_LEVELS;
     if !persp && flat {
         // Integer path with per-segment water colour, haze and glint (midpoints); the swell
@@ -1055,7 +1229,8 @@ fn sea_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node
         }
         return;
     }
-    let mut persp_gen = persp.then(|| Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level));
+    let mut persp_gen =
+        persp.then(|| Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level));
     const NORM: f32 = 1.0 / (128.0 * 128.0);
     for px in seg.chunks_exact_mut(3) {
         let ((u, v), fog_px) = match persp_gen.as_mut() {
@@ -1086,7 +1261,14 @@ fn sea_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node
 /// Land pixels of one segment between row nodes `l0` and `l1`. With `persp` (the float nodes),
 /// texture coordinates and haze come from an exact per-pixel plane intersection (cells near the
 /// horizon, where the haze changes within a few pixels).
-fn land_span(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], l0: &LandNode, l1: &LandNode, persp: Option<(&Node, &Node)>) {
+fn land_span(
+    ctx: &FrameCtx,
+    tex: &Textures,
+    seg: &mut [u8],
+    l0: &LandNode,
+    l1: &LandNode,
+    persp: Option<(&Node, &Node)>,
+) {
     let level = l0.level.min(l1.level);
     match persp {
         None => {
@@ -1112,7 +1294,14 @@ fn land_detail<'a>(ctx: &FrameCtx, tex: &'a Textures) -> &'a crate::texture::Mip
 }
 
 /// Land pixels with exact per-pixel perspective and haze (float path, used near the horizon).
-fn land_persp_pixels(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, n1: &Node, level: u32) {
+fn land_persp_pixels(
+    ctx: &FrameCtx,
+    tex: &Textures,
+    seg: &mut [u8],
+    n0: &Node,
+    n1: &Node,
+    level: u32,
+) {
     let inv = 1.0 / GRID as f32;
     let det = land_detail(ctx, tex).view(level);
     let pal = &ctx.palette_i[level as usize];
@@ -1123,7 +1312,11 @@ fn land_persp_pixels(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, 
     let m1 = mac.get(n1.u as i32 >> sh, n1.v as i32 >> sh) as f32;
     let (mut m, dm) = (m0, (m1 - m0) * inv);
     let mut b = n0.b;
-    let db = [(n1.b[0] - b[0]) * inv, (n1.b[1] - b[1]) * inv, (n1.b[2] - b[2]) * inv];
+    let db = [
+        (n1.b[0] - b[0]) * inv,
+        (n1.b[1] - b[1]) * inv,
+        (n1.b[2] - b[2]) * inv,
+    ];
     let mut g = Persp::new(ctx, n0, n1, -ctx.eye_z, ctx.ground_tpm, false, level);
     let fs = ctx.field_seed;
     const NORM: f32 = 1.0 / (128.0 * 128.0);
@@ -1132,13 +1325,26 @@ fn land_persp_pixels(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], n0: &Node, 
         let f = fog(ctx, dist);
         let p = &pal[(field_at(fs, ui << level, vi << level).2 >> 29) as usize];
         let lum = det.get(ui, vi) as f32 * m * NORM * (1.0 - f);
-        store(px, p[0] as f32 * lum + b[0] * f, p[1] as f32 * lum + b[1] * f, p[2] as f32 * lum + b[2] * f);
+        store(
+            px,
+            p[0] as f32 * lum + b[0] * f,
+            p[1] as f32 * lum + b[1] * f,
+            p[2] as f32 * lum + b[2] * f,
+        );
         m += dm;
         b = [b[0] + db[0], b[1] + db[1], b[2] + db[2]];
     }
 }
 
-fn land_pixels<G: UvGen>(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], l0: &LandNode, l1: &LandNode, level: u32, mut gen: G) {
+fn land_pixels<G: UvGen>(
+    ctx: &FrameCtx,
+    tex: &Textures,
+    seg: &mut [u8],
+    l0: &LandNode,
+    l1: &LandNode,
+    level: u32,
+    mut gen: G,
+) {
     let det = land_detail(ctx, tex).view(level);
     let pal = &ctx.palette_i[level as usize];
     let fs = ctx.field_seed;
@@ -1148,7 +1354,10 @@ fn land_pixels<G: UvGen>(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], l0: &La
     // Most segments lie inside one field: look its colour up once.
     let (f0, single) = match (gen.predict(0), gen.predict(n - 1)) {
         (Some((u0, v0)), Some((u1, v1))) => {
-            let (a, b) = (field_at(fs, u0 << level, v0 << level), field_at(fs, u1 << level, v1 << level));
+            let (a, b) = (
+                field_at(fs, u0 << level, v0 << level),
+                field_at(fs, u1 << level, v1 << level),
+            );
             (a.2, a.0 == b.0 && a.1 == b.1)
         }
         _ => (0, false),
@@ -1161,10 +1370,18 @@ fn land_pixels<G: UvGen>(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], l0: &La
         let p = &pal[(f0 >> 29) as usize];
         // Stripe darkening: select the u or v coordinate with masks (no branch in the loop).
         let amp = if (f0 >> 28) & 1 == 1 { stripe_on } else { 0 };
-        let (mu, mv) = if f0 & (1 << 27) != 0 { (-1i32, 0i32) } else { (0, -1) };
+        let (mu, mv) = if f0 & (1 << 27) != 0 {
+            (-1i32, 0i32)
+        } else {
+            (0, -1)
+        };
         let gm = ((l0.g >> 1) + (l1.g >> 1)) >> 8;
         let pg = [p[0] * gm, p[1] * gm, p[2] * gm];
-        let hz = [(l0.hz[0] + l1.hz[0]) >> 17, (l0.hz[1] + l1.hz[1]) >> 17, (l0.hz[2] + l1.hz[2]) >> 17];
+        let hz = [
+            (l0.hz[0] + l1.hz[0]) >> 17,
+            (l0.hz[1] + l1.hz[1]) >> 17,
+            (l0.hz[2] + l1.hz[2]) >> 17,
+        ];
         for px in seg.chunks_exact_mut(3) {
             let (ui, vi) = gen.next_uv();
             let d = det.get(ui, vi) as i32 - ((((ui & mu) | (vi & mv)) >> STRIPE_SHIFT) & 1) * amp;
@@ -1177,10 +1394,18 @@ fn land_pixels<G: UvGen>(ctx: &FrameCtx, tex: &Textures, seg: &mut [u8], l0: &La
     let mut g = l0.g;
     let dg = (l1.g - l0.g) >> GRID_LOG2;
     let mut bb = l0.hz;
-    let dbb = [(l1.hz[0] - l0.hz[0]) >> GRID_LOG2, (l1.hz[1] - l0.hz[1]) >> GRID_LOG2, (l1.hz[2] - l0.hz[2]) >> GRID_LOG2];
+    let dbb = [
+        (l1.hz[0] - l0.hz[0]) >> GRID_LOG2,
+        (l1.hz[1] - l0.hz[1]) >> GRID_LOG2,
+        (l1.hz[2] - l0.hz[2]) >> GRID_LOG2,
+    ];
     for px in seg.chunks_exact_mut(3) {
         let (ui, vi) = gen.next_uv();
-        let h = if single { f0 } else { field_at(fs, ui << level, vi << level).2 };
+        let h = if single {
+            f0
+        } else {
+            field_at(fs, ui << level, vi << level).2
+        };
         let p = &pal[(h >> 29) as usize];
         // Crop rows / mowing stripes in some fields: darker every other 2^STRIPE_SHIFT texels.
         let sv = if h & (1 << 27) != 0 { ui } else { vi };

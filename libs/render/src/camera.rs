@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::math::{cross, deg, normalize, scale, add, WorldToCam, V3};
+use crate::math::{add, cross, deg, normalize, scale, WorldToCam, V3};
 
 /// Points closer than this in front of the camera (metres, along the optical axis) do not project.
 pub const MIN_PROJECT_DEPTH_M: f64 = 1e-3;
@@ -245,11 +245,19 @@ impl CameraPose {
         // Heading (counter-clockwise from +X seen from above) of the horizontal line of sight to
         // the hub; straight above/below the hub there is none, so look along -X (at the rotor face).
         let (dx, dy) = (-self.distance_m, -self.lateral_m);
-        let base = if dx.abs() + dy.abs() > 1e-9 { dy.atan2(dx) } else { std::f64::consts::PI };
+        let base = if dx.abs() + dy.abs() > 1e-9 {
+            dy.atan2(dx)
+        } else {
+            std::f64::consts::PI
+        };
         // Turning right is clockwise seen from above, i.e. decreasing the CCW heading.
         let heading = base - deg(self.yaw_deg);
         let pitch = deg(self.pitch_deg);
-        let fwd = [pitch.cos() * heading.cos(), pitch.cos() * heading.sin(), pitch.sin()];
+        let fwd = [
+            pitch.cos() * heading.cos(),
+            pitch.cos() * heading.sin(),
+            pitch.sin(),
+        ];
         let right0 = [heading.sin(), -heading.cos(), 0.0];
         let down0 = normalize(cross(fwd, right0));
         let up0 = scale(down0, -1.0);
@@ -258,7 +266,10 @@ impl CameraPose {
         let up = add(scale(up0, roll.cos()), scale(right0, roll.sin()));
         let right = add(scale(right0, roll.cos()), scale(up0, -roll.sin()));
         let down = scale(up, -1.0);
-        WorldToCam { rot: [right, down, fwd], origin }
+        WorldToCam {
+            rot: [right, down, fwd],
+            origin,
+        }
     }
 }
 
@@ -276,7 +287,11 @@ impl RasterProjector {
     pub fn new(cam: &Camera) -> RasterProjector {
         let r_lim = (cam.max_undistorted_radius() * 0.98).min(1e3);
         let rd_lim = r_lim * cam.distortion_factor(r_lim * r_lim);
-        RasterProjector { cam: *cam, r_lim, rd_lim }
+        RasterProjector {
+            cam: *cam,
+            r_lim,
+            rd_lim,
+        }
     }
 
     /// Focal length along x (pixels).
@@ -298,6 +313,9 @@ impl RasterProjector {
             // Continue with the distorted radius growing like r: keeps the map monotonic.
             self.rd_lim / self.r_lim
         };
-        [self.cam.fx * x * f + self.cam.cx, self.cam.fy * y * f + self.cam.cy]
+        [
+            self.cam.fx * x * f + self.cam.cx,
+            self.cam.fy * y * f + self.cam.cy,
+        ]
     }
 }

@@ -6,7 +6,11 @@
 use crate::{Camera, CameraPose, Distractor, Scene};
 
 /// Distance classes of the synthetic set, metres: far ≥ 25, medium 12–25, close < 12.
-pub const CLASSES: [(&str, f64, f64); 3] = [("far", 25.0, 45.0), ("medium", 12.0, 25.0), ("close", 6.0, 12.0)];
+pub const CLASSES: [(&str, f64, f64); 3] = [
+    ("far", 25.0, 45.0),
+    ("medium", 12.0, 25.0),
+    ("close", 6.0, 12.0),
+];
 /// Largest relative yaw in the synthetic set, degrees.
 pub const MAX_REL_YAW_DEG: f64 = 30.0;
 /// Largest camera pointing error (hub away from the image centre), degrees.
@@ -66,7 +70,15 @@ pub fn synth_case(seed: u64, class: usize, index: u64, negative: bool) -> SynthC
 
 /// As [`synth_case`], at a distance drawn from `[lo, hi)` metres, counted under the distance
 /// category `name`.
-pub fn synth_case_between(seed: u64, class: usize, index: u64, negative: bool, name: &str, lo: f64, hi: f64) -> SynthCase {
+pub fn synth_case_between(
+    seed: u64,
+    class: usize,
+    index: u64,
+    negative: bool,
+    name: &str,
+    lo: f64,
+    hi: f64,
+) -> SynthCase {
     let mut r = Rng(seed ^ (class as u64) << 40 ^ index.wrapping_mul(0x9E37));
     let mut scene = Scene::random(r.next_u64());
     scene.turbine_present = !negative;
@@ -86,7 +98,11 @@ pub fn synth_case_between(seed: u64, class: usize, index: u64, negative: bool, n
     let wide = !r.next_u64().is_multiple_of(4);
     let mut categories = vec!["all".to_string(), format!("distance:{name}")];
     categories.push(format!("sky:{:?}", scene.sky).to_lowercase());
-    categories.push(if rel_yaw.abs() > OBLIQUE_DEG { "view:oblique".into() } else { "view:front".into() });
+    categories.push(if rel_yaw.abs() > OBLIQUE_DEG {
+        "view:oblique".into()
+    } else {
+        "view:front".into()
+    });
     if height.abs() < HORIZON_NEAR_M {
         categories.push("effects:horizon_near_hub".into());
     }
@@ -96,11 +112,20 @@ pub fn synth_case_between(seed: u64, class: usize, index: u64, negative: bool, n
     if scene.nacelle_shadow {
         categories.push("effects:nacelle_shadow".into());
     }
-    categories.push(if wide { "camera:gopro".into() } else { "camera:usb".into() });
+    categories.push(if wide {
+        "camera:gopro".into()
+    } else {
+        "camera:usb".into()
+    });
     if negative {
         categories = vec!["negatives".into()];
     }
-    SynthCase { scene, pose, wide, categories }
+    SynthCase {
+        scene,
+        pose,
+        wide,
+        categories,
+    }
 }
 
 /// Distances of the photo-like views ([`photo_case`]), metres (drawn log-uniformly).
@@ -135,7 +160,10 @@ pub const PHOTO_LENS_HFOV_DEG: f64 = 75.0;
 /// The lenses of the photo-like views: `[0]` the GoPro (`SynthCase::wide`, a third of the
 /// views), `[1]` a drone's photo camera.
 pub fn photo_lenses() -> [Camera; 2] {
-    [Camera::gopro_hero3(), Camera::pinhole(1920, 1080, PHOTO_LENS_HFOV_DEG)]
+    [
+        Camera::gopro_hero3(),
+        Camera::pinhole(1920, 1080, PHOTO_LENS_HFOV_DEG),
+    ]
 }
 
 /// Horizontal and vertical half fields of view of a camera, degrees (pinhole approximation).
@@ -156,7 +184,12 @@ pub fn photo_case(seed: u64, index: u64, negative: bool) -> SynthCase {
 /// [`photo_case`]'s): the same views from 5–12 m ([`PHOTO_CLOSE_DISTANCE_M`]), category
 /// `photo-like:close` (`hubtrack dataset --photo-close`, `hubtrack eval --photo-close`).
 pub fn photo_case_close(seed: u64, index: u64, negative: bool) -> SynthCase {
-    photo_case_within(seed ^ 0xC105_E000_0000_0000, index, negative, PHOTO_CLOSE_DISTANCE_M)
+    photo_case_within(
+        seed ^ 0xC105_E000_0000_0000,
+        index,
+        negative,
+        PHOTO_CLOSE_DISTANCE_M,
+    )
 }
 
 /// A photo-like case whose ground range lies within `range` (metres).
@@ -169,7 +202,8 @@ fn photo_case_within(seed: u64, index: u64, negative: bool, range: (f64, f64)) -
     if negative && scene.distractor == Distractor::None {
         scene.distractor = Distractor::Mast;
     }
-    scene.shrubland = scene.ground != crate::Ground::Sea && r.range(0.0, 1.0) < PHOTO_SHRUBLAND_SHARE;
+    scene.shrubland =
+        scene.ground != crate::Ground::Sea && r.range(0.0, 1.0) < PHOTO_SHRUBLAND_SHARE;
     if !negative && r.range(0.0, 1.0) < PHOTO_NEIGHBOURS.0 {
         scene.neighbour_turbines = 1 + (r.next_u64() % PHOTO_NEIGHBOURS.1 as u64) as u8;
     }
@@ -182,7 +216,8 @@ fn photo_case_within(seed: u64, index: u64, negative: bool, range: (f64, f64)) -
     let bearing = (rel_yaw - nacelle).to_radians();
     let (distance, lateral) = (ground_range * bearing.cos(), ground_range * bearing.sin());
     let elevation = r.range(PHOTO_ELEVATION_DEG.0, PHOTO_ELEVATION_DEG.1);
-    let height = (ground_range * elevation.to_radians().tan()).max(PHOTO_MIN_CAMERA_HEIGHT_M - scene.hub_height_m);
+    let height = (ground_range * elevation.to_radians().tan())
+        .max(PHOTO_MIN_CAMERA_HEIGHT_M - scene.hub_height_m);
     let mut pose = CameraPose::looking_at_hub(distance, lateral, height);
     pose.yaw_deg += r.range(-1.0, 1.0) * PHOTO_POINTING_FRAC.0 * half_fov_deg.0;
     pose.pitch_deg += r.range(-1.0, 1.0) * PHOTO_POINTING_FRAC.1 * half_fov_deg.1;
@@ -194,8 +229,17 @@ fn photo_case_within(seed: u64, index: u64, negative: bool, range: (f64, f64)) -
     } else {
         "approach"
     };
-    let categories = if negative { vec!["negatives".into()] } else { vec!["photo-like".into(), format!("photo-like:{class}")] };
-    SynthCase { scene, pose, wide, categories }
+    let categories = if negative {
+        vec!["negatives".into()]
+    } else {
+        vec!["photo-like".into(), format!("photo-like:{class}")]
+    };
+    SynthCase {
+        scene,
+        pose,
+        wide,
+        categories,
+    }
 }
 
 /// Frames per second of the evaluation flights.
@@ -243,12 +287,17 @@ pub fn flight(seed: u64, frames: u64) -> Vec<FlightFrame> {
     let drift_period = r.range(0.6, 1.4);
     let h0 = r.range(FLIGHT_START_HEIGHT_M.0, FLIGHT_START_HEIGHT_M.1);
     let turn_at = r.range(0.3, 0.6);
-    let turn_sign = if r.next_u64().is_multiple_of(2) { 1.0 } else { -1.0 };
+    let turn_sign = if r.next_u64().is_multiple_of(2) {
+        1.0
+    } else {
+        -1.0
+    };
     let roll_phase = r.range(0.0, TAU);
     let mut drop_ranges = Vec::new();
     for _ in 0..FLIGHT_DROPOUTS {
         let start = (r.range(0.15, 0.9) * frames as f64) as u64;
-        let len = FLIGHT_DROPOUT_FRAMES.0 + r.next_u64() % (FLIGHT_DROPOUT_FRAMES.1 - FLIGHT_DROPOUT_FRAMES.0 + 1);
+        let len = FLIGHT_DROPOUT_FRAMES.0
+            + r.next_u64() % (FLIGHT_DROPOUT_FRAMES.1 - FLIGHT_DROPOUT_FRAMES.0 + 1);
         drop_ranges.push(start..start + len);
     }
     let n = frames.max(2) as f64;
@@ -272,7 +321,12 @@ pub fn flight(seed: u64, frames: u64) -> Vec<FlightFrame> {
             // The heading that keeps the hub centred changes with the lateral offset: camera to the
             // viewer's right must turn left to see the hub.
             let heading_rad = (-(lateral.atan2(distance)).to_degrees() + pose.yaw_deg).to_radians();
-            FlightFrame { scene: s, pose, heading_rad, dropout: drop_ranges.iter().any(|r| r.contains(&i)) }
+            FlightFrame {
+                scene: s,
+                pose,
+                heading_rad,
+                dropout: drop_ranges.iter().any(|r| r.contains(&i)),
+            }
         })
         .collect()
 }

@@ -44,7 +44,11 @@ impl PropellerShape {
         // Disc seen obliquely from below: an ellipse whose centre lies just outside the corner.
         let rx = wf * rng.range(0.22, 0.30);
         let ry = rx * rng.range(0.35, 0.5);
-        let cx = if left { wf * rng.range(-0.02, 0.06) } else { wf * rng.range(0.94, 1.02) };
+        let cx = if left {
+            wf * rng.range(-0.02, 0.06)
+        } else {
+            wf * rng.range(0.94, 1.02)
+        };
         let cy = -ry * rng.range(0.15, 0.45);
         let phase = rng.range(0.0, std::f64::consts::TAU);
         // Rolling shutter bends each blade image into an arc: angle grows with radius.
@@ -63,7 +67,13 @@ impl PropellerShape {
                 }
             }
         }
-        PropellerShape { seed, pixels, phase, bend, tone }
+        PropellerShape {
+            seed,
+            pixels,
+            phase,
+            bend,
+            tone,
+        }
     }
 }
 
@@ -99,7 +109,9 @@ impl Effects {
             self.noise_neg.clear();
             for _ in 0..n {
                 let s: f64 = (0..4).map(|_| rng.uniform()).sum::<f64>() - 2.0;
-                let v = (s * 3f64.sqrt() * sigma as f64).round().clamp(-255.0, 255.0) as i32;
+                let v = (s * 3f64.sqrt() * sigma as f64)
+                    .round()
+                    .clamp(-255.0, 255.0) as i32;
                 self.noise_pos.push(v.max(0) as u8);
                 self.noise_neg.push((-v).max(0) as u8);
             }
@@ -129,7 +141,9 @@ impl Effects {
                 dst[c] = 3 * src[c] as u16 + src[3 + c] as u16;
                 dst[rl - 3 + c] = 3 * src[rl - 3 + c] as u16 + src[rl - 6 + c] as u16;
             }
-            let mid = dst[3..rl - 3].iter_mut().zip(src[..rl - 6].iter().zip(&src[3..rl - 3]).zip(&src[6..]));
+            let mid = dst[3..rl - 3]
+                .iter_mut()
+                .zip(src[..rl - 6].iter().zip(&src[3..rl - 3]).zip(&src[6..]));
             for (d, ((&l, &m), &r)) in mid {
                 *d = l as u16 + 2 * m as u16 + r as u16;
             }
@@ -142,7 +156,10 @@ impl Effects {
             let ny = (y + 1).min(h - 1);
             hblur(&out[ny * rl..(ny + 1) * rl], next);
             let dst = &mut out[y * rl..(y + 1) * rl];
-            for (d, ((&p, &c), &n)) in dst.iter_mut().zip(prev.iter().zip(cur.iter()).zip(next.iter())) {
+            for (d, ((&p, &c), &n)) in dst
+                .iter_mut()
+                .zip(prev.iter().zip(cur.iter()).zip(next.iter()))
+            {
                 *d = ((p + 2 * c + n + 8) >> 4) as u8;
             }
             std::mem::swap(&mut prev, &mut cur);
@@ -185,7 +202,11 @@ impl Effects {
         for cy in 0..ch {
             for cx in 0..cw {
                 let (cb, cr) = (self.cb_plane[cy * cw + cx], self.cr_plane[cy * cw + cx]);
-                let (dr, dg, db) = (1.402 * cr + 128.5, -0.344_136 * cb - 0.714_136 * cr + 128.5, 1.772 * cb + 128.5);
+                let (dr, dg, db) = (
+                    1.402 * cr + 128.5,
+                    -0.344_136 * cb - 0.714_136 * cr + 128.5,
+                    1.772 * cb + 128.5,
+                );
                 for yy in 2 * cy..(2 * cy + 2).min(h) {
                     for xx in 2 * cx..(2 * cx + 2).min(w) {
                         let i = yy * w + xx;
@@ -207,7 +228,9 @@ impl Effects {
         if self.prop.as_ref().map(|p| p.seed) != Some(seed) {
             self.prop = Some(PropellerShape::new(seed, self.w, self.h));
         }
-        let Some(shape) = self.prop.as_ref() else { return };
+        let Some(shape) = self.prop.as_ref() else {
+            return;
+        };
         // Blade images advance by an irrational fraction of a turn per frame.
         let phase = shape.phase + frame as f64 * 2.399_963;
         const HUB_R: f32 = 0.08;
@@ -228,7 +251,11 @@ impl Effects {
                 blade = blade.max(1.0 / (1.0 + x2 + 0.5 * x2 * x2 + x2 * x2 * x2 / 6.0));
             }
             let rim = ((1.0 - r) / 0.05).clamp(0.0, 1.0);
-            let a = if r < HUB_R { 0.95 } else { ((disc + 0.55 * blade) * rim).min(0.9) };
+            let a = if r < HUB_R {
+                0.95
+            } else {
+                ((disc + 0.55 * blade) * rim).min(0.9)
+            };
             let p = &mut out[idx as usize * 3..idx as usize * 3 + 3];
             for c in p.iter_mut() {
                 *c = (*c as f32 * (1.0 - a) + shape.tone * a) as u8;
@@ -241,11 +268,21 @@ impl Effects {
         let r_core = (SUN_CORE_RAD * f_px).max(1.5);
         let r_out = r_core * SUN_BLOOM_FACTOR;
         let (w, h) = (self.w as f64, self.h as f64);
-        if centre[0] < -r_out || centre[1] < -r_out || centre[0] > w + r_out || centre[1] > h + r_out {
+        if centre[0] < -r_out
+            || centre[1] < -r_out
+            || centre[0] > w + r_out
+            || centre[1] > h + r_out
+        {
             return;
         }
-        let (x0, x1) = ((centre[0] - r_out).floor().max(0.0) as usize, (centre[0] + r_out).ceil().min(w - 1.0) as usize);
-        let (y0, y1) = ((centre[1] - r_out).floor().max(0.0) as usize, (centre[1] + r_out).ceil().min(h - 1.0) as usize);
+        let (x0, x1) = (
+            (centre[0] - r_out).floor().max(0.0) as usize,
+            (centre[0] + r_out).ceil().min(w - 1.0) as usize,
+        );
+        let (y0, y1) = (
+            (centre[1] - r_out).floor().max(0.0) as usize,
+            (centre[1] + r_out).ceil().min(h - 1.0) as usize,
+        );
         for y in y0..=y1 {
             for x in x0..=x1 {
                 let d = ((x as f64 - centre[0]).powi(2) + (y as f64 - centre[1]).powi(2)).sqrt();
@@ -272,14 +309,14 @@ impl Effects {
 /// Standard JPEG luminance / chrominance quantisation tables scaled to `quality` (IJG formula).
 fn quant_tables(quality: u8) -> ([f32; 64], [f32; 64]) {
     const LUMA: [u16; 64] = [
-        16, 11, 10, 16, 24, 40, 51, 61, 12, 12, 14, 19, 26, 58, 60, 55, 14, 13, 16, 24, 40, 57, 69, 56, 14, 17, 22,
-        29, 51, 87, 80, 62, 18, 22, 37, 56, 68, 109, 103, 77, 24, 35, 55, 64, 81, 104, 113, 92, 49, 64, 78, 87, 103,
-        121, 120, 101, 72, 92, 95, 98, 112, 100, 103, 99,
+        16, 11, 10, 16, 24, 40, 51, 61, 12, 12, 14, 19, 26, 58, 60, 55, 14, 13, 16, 24, 40, 57, 69,
+        56, 14, 17, 22, 29, 51, 87, 80, 62, 18, 22, 37, 56, 68, 109, 103, 77, 24, 35, 55, 64, 81,
+        104, 113, 92, 49, 64, 78, 87, 103, 121, 120, 101, 72, 92, 95, 98, 112, 100, 103, 99,
     ];
     const CHROMA: [u16; 64] = [
-        17, 18, 24, 47, 99, 99, 99, 99, 18, 21, 26, 66, 99, 99, 99, 99, 24, 26, 56, 99, 99, 99, 99, 99, 47, 66, 99,
-        99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99,
-        99, 99, 99, 99, 99, 99, 99, 99, 99, 99,
+        17, 18, 24, 47, 99, 99, 99, 99, 18, 21, 26, 66, 99, 99, 99, 99, 24, 26, 56, 99, 99, 99, 99,
+        99, 47, 66, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99,
+        99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99,
     ];
     let q = quality.clamp(1, 100) as u32;
     let s = if q < 50 { 5000 / q } else { 200 - 2 * q };
@@ -297,7 +334,11 @@ fn quant_tables(quality: u8) -> ([f32; 64], [f32; 64]) {
 fn dct_matrix() -> [[f32; 8]; 8] {
     let mut m = [[0f32; 8]; 8];
     for (k, row) in m.iter_mut().enumerate() {
-        let a = if k == 0 { (1.0f64 / 8.0).sqrt() } else { (2.0f64 / 8.0).sqrt() };
+        let a = if k == 0 {
+            (1.0f64 / 8.0).sqrt()
+        } else {
+            (2.0f64 / 8.0).sqrt()
+        };
         for (n, v) in row.iter_mut().enumerate() {
             *v = (a * (std::f64::consts::PI * (2 * n + 1) as f64 * k as f64 / 16.0).cos()) as f32;
         }
@@ -389,7 +430,10 @@ fn dct_plane(p: &mut [f32], w: usize, h: usize, q: &[f32; 64]) {
                     }
                 }
                 let n = (w - bx).min(8);
-                for (d, s) in p[(by + y) * w + bx..(by + y) * w + bx + n].iter_mut().zip(&acc) {
+                for (d, s) in p[(by + y) * w + bx..(by + y) * w + bx + n]
+                    .iter_mut()
+                    .zip(&acc)
+                {
                     *d = *s;
                 }
             }
@@ -405,11 +449,17 @@ mod tests {
     fn dct_quantisation_with_unit_table_is_nearly_identity() {
         let (w, h) = (19, 11);
         let mut rng = Rng::new(3, 4);
-        let orig: Vec<f32> = (0..w * h).map(|_| rng.range(-128.0, 127.0) as f32).collect();
+        let orig: Vec<f32> = (0..w * h)
+            .map(|_| rng.range(-128.0, 127.0) as f32)
+            .collect();
         let mut p = orig.clone();
         dct_plane(&mut p, w, h, &[1.0; 64]);
         // Rounding each coefficient to an integer moves each pixel by well under a level.
-        let worst = p.iter().zip(&orig).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
+        let worst = p
+            .iter()
+            .zip(&orig)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0f32, f32::max);
         assert!(worst < 1.5, "worst {worst}");
         assert!(worst > 0.0);
     }
@@ -418,13 +468,21 @@ mod tests {
     fn jpeg_quality_100_is_nearly_lossless_and_low_quality_is_not() {
         let (w, h) = (37, 21);
         let mut rng = Rng::new(5, 6);
-        let img: Vec<u8> = (0..w * h * 3).map(|i| ((i % 97) as f64 * 2.0 + rng.range(0.0, 20.0)) as u8).collect();
+        let img: Vec<u8> = (0..w * h * 3)
+            .map(|i| ((i % 97) as f64 * 2.0 + rng.range(0.0, 20.0)) as u8)
+            .collect();
         let mut fx = Effects::new(w, h);
         let mut hi = img.clone();
         fx.jpeg(&mut hi, 100);
         let mut lo = img.clone();
         fx.jpeg(&mut lo, 10);
-        let mad = |a: &[u8]| a.iter().zip(&img).map(|(&x, &y)| (x as f64 - y as f64).abs()).sum::<f64>() / img.len() as f64;
+        let mad = |a: &[u8]| {
+            a.iter()
+                .zip(&img)
+                .map(|(&x, &y)| (x as f64 - y as f64).abs())
+                .sum::<f64>()
+                / img.len() as f64
+        };
         // Chroma subsampling alone costs a few levels on this busy pattern.
         assert!(mad(&hi) < mad(&lo), "q100 {} vs q10 {}", mad(&hi), mad(&lo));
         assert!(mad(&lo) > 3.0);

@@ -187,7 +187,9 @@ pub enum RenderError {
         got: usize,
     },
     /// The pose puts the camera below (or within [`MIN_CAMERA_HEIGHT_M`] of) the ground.
-    #[error("camera is {height_m:.2} m above the ground; must be at least {MIN_CAMERA_HEIGHT_M} m")]
+    #[error(
+        "camera is {height_m:.2} m above the ground; must be at least {MIN_CAMERA_HEIGHT_M} m"
+    )]
     CameraBelowGround {
         /// Camera height above the ground (m).
         height_m: f64,
@@ -231,15 +233,25 @@ impl Renderer {
 
     /// Render BGR8 pixels (stride = width*3, row-major, top row first) into `out`, which the
     /// caller owns, and return the frame's truth.
-    pub fn render(&mut self, scene: &Scene, pose: &CameraPose, out: &mut [u8]) -> Result<Truth, RenderError> {
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        pose: &CameraPose,
+        out: &mut [u8],
+    ) -> Result<Truth, RenderError> {
         let expected = self.camera.frame_bytes();
         if out.len() != expected {
-            return Err(RenderError::BufferSize { expected, got: out.len() });
+            return Err(RenderError::BufferSize {
+                expected,
+                got: out.len(),
+            });
         }
         validate(scene, pose)?;
         let cam_height = scene.hub_height_m + pose.height_m;
         if cam_height < MIN_CAMERA_HEIGHT_M {
-            return Err(RenderError::CameraBelowGround { height_m: cam_height });
+            return Err(RenderError::CameraBelowGround {
+                height_m: cam_height,
+            });
         }
         let hub = scene.hub_world();
         let w2c = pose.world_to_cam(hub);
@@ -250,7 +262,11 @@ impl Renderer {
         if scene.sky != Sky::Overcast && sun[2] > 0.0 {
             let sc = w2c.point(math::add(w2c.origin, sun));
             if let Some(px) = self.camera.project(sc) {
-                let strength = if scene.sky == Sky::Clouds { SUN_DISC_STRENGTH_CLOUDS } else { 1.0 };
+                let strength = if scene.sky == Sky::Clouds {
+                    SUN_DISC_STRENGTH_CLOUDS
+                } else {
+                    1.0
+                };
                 self.effects.sun_disc(out, px, self.camera.fx, strength);
             }
         }
@@ -280,13 +296,15 @@ impl Renderer {
                 build_hills(&mut self.hills, scene.seed);
                 self.hills_seed = Some(scene.seed);
             }
-            self.raster.draw_mesh(out, &self.hills, &w2c, &light, DepthMode::Backdrop);
+            self.raster
+                .draw_mesh(out, &self.hills, &w2c, &light, DepthMode::Backdrop);
         }
         // The main tower is drawn first in its own mesh so its spans are recorded unoccluded.
         if scene.turbine_present {
             self.mesh.clear();
             build_turbine(&mut self.mesh, &TurbineSpec::main(scene));
-            self.raster.draw_mesh(out, &self.mesh, &w2c, &light, DepthMode::TestWrite);
+            self.raster
+                .draw_mesh(out, &self.mesh, &w2c, &light, DepthMode::TestWrite);
         }
         self.mesh.clear();
         if scene.second_turbine {
@@ -294,9 +312,15 @@ impl Renderer {
             let mut spec = TurbineSpec::main(scene);
             // Behind the main turbine as seen from the usual camera positions (which are at +X).
             let (bx, by) = (SECOND_TURBINE_BEHIND_M, SECOND_TURBINE_SIDEWAYS_M);
-            spec.base = [-layout.range(bx.0, bx.1), side * layout.range(by.0, by.1), 0.0];
-            spec.hub_height_m = scene.hub_height_m * layout.range(SECOND_TURBINE_SCALE.0, SECOND_TURBINE_SCALE.1);
-            spec.blade_length_m = scene.blade_length_m * layout.range(SECOND_TURBINE_SCALE.0, SECOND_TURBINE_SCALE.1);
+            spec.base = [
+                -layout.range(bx.0, bx.1),
+                side * layout.range(by.0, by.1),
+                0.0,
+            ];
+            spec.hub_height_m =
+                scene.hub_height_m * layout.range(SECOND_TURBINE_SCALE.0, SECOND_TURBINE_SCALE.1);
+            spec.blade_length_m =
+                scene.blade_length_m * layout.range(SECOND_TURBINE_SCALE.0, SECOND_TURBINE_SCALE.1);
             spec.rotor_angle_deg = layout.range(0.0, 120.0);
             spec.detail = Detail::Low;
             spec.shadow_sun = None;
@@ -309,7 +333,8 @@ impl Renderer {
             Distractor::PowerLines => build_power_lines(&mut self.mesh, &mut layout),
         }
         if !self.mesh.tris.is_empty() || !self.mesh.wires.is_empty() {
-            self.raster.draw_mesh(out, &self.mesh, &w2c, &light, DepthMode::TestWrite);
+            self.raster
+                .draw_mesh(out, &self.mesh, &w2c, &light, DepthMode::TestWrite);
         }
 
         let truth = self.truth(scene, pose, &w2c);
@@ -320,7 +345,8 @@ impl Renderer {
         if scene.blur {
             self.effects.blur(out);
         }
-        self.effects.noise(out, scene.noise_sigma, scene.seed, scene.frame);
+        self.effects
+            .noise(out, scene.noise_sigma, scene.seed, scene.frame);
         if let Some(q) = scene.jpeg_quality {
             self.effects.jpeg(out, q);
         }
@@ -337,11 +363,21 @@ impl Renderer {
             // A few draws to find a place behind the main turbine as seen from the camera.
             for _ in 0..8 {
                 let side = if r.chance(0.5) { 1.0 } else { -1.0 };
-                let base = [-r.range(NEIGHBOUR_BEHIND_M.0, NEIGHBOUR_BEHIND_M.1), side * r.range(NEIGHBOUR_SIDEWAYS_M.0, NEIGHBOUR_SIDEWAYS_M.1), 0.0];
+                let base = [
+                    -r.range(NEIGHBOUR_BEHIND_M.0, NEIGHBOUR_BEHIND_M.1),
+                    side * r.range(NEIGHBOUR_SIDEWAYS_M.0, NEIGHBOUR_SIDEWAYS_M.1),
+                    0.0,
+                ];
                 let size = r.range(NEIGHBOUR_SCALE.0, NEIGHBOUR_SCALE.1);
-                let (yaw, rotor) = (r.range(-NEIGHBOUR_YAW_SPREAD_DEG, NEIGHBOUR_YAW_SPREAD_DEG), r.range(0.0, 120.0));
+                let (yaw, rotor) = (
+                    r.range(-NEIGHBOUR_YAW_SPREAD_DEG, NEIGHBOUR_YAW_SPREAD_DEG),
+                    r.range(0.0, 120.0),
+                );
                 let distance = horizontal(base);
-                if distance < (main_distance + NEIGHBOUR_MIN_EXTRA_DISTANCE_M).max(main_distance * NEIGHBOUR_MIN_DISTANCE_RATIO) {
+                if distance
+                    < (main_distance + NEIGHBOUR_MIN_EXTRA_DISTANCE_M)
+                        .max(main_distance * NEIGHBOUR_MIN_DISTANCE_RATIO)
+                {
                     continue;
                 }
                 let mut spec = TurbineSpec::main(scene);
@@ -350,7 +386,11 @@ impl Renderer {
                 spec.blade_length_m *= size;
                 spec.nacelle_yaw_deg += yaw;
                 spec.rotor_angle_deg = rotor;
-                spec.detail = if distance > NEIGHBOUR_LOW_DETAIL_M { Detail::Low } else { Detail::High };
+                spec.detail = if distance > NEIGHBOUR_LOW_DETAIL_M {
+                    Detail::Low
+                } else {
+                    Detail::High
+                };
                 spec.shadow_sun = None;
                 build_turbine(&mut self.mesh, &spec);
                 break;
@@ -362,11 +402,19 @@ impl Renderer {
         let cam = &self.camera;
         let (w, h) = (cam.width as f64, cam.height as f64);
         let hub_cam = w2c.point(scene.hub_world());
-        let proj = |p: [f64; 3]| if scene.turbine_present { cam.project(w2c.point(p)) } else { None };
+        let proj = |p: [f64; 3]| {
+            if scene.turbine_present {
+                cam.project(w2c.point(p))
+            } else {
+                None
+            }
+        };
         let hub_px = proj(scene.hub_world());
-        let inside = |p: &[f64; 2]| p[0] >= -0.5 && p[0] <= w - 0.5 && p[1] >= -0.5 && p[1] <= h - 0.5;
+        let inside =
+            |p: &[f64; 2]| p[0] >= -0.5 && p[0] <= w - 0.5 && p[1] >= -0.5 && p[1] <= h - 0.5;
         let turbine_in_view = hub_px.as_ref().is_some_and(inside);
-        let (mut tower_width_px, mut tower_width_row, mut tower_width_height_m) = (None, None, None);
+        let (mut tower_width_px, mut tower_width_row, mut tower_width_height_m) =
+            (None, None, None);
         if scene.turbine_present {
             if let Some((row, z)) = self.tower_width_row(scene, w2c) {
                 let (l, r) = self.raster.tower_spans[row];
@@ -386,13 +434,19 @@ impl Renderer {
             tower_width_row,
             tower_width_height_m,
             distance_m: norm(pose.offset_from_hub()),
-            relative_yaw_deg: wrap_deg(pose.lateral_m.atan2(pose.distance_m).to_degrees() + scene.nacelle_yaw_deg),
+            relative_yaw_deg: wrap_deg(
+                pose.lateral_m.atan2(pose.distance_m).to_degrees() + scene.nacelle_yaw_deg,
+            ),
             hub_cam_m: hub_cam,
         }
     }
 
     /// Row for the tower-width truth and the tower height (m) on it.
-    fn tower_width_row(&self, scene: &Scene, w2c: &math::WorldToCam) -> Option<(usize, Option<f64>)> {
+    fn tower_width_row(
+        &self,
+        scene: &Scene,
+        w2c: &math::WorldToCam,
+    ) -> Option<(usize, Option<f64>)> {
         let h = self.camera.height as usize;
         let spans = &self.raster.tower_spans;
         let valid = |r: usize| spans[r].0 <= spans[r].1;
@@ -458,16 +512,26 @@ fn validate(scene: &Scene, pose: &CameraPose) -> Result<(), RenderError> {
         return Err(RenderError::InvalidInput("non-finite scene or pose value"));
     }
     if !(10.0..=500.0).contains(&scene.hub_height_m) {
-        return Err(RenderError::InvalidInput("hub_height_m must be within 10..500"));
+        return Err(RenderError::InvalidInput(
+            "hub_height_m must be within 10..500",
+        ));
     }
-    if !(0.1..=30.0).contains(&scene.tower_base_diameter_m) || !(0.1..=30.0).contains(&scene.tower_top_diameter_m) {
-        return Err(RenderError::InvalidInput("tower diameters must be within 0.1..30 m"));
+    if !(0.1..=30.0).contains(&scene.tower_base_diameter_m)
+        || !(0.1..=30.0).contains(&scene.tower_top_diameter_m)
+    {
+        return Err(RenderError::InvalidInput(
+            "tower diameters must be within 0.1..30 m",
+        ));
     }
     if !(2.0..=200.0).contains(&scene.blade_length_m) {
-        return Err(RenderError::InvalidInput("blade_length_m must be within 2..200"));
+        return Err(RenderError::InvalidInput(
+            "blade_length_m must be within 2..200",
+        ));
     }
     if scene.noise_sigma < 0.0 || scene.noise_sigma > 100.0 {
-        return Err(RenderError::InvalidInput("noise_sigma must be within 0..100"));
+        return Err(RenderError::InvalidInput(
+            "noise_sigma must be within 0..100",
+        ));
     }
     Ok(())
 }

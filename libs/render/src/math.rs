@@ -75,7 +75,11 @@ impl WorldToCam {
     #[inline]
     pub fn point(&self, p: V3) -> V3 {
         let d = sub(p, self.origin);
-        [dot(self.rot[0], d), dot(self.rot[1], d), dot(self.rot[2], d)]
+        [
+            dot(self.rot[0], d),
+            dot(self.rot[1], d),
+            dot(self.rot[2], d),
+        ]
     }
 
     /// Camera-frame direction to world frame (transpose of `rot`).

@@ -7,8 +7,8 @@
 
 use crate::math::{add, cross, deg, dot, lerp3, normalize, scale, sub, Rng, V3};
 use crate::scene::{
-    Scene, HUB_OVERHANG_M, NACELLE_FRONT_X_M, NACELLE_HEIGHT_M, NACELLE_LENGTH_M,
-    NACELLE_WIDTH_M, SPINNER_NOSE_LENGTH_M, SPINNER_RADIUS_M,
+    Scene, HUB_OVERHANG_M, NACELLE_FRONT_X_M, NACELLE_HEIGHT_M, NACELLE_LENGTH_M, NACELLE_WIDTH_M,
+    SPINNER_NOSE_LENGTH_M, SPINNER_RADIUS_M,
 };
 
 /// Turbine paint (RAL 7035-like light grey), linear 0..1 albedo per RGB channel.
@@ -110,15 +110,27 @@ impl Mesh {
     }
 
     fn vert(&mut self, p: V3, n: V3, albedo: [f32; 3]) -> u32 {
-        self.verts.push(Vertex { p, n, albedo, sun_vis: 1.0 });
+        self.verts.push(Vertex {
+            p,
+            n,
+            albedo,
+            sun_vis: 1.0,
+        });
         (self.verts.len() - 1) as u32
     }
 
     /// Add a triangle, flipping it if needed so its winding agrees with the vertex normals.
     fn tri(&mut self, a: u32, b: u32, c: u32, tag: Tag) {
-        let (pa, pb, pc) = (self.verts[a as usize].p, self.verts[b as usize].p, self.verts[c as usize].p);
+        let (pa, pb, pc) = (
+            self.verts[a as usize].p,
+            self.verts[b as usize].p,
+            self.verts[c as usize].p,
+        );
         let g = cross(sub(pb, pa), sub(pc, pa));
-        let n = add(add(self.verts[a as usize].n, self.verts[b as usize].n), self.verts[c as usize].n);
+        let n = add(
+            add(self.verts[a as usize].n, self.verts[b as usize].n),
+            self.verts[c as usize].n,
+        );
         if dot(g, n) >= 0.0 {
             self.tris.push(Tri { v: [a, b, c], tag });
         } else {
@@ -146,7 +158,13 @@ impl Mesh {
         let base = self.verts.len() as u32;
         for j in 0..=nv {
             for i in 0..=nu {
-                let p = add(o, add(scale(eu, i as f64 / nu as f64), scale(ev, j as f64 / nv as f64)));
+                let p = add(
+                    o,
+                    add(
+                        scale(eu, i as f64 / nu as f64),
+                        scale(ev, j as f64 / nv as f64),
+                    ),
+                );
                 self.vert(p, n, albedo);
             }
         }
@@ -199,7 +217,11 @@ impl TurbineSpec {
             nacelle_yaw_deg: scene.nacelle_yaw_deg,
             blade_pitch_deg: scene.blade_pitch_deg,
             detail: Detail::High,
-            shadow_sun: if scene.nacelle_shadow { Some(scene.sun_dir()) } else { None },
+            shadow_sun: if scene.nacelle_shadow {
+                Some(scene.sun_dir())
+            } else {
+                None
+            },
         }
     }
 }
@@ -213,10 +235,19 @@ struct Frame {
 
 impl Frame {
     fn p(&self, l: V3) -> V3 {
-        add(self.o, add(scale(self.x, l[0]), add(scale(self.y, l[1]), [0.0, 0.0, l[2]])))
+        add(
+            self.o,
+            add(
+                scale(self.x, l[0]),
+                add(scale(self.y, l[1]), [0.0, 0.0, l[2]]),
+            ),
+        )
     }
     fn d(&self, l: V3) -> V3 {
-        add(scale(self.x, l[0]), add(scale(self.y, l[1]), [0.0, 0.0, l[2]]))
+        add(
+            scale(self.x, l[0]),
+            add(scale(self.y, l[1]), [0.0, 0.0, l[2]]),
+        )
     }
     fn to_local_dir(&self, w: V3) -> V3 {
         [dot(w, self.x), dot(w, self.y), w[2]]
@@ -247,7 +278,11 @@ fn ray_hits_box(p: V3, d: V3, lo: V3, hi: V3) -> bool {
 /// Append a complete turbine (tower, nacelle, spinner, three blades) to `mesh`.
 pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
     let yaw = deg(s.nacelle_yaw_deg);
-    let f = Frame { o: s.base, x: [yaw.cos(), -yaw.sin(), 0.0], y: [yaw.sin(), yaw.cos(), 0.0] };
+    let f = Frame {
+        o: s.base,
+        x: [yaw.cos(), -yaw.sin(), 0.0],
+        y: [yaw.sin(), yaw.cos(), 0.0],
+    };
     let high = s.detail == Detail::High;
     let tag_tower = if high { Tag::Tower } else { Tag::Other };
     let alb = TURBINE_ALBEDO;
@@ -258,8 +293,16 @@ pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
     let segs = if high { TOWER_SEGMENTS } else { 12 };
     let (rb, rt) = (s.tower_base_d_m / 2.0, s.tower_top_d_m / 2.0);
     let slope = (rt - rb) / top_z;
-    let nac_lo = [NACELLE_FRONT_X_M - NACELLE_LENGTH_M, -NACELLE_WIDTH_M / 2.0, hub_z - NACELLE_HEIGHT_M / 2.0];
-    let nac_hi = [NACELLE_FRONT_X_M, NACELLE_WIDTH_M / 2.0, hub_z + NACELLE_HEIGHT_M / 2.0];
+    let nac_lo = [
+        NACELLE_FRONT_X_M - NACELLE_LENGTH_M,
+        -NACELLE_WIDTH_M / 2.0,
+        hub_z - NACELLE_HEIGHT_M / 2.0,
+    ];
+    let nac_hi = [
+        NACELLE_FRONT_X_M,
+        NACELLE_WIDTH_M / 2.0,
+        hub_z + NACELLE_HEIGHT_M / 2.0,
+    ];
     let sun_local = s.shadow_sun.map(|w| f.to_local_dir(w));
     let mut z = 0.0;
     let mut prev_ring: Option<u32> = None;
@@ -299,7 +342,11 @@ pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
     }
 
     // --- Nacelle: chamfered box along the rotor axis, each face flat-shaded.
-    let (hw, hh, c) = (NACELLE_WIDTH_M / 2.0, NACELLE_HEIGHT_M / 2.0, NACELLE_CHAMFER_M);
+    let (hw, hh, c) = (
+        NACELLE_WIDTH_M / 2.0,
+        NACELLE_HEIGHT_M / 2.0,
+        NACELLE_CHAMFER_M,
+    );
     // Cross-section outline (y, z offsets from the axis), counter-clockwise seen from the front.
     let outline: [[f64; 2]; 8] = [
         [hw, -hh + c],
@@ -316,7 +363,11 @@ pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
         let (p0, p1) = (outline[k], outline[(k + 1) % 8]);
         let mid = [(p0[0] + p1[0]) / 2.0, (p0[1] + p1[1]) / 2.0];
         let n2 = normalize([0.0, p1[1] - p0[1], -(p1[0] - p0[0])]);
-        let n2 = if n2[1] * mid[0] + n2[2] * mid[1] < 0.0 { scale(n2, -1.0) } else { n2 };
+        let n2 = if n2[1] * mid[0] + n2[2] * mid[1] < 0.0 {
+            scale(n2, -1.0)
+        } else {
+            n2
+        };
         let o = f.p([x_rear, p0[0], hub_z + p0[1]]);
         let eu = f.d([NACELLE_LENGTH_M, 0.0, 0.0]);
         let ev = f.d([0.0, p1[0] - p0[0], p1[1] - p0[1]]);
@@ -371,18 +422,38 @@ pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
         // Clockwise seen from the front: 90° points to the viewer's right = turbine's left (+y).
         let e_r = [0.0, th.sin(), th.cos()];
         let e_t = [0.0, th.cos(), -th.sin()];
-        build_blade(mesh, &f, hub_local, e_r, e_t, s.blade_length_m, s.blade_pitch_deg, high);
+        build_blade(
+            mesh,
+            &f,
+            hub_local,
+            e_r,
+            e_t,
+            s.blade_length_m,
+            s.blade_pitch_deg,
+            high,
+        );
     }
 }
 
 /// NACA 4-digit symmetric half thickness (fraction of chord) at chord position `s` (0 = LE).
 fn naca_half_thickness(s: f64, t_ratio: f64) -> f64 {
     let s = s.clamp(0.0, 1.0);
-    5.0 * t_ratio * (0.2969 * s.sqrt() - 0.1260 * s - 0.3516 * s * s + 0.2843 * s * s * s - 0.1036 * s.powi(4))
+    5.0 * t_ratio
+        * (0.2969 * s.sqrt() - 0.1260 * s - 0.3516 * s * s + 0.2843 * s * s * s
+            - 0.1036 * s.powi(4))
 }
 
 #[allow(clippy::too_many_arguments)]
-fn build_blade(mesh: &mut Mesh, f: &Frame, hub: V3, e_r: V3, e_t: V3, len: f64, pitch_deg: f64, high: bool) {
+fn build_blade(
+    mesh: &mut Mesh,
+    f: &Frame,
+    hub: V3,
+    e_r: V3,
+    e_t: V3,
+    len: f64,
+    pitch_deg: f64,
+    high: bool,
+) {
     let k = len / BLADE_REF_LENGTH_M;
     let root_d = BLADE_ROOT_DIAMETER_M * k;
     let c_max = BLADE_MAX_CHORD_M * k;
@@ -394,12 +465,28 @@ fn build_blade(mesh: &mut Mesh, f: &Frame, hub: V3, e_r: V3, e_t: V3, len: f64, 
     // Stations: dense near the root where the shape changes, then every few metres.
     let mut radii: [f64; 40] = [0.0; 40];
     let mut nr = 0;
-    let root_stations = [BLADE_ROOT_START_M, 2.0, BLADE_ROOT_CYLINDER_END_M, 3.6, 4.6, 5.6, r_cmax.max(6.2)];
+    let root_stations = [
+        BLADE_ROOT_START_M,
+        2.0,
+        BLADE_ROOT_CYLINDER_END_M,
+        3.6,
+        4.6,
+        5.6,
+        r_cmax.max(6.2),
+    ];
     for r in root_stations {
-        radii[nr] = r * if r > BLADE_ROOT_CYLINDER_END_M { k.max(0.5) } else { 1.0 };
+        radii[nr] = r * if r > BLADE_ROOT_CYLINDER_END_M {
+            k.max(0.5)
+        } else {
+            1.0
+        };
         nr += 1;
     }
-    let step = if high { BLADE_STATION_STEP_M } else { len / 4.0 };
+    let step = if high {
+        BLADE_STATION_STEP_M
+    } else {
+        len / 4.0
+    };
     let mut r = radii[nr - 1];
     let r_end = len * 0.985;
     while r + step < r_end && nr < 37 {
@@ -420,10 +507,18 @@ fn build_blade(mesh: &mut Mesh, f: &Frame, hub: V3, e_r: V3, e_t: V3, len: f64, 
             let t = ((r - r_cmax) / (len - r_cmax)).clamp(0.0, 1.0);
             // Slightly convex taper, rounded off toward the tip.
             let lin = c_max + (c_tip - c_max) * t;
-            let tip_round = if t > 0.9 { (1.0 - (t - 0.9) / 0.1 * 0.45).max(0.4) } else { 1.0 };
+            let tip_round = if t > 0.9 {
+                (1.0 - (t - 0.9) / 0.1 * 0.45).max(0.4)
+            } else {
+                1.0
+            };
             lin * tip_round
         };
-        let t_ratio = if r <= r_cmax { 0.40 } else { 0.40 - 0.25 * ((r - r_cmax) / (len - r_cmax)).clamp(0.0, 1.0).sqrt() };
+        let t_ratio = if r <= r_cmax {
+            0.40
+        } else {
+            0.40 - 0.25 * ((r - r_cmax) / (len - r_cmax)).clamp(0.0, 1.0).sqrt()
+        };
         let twist = if r <= r_cmax {
             BLADE_TWIST_DEG
         } else {
@@ -441,10 +536,18 @@ fn build_blade(mesh: &mut Mesh, f: &Frame, hub: V3, e_r: V3, e_t: V3, len: f64, 
             let circ = [root_d / 2.0 * phi.cos(), root_d / 2.0 * phi.sin()];
             let sc = (1.0 - phi.cos()) / 2.0;
             let ht = naca_half_thickness(sc, t_ratio) * chord;
-            let foil = [(BLADE_PITCH_AXIS_FRAC - sc) * chord, if phi.sin() >= 0.0 { ht } else { -ht }];
-            *p2 = [circ[0] + (foil[0] - circ[0]) * w, circ[1] + (foil[1] - circ[1]) * w];
+            let foil = [
+                (BLADE_PITCH_AXIS_FRAC - sc) * chord,
+                if phi.sin() >= 0.0 { ht } else { -ht },
+            ];
+            *p2 = [
+                circ[0] + (foil[0] - circ[0]) * w,
+                circ[1] + (foil[1] - circ[1]) * w,
+            ];
         }
-        let cen2 = pts2[..npts].iter().fold([0.0, 0.0], |a, p| [a[0] + p[0] / npts as f64, a[1] + p[1] / npts as f64]);
+        let cen2 = pts2[..npts].iter().fold([0.0, 0.0], |a, p| {
+            [a[0] + p[0] / npts as f64, a[1] + p[1] / npts as f64]
+        });
         for i in 0..npts {
             let (pm, pp) = (pts2[(i + npts - 1) % npts], pts2[(i + 1) % npts]);
             let tan = [pp[0] - pm[0], pp[1] - pm[1]];
@@ -472,7 +575,15 @@ fn build_blade(mesh: &mut Mesh, f: &Frame, hub: V3, e_r: V3, e_t: V3, len: f64, 
 }
 
 /// Vertical tapered prism (lattice mast / pylon body stand-in), `n` sides.
-fn build_pole(mesh: &mut Mesh, base: V3, height: f64, r_base: f64, r_top: f64, n: usize, albedo: [f32; 3]) {
+fn build_pole(
+    mesh: &mut Mesh,
+    base: V3,
+    height: f64,
+    r_base: f64,
+    r_top: f64,
+    n: usize,
+    albedo: [f32; 3],
+) {
     let rings = ((height / 6.0).ceil() as usize).max(1);
     let slope = (r_top - r_base) / height;
     let mut prev: Option<u32> = None;
@@ -500,7 +611,12 @@ fn add_cable(mesh: &mut Mesh, a: V3, b: V3, sag_m: f64, width_m: f64) {
         let t = i as f64 / PIECES as f64;
         let mut p = lerp3(a, b, t);
         p[2] -= 4.0 * sag_m * t * (1.0 - t);
-        mesh.wires.push(Wire { a: prev, b: p, width_m, albedo: CABLE_ALBEDO });
+        mesh.wires.push(Wire {
+            a: prev,
+            b: p,
+            width_m,
+            albedo: CABLE_ALBEDO,
+        });
         prev = p;
     }
 }
@@ -516,18 +632,36 @@ pub(crate) fn build_mast(mesh: &mut Mesh, scene: &Scene, rng: &mut Rng) {
     let h = rng.range(55.0, 85.0);
     // Lattice mast: thin triangular section, lattice drawn as wires on top of a faint body.
     const MAST_HALF_WIDTH_M: f64 = 0.35;
-    build_pole(mesh, base, h, MAST_HALF_WIDTH_M, MAST_HALF_WIDTH_M, 3, STEEL_ALBEDO);
+    build_pole(
+        mesh,
+        base,
+        h,
+        MAST_HALF_WIDTH_M,
+        MAST_HALF_WIDTH_M,
+        3,
+        STEEL_ALBEDO,
+    );
     // Guy wires at three heights to three anchors.
     for level in [0.35, 0.65, 0.95] {
         for k in 0..3 {
             let a = std::f64::consts::TAU * k as f64 / 3.0 + 0.4;
             let anchor = add(base, [h * 0.45 * a.cos(), h * 0.45 * a.sin(), 0.0]);
-            mesh.wires.push(Wire { a: add(base, [0.0, 0.0, h * level]), b: anchor, width_m: 0.02, albedo: CABLE_ALBEDO });
+            mesh.wires.push(Wire {
+                a: add(base, [0.0, 0.0, h * level]),
+                b: anchor,
+                width_m: 0.02,
+                albedo: CABLE_ALBEDO,
+            });
         }
     }
     // Boom arms with instruments near the top.
     for z in [h - 2.0, h * 0.6] {
-        mesh.wires.push(Wire { a: add(base, [0.0, 0.0, z]), b: add(base, [0.0, 3.0, z]), width_m: 0.08, albedo: STEEL_ALBEDO });
+        mesh.wires.push(Wire {
+            a: add(base, [0.0, 0.0, z]),
+            b: add(base, [0.0, 3.0, z]),
+            width_m: 0.08,
+            albedo: STEEL_ALBEDO,
+        });
     }
 }
 
@@ -538,25 +672,54 @@ fn build_pylon(mesh: &mut Mesh, base: V3, h: f64, along: V3) -> [V3; 6] {
     let (wb, wt) = (4.0, 1.2);
     let leg = |z: f64, sx: f64, sy: f64| -> V3 {
         let w = wb + (wt - wb) * (z / h);
-        add(base, add(add(scale(along, sx * w), scale(across, sy * w)), [0.0, 0.0, z]))
+        add(
+            base,
+            add(
+                add(scale(along, sx * w), scale(across, sy * w)),
+                [0.0, 0.0, z],
+            ),
+        )
     };
     let corners = [(1.0, 1.0), (1.0, -1.0), (-1.0, -1.0), (-1.0, 1.0)];
     let levels = 8;
     for l in 0..levels {
-        let (z0, z1) = (h * l as f64 / levels as f64, h * (l + 1) as f64 / levels as f64);
+        let (z0, z1) = (
+            h * l as f64 / levels as f64,
+            h * (l + 1) as f64 / levels as f64,
+        );
         for k in 0..4 {
             let (a, b) = (corners[k], corners[(k + 1) % 4]);
             let w = 0.15;
-            mesh.wires.push(Wire { a: leg(z0, a.0, a.1), b: leg(z1, a.0, a.1), width_m: 0.25, albedo: STEEL_ALBEDO });
-            mesh.wires.push(Wire { a: leg(z0, a.0, a.1), b: leg(z1, b.0, b.1), width_m: w, albedo: STEEL_ALBEDO });
-            mesh.wires.push(Wire { a: leg(z1, a.0, a.1), b: leg(z1, b.0, b.1), width_m: w, albedo: STEEL_ALBEDO });
+            mesh.wires.push(Wire {
+                a: leg(z0, a.0, a.1),
+                b: leg(z1, a.0, a.1),
+                width_m: 0.25,
+                albedo: STEEL_ALBEDO,
+            });
+            mesh.wires.push(Wire {
+                a: leg(z0, a.0, a.1),
+                b: leg(z1, b.0, b.1),
+                width_m: w,
+                albedo: STEEL_ALBEDO,
+            });
+            mesh.wires.push(Wire {
+                a: leg(z1, a.0, a.1),
+                b: leg(z1, b.0, b.1),
+                width_m: w,
+                albedo: STEEL_ALBEDO,
+            });
         }
     }
     let mut pts = [[0.0; 3]; 6];
     for (i, (z, span)) in [(h * 0.72, 7.0), (h * 0.86, 5.5)].iter().enumerate() {
         let a = add(base, add(scale(across, -span), [0.0, 0.0, *z]));
         let b = add(base, add(scale(across, *span), [0.0, 0.0, *z]));
-        mesh.wires.push(Wire { a, b, width_m: 0.6, albedo: STEEL_ALBEDO });
+        mesh.wires.push(Wire {
+            a,
+            b,
+            width_m: 0.6,
+            albedo: STEEL_ALBEDO,
+        });
         pts[i * 3] = add(a, [0.0, 0.0, -2.0]);
         pts[i * 3 + 1] = add(b, [0.0, 0.0, -2.0]);
         pts[i * 3 + 2] = add(base, [0.0, 0.0, h]);
@@ -575,7 +738,10 @@ pub(crate) fn build_power_lines(mesh: &mut Mesh, rng: &mut Rng) {
     let offset = rng.range(-spacing / 2.0, spacing / 2.0);
     let mut prev: Option<[V3; 6]> = None;
     for i in -6..=6 {
-        let base = add([x_line, 0.0, 0.0], scale(along, offset + i as f64 * spacing));
+        let base = add(
+            [x_line, 0.0, 0.0],
+            scale(along, offset + i as f64 * spacing),
+        );
         let pts = build_pylon(mesh, base, h, along);
         if let Some(p) = prev {
             for k in 0..6 {
@@ -593,21 +759,42 @@ pub(crate) fn build_hills(mesh: &mut Mesh, seed: u64) {
     let mut rng = Rng::new(seed, 0x4111);
     // (front radius m, depth m, mean height m, albedo)
     let ridges = [
-        (rng.range(5000.0, 6500.0), 1500.0, rng.range(180.0, 320.0), [0.27f32, 0.34, 0.26]),
-        (rng.range(2500.0, 3500.0), 1000.0, rng.range(70.0, 160.0), [0.28f32, 0.38, 0.22]),
+        (
+            rng.range(5000.0, 6500.0),
+            1500.0,
+            rng.range(180.0, 320.0),
+            [0.27f32, 0.34, 0.26],
+        ),
+        (
+            rng.range(2500.0, 3500.0),
+            1000.0,
+            rng.range(70.0, 160.0),
+            [0.28f32, 0.38, 0.22],
+        ),
     ];
     for (front, depth, mean_h, albedo) in ridges {
         build_ridge(mesh, &mut rng, front, depth, mean_h, albedo);
     }
 }
 
-fn build_ridge(mesh: &mut Mesh, rng: &mut Rng, front: f64, depth: f64, mean_h: f64, albedo: [f32; 3]) {
+fn build_ridge(
+    mesh: &mut Mesh,
+    rng: &mut Rng,
+    front: f64,
+    depth: f64,
+    mean_h: f64,
+    albedo: [f32; 3],
+) {
     const SEGMENTS: usize = 360;
     const ROWS: usize = 5;
     let mut harm = [[0.0f64; 3]; 8];
     for (i, h) in harm.iter_mut().enumerate() {
         let k = ((i + 1) as f64 * 2.3 + rng.range(0.0, 2.0)).round();
-        *h = [k, rng.range(0.0, std::f64::consts::TAU), 1.0 / (1.0 + i as f64 * 0.7)];
+        *h = [
+            k,
+            rng.range(0.0, std::f64::consts::TAU),
+            1.0 / (1.0 + i as f64 * 0.7),
+        ];
     }
     let patch_seed = rng.next_u64();
     let height = |a: f64, frac: f64| -> f64 {
@@ -636,7 +823,10 @@ fn build_ridge(mesh: &mut Mesh, rng: &mut Rng, front: f64, depth: f64, mean_h: f
         for r in 0..ROWS {
             let p = pos(i, r);
             // Normal from the surface: cross of the azimuthal and radial tangents.
-            let ta = sub(pos((i + 1) % SEGMENTS, r), pos((i + SEGMENTS - 1) % SEGMENTS, r));
+            let ta = sub(
+                pos((i + 1) % SEGMENTS, r),
+                pos((i + SEGMENTS - 1) % SEGMENTS, r),
+            );
             let tr = sub(pos(i, (r + 1).min(ROWS - 1)), pos(i, r.saturating_sub(1)));
             let mut n = normalize(cross(tr, ta));
             if n[2] < 0.0 {

@@ -136,27 +136,55 @@ impl Raster {
     #[inline]
     fn to_screen(&self, c: &CVert) -> SVert {
         let p = self.proj.project(c.p);
-        SVert { x: p[0], y: p[1], iz: 1.0 / c.p[2], c: c.c }
+        SVert {
+            x: p[0],
+            y: p[1],
+            iz: 1.0 / c.p[2],
+            c: c.c,
+        }
     }
 
     /// Shade, transform, clip and rasterise all triangles of `mesh`, then its wires.
-    pub fn draw_mesh(&mut self, out: &mut [u8], mesh: &Mesh, w2c: &WorldToCam, light: &Lighting, mode: DepthMode) {
+    pub fn draw_mesh(
+        &mut self,
+        out: &mut [u8],
+        mesh: &Mesh,
+        w2c: &WorldToCam,
+        light: &Lighting,
+        mode: DepthMode,
+    ) {
         self.cverts.clear();
         self.sverts.clear();
         for v in &mesh.verts {
-            let cv = CVert { p: w2c.point(v.p), c: light.shade(v) };
+            let cv = CVert {
+                p: w2c.point(v.p),
+                c: light.shade(v),
+            };
             self.cverts.push(cv);
-            let sv = if cv.p[2] > NEAR_M { self.to_screen(&cv) } else { SVert::default() };
+            let sv = if cv.p[2] > NEAR_M {
+                self.to_screen(&cv)
+            } else {
+                SVert::default()
+            };
             self.sverts.push(sv);
         }
         for t in &mesh.tris {
             let [a, b, c] = t.v.map(|i| i as usize);
-            let (za, zb, zc) = (self.cverts[a].p[2], self.cverts[b].p[2], self.cverts[c].p[2]);
+            let (za, zb, zc) = (
+                self.cverts[a].p[2],
+                self.cverts[b].p[2],
+                self.cverts[c].p[2],
+            );
             if za > NEAR_M && zb > NEAR_M && zc > NEAR_M {
                 let (sa, sb, sc) = (self.sverts[a], self.sverts[b], self.sverts[c]);
                 self.tri(out, &sa, &sb, &sc, mode, t.tag);
             } else if za > NEAR_M || zb > NEAR_M || zc > NEAR_M {
-                self.clipped_tri(out, [self.cverts[a], self.cverts[b], self.cverts[c]], mode, t.tag);
+                self.clipped_tri(
+                    out,
+                    [self.cverts[a], self.cverts[b], self.cverts[c]],
+                    mode,
+                    t.tag,
+                );
             }
         }
         for wire in &mesh.wires {
@@ -192,7 +220,13 @@ impl Raster {
         if n < 3 {
             return;
         }
-        let s: [SVert; 4] = [0, 1, 2, 3].map(|i| if i < n { self.to_screen(&poly[i]) } else { SVert::default() });
+        let s: [SVert; 4] = [0, 1, 2, 3].map(|i| {
+            if i < n {
+                self.to_screen(&poly[i])
+            } else {
+                SVert::default()
+            }
+        });
         self.tri(out, &s[0], &s[1], &s[2], mode, tag);
         if n == 4 {
             self.tri(out, &s[0], &s[2], &s[3], mode, tag);
@@ -271,7 +305,10 @@ impl Raster {
             for e in &upper[..nu] {
                 hi = hi.min(e.0 + e.1 * yf);
             }
-            if horizontal_reject[..nh].iter().any(|e| e.0 * (yf - e.1) < 0.0) {
+            if horizontal_reject[..nh]
+                .iter()
+                .any(|e| e.0 * (yf - e.1) < 0.0)
+            {
                 continue;
             }
             // A tiny tolerance makes shared edges overlap instead of leaving cracks.
@@ -339,11 +376,22 @@ impl Raster {
     }
 
     /// Draw a wire as an anti-aliased line, depth-tested against the z-buffer (no depth write).
-    fn draw_wire(&mut self, out: &mut [u8], wire: &crate::mesh::Wire, w2c: &WorldToCam, light: &Lighting) {
+    fn draw_wire(
+        &mut self,
+        out: &mut [u8],
+        wire: &crate::mesh::Wire,
+        w2c: &WorldToCam,
+        light: &Lighting,
+    ) {
         let len = norm(sub(wire.b, wire.a));
         let pieces = ((len / WIRE_STEP_M).ceil() as usize).max(1);
         // Wires are lit like a thin cylinder: mostly ambient plus some sun.
-        let fake = Vertex { p: wire.a, n: [0.0, 0.0, 1.0], albedo: wire.albedo, sun_vis: 0.35 };
+        let fake = Vertex {
+            p: wire.a,
+            n: [0.0, 0.0, 1.0],
+            albedo: wire.albedo,
+            sun_vis: 0.35,
+        };
         let col = light.shade(&fake);
         for i in 0..pieces {
             let pa = crate::math::lerp3(wire.a, wire.b, i as f64 / pieces as f64);
@@ -371,14 +419,29 @@ impl Raster {
 
     /// Anti-aliased line of pixel width `width_px` (sub-pixel widths become partial opacity).
     #[allow(clippy::too_many_arguments)]
-    fn line(&mut self, out: &mut [u8], a: [f64; 2], b: [f64; 2], iza: f64, izb: f64, width_px: f32, col: [f32; 3]) {
+    fn line(
+        &mut self,
+        out: &mut [u8],
+        a: [f64; 2],
+        b: [f64; 2],
+        iza: f64,
+        izb: f64,
+        width_px: f32,
+        col: [f32; 3],
+    ) {
         let alpha_w = width_px.min(1.0);
-        if alpha_w < WIRE_MIN_ALPHA || !(a[0].is_finite() && b[0].is_finite() && a[1].is_finite() && b[1].is_finite()) {
+        if alpha_w < WIRE_MIN_ALPHA
+            || !(a[0].is_finite() && b[0].is_finite() && a[1].is_finite() && b[1].is_finite())
+        {
             return;
         }
         let (w, h) = (self.w as f64, self.h as f64);
         // Reject lines entirely off-screen.
-        if (a[0] < -1.0 && b[0] < -1.0) || (a[0] > w && b[0] > w) || (a[1] < -1.0 && b[1] < -1.0) || (a[1] > h && b[1] > h) {
+        if (a[0] < -1.0 && b[0] < -1.0)
+            || (a[0] > w && b[0] > w)
+            || (a[1] < -1.0 && b[1] < -1.0)
+            || (a[1] > h && b[1] > h)
+        {
             return;
         }
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -392,21 +455,33 @@ impl Raster {
         let steps = major_len.ceil().min(4.0 * (w + h)) as usize;
         let half = (width_px.max(1.0) / 2.0) as f64;
         for s in 0..=steps {
-            let t = if major_len > 0.0 { (s as f64).min(major_len) } else { 0.0 };
+            let t = if major_len > 0.0 {
+                (s as f64).min(major_len)
+            } else {
+                0.0
+            };
             let ma = ma0 + dma * t;
             let mi = mi0 + dmi * t;
             let frac_along = if major_len > 0.0 { t / major_len } else { 0.0 };
             let iz = (iza + (izb - iza) * frac_along) as f32;
             let mai = ma.round();
-            let (k0, k1) = ((mi - half - 0.5).ceil() as i64, (mi + half + 0.5).floor() as i64);
+            let (k0, k1) = (
+                (mi - half - 0.5).ceil() as i64,
+                (mi + half + 0.5).floor() as i64,
+            );
             for k in k0..=k1 {
                 // Coverage of pixel k by the interval [mi - half, mi + half].
-                let cov = ((k as f64 + 0.5).min(mi + half) - (k as f64 - 0.5).max(mi - half)).clamp(0.0, 1.0) as f32;
+                let cov = ((k as f64 + 0.5).min(mi + half) - (k as f64 - 0.5).max(mi - half))
+                    .clamp(0.0, 1.0) as f32;
                 let alpha = cov * alpha_w;
                 if alpha <= 0.0 {
                     continue;
                 }
-                let (px, py) = if steep { (k as f64, mai) } else { (mai, k as f64) };
+                let (px, py) = if steep {
+                    (k as f64, mai)
+                } else {
+                    (mai, k as f64)
+                };
                 if px < 0.0 || py < 0.0 || px >= w || py >= h {
                     continue;
                 }

@@ -195,7 +195,11 @@ impl Scene {
             blade_length_m: DEFAULT_BLADE_LENGTH_M,
             rotor_angle_deg: r.range(0.0, 120.0),
             nacelle_yaw_deg: 0.0,
-            blade_pitch_deg: if parked { r.range(70.0, 88.0) } else { r.range(0.0, 6.0) },
+            blade_pitch_deg: if parked {
+                r.range(70.0, 88.0)
+            } else {
+                r.range(0.0, 6.0)
+            },
             sky,
             ground,
             sun_azimuth_deg: r.range(0.0, 360.0),
@@ -208,7 +212,11 @@ impl Scene {
             distractor,
             noise_sigma: r.range(0.0, 4.0) as f32,
             blur: r.chance(0.3),
-            jpeg_quality: if r.chance(0.4) { Some(r.range(55.0, 95.0) as u8) } else { None },
+            jpeg_quality: if r.chance(0.4) {
+                Some(r.range(55.0, 95.0) as u8)
+            } else {
+                None
+            },
             seed,
             frame: 0,
         }
@@ -228,12 +236,18 @@ impl Scene {
 
     /// Rotor centre (where the blade axes meet) in the world frame.
     pub fn hub_world(&self) -> [f64; 3] {
-        add([0.0, 0.0, self.hub_height_m], scale(self.rotor_axis(), HUB_OVERHANG_M))
+        add(
+            [0.0, 0.0, self.hub_height_m],
+            scale(self.rotor_axis(), HUB_OVERHANG_M),
+        )
     }
 
     /// Tip of the spinner nose cone in the world frame.
     pub fn nose_world(&self) -> [f64; 3] {
-        add(self.hub_world(), scale(self.rotor_axis(), SPINNER_NOSE_LENGTH_M))
+        add(
+            self.hub_world(),
+            scale(self.rotor_axis(), SPINNER_NOSE_LENGTH_M),
+        )
     }
 
     /// Height of the tower top (flange under the nacelle) above the ground, metres.

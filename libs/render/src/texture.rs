@@ -31,7 +31,10 @@ impl MipTex {
             for y in 0..ns {
                 for x in 0..ns {
                     let at = |yy: usize, xx: usize| prev[yy * TEX_SIZE + xx] as u32;
-                    let s = at(2 * y, 2 * x) + at(2 * y, 2 * x + 1) + at(2 * y + 1, 2 * x) + at(2 * y + 1, 2 * x + 1);
+                    let s = at(2 * y, 2 * x)
+                        + at(2 * y, 2 * x + 1)
+                        + at(2 * y + 1, 2 * x)
+                        + at(2 * y + 1, 2 * x + 1);
                     next[y * TEX_SIZE + x] = ((s + 2) / 4) as u8;
                 }
             }
@@ -44,7 +47,10 @@ impl MipTex {
     /// A view of one mip level, addressed in that level's own texel units (wrapping).
     #[inline(always)]
     pub fn view(&self, level: u32) -> TexView<'_> {
-        TexView { data: &self.levels[level as usize], mask: (TEX_SIZE as i32 >> level) - 1 }
+        TexView {
+            data: &self.levels[level as usize],
+            mask: (TEX_SIZE as i32 >> level) - 1,
+        }
     }
 }
 
@@ -67,7 +73,10 @@ impl TexView<'_> {
 /// Tileable value noise on a `size x size` grid with `cx x cy` lattice cells, values in [0, 1].
 fn value_noise_into(acc: &mut [f32], size: usize, cx: usize, cy: usize, seed: u64, amp: f32) {
     let lattice: Vec<f32> = (0..cx * cy)
-        .map(|i| (hash64(seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) >> 40) as f32 / (1u64 << 24) as f32)
+        .map(|i| {
+            (hash64(seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) >> 40) as f32
+                / (1u64 << 24) as f32
+        })
         .collect();
     let smooth = |t: f32| t * t * (3.0 - 2.0 * t);
     for y in 0..size {
@@ -95,11 +104,20 @@ fn fbm(base_cells: usize, octaves: usize, gain: f32, aniso: usize, seed: u64) ->
     let mut cells = base_cells;
     for o in 0..octaves {
         let cx = (cells / aniso).max(1);
-        value_noise_into(&mut acc, TEX_SIZE, cx, cells.min(TEX_SIZE), hash64(seed.wrapping_add(o as u64)), amp);
+        value_noise_into(
+            &mut acc,
+            TEX_SIZE,
+            cx,
+            cells.min(TEX_SIZE),
+            hash64(seed.wrapping_add(o as u64)),
+            amp,
+        );
         amp *= gain;
         cells = (cells * 2).min(TEX_SIZE);
     }
-    let (mn, mx) = acc.iter().fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    let (mn, mx) = acc
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
     let inv = 1.0 / (mx - mn).max(1e-6);
     acc.iter_mut().for_each(|v| *v = (*v - mn) * inv);
     acc
@@ -129,9 +147,17 @@ impl Textures {
     pub fn new() -> Textures {
         let g = fbm(8, 7, 0.55, 1, TEXTURE_SEED);
         // Luminance 0.70 .. 1.30 with mean ~1.
-        let grass = MipTex::from_level0(g.iter().map(|&v| (128.0 * (0.70 + 0.60 * v)) as u8).collect());
+        let grass = MipTex::from_level0(
+            g.iter()
+                .map(|&v| (128.0 * (0.70 + 0.60 * v)) as u8)
+                .collect(),
+        );
         let w = fbm(16, 6, 0.6, 4, TEXTURE_SEED ^ 0x5EA);
-        let waves = MipTex::from_level0(w.iter().map(|&v| (128.0 * (0.62 + 0.76 * v * v * 1.2).min(1.95)) as u8).collect());
+        let waves = MipTex::from_level0(
+            w.iter()
+                .map(|&v| (128.0 * (0.62 + 0.76 * v * v * 1.2).min(1.95)) as u8)
+                .collect(),
+        );
         let c = fbm(4, 8, 0.55, 1, TEXTURE_SEED ^ 0xC10D);
         let clouds = MipTex::from_level0(c.iter().map(|&v| (v * 255.0) as u8).collect());
         // Bushes: the top of high-frequency noise, with a soft rim (a texel is 0.5 m, so the
@@ -139,9 +165,21 @@ impl Textures {
         // thickens them. Soil 1.3, bush 0.55 of the field colour.
         let b = fbm(128, 2, 0.5, 1, TEXTURE_SEED ^ 0xB05);
         let density = fbm(16, 3, 0.5, 1, TEXTURE_SEED ^ 0xB06);
-        let bush = |v: f32, d: f32| ((v + 0.3 * (d - 0.5) - SHRUB_COVER_LEVEL) / SHRUB_RIM + 0.5).clamp(0.0, 1.0);
-        let shrubs = MipTex::from_level0(b.iter().zip(&density).map(|(&v, &d)| (128.0 * (1.3 - 0.75 * bush(v, d))) as u8).collect());
-        Textures { grass, waves, clouds, shrubs }
+        let bush = |v: f32, d: f32| {
+            ((v + 0.3 * (d - 0.5) - SHRUB_COVER_LEVEL) / SHRUB_RIM + 0.5).clamp(0.0, 1.0)
+        };
+        let shrubs = MipTex::from_level0(
+            b.iter()
+                .zip(&density)
+                .map(|(&v, &d)| (128.0 * (1.3 - 0.75 * bush(v, d))) as u8)
+                .collect(),
+        );
+        Textures {
+            grass,
+            waves,
+            clouds,
+            shrubs,
+        }
     }
 }
 

@@ -1,7 +1,9 @@
 //! End-to-end checks of projection, truth, conventions, effects and robustness.
 
 use hubtrack_render::scene::{HUB_OVERHANG_M, SPINNER_NOSE_LENGTH_M};
-use hubtrack_render::{Camera, CameraPose, Distractor, Ground, RenderError, Renderer, Scene, Sky, Truth};
+use hubtrack_render::{
+    Camera, CameraPose, Distractor, Ground, RenderError, Renderer, Scene, Sky, Truth,
+};
 
 fn render(cam: Camera, scene: &Scene, pose: &CameraPose) -> (Vec<u8>, Truth) {
     let mut r = Renderer::new(cam);
@@ -11,7 +13,13 @@ fn render(cam: Camera, scene: &Scene, pose: &CameraPose) -> (Vec<u8>, Truth) {
 }
 
 fn quiet(scene: Scene) -> Scene {
-    Scene { noise_sigma: 0.0, blur: false, jpeg_quality: None, propellers_in_view: false, ..scene }
+    Scene {
+        noise_sigma: 0.0,
+        blur: false,
+        jpeg_quality: None,
+        propellers_in_view: false,
+        ..scene
+    }
 }
 
 fn px(cam: &Camera, buf: &[u8], x: usize, y: usize) -> [u8; 3] {
@@ -39,7 +47,10 @@ fn gopro_fov_edges() {
     let cam = Camera::gopro_hero3();
     let h = (GOPRO_HFOV_DEG / 2.0).to_radians().tan();
     let right = cam.project([h, 0.0, 1.0]).expect("in front");
-    assert!((right[0] - 1919.5).abs() < 0.01 && (right[1] - 539.5).abs() < 1e-9, "{right:?}");
+    assert!(
+        (right[0] - 1919.5).abs() < 0.01 && (right[1] - 539.5).abs() < 1e-9,
+        "{right:?}"
+    );
     let v = (GOPRO_VFOV_DEG / 2.0).to_radians().tan();
     let bottom = cam.project([0.0, v, 1.0]).expect("in front");
     assert!((bottom[1] - 1079.5).abs() < 0.01, "{bottom:?}");
@@ -47,8 +58,13 @@ fn gopro_fov_edges() {
     let d = (GOPRO_DFOV_DEG / 2.0).to_radians().tan();
     let (cx, cy) = (960.0f64, 540.0f64);
     let n = (cx * cx + cy * cy).sqrt();
-    let corner = cam.project([d * cx / n, d * cy / n, 1.0]).expect("in front");
-    assert!((corner[0] - 1919.5).abs() < 0.02 && (corner[1] - 1079.5).abs() < 0.02, "{corner:?}");
+    let corner = cam
+        .project([d * cx / n, d * cy / n, 1.0])
+        .expect("in front");
+    assert!(
+        (corner[0] - 1919.5).abs() < 0.02 && (corner[1] - 1079.5).abs() < 0.02,
+        "{corner:?}"
+    );
     // Barrel distortion: a point at the pinhole edge position lands well inside the frame.
     assert!(cam.k1 < 0.0);
     let pin_edge = cam.project([960.0 / cam.fx, 0.0, 1.0]).expect("in front");
@@ -61,7 +77,10 @@ fn usb_camera_diagonal_fov() {
     assert_eq!((cam.width, cam.height), (640, 480));
     let d = 30f64.to_radians().tan();
     let corner = cam.project([d * 0.8, d * 0.6, 1.0]).expect("in front");
-    assert!((corner[0] - 639.5).abs() < 1e-6 && (corner[1] - 479.5).abs() < 1e-6, "{corner:?}");
+    assert!(
+        (corner[0] - 639.5).abs() < 1e-6 && (corner[1] - 479.5).abs() < 1e-6,
+        "{corner:?}"
+    );
 }
 
 #[test]
@@ -70,19 +89,34 @@ fn unproject_inverts_project() {
     for &(x, y) in &[(0.0, 0.0), (0.5, -0.3), (-1.4, 0.55), (1.6, 0.6)] {
         let p = cam.project([x, y, 1.0]).expect("in front");
         let back = cam.unproject(p);
-        assert!((back[0] - x).abs() < 1e-9 && (back[1] - y).abs() < 1e-9, "{x} {y} -> {back:?}");
+        assert!(
+            (back[0] - x).abs() < 1e-9 && (back[1] - y).abs() < 1e-9,
+            "{x} {y} -> {back:?}"
+        );
     }
 }
 
 #[test]
 fn hub_at_image_centre_when_looking_at_it() {
-    for cam in [Camera::gopro_hero3(), Camera::usb_narrow(), Camera::pinhole(800, 600, 50.0)] {
-        for pose in [CameraPose::front(100.0), CameraPose::looking_at_hub(80.0, 25.0, -15.0), CameraPose::looking_at_hub(40.0, -30.0, 12.0)] {
+    for cam in [
+        Camera::gopro_hero3(),
+        Camera::usb_narrow(),
+        Camera::pinhole(800, 600, 50.0),
+    ] {
+        for pose in [
+            CameraPose::front(100.0),
+            CameraPose::looking_at_hub(80.0, 25.0, -15.0),
+            CameraPose::looking_at_hub(40.0, -30.0, 12.0),
+        ] {
             let (_, t) = render(cam, &quiet(Scene::default_clear()), &pose);
             let hub = t.hub_px.expect("hub projects");
-            assert!((hub[0] - cam.cx).abs() < 1e-6 && (hub[1] - cam.cy).abs() < 1e-6, "{pose:?} -> {hub:?}");
+            assert!(
+                (hub[0] - cam.cx).abs() < 1e-6 && (hub[1] - cam.cy).abs() < 1e-6,
+                "{pose:?} -> {hub:?}"
+            );
             assert!(t.turbine_in_view);
-            let expected = (pose.distance_m.powi(2) + pose.lateral_m.powi(2) + pose.height_m.powi(2)).sqrt();
+            let expected =
+                (pose.distance_m.powi(2) + pose.lateral_m.powi(2) + pose.height_m.powi(2)).sqrt();
             assert!((t.distance_m - expected).abs() < 1e-9);
             assert!((t.hub_cam_m[2] - expected).abs() < 1e-6);
         }
@@ -109,7 +143,10 @@ fn relative_yaw_sign_convention() {
     assert!(t.relative_yaw_deg < 0.0);
     assert!(t.nose_px.expect("nose")[0] > t.hub_px.expect("hub")[0] + 1.0);
     // Turning the nacelle clockwise (seen from above) puts a front camera on the turbine's left.
-    let yawed = Scene { nacelle_yaw_deg: 20.0, ..scene.clone() };
+    let yawed = Scene {
+        nacelle_yaw_deg: 20.0,
+        ..scene.clone()
+    };
     let (_, t) = render(cam, &yawed, &CameraPose::front(80.0));
     assert!((t.relative_yaw_deg - 20.0).abs() < 1e-9);
     assert!(t.nose_px.expect("nose")[0] < t.hub_px.expect("hub")[0]);
@@ -127,7 +164,10 @@ fn nose_is_spinner_length_in_front_of_hub() {
     let top = t.tower_top_px.expect("tower top");
     let depth = pose.distance_m + HUB_OVERHANG_M;
     let expected_v = cam.cy + cam.fy * (hubtrack_render::scene::NACELLE_HEIGHT_M / 2.0) / depth;
-    assert!((top[0] - cam.cx).abs() < 1e-6 && (top[1] - expected_v).abs() < 1e-6, "{top:?}");
+    assert!(
+        (top[0] - cam.cx).abs() < 1e-6 && (top[1] - expected_v).abs() < 1e-6,
+        "{top:?}"
+    );
     // Pure side view from the viewer's right: the nose sticks out to the left of the hub by
     // exactly f · SPINNER_NOSE_LENGTH_M / distance.
     let side = CameraPose::looking_at_hub(0.0, 50.0, 0.0);
@@ -135,7 +175,10 @@ fn nose_is_spinner_length_in_front_of_hub() {
     let (hub, nose) = (t.hub_px.expect("hub"), t.nose_px.expect("nose"));
     assert!((hub[0] - cam.cx).abs() < 1e-6);
     let expected = cam.cx - cam.fx * SPINNER_NOSE_LENGTH_M / 50.0;
-    assert!((nose[0] - expected).abs() < 1e-6 && (nose[1] - cam.cy).abs() < 1e-6, "{nose:?} vs {expected}");
+    assert!(
+        (nose[0] - expected).abs() < 1e-6 && (nose[1] - cam.cy).abs() < 1e-6,
+        "{nose:?} vs {expected}"
+    );
     assert!((t.relative_yaw_deg - 90.0).abs() < 1e-9);
 }
 
@@ -152,11 +195,20 @@ fn tower_width_matches_pinhole_prediction() {
         // The camera looks along -X at hub height: the tower axis is at depth distance + overhang.
         let depth = distance + HUB_OVERHANG_M;
         let predicted = cam.fx * scene.tower_diameter_at(z) / depth;
-        assert!((w - predicted).abs() <= 1.0, "d={distance}: measured {w} px, predicted {predicted:.2} px");
+        assert!(
+            (w - predicted).abs() <= 1.0,
+            "d={distance}: measured {w} px, predicted {predicted:.2} px"
+        );
         // The row is the one through the reference point just below the nacelle.
         let expected_row = cam.cy + cam.fy * (scene.hub_height_m - z) / depth;
-        assert!((row - expected_row.round()).abs() < 0.5, "row {row} vs {expected_row}");
-        assert!((z - (scene.tower_top_height_m() - hubtrack_render::TOWER_WIDTH_REF_BELOW_TOP_M)).abs() < 1e-9);
+        assert!(
+            (row - expected_row.round()).abs() < 0.5,
+            "row {row} vs {expected_row}"
+        );
+        assert!(
+            (z - (scene.tower_top_height_m() - hubtrack_render::TOWER_WIDTH_REF_BELOW_TOP_M)).abs()
+                < 1e-9
+        );
     }
 }
 
@@ -166,12 +218,19 @@ fn tower_width_falls_back_to_lowest_visible_row() {
     // above the image, so the width is measured on the lowest row that shows the tower.
     let cam = Camera::pinhole(800, 600, 50.0);
     let scene = quiet(Scene::default_clear());
-    let pose = CameraPose { height_m: -45.0, pitch_deg: -30.0, ..CameraPose::front(60.0) };
+    let pose = CameraPose {
+        height_m: -45.0,
+        pitch_deg: -30.0,
+        ..CameraPose::front(60.0)
+    };
     let (_, t) = render(cam, &scene, &pose);
     let row = t.tower_width_row.expect("row");
     let z = t.tower_width_height_m.expect("height");
     // Tower top above the image: the width is taken low on the tower, at the base margin.
-    assert!((z - hubtrack_render::TOWER_WIDTH_MIN_HEIGHT_M).abs() < 0.05, "z {z}");
+    assert!(
+        (z - hubtrack_render::TOWER_WIDTH_MIN_HEIGHT_M).abs() < 0.05,
+        "z {z}"
+    );
     assert!(row > 100.0, "row {row}");
     // Looking down 30°, a vertical tower is not slanted at the image centre column: the width
     // is close to f·D/Z with Z the depth of the axis point.
@@ -182,7 +241,10 @@ fn tower_width_falls_back_to_lowest_visible_row() {
     let p = pose.pitch_deg.to_radians();
     let depth = dx * p.cos() + dz * (-p).sin();
     let predicted = cam.fx * scene.tower_diameter_at(z) / depth;
-    assert!((w - predicted).abs() <= 1.5, "measured {w}, predicted {predicted:.2}");
+    assert!(
+        (w - predicted).abs() <= 1.5,
+        "measured {w}, predicted {predicted:.2}"
+    );
 }
 
 #[test]
@@ -194,17 +256,39 @@ fn hub_pixel_is_turbine_not_sky() {
     let hub = t.hub_px.expect("hub");
     let [b, g, r] = px(&cam, &buf, hub[0].round() as usize, hub[1].round() as usize);
     // Turbine paint is a neutral light grey; clear sky at this elevation is clearly blue.
-    assert!((r as i32 - b as i32).abs() < 15 && (g as i32 - b as i32).abs() < 15, "bgr {b} {g} {r}");
-    let (sky_buf, _) = render(cam, &Scene { turbine_present: false, ..scene }, &pose);
-    let [sb, _, sr] = px(&cam, &sky_buf, hub[0].round() as usize, hub[1].round() as usize);
-    assert!(sb as i32 - sr as i32 > 25, "sky should be blue: b {sb} r {sr}");
+    assert!(
+        (r as i32 - b as i32).abs() < 15 && (g as i32 - b as i32).abs() < 15,
+        "bgr {b} {g} {r}"
+    );
+    let (sky_buf, _) = render(
+        cam,
+        &Scene {
+            turbine_present: false,
+            ..scene
+        },
+        &pose,
+    );
+    let [sb, _, sr] = px(
+        &cam,
+        &sky_buf,
+        hub[0].round() as usize,
+        hub[1].round() as usize,
+    );
+    assert!(
+        sb as i32 - sr as i32 > 25,
+        "sky should be blue: b {sb} r {sr}"
+    );
 }
 
 #[test]
 fn scene_without_turbine_reports_nothing_in_view() {
     let cam = Camera::usb_narrow();
     for distractor in [Distractor::None, Distractor::Mast, Distractor::PowerLines] {
-        let scene = Scene { turbine_present: false, distractor, ..Scene::default_clear() };
+        let scene = Scene {
+            turbine_present: false,
+            distractor,
+            ..Scene::default_clear()
+        };
         let (_, t) = render(cam, &scene, &CameraPose::front(100.0));
         assert!(!t.turbine_in_view);
         assert!(t.hub_px.is_none() && t.tower_width_px.is_none());
@@ -214,7 +298,10 @@ fn scene_without_turbine_reports_nothing_in_view() {
 #[test]
 fn hub_outside_image_is_not_in_view() {
     let cam = Camera::usb_narrow();
-    let pose = CameraPose { yaw_deg: 90.0, ..CameraPose::front(100.0) };
+    let pose = CameraPose {
+        yaw_deg: 90.0,
+        ..CameraPose::front(100.0)
+    };
     let (_, t) = render(cam, &Scene::default_clear(), &pose);
     assert!(!t.turbine_in_view);
 }
@@ -222,20 +309,41 @@ fn hub_outside_image_is_not_in_view() {
 #[test]
 fn deterministic_for_same_seed() {
     let cam = Camera::gopro_hero3();
-    let scene = Scene { sky: Sky::Clouds, second_turbine: true, propellers_in_view: true, jpeg_quality: Some(80), ..Scene::random(42) };
+    let scene = Scene {
+        sky: Sky::Clouds,
+        second_turbine: true,
+        propellers_in_view: true,
+        jpeg_quality: Some(80),
+        ..Scene::random(42)
+    };
     let pose = CameraPose::looking_at_hub(70.0, 15.0, -8.0);
     let (a, ta) = render(cam, &scene, &pose);
     // A second render with a reused renderer (scratch state from another scene in between).
     let mut r = Renderer::new(cam);
     let mut b = vec![0u8; cam.frame_bytes()];
-    r.render(&Scene::random(7), &CameraPose::front(40.0), &mut b).expect("render");
+    r.render(&Scene::random(7), &CameraPose::front(40.0), &mut b)
+        .expect("render");
     let tb = r.render(&scene, &pose, &mut b).expect("render");
     assert!(a == b, "same seed must give identical bytes");
     assert_eq!(ta, tb);
     // A different seed changes the picture; a different frame changes only the noise.
-    let (c, _) = render(cam, &Scene { seed: 43, ..scene.clone() }, &pose);
+    let (c, _) = render(
+        cam,
+        &Scene {
+            seed: 43,
+            ..scene.clone()
+        },
+        &pose,
+    );
     assert!(a != c);
-    let (d, _) = render(cam, &Scene { frame: 1, ..scene.clone() }, &pose);
+    let (d, _) = render(
+        cam,
+        &Scene {
+            frame: 1,
+            ..scene.clone()
+        },
+        &pose,
+    );
     assert!(a != d);
 }
 
@@ -244,10 +352,25 @@ fn wrong_buffer_size_is_an_error() {
     let cam = Camera::usb_narrow();
     let mut r = Renderer::new(cam);
     let mut small = vec![0u8; cam.frame_bytes() - 1];
-    let err = r.render(&Scene::default_clear(), &CameraPose::front(50.0), &mut small).unwrap_err();
-    assert_eq!(err, RenderError::BufferSize { expected: 640 * 480 * 3, got: 640 * 480 * 3 - 1 });
+    let err = r
+        .render(
+            &Scene::default_clear(),
+            &CameraPose::front(50.0),
+            &mut small,
+        )
+        .unwrap_err();
+    assert_eq!(
+        err,
+        RenderError::BufferSize {
+            expected: 640 * 480 * 3,
+            got: 640 * 480 * 3 - 1
+        }
+    );
     let mut big = vec![0u8; cam.frame_bytes() + 3];
-    assert!(matches!(r.render(&Scene::default_clear(), &CameraPose::front(50.0), &mut big), Err(RenderError::BufferSize { .. })));
+    assert!(matches!(
+        r.render(&Scene::default_clear(), &CameraPose::front(50.0), &mut big),
+        Err(RenderError::BufferSize { .. })
+    ));
 }
 
 #[test]
@@ -255,12 +378,30 @@ fn invalid_inputs_are_errors() {
     let cam = Camera::usb_narrow();
     let mut r = Renderer::new(cam);
     let mut buf = vec![0u8; cam.frame_bytes()];
-    let under = CameraPose { height_m: -80.0, ..CameraPose::front(50.0) };
-    assert!(matches!(r.render(&Scene::default_clear(), &under, &mut buf), Err(RenderError::CameraBelowGround { .. })));
-    let nan = CameraPose { yaw_deg: f64::NAN, ..CameraPose::front(50.0) };
-    assert!(matches!(r.render(&Scene::default_clear(), &nan, &mut buf), Err(RenderError::InvalidInput(_))));
-    let bad = Scene { hub_height_m: -3.0, ..Scene::default_clear() };
-    assert!(matches!(r.render(&bad, &CameraPose::front(50.0), &mut buf), Err(RenderError::InvalidInput(_))));
+    let under = CameraPose {
+        height_m: -80.0,
+        ..CameraPose::front(50.0)
+    };
+    assert!(matches!(
+        r.render(&Scene::default_clear(), &under, &mut buf),
+        Err(RenderError::CameraBelowGround { .. })
+    ));
+    let nan = CameraPose {
+        yaw_deg: f64::NAN,
+        ..CameraPose::front(50.0)
+    };
+    assert!(matches!(
+        r.render(&Scene::default_clear(), &nan, &mut buf),
+        Err(RenderError::InvalidInput(_))
+    ));
+    let bad = Scene {
+        hub_height_m: -3.0,
+        ..Scene::default_clear()
+    };
+    assert!(matches!(
+        r.render(&bad, &CameraPose::front(50.0), &mut buf),
+        Err(RenderError::InvalidInput(_))
+    ));
 }
 
 /// Per row, the centre of the main turbine's pixels (those that differ from the same frame
@@ -273,7 +414,10 @@ fn tower_centres(cam: &Camera, with: &[u8], without: &[u8]) -> Vec<(f64, f64)> {
         let cols: Vec<usize> = (0..w)
             .filter(|&x| {
                 let i = (y * w + x) * 3;
-                (0..3).map(|c| (with[i + c] as i32 - without[i + c] as i32).abs()).sum::<i32>() > 30
+                (0..3)
+                    .map(|c| (with[i + c] as i32 - without[i + c] as i32).abs())
+                    .sum::<i32>()
+                    > 30
             })
             .collect();
         if let (Some(&first), Some(&last)) = (cols.first(), cols.last()) {
@@ -314,16 +458,30 @@ fn max_bend(pts: &[(f64, f64)]) -> f64 {
 fn straight_tower_bends_near_gopro_edge() {
     // Camera turned right and pitched down so the tower runs down near the left image edge.
     let scene = quiet(Scene::default_clear());
-    let pose = CameraPose { yaw_deg: 48.0, pitch_deg: -22.0, ..CameraPose::front(70.0) };
-    let no_turbine = Scene { turbine_present: false, ..scene.clone() };
+    let pose = CameraPose {
+        yaw_deg: 48.0,
+        pitch_deg: -22.0,
+        ..CameraPose::front(70.0)
+    };
+    let no_turbine = Scene {
+        turbine_present: false,
+        ..scene.clone()
+    };
     let gopro = Camera::gopro_hero3();
     let (with, _) = render(gopro, &scene, &pose);
     let (without, _) = render(gopro, &no_turbine, &pose);
     let pts = tower_centres(&gopro, &with, &without);
     assert!(pts.len() > 150, "tower visible on {} rows", pts.len());
-    assert!(pts.iter().all(|p| p.1 < 600.0), "tower should be near the left edge: {:?}", pts[0]);
+    assert!(
+        pts.iter().all(|p| p.1 < 600.0),
+        "tower should be near the left edge: {:?}",
+        pts[0]
+    );
     let bend = max_bend(&pts);
-    assert!(bend > 4.0, "tower should bend through the barrel lens, max deviation {bend:.2} px");
+    assert!(
+        bend > 4.0,
+        "tower should bend through the barrel lens, max deviation {bend:.2} px"
+    );
 
     // The same view through a pinhole lens of the same horizontal field of view stays straight.
     let pin = Camera::pinhole(1920, 1080, 118.0);
@@ -333,7 +491,10 @@ fn straight_tower_bends_near_gopro_edge() {
     assert!(pts.len() > 150, "tower visible on {} rows", pts.len());
     let bend = max_bend(&pts);
     eprintln!("{:?}", pts.iter().step_by(15).collect::<Vec<_>>());
-    assert!(bend < 1.0, "pinhole tower should be straight, max deviation {bend:.2} px");
+    assert!(
+        bend < 1.0,
+        "pinhole tower should be straight, max deviation {bend:.2} px"
+    );
 }
 
 #[test]
@@ -344,11 +505,31 @@ fn random_scenes_and_extreme_poses_render() {
     let poses = [
         CameraPose::front(8.0),
         CameraPose::looking_at_hub(150.0, 80.0, 40.0),
-        CameraPose { pitch_deg: -89.0, ..CameraPose::front(20.0) },
-        CameraPose { pitch_deg: 89.0, roll_deg: 90.0, ..CameraPose::front(20.0) },
-        CameraPose { yaw_deg: 180.0, ..CameraPose::front(30.0) },
-        CameraPose { distance_m: -40.0, ..CameraPose::front(0.0) },
-        CameraPose { distance_m: 0.0, lateral_m: 0.0, height_m: 3.0, yaw_deg: 0.0, pitch_deg: -90.0, roll_deg: 0.0 },
+        CameraPose {
+            pitch_deg: -89.0,
+            ..CameraPose::front(20.0)
+        },
+        CameraPose {
+            pitch_deg: 89.0,
+            roll_deg: 90.0,
+            ..CameraPose::front(20.0)
+        },
+        CameraPose {
+            yaw_deg: 180.0,
+            ..CameraPose::front(30.0)
+        },
+        CameraPose {
+            distance_m: -40.0,
+            ..CameraPose::front(0.0)
+        },
+        CameraPose {
+            distance_m: 0.0,
+            lateral_m: 0.0,
+            height_m: 3.0,
+            yaw_deg: 0.0,
+            pitch_deg: -90.0,
+            roll_deg: 0.0,
+        },
         CameraPose::looking_at_hub(5.0, 3.0, -25.0),
     ];
     for seed in 0..24u64 {
@@ -367,12 +548,29 @@ fn every_sky_and_ground_renders_plausibly() {
     let cam = Camera::pinhole(320, 240, 90.0);
     for sky in [Sky::Clear, Sky::Overcast, Sky::Clouds] {
         for ground in [Ground::Grass, Ground::Sea, Ground::Hills] {
-            let scene = quiet(Scene { sky, ground, turbine_present: false, ..Scene::default_clear() });
+            let scene = quiet(Scene {
+                sky,
+                ground,
+                turbine_present: false,
+                ..Scene::default_clear()
+            });
             let (buf, _) = render(cam, &scene, &CameraPose::front(100.0));
             // Top row is sky (bright-ish, bluer or grey), bottom row is ground (darker).
-            let top: u32 = (0..320).map(|x| px(&cam, &buf, x, 2).iter().map(|&c| c as u32).sum::<u32>()).sum();
-            let bottom: u32 = (0..320).map(|x| px(&cam, &buf, x, 237).iter().map(|&c| c as u32).sum::<u32>()).sum();
-            assert!(top > bottom, "{sky:?}/{ground:?}: sky {top} vs ground {bottom}");
+            let top: u32 = (0..320)
+                .map(|x| px(&cam, &buf, x, 2).iter().map(|&c| c as u32).sum::<u32>())
+                .sum();
+            let bottom: u32 = (0..320)
+                .map(|x| {
+                    px(&cam, &buf, x, 237)
+                        .iter()
+                        .map(|&c| c as u32)
+                        .sum::<u32>()
+                })
+                .sum();
+            assert!(
+                top > bottom,
+                "{sky:?}/{ground:?}: sky {top} vs ground {bottom}"
+            );
         }
     }
 }
@@ -380,14 +578,30 @@ fn every_sky_and_ground_renders_plausibly() {
 #[test]
 fn sensor_noise_has_requested_strength() {
     let cam = Camera::pinhole(320, 240, 60.0);
-    let clean = quiet(Scene { turbine_present: false, ..Scene::default_clear() });
-    let noisy = Scene { noise_sigma: 4.0, ..clean.clone() };
+    let clean = quiet(Scene {
+        turbine_present: false,
+        ..Scene::default_clear()
+    });
+    let noisy = Scene {
+        noise_sigma: 4.0,
+        ..clean.clone()
+    };
     let pose = CameraPose::front(100.0);
     let (a, _) = render(cam, &clean, &pose);
     let (b, _) = render(cam, &noisy, &pose);
     let n = a.len() as f64;
-    let mean: f64 = a.iter().zip(&b).map(|(&x, &y)| y as f64 - x as f64).sum::<f64>() / n;
-    let var: f64 = a.iter().zip(&b).map(|(&x, &y)| (y as f64 - x as f64 - mean).powi(2)).sum::<f64>() / n;
+    let mean: f64 = a
+        .iter()
+        .zip(&b)
+        .map(|(&x, &y)| y as f64 - x as f64)
+        .sum::<f64>()
+        / n;
+    let var: f64 = a
+        .iter()
+        .zip(&b)
+        .map(|(&x, &y)| (y as f64 - x as f64 - mean).powi(2))
+        .sum::<f64>()
+        / n;
     assert!(mean.abs() < 0.3, "mean {mean}");
     assert!((var.sqrt() - 4.0).abs() < 0.5, "sigma {}", var.sqrt());
 }
@@ -398,9 +612,23 @@ fn blur_and_jpeg_change_the_image_mildly() {
     let base = quiet(Scene::default_clear());
     let pose = CameraPose::front(60.0);
     let (a, _) = render(cam, &base, &pose);
-    for scene in [Scene { blur: true, ..base.clone() }, Scene { jpeg_quality: Some(50), ..base.clone() }] {
+    for scene in [
+        Scene {
+            blur: true,
+            ..base.clone()
+        },
+        Scene {
+            jpeg_quality: Some(50),
+            ..base.clone()
+        },
+    ] {
         let (b, _) = render(cam, &scene, &pose);
-        let mad: f64 = a.iter().zip(&b).map(|(&x, &y)| (x as f64 - y as f64).abs()).sum::<f64>() / a.len() as f64;
+        let mad: f64 = a
+            .iter()
+            .zip(&b)
+            .map(|(&x, &y)| (x as f64 - y as f64).abs())
+            .sum::<f64>()
+            / a.len() as f64;
         assert!(mad > 0.05 && mad < 8.0, "mean abs diff {mad}");
     }
 }
@@ -408,11 +636,24 @@ fn blur_and_jpeg_change_the_image_mildly() {
 #[test]
 fn tiny_and_odd_sized_cameras_do_not_panic() {
     for (w, h) in [(1u32, 1u32), (2, 3), (17, 9), (33, 1), (1, 40)] {
-        for cam in [Camera::pinhole(w, h, 70.0), Camera { k1: -0.2, k2: 0.02, ..Camera::pinhole(w, h, 100.0) }] {
+        for cam in [
+            Camera::pinhole(w, h, 70.0),
+            Camera {
+                k1: -0.2,
+                k2: 0.02,
+                ..Camera::pinhole(w, h, 100.0)
+            },
+        ] {
             let mut r = Renderer::new(cam);
             let mut buf = vec![0u8; cam.frame_bytes()];
-            let scene = Scene { blur: true, jpeg_quality: Some(40), propellers_in_view: true, ..Scene::random(w as u64 * 7 + h as u64) };
-            r.render(&scene, &CameraPose::front(60.0), &mut buf).expect("render");
+            let scene = Scene {
+                blur: true,
+                jpeg_quality: Some(40),
+                propellers_in_view: true,
+                ..Scene::random(w as u64 * 7 + h as u64)
+            };
+            r.render(&scene, &CameraPose::front(60.0), &mut buf)
+                .expect("render");
         }
     }
 }
@@ -420,7 +661,11 @@ fn tiny_and_odd_sized_cameras_do_not_panic() {
 #[test]
 fn strong_custom_distortion_renders() {
     // k1 alone folds back beyond r = 1/sqrt(3 |k1|): projection must refuse those points.
-    let cam = Camera { k1: -0.3, k2: 0.0, ..Camera::pinhole(640, 480, 120.0) };
+    let cam = Camera {
+        k1: -0.3,
+        k2: 0.0,
+        ..Camera::pinhole(640, 480, 120.0)
+    };
     let r_max = cam.max_undistorted_radius();
     assert!((r_max - 1.0 / (0.9f64).sqrt()).abs() < 1e-12);
     assert!(cam.project([r_max * 1.01, 0.0, 1.0]).is_none());
@@ -447,32 +692,61 @@ fn shrubland_ground_has_more_fine_texture_than_fields() {
     // Looking down from above the hub: the lower half of the frame is ground near the tower.
     let cam = Camera::pinhole(960, 540, 75.0);
     let pose = CameraPose::looking_at_hub(60.0, 0.0, 40.0);
-    let fields = quiet(Scene { seed: 5, ..Scene::default_clear() });
-    let shrubs = Scene { shrubland: true, ..fields.clone() };
+    let fields = quiet(Scene {
+        seed: 5,
+        ..Scene::default_clear()
+    });
+    let shrubs = Scene {
+        shrubland: true,
+        ..fields.clone()
+    };
     let (a, ta) = render(cam, &fields, &pose);
     let (b, tb) = render(cam, &shrubs, &pose);
     assert_eq!(ta, tb, "the ground does not change the truth");
-    let (fa, fb) = (fine_texture(&cam, &a, 400..540), fine_texture(&cam, &b, 400..540));
-    assert!(fb > 2.0 * fa, "shrubland {fb:.2} against fields {fa:.2} grey levels per pixel step");
+    let (fa, fb) = (
+        fine_texture(&cam, &a, 400..540),
+        fine_texture(&cam, &b, 400..540),
+    );
+    assert!(
+        fb > 2.0 * fa,
+        "shrubland {fb:.2} against fields {fa:.2} grey levels per pixel step"
+    );
 }
 
 #[test]
 fn wind_farm_neighbours_stand_behind_the_main_turbine() {
     let cam = Camera::gopro_hero3();
     let pose = CameraPose::looking_at_hub(40.0, 10.0, 15.0);
-    let alone = quiet(Scene { seed: 9, ..Scene::default_clear() });
-    let farm = Scene { neighbour_turbines: 5, ..alone.clone() };
+    let alone = quiet(Scene {
+        seed: 9,
+        ..Scene::default_clear()
+    });
+    let farm = Scene {
+        neighbour_turbines: 5,
+        ..alone.clone()
+    };
     let (a, ta) = render(cam, &alone, &pose);
     let (b, tb) = render(cam, &farm, &pose);
     assert_eq!(ta, tb, "the truth is the main turbine's");
-    let changed = a.chunks_exact(3).zip(b.chunks_exact(3)).filter(|(p, q)| p != q).count();
-    assert!(changed > 500, "the neighbours are drawn ({changed} pixels changed)");
+    let changed = a
+        .chunks_exact(3)
+        .zip(b.chunks_exact(3))
+        .filter(|(p, q)| p != q)
+        .count();
+    assert!(
+        changed > 500,
+        "the neighbours are drawn ({changed} pixels changed)"
+    );
     // Nothing in front of the main turbine: its hub pixel and the pixels around it stay.
     let [hx, hy] = ta.hub_px.expect("hub in view");
     for dy in -3i64..=3 {
         for dx in -3i64..=3 {
             let (x, y) = ((hx as i64 + dx) as usize, (hy as i64 + dy) as usize);
-            assert_eq!(px(&cam, &a, x, y), px(&cam, &b, x, y), "hub area changed at ({x}, {y})");
+            assert_eq!(
+                px(&cam, &a, x, y),
+                px(&cam, &b, x, y),
+                "hub area changed at ({x}, {y})"
+            );
         }
     }
 }
@@ -482,26 +756,48 @@ fn photo_like_cases_cover_views_from_above_far_and_oblique() {
     use hubtrack_render::dataset::{photo_case, PHOTO_DISTANCE_M, PHOTO_MAX_REL_YAW_DEG};
     let cases: Vec<_> = (0..400).map(|i| photo_case(7, i, false)).collect();
     let again = photo_case(7, 3, false);
-    assert_eq!((again.scene, again.pose.distance_m), (cases[3].scene.clone(), cases[3].pose.distance_m), "deterministic");
+    assert_eq!(
+        (again.scene, again.pose.distance_m),
+        (cases[3].scene.clone(), cases[3].pose.distance_m),
+        "deterministic"
+    );
     let (mut above, mut far, mut oblique, mut shrubs, mut farms) = (0, 0, 0, 0, 0);
     for c in &cases {
         let p = &c.pose;
         let ground_range = p.distance_m.hypot(p.lateral_m);
-        assert!((PHOTO_DISTANCE_M.0 - 1e-9..PHOTO_DISTANCE_M.1 + 1e-9).contains(&ground_range), "{ground_range}");
+        assert!(
+            (PHOTO_DISTANCE_M.0 - 1e-9..PHOTO_DISTANCE_M.1 + 1e-9).contains(&ground_range),
+            "{ground_range}"
+        );
         let rel = c.scene.nacelle_yaw_deg + p.lateral_m.atan2(p.distance_m).to_degrees();
-        assert!(rel.abs() <= PHOTO_MAX_REL_YAW_DEG + 1e-9, "relative yaw {rel}");
-        assert!(c.scene.hub_height_m + p.height_m >= 2.9, "camera above the ground");
+        assert!(
+            rel.abs() <= PHOTO_MAX_REL_YAW_DEG + 1e-9,
+            "relative yaw {rel}"
+        );
+        assert!(
+            c.scene.hub_height_m + p.height_m >= 2.9,
+            "camera above the ground"
+        );
         above += (p.height_m > 0.3 * ground_range) as usize;
         far += (ground_range > 100.0) as usize;
         oblique += (rel.abs() > 40.0) as usize;
         shrubs += c.scene.shrubland as usize;
         farms += (c.scene.neighbour_turbines > 0) as usize;
     }
-    for (what, n) in [("from well above", above), ("beyond 100 m", far), ("beyond 40° yaw", oblique), ("shrubland", shrubs), ("wind farm", farms)] {
+    for (what, n) in [
+        ("from well above", above),
+        ("beyond 100 m", far),
+        ("beyond 40° yaw", oblique),
+        ("shrubland", shrubs),
+        ("wind farm", farms),
+    ] {
         assert!(n >= 40, "{what}: {n} of 400");
     }
     let negative = photo_case(7, 0, true).scene;
-    assert!(negative.neighbour_turbines == 0 && !negative.turbine_present, "negatives hold no turbine");
+    assert!(
+        negative.neighbour_turbines == 0 && !negative.turbine_present,
+        "negatives hold no turbine"
+    );
 }
 
 #[test]
@@ -511,7 +807,11 @@ fn close_photo_like_cases_stay_within_their_range_in_a_stream_of_their_own() {
     for i in 0..200 {
         let c = photo_case_close(7, i, false);
         let ground_range = c.pose.distance_m.hypot(c.pose.lateral_m);
-        assert!((PHOTO_CLOSE_DISTANCE_M.0 - 1e-9..PHOTO_CLOSE_DISTANCE_M.1 + 1e-9).contains(&ground_range), "{ground_range}");
+        assert!(
+            (PHOTO_CLOSE_DISTANCE_M.0 - 1e-9..PHOTO_CLOSE_DISTANCE_M.1 + 1e-9)
+                .contains(&ground_range),
+            "{ground_range}"
+        );
         assert_eq!(c.categories, ["photo-like", "photo-like:close"]);
         from_above += (c.pose.height_m > 0.3 * ground_range) as usize;
         // Not the far views' scenes brought closer: a stream of its own.

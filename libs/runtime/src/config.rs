@@ -204,7 +204,10 @@ impl Default for RestartConfig {
 impl RestartConfig {
     /// The policy of `stage`.
     pub fn policy_of(&self, stage: &str) -> RestartPolicy {
-        self.policy.get(stage).copied().unwrap_or(self.default_policy)
+        self.policy
+            .get(stage)
+            .copied()
+            .unwrap_or(self.default_policy)
     }
 }
 
@@ -214,7 +217,12 @@ pub const DEFAULT_NICE: &[(&str, i32)] = &[("recorder", 10)];
 impl RunConfig {
     /// The niceness stage `name` runs at: `[run.nice]`, else its default.
     pub fn nice_of(&self, name: &str) -> i32 {
-        self.nice.get(name).copied().unwrap_or_else(|| DEFAULT_NICE.iter().find(|(n, _)| *n == name).map_or(0, |(_, v)| *v))
+        self.nice.get(name).copied().unwrap_or_else(|| {
+            DEFAULT_NICE
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map_or(0, |(_, v)| *v)
+        })
     }
 }
 
@@ -228,7 +236,10 @@ impl Default for RunConfig {
             status_interval_ms: 250,
             stop_with_supervisor: false,
             restart: RestartConfig::default(),
-            nice: DEFAULT_NICE.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
+            nice: DEFAULT_NICE
+                .iter()
+                .map(|(n, v)| (n.to_string(), *v))
+                .collect(),
         }
     }
 }
@@ -511,11 +522,12 @@ impl Config {
         if overrides.is_empty() {
             return Ok(self.clone());
         }
-        let mut doc: toml::Table = toml::Table::try_from(self).map_err(|e| ConfigError::Invalid {
-            origin: "override".into(),
-            key: "(all)".into(),
-            message: e.to_string(),
-        })?;
+        let mut doc: toml::Table =
+            toml::Table::try_from(self).map_err(|e| ConfigError::Invalid {
+                origin: "override".into(),
+                key: "(all)".into(),
+                message: e.to_string(),
+            })?;
         for ov in overrides {
             let (key, value) = ov.split_once('=').ok_or_else(|| ConfigError::Invalid {
                 origin: "override".into(),
@@ -565,24 +577,51 @@ impl Config {
         let rs = &r.restart;
         for stage in rs.policy.keys() {
             if !KNOWN_STAGES.contains(&stage.as_str()) {
-                return Err(out_of_range(&format!("run.restart.policy.{stage}"), stage, format!("a stage of {KNOWN_STAGES:?}")));
+                return Err(out_of_range(
+                    &format!("run.restart.policy.{stage}"),
+                    stage,
+                    format!("a stage of {KNOWN_STAGES:?}"),
+                ));
             }
         }
         for (stage, nice) in &r.nice {
             if !KNOWN_STAGES.contains(&stage.as_str()) {
-                return Err(out_of_range(&format!("run.nice.{stage}"), stage, format!("a stage of {KNOWN_STAGES:?}")));
+                return Err(out_of_range(
+                    &format!("run.nice.{stage}"),
+                    stage,
+                    format!("a stage of {KNOWN_STAGES:?}"),
+                ));
             }
             range(&format!("run.nice.{stage}"), *nice, -20, 19)?;
         }
-        range("run.restart.backoff_initial_ms", rs.backoff_initial_ms, 0, 60_000)?;
-        range("run.restart.backoff_max_ms", rs.backoff_max_ms, rs.backoff_initial_ms, 600_000)?;
+        range(
+            "run.restart.backoff_initial_ms",
+            rs.backoff_initial_ms,
+            0,
+            60_000,
+        )?;
+        range(
+            "run.restart.backoff_max_ms",
+            rs.backoff_max_ms,
+            rs.backoff_initial_ms,
+            600_000,
+        )?;
         range("run.restart.max_restarts", rs.max_restarts, 0, 1000)?;
         range("run.restart.window_s", rs.window_s, 1.0, 86_400.0)?;
-        range("run.restart.liveness_timeout_ms", rs.liveness_timeout_ms, 4 * r.status_interval_ms, 600_000)?;
+        range(
+            "run.restart.liveness_timeout_ms",
+            rs.liveness_timeout_ms,
+            4 * r.status_interval_ms,
+            600_000,
+        )?;
         let c = &self.capture;
         range("capture.fps", c.fps, 0.0, 1000.0)?;
         if c.source != SourceKind::Video && c.fps <= 0.0 {
-            return Err(out_of_range("capture.fps", c.fps, "(0, 1000] for this source"));
+            return Err(out_of_range(
+                "capture.fps",
+                c.fps,
+                "(0, 1000] for this source",
+            ));
         }
         range("capture.v4l.width", c.v4l.width, 16, 8192)?;
         range("capture.v4l.height", c.v4l.height, 16, 8192)?;
@@ -590,45 +629,141 @@ impl Config {
         range("capture.v4l.exposure_us", c.v4l.exposure_us, 1, 1_000_000)?;
         range("capture.v4l.buffers", c.v4l.buffers, 2, 32)?;
         let s = &c.synthetic;
-        range("capture.synthetic.start_distance_m", s.start_distance_m, 3.0, 500.0)?;
-        range("capture.synthetic.end_distance_m", s.end_distance_m, 3.0, 500.0)?;
-        range("capture.synthetic.path_duration_s", s.path_duration_s, 0.1, 3600.0)?;
-        range("capture.synthetic.lateral_sway_m", s.lateral_sway_m, 0.0, 50.0)?;
-        range("capture.synthetic.yaw_swing_deg", s.yaw_swing_deg, 0.0, 80.0)?;
+        range(
+            "capture.synthetic.start_distance_m",
+            s.start_distance_m,
+            3.0,
+            500.0,
+        )?;
+        range(
+            "capture.synthetic.end_distance_m",
+            s.end_distance_m,
+            3.0,
+            500.0,
+        )?;
+        range(
+            "capture.synthetic.path_duration_s",
+            s.path_duration_s,
+            0.1,
+            3600.0,
+        )?;
+        range(
+            "capture.synthetic.lateral_sway_m",
+            s.lateral_sway_m,
+            0.0,
+            50.0,
+        )?;
+        range(
+            "capture.synthetic.yaw_swing_deg",
+            s.yaw_swing_deg,
+            0.0,
+            80.0,
+        )?;
         range("capture.synthetic.height_m", s.height_m, -60.0, 60.0)?;
-        range("capture.synthetic.roll_jitter_deg", s.roll_jitter_deg, 0.0, 30.0)?;
+        range(
+            "capture.synthetic.roll_jitter_deg",
+            s.roll_jitter_deg,
+            0.0,
+            30.0,
+        )?;
         range("capture.synthetic.rotor_rpm", s.rotor_rpm, 0.0, 30.0)?;
         range("capture.synthetic.noise_sigma", s.noise_sigma, 0.0, 50.0)?;
         let rec = &self.recorder;
         range("recorder.chunk_size_kib", rec.chunk_size_kib, 16, 1 << 20)?;
         range("recorder.queue_frames", rec.queue_frames, 1, 1024)?;
-        range("recorder.flush_interval_ms", rec.flush_interval_ms, 10, 60_000)?;
+        range(
+            "recorder.flush_interval_ms",
+            rec.flush_interval_ms,
+            10,
+            60_000,
+        )?;
         range("recorder.min_free_mib", rec.min_free_mib, 0, 1 << 24)?;
-        self.detect.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
-        self.track.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
+        self.detect
+            .validate()
+            .map_err(|e| ConfigError::OutOfRange {
+                key: e.key,
+                value: e.value,
+                allowed: e.allowed,
+            })?;
+        self.track.validate().map_err(|e| ConfigError::OutOfRange {
+            key: e.key,
+            value: e.value,
+            allowed: e.allowed,
+        })?;
         let ctl = &self.control;
-        ctl.link.parse::<hubtrack_mavlink::Endpoint>().map_err(|e| out_of_range("control.link", format!("{:?}", ctl.link), e))?;
+        ctl.link
+            .parse::<hubtrack_mavlink::Endpoint>()
+            .map_err(|e| out_of_range("control.link", format!("{:?}", ctl.link), e))?;
         range("control.system_id", ctl.system_id, 1, 255)?;
         range("control.component_id", ctl.component_id, 1, 255)?;
         range("control.setpoint_rate_hz", ctl.setpoint_rate_hz, 10.0, 50.0)?;
         range("control.heartbeat_hz", ctl.heartbeat_hz, 0.2, 10.0)?;
         range("control.link_timeout_ms", ctl.link_timeout_ms, 500, 30_000)?;
-        range("control.vehicle_timeout_ms", ctl.vehicle_timeout_ms, 50, 5000)?;
+        range(
+            "control.vehicle_timeout_ms",
+            ctl.vehicle_timeout_ms,
+            50,
+            5000,
+        )?;
         range("control.input_timeout_ms", ctl.input_timeout_ms, 50, 5000)?;
-        ctl.approach.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
-        self.sim.link.parse::<hubtrack_mavlink::Endpoint>().map_err(|e| out_of_range("sim.link", format!("{:?}", self.sim.link), e))?;
-        self.sim.validate().map_err(|e| ConfigError::OutOfRange { key: e.key, value: e.value, allowed: e.allowed })?;
-        if self.run.stages.iter().any(|s| s == "sim") && self.run.stages.iter().any(|s| s == "capture") {
-            return Err(out_of_range("run.stages", format!("{:?}", self.run.stages), "either \"capture\" or \"sim\" (both publish frames)"));
+        ctl.approach
+            .validate()
+            .map_err(|e| ConfigError::OutOfRange {
+                key: e.key,
+                value: e.value,
+                allowed: e.allowed,
+            })?;
+        self.sim
+            .link
+            .parse::<hubtrack_mavlink::Endpoint>()
+            .map_err(|e| out_of_range("sim.link", format!("{:?}", self.sim.link), e))?;
+        self.sim.validate().map_err(|e| ConfigError::OutOfRange {
+            key: e.key,
+            value: e.value,
+            allowed: e.allowed,
+        })?;
+        if self.run.stages.iter().any(|s| s == "sim")
+            && self.run.stages.iter().any(|s| s == "capture")
+        {
+            return Err(out_of_range(
+                "run.stages",
+                format!("{:?}", self.run.stages),
+                "either \"capture\" or \"sim\" (both publish frames)",
+            ));
         }
         // Detect and track each estimate distance and yaw: their lens and turbine must agree.
         let (dc, tc) = (&self.detect.camera, &self.track);
         for (dk, dv, tk, tv) in [
-            ("detect.camera.hfov_deg", dc.hfov_deg, "track.camera.hfov_deg", tc.camera.hfov_deg),
-            ("detect.camera.focal_length_per_width", dc.focal_length_per_width, "track.camera.focal_length_per_width", tc.camera.focal_length_per_width),
-            ("detect.camera.tower_top_diameter_m", dc.tower_top_diameter_m, "track.distance.tower_diameter_m", tc.distance.tower_diameter_m),
-            ("detect.camera.hub_tower_gap_m", dc.hub_tower_gap_m, "track.yaw.hub_tower_offset_m", tc.yaw.hub_tower_offset_m),
-            ("detect.camera.spinner_diameter_m", dc.spinner_diameter_m, "track.distance.spinner_diameter_m", tc.distance.spinner_diameter_m),
+            (
+                "detect.camera.hfov_deg",
+                dc.hfov_deg,
+                "track.camera.hfov_deg",
+                tc.camera.hfov_deg,
+            ),
+            (
+                "detect.camera.focal_length_per_width",
+                dc.focal_length_per_width,
+                "track.camera.focal_length_per_width",
+                tc.camera.focal_length_per_width,
+            ),
+            (
+                "detect.camera.tower_top_diameter_m",
+                dc.tower_top_diameter_m,
+                "track.distance.tower_diameter_m",
+                tc.distance.tower_diameter_m,
+            ),
+            (
+                "detect.camera.hub_tower_gap_m",
+                dc.hub_tower_gap_m,
+                "track.yaw.hub_tower_offset_m",
+                tc.yaw.hub_tower_offset_m,
+            ),
+            (
+                "detect.camera.spinner_diameter_m",
+                dc.spinner_diameter_m,
+                "track.distance.spinner_diameter_m",
+                tc.distance.spinner_diameter_m,
+            ),
         ] {
             if dv != tv {
                 return Err(ConfigError::OutOfRange {
@@ -651,7 +786,12 @@ fn out_of_range(key: &str, value: impl Display, allowed: impl Display) -> Config
 }
 
 /// Checks `lo <= value <= hi` (NaN fails).
-fn range<T: PartialOrd + Display + Copy>(key: &str, value: T, lo: T, hi: T) -> Result<(), ConfigError> {
+fn range<T: PartialOrd + Display + Copy>(
+    key: &str,
+    value: T,
+    lo: T,
+    hi: T,
+) -> Result<(), ConfigError> {
     if value >= lo && value <= hi {
         Ok(())
     } else {
@@ -696,19 +836,39 @@ mod tests {
     fn out_of_range_names_key_and_range() {
         let err = Config::parse("[capture]\nfps = 5000\n", "t.toml").unwrap_err();
         let msg = err.to_string();
-        assert!(msg.contains("capture.fps") && msg.contains("[0, 1000]"), "{msg}");
+        assert!(
+            msg.contains("capture.fps") && msg.contains("[0, 1000]"),
+            "{msg}"
+        );
     }
 
     #[test]
     fn stage_niceness_defaults_overrides_and_range() {
         let d = Config::default();
-        assert_eq!((d.run.nice_of("recorder"), d.run.nice_of("detect")), (10, 0));
+        assert_eq!(
+            (d.run.nice_of("recorder"), d.run.nice_of("detect")),
+            (10, 0)
+        );
         // Naming one stage keeps the other stages' defaults.
         let c = Config::parse("[run.nice]\ncapture = 5\n", "t.toml").unwrap();
-        assert_eq!((c.run.nice_of("capture"), c.run.nice_of("recorder"), c.run.nice_of("track")), (5, 10, 0));
-        let err = Config::parse("[run.nice]\ndetect = 25\n", "t.toml").unwrap_err().to_string();
-        assert!(err.contains("run.nice.detect") && err.contains("[-20, 19]"), "{err}");
-        let err = Config::parse("[run.nice]\ncamera = 1\n", "t.toml").unwrap_err().to_string();
+        assert_eq!(
+            (
+                c.run.nice_of("capture"),
+                c.run.nice_of("recorder"),
+                c.run.nice_of("track")
+            ),
+            (5, 10, 0)
+        );
+        let err = Config::parse("[run.nice]\ndetect = 25\n", "t.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("run.nice.detect") && err.contains("[-20, 19]"),
+            "{err}"
+        );
+        let err = Config::parse("[run.nice]\ncamera = 1\n", "t.toml")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("run.nice.camera"), "{err}");
     }
 
@@ -720,8 +880,14 @@ mod tests {
 
     #[test]
     fn detect_and_track_must_share_the_lens() {
-        let err = Config::parse("[track.camera]\nfocal_length_per_width = 0.5\n", "t").unwrap_err().to_string();
-        assert!(err.contains("detect.camera.focal_length_per_width") && err.contains("track.camera.focal_length_per_width"), "{err}");
+        let err = Config::parse("[track.camera]\nfocal_length_per_width = 0.5\n", "t")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("detect.camera.focal_length_per_width")
+                && err.contains("track.camera.focal_length_per_width"),
+            "{err}"
+        );
     }
 
     #[test]
@@ -737,8 +903,12 @@ mod tests {
             .unwrap();
         assert_eq!(c.capture.fps, 60.0);
         assert_eq!(c.capture.source, SourceKind::Images);
-        assert!(Config::default().with_overrides(&["capture.nope=1".into()]).is_err());
-        assert!(Config::default().with_overrides(&["recorder.queue_frames=0".into()]).is_err());
+        assert!(Config::default()
+            .with_overrides(&["capture.nope=1".into()])
+            .is_err());
+        assert!(Config::default()
+            .with_overrides(&["recorder.queue_frames=0".into()])
+            .is_err());
     }
 }
 

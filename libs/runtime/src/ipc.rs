@@ -65,17 +65,27 @@ pub fn scoped_name(name: &str) -> String {
 }
 
 fn svc_err(spec: &ServiceSpec, e: impl Debug) -> IpcError {
-    IpcError::Service { service: spec.name.into(), reason: format!("{e:?}") }
+    IpcError::Service {
+        service: spec.name.into(),
+        reason: format!("{e:?}"),
+    }
 }
 
 fn xfer_err(op: &'static str, spec: &ServiceSpec, e: impl Debug) -> IpcError {
-    IpcError::Transfer { op, service: spec.name.into(), reason: format!("{e:?}") }
+    IpcError::Transfer {
+        op,
+        service: spec.name.into(),
+        reason: format!("{e:?}"),
+    }
 }
 
 /// Opens this process's iceoryx2 node and removes stale resources of dead nodes (a stage that was
 /// killed leaves its ports behind; design rule 6). Signal handling stays with [`crate::shutdown`].
 pub fn open_node(stage: &str) -> Result<Node<Ipc>, IpcError> {
-    let err = |e: &dyn Debug| IpcError::Node { node: stage.into(), reason: format!("{e:?}") };
+    let err = |e: &dyn Debug| IpcError::Node {
+        node: stage.into(),
+        reason: format!("{e:?}"),
+    };
     let name: NodeName = stage.try_into().map_err(|e| err(&e))?;
     let node = NodeBuilder::new()
         .name(&name)
@@ -100,7 +110,10 @@ pub fn cleanup_dead_nodes(node: &Node<Ipc>) -> u64 {
 }
 
 fn open_event(node: &Node<Ipc>, spec: &ServiceSpec) -> Result<PortFactoryEvent, IpcError> {
-    let name: ServiceName = scoped_name(spec.event_name).as_str().try_into().map_err(|e| svc_err(spec, e))?;
+    let name: ServiceName = scoped_name(spec.event_name)
+        .as_str()
+        .try_into()
+        .map_err(|e| svc_err(spec, e))?;
     node.service_builder(&name)
         .event()
         .max_notifiers(spec.qos.max_publishers + 2)
@@ -115,7 +128,10 @@ type PortFactoryEvent = iceoryx2::service::port_factory::event::PortFactory<Ipc>
 macro_rules! pubsub_builder {
     ($node:expr, $spec:expr, $payload:ty) => {{
         let spec: &ServiceSpec = $spec;
-        let name: ServiceName = scoped_name(spec.name).as_str().try_into().map_err(|e| svc_err(spec, e))?;
+        let name: ServiceName = scoped_name(spec.name)
+            .as_str()
+            .try_into()
+            .map_err(|e| svc_err(spec, e))?;
         $node
             .service_builder(&name)
             .publish_subscribe::<$payload>()
@@ -151,8 +167,14 @@ impl FramePublisher {
             .max_loaned_samples(2)
             .create()
             .map_err(|e| svc_err(spec, e))?;
-        let notifier = open_event(node, spec)?.notifier_builder().create().map_err(|e| svc_err(spec, e))?;
-        Ok(FramePublisher { publisher, notifier })
+        let notifier = open_event(node, spec)?
+            .notifier_builder()
+            .create()
+            .map_err(|e| svc_err(spec, e))?;
+        Ok(FramePublisher {
+            publisher,
+            notifier,
+        })
     }
 
     /// Loans `header.payload_len()` bytes of shared memory, lets `fill` write the pixels (and
@@ -166,11 +188,15 @@ impl FramePublisher {
     ) -> Result<FrameHeader, E> {
         let spec = &FRAMES;
         let len = header.payload_len();
-        let mut sample = self.publisher.loan_slice_uninit(len).map_err(|e| xfer_err("loan", spec, e))?;
+        let mut sample = self
+            .publisher
+            .loan_slice_uninit(len)
+            .map_err(|e| xfer_err("loan", spec, e))?;
         let payload = sample.payload_mut();
         // SAFETY: `u8` has no invalid bit patterns and the chunk lies in mapped shared memory,
         // which the OS initialises (zero pages, or an earlier frame); `fill` only writes.
-        let bytes: &mut [u8] = unsafe { &mut *(payload as *mut [std::mem::MaybeUninit<u8>] as *mut [u8]) };
+        let bytes: &mut [u8] =
+            unsafe { &mut *(payload as *mut [std::mem::MaybeUninit<u8>] as *mut [u8]) };
         fill(bytes, &mut header)?;
         // SAFETY: as above, every byte is initialised.
         let mut sample = unsafe { sample.assume_init() };
@@ -209,7 +235,12 @@ impl FrameSubscriber {
     /// woken by each frame (for the latency-bound consumer: detect).
     pub fn new(node: &Node<Ipc>, buffer: usize) -> Result<FrameSubscriber, IpcError> {
         let mut s = FrameSubscriber::polling(node, buffer)?;
-        s.listener = Some(open_event(node, &FRAMES)?.listener_builder().create().map_err(|e| svc_err(&FRAMES, e))?);
+        s.listener = Some(
+            open_event(node, &FRAMES)?
+                .listener_builder()
+                .create()
+                .map_err(|e| svc_err(&FRAMES, e))?,
+        );
         Ok(s)
     }
 
@@ -230,7 +261,13 @@ impl FrameSubscriber {
             .buffer_size(buffer.clamp(1, spec.qos.subscriber_max_buffer_size))
             .create()
             .map_err(|e| svc_err(spec, e))?;
-        Ok(FrameSubscriber { subscriber, listener: None, last_seq: None, skipped: 0, lost: 0 })
+        Ok(FrameSubscriber {
+            subscriber,
+            listener: None,
+            last_seq: None,
+            skipped: 0,
+            lost: 0,
+        })
     }
 
     /// Sleeps until a frame is announced or `timeout` passes (a polling subscriber sleeps
@@ -257,7 +294,10 @@ impl FrameSubscriber {
 
     /// The next frame in order (for the recorder), counting seq gaps as lost.
     pub fn receive(&mut self) -> Result<Option<FrameSample>, IpcError> {
-        let s = self.subscriber.receive().map_err(|e| xfer_err("receive", &FRAMES, e))?;
+        let s = self
+            .subscriber
+            .receive()
+            .map_err(|e| xfer_err("receive", &FRAMES, e))?;
         if let Some(s) = &s {
             self.account(s.user_header().seq);
         }
@@ -268,7 +308,11 @@ impl FrameSubscriber {
     /// gaps between received frames as lost.
     pub fn receive_newest(&mut self) -> Result<Option<FrameSample>, IpcError> {
         let mut newest: Option<FrameSample> = None;
-        while let Some(s) = self.subscriber.receive().map_err(|e| xfer_err("receive", &FRAMES, e))? {
+        while let Some(s) = self
+            .subscriber
+            .receive()
+            .map_err(|e| xfer_err("receive", &FRAMES, e))?
+        {
             self.account(s.user_header().seq);
             if newest.is_some() {
                 self.skipped += 1;
@@ -289,15 +333,29 @@ pub struct MsgPublisher<T: Debug + ZeroCopySend + Copy + 'static> {
 impl<T: Debug + ZeroCopySend + Copy + 'static> MsgPublisher<T> {
     /// Opens `spec` for publishing `T`.
     pub fn new(node: &Node<Ipc>, spec: &ServiceSpec) -> Result<Self, IpcError> {
-        let service = pubsub_builder!(node, spec, T).open_or_create().map_err(|e| svc_err(spec, e))?;
-        let publisher = service.publisher_builder().create().map_err(|e| svc_err(spec, e))?;
-        let notifier = open_event(node, spec)?.notifier_builder().create().map_err(|e| svc_err(spec, e))?;
-        Ok(MsgPublisher { spec: *spec, publisher, notifier })
+        let service = pubsub_builder!(node, spec, T)
+            .open_or_create()
+            .map_err(|e| svc_err(spec, e))?;
+        let publisher = service
+            .publisher_builder()
+            .create()
+            .map_err(|e| svc_err(spec, e))?;
+        let notifier = open_event(node, spec)?
+            .notifier_builder()
+            .create()
+            .map_err(|e| svc_err(spec, e))?;
+        Ok(MsgPublisher {
+            spec: *spec,
+            publisher,
+            notifier,
+        })
     }
 
     /// Sends a copy of `value` (these messages are small) and notifies subscribers.
     pub fn publish(&self, value: T) -> Result<(), IpcError> {
-        self.publisher.send_copy(value).map_err(|e| xfer_err("send", &self.spec, e))?;
+        self.publisher
+            .send_copy(value)
+            .map_err(|e| xfer_err("send", &self.spec, e))?;
         let _ = self.notifier.notify();
         Ok(())
     }
@@ -315,7 +373,12 @@ impl<T: Debug + ZeroCopySend + Copy + 'static> MsgSubscriber<T> {
     /// Opens `spec` for receiving `T` with a buffer of `buffer` messages, woken by each one.
     pub fn new(node: &Node<Ipc>, spec: &ServiceSpec, buffer: usize) -> Result<Self, IpcError> {
         let mut s = Self::polling(node, spec, buffer)?;
-        s.listener = Some(open_event(node, spec)?.listener_builder().create().map_err(|e| svc_err(spec, e))?);
+        s.listener = Some(
+            open_event(node, spec)?
+                .listener_builder()
+                .create()
+                .map_err(|e| svc_err(spec, e))?,
+        );
         Ok(s)
     }
 
@@ -323,13 +386,19 @@ impl<T: Debug + ZeroCopySend + Copy + 'static> MsgSubscriber<T> {
     /// inputs read alongside another one that paces the loop, so that publishers do not
     /// notify a listener nobody waits on.
     pub fn polling(node: &Node<Ipc>, spec: &ServiceSpec, buffer: usize) -> Result<Self, IpcError> {
-        let service = pubsub_builder!(node, spec, T).open_or_create().map_err(|e| svc_err(spec, e))?;
+        let service = pubsub_builder!(node, spec, T)
+            .open_or_create()
+            .map_err(|e| svc_err(spec, e))?;
         let subscriber = service
             .subscriber_builder()
             .buffer_size(buffer.clamp(1, spec.qos.subscriber_max_buffer_size))
             .create()
             .map_err(|e| svc_err(spec, e))?;
-        Ok(MsgSubscriber { spec: *spec, subscriber, listener: None })
+        Ok(MsgSubscriber {
+            spec: *spec,
+            subscriber,
+            listener: None,
+        })
     }
 
     /// Sleeps until a message is announced or `timeout` passes (a polling subscriber sleeps

@@ -42,6 +42,11 @@ impl Stage {
         let shutdown = Shutdown::install()?;
         let node = open_node(name)?;
         let status = StatusReporter::new(&node, name, config.run.status_interval_ms)?;
-        Ok(Stage { config, shutdown, node, status })
+        Ok(Stage {
+            config,
+            shutdown,
+            node,
+            status,
+        })
     }
 }

@@ -27,8 +27,8 @@
 //! the real one knows its own attitude.
 
 use mavlink::dialects::common::{
-    MavAutopilot, MavMessage, MavModeFlag, MavState, MavType, ATTITUDE_DATA, HEARTBEAT_DATA, LOCAL_POSITION_NED_DATA,
-    MINOR_MAVLINK_VERSION, SET_POSITION_TARGET_LOCAL_NED_DATA,
+    MavAutopilot, MavMessage, MavModeFlag, MavState, MavType, ATTITUDE_DATA, HEARTBEAT_DATA,
+    LOCAL_POSITION_NED_DATA, MINOR_MAVLINK_VERSION, SET_POSITION_TARGET_LOCAL_NED_DATA,
 };
 use serde::{Deserialize, Serialize};
 
@@ -145,10 +145,14 @@ impl CommandResult {
 impl std::fmt::Display for RejectReason {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            RejectReason::NotGuided { custom_mode } => write!(f, "not in GUIDED (custom_mode {custom_mode})"),
+            RejectReason::NotGuided { custom_mode } => {
+                write!(f, "not in GUIDED (custom_mode {custom_mode})")
+            }
             RejectReason::NotArmed => write!(f, "not armed"),
             RejectReason::UnsupportedFrame(fr) => write!(f, "unsupported coordinate frame {fr}"),
-            RejectReason::UnsupportedTypeMask(m) => write!(f, "unsupported type_mask {m} (only velocity targets)"),
+            RejectReason::UnsupportedTypeMask(m) => {
+                write!(f, "unsupported type_mask {m} (only velocity targets)")
+            }
             RejectReason::NotFinite => write!(f, "non-finite value"),
         }
     }
@@ -206,7 +210,11 @@ impl Autopilot {
             cfg: cfg.clone(),
             armed: cfg.start_armed,
             guided: immediate,
-            guided_at: if cfg.start_guided && !immediate { Some(cfg.guided_after_s) } else { None },
+            guided_at: if cfg.start_guided && !immediate {
+                Some(cfg.guided_after_s)
+            } else {
+                None
+            },
             active: None,
             yaw_target: None,
             vehicle_yaw: None,
@@ -252,7 +260,11 @@ impl Autopilot {
             CommandResult::Accepted(_) => self.stats.accepted += 1,
             CommandResult::Rejected(r) => {
                 self.stats.rejected += 1;
-                log::debug!("autopilot: setpoint from {}/{} rejected: {r}", header.system_id, header.component_id);
+                log::debug!(
+                    "autopilot: setpoint from {}/{} rejected: {r}",
+                    header.system_id,
+                    header.component_id
+                );
             }
             CommandResult::Ignored(_) => self.stats.ignored += 1,
         }
@@ -263,14 +275,23 @@ impl Autopilot {
         let MavMessage::SET_POSITION_TARGET_LOCAL_NED(d) = msg else {
             return CommandResult::Ignored(IgnoreReason::NotASetpoint);
         };
-        let SET_POSITION_TARGET_LOCAL_NED_DATA { target_system, target_component, .. } = *d;
+        let SET_POSITION_TARGET_LOCAL_NED_DATA {
+            target_system,
+            target_component,
+            ..
+        } = *d;
         let for_us = (target_system == 0 || target_system == self.cfg.system_id)
             && (target_component == 0 || target_component == self.cfg.component_id);
         if !for_us {
-            return CommandResult::Ignored(IgnoreReason::OtherTarget { target_system, target_component });
+            return CommandResult::Ignored(IgnoreReason::OtherTarget {
+                target_system,
+                target_component,
+            });
         }
         if !self.guided {
-            return CommandResult::Rejected(RejectReason::NotGuided { custom_mode: self.custom_mode() });
+            return CommandResult::Rejected(RejectReason::NotGuided {
+                custom_mode: self.custom_mode(),
+            });
         }
         if !self.armed {
             return CommandResult::Rejected(RejectReason::NotArmed);
@@ -308,8 +329,19 @@ impl Autopilot {
         let yaw_rate = use_yaw_rate.then_some(d.yaw_rate as f64);
         // A new setpoint without a yaw angle releases a previous heading target.
         self.yaw_target = yaw_rad;
-        self.active = Some(Active { velocity_ned, yaw_rate, received_s: now_s, lapsed: false });
-        CommandResult::Accepted(AcceptedSetpoint { velocity_ned, yaw_rate, yaw_rad, frame, type_mask: mask })
+        self.active = Some(Active {
+            velocity_ned,
+            yaw_rate,
+            received_s: now_s,
+            lapsed: false,
+        });
+        CommandResult::Accepted(AcceptedSetpoint {
+            velocity_ned,
+            yaw_rate,
+            yaw_rad,
+            frame,
+            type_mask: mask,
+        })
     }
 
     /// The velocity command in force at `now_s`: the last accepted setpoint, hover after
@@ -396,7 +428,11 @@ impl Autopilot {
             autopilot: MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
             base_mode,
             // ArduCopter reports STANDBY while disarmed.
-            system_status: if self.armed { MavState::MAV_STATE_ACTIVE } else { MavState::MAV_STATE_STANDBY },
+            system_status: if self.armed {
+                MavState::MAV_STATE_ACTIVE
+            } else {
+                MavState::MAV_STATE_STANDBY
+            },
             mavlink_version: MINOR_MAVLINK_VERSION,
         })
     }
@@ -470,12 +506,20 @@ mod tests {
     use std::f64::consts::FRAC_PI_2;
 
     fn header() -> mavlink::MavHeader {
-        mavlink::MavHeader { system_id: 255, component_id: 190, sequence: 0 }
+        mavlink::MavHeader {
+            system_id: 255,
+            component_id: 190,
+            sequence: 0,
+        }
     }
 
     fn vehicle(yaw: f64) -> Multicopter {
         Multicopter::new(
-            &VehicleStart { position_ned: [0.0, 0.0, -70.0], velocity_ned: [0.0; 3], yaw_rad: yaw },
+            &VehicleStart {
+                position_ned: [0.0, 0.0, -70.0],
+                velocity_ned: [0.0; 3],
+                yaw_rad: yaw,
+            },
             &VehicleConfig::default(),
         )
     }
@@ -540,14 +584,17 @@ mod tests {
         assert_eq!(h.autopilot, MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA);
         assert_eq!(
             h.base_mode,
-            MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED
+            MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+                | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED
         );
         assert_eq!(h.system_status, MavState::MAV_STATE_ACTIVE);
         assert_eq!(h.mavlink_version, 3);
 
         ap.set_armed(false);
         ap.set_guided(false);
-        let MavMessage::HEARTBEAT(h) = ap.heartbeat() else { unreachable!() };
+        let MavMessage::HEARTBEAT(h) = ap.heartbeat() else {
+            unreachable!()
+        };
         assert_eq!(h.custom_mode, COPTER_MODE_LOITER);
         assert_eq!(h.base_mode, MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED);
     }
@@ -560,7 +607,13 @@ mod tests {
         let msgs = ap.outgoing(1.5, &v);
         let att = msgs
             .iter()
-            .find_map(|m| if let MavMessage::ATTITUDE(a) = m { Some(a.clone()) } else { None })
+            .find_map(|m| {
+                if let MavMessage::ATTITUDE(a) = m {
+                    Some(a.clone())
+                } else {
+                    None
+                }
+            })
             .unwrap();
         assert_eq!((att.roll, att.pitch, att.yaw), (0.1, -0.2, 3.0));
         assert_eq!(att.time_boot_ms, 1500);
@@ -569,16 +622,33 @@ mod tests {
     #[test]
     fn setpoints_need_guided_and_armed() {
         let v = vehicle(0.0);
-        let sp = setpoint(MavFrame::MAV_FRAME_LOCAL_NED, MASK_VELOCITY_YAW_RATE, [1.0, 0.0, 0.0], 0.0, 0.0);
-        let mut ap = Autopilot::new(&AutopilotConfig { start_guided: false, ..Default::default() });
+        let sp = setpoint(
+            MavFrame::MAV_FRAME_LOCAL_NED,
+            MASK_VELOCITY_YAW_RATE,
+            [1.0, 0.0, 0.0],
+            0.0,
+            0.0,
+        );
+        let mut ap = Autopilot::new(&AutopilotConfig {
+            start_guided: false,
+            ..Default::default()
+        });
         assert_eq!(
             ap.handle(0.0, &header(), &sp, &v),
-            CommandResult::Rejected(RejectReason::NotGuided { custom_mode: COPTER_MODE_LOITER })
+            CommandResult::Rejected(RejectReason::NotGuided {
+                custom_mode: COPTER_MODE_LOITER
+            })
         );
         assert_eq!(ap.command(0.1), VelocityCommand::HOVER);
 
-        let mut ap = Autopilot::new(&AutopilotConfig { start_armed: false, ..Default::default() });
-        assert_eq!(ap.handle(0.0, &header(), &sp, &v), CommandResult::Rejected(RejectReason::NotArmed));
+        let mut ap = Autopilot::new(&AutopilotConfig {
+            start_armed: false,
+            ..Default::default()
+        });
+        assert_eq!(
+            ap.handle(0.0, &header(), &sp, &v),
+            CommandResult::Rejected(RejectReason::NotArmed)
+        );
         assert_eq!(ap.command(0.1), VelocityCommand::HOVER);
         ap.set_armed(true);
         assert!(ap.handle(0.2, &header(), &sp, &v).is_accepted());
@@ -588,27 +658,60 @@ mod tests {
         assert_eq!(ap.command(0.4), VelocityCommand::HOVER);
         ap.set_guided(true);
         assert_eq!(ap.command(0.5), VelocityCommand::HOVER);
-        assert_eq!(ap.stats(), AutopilotStats { accepted: 1, rejected: 1, timeouts: 0, ignored: 0 });
+        assert_eq!(
+            ap.stats(),
+            AutopilotStats {
+                accepted: 1,
+                rejected: 1,
+                timeouts: 0,
+                ignored: 0
+            }
+        );
     }
 
     #[test]
     fn messages_for_others_are_ignored() {
         let v = vehicle(0.0);
         let mut ap = Autopilot::new(&AutopilotConfig::default());
-        let MavMessage::SET_POSITION_TARGET_LOCAL_NED(mut d) =
-            setpoint(MavFrame::MAV_FRAME_LOCAL_NED, MASK_VELOCITY_YAW_RATE, [1.0, 0.0, 0.0], 0.0, 0.0)
-        else {
+        let MavMessage::SET_POSITION_TARGET_LOCAL_NED(mut d) = setpoint(
+            MavFrame::MAV_FRAME_LOCAL_NED,
+            MASK_VELOCITY_YAW_RATE,
+            [1.0, 0.0, 0.0],
+            0.0,
+            0.0,
+        ) else {
             unreachable!()
         };
         d.target_system = 2;
-        let r = ap.handle(0.0, &header(), &MavMessage::SET_POSITION_TARGET_LOCAL_NED(d.clone()), &v);
-        assert_eq!(r, CommandResult::Ignored(IgnoreReason::OtherTarget { target_system: 2, target_component: 1 }));
+        let r = ap.handle(
+            0.0,
+            &header(),
+            &MavMessage::SET_POSITION_TARGET_LOCAL_NED(d.clone()),
+            &v,
+        );
+        assert_eq!(
+            r,
+            CommandResult::Ignored(IgnoreReason::OtherTarget {
+                target_system: 2,
+                target_component: 1
+            })
+        );
         // Broadcast is for us.
         d.target_system = 0;
         d.target_component = 0;
-        assert!(ap.handle(0.0, &header(), &MavMessage::SET_POSITION_TARGET_LOCAL_NED(d), &v).is_accepted());
+        assert!(ap
+            .handle(
+                0.0,
+                &header(),
+                &MavMessage::SET_POSITION_TARGET_LOCAL_NED(d),
+                &v
+            )
+            .is_accepted());
         let hb = ap.heartbeat();
-        assert_eq!(ap.handle(0.0, &header(), &hb, &v), CommandResult::Ignored(IgnoreReason::NotASetpoint));
+        assert_eq!(
+            ap.handle(0.0, &header(), &hb, &v),
+            CommandResult::Ignored(IgnoreReason::NotASetpoint)
+        );
         assert_eq!(ap.stats().ignored, 2);
     }
 
@@ -617,15 +720,41 @@ mod tests {
         assert_eq!(MASK_VELOCITY_YAW_RATE, 1479);
         let v = vehicle(0.0);
         let mut ap = Autopilot::new(&AutopilotConfig::default());
-        let r = ap.handle(0.0, &header(), &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, 1479, [0.5, -1.0, 0.2], 0.7, 0.3), &v);
-        let CommandResult::Accepted(a) = r else { panic!("{r:?}") };
+        let r = ap.handle(
+            0.0,
+            &header(),
+            &setpoint(
+                MavFrame::MAV_FRAME_LOCAL_NED,
+                1479,
+                [0.5, -1.0, 0.2],
+                0.7,
+                0.3,
+            ),
+            &v,
+        );
+        let CommandResult::Accepted(a) = r else {
+            panic!("{r:?}")
+        };
         assert_eq!(a.yaw_rate, Some(0.3f32 as f64));
         assert_eq!(a.yaw_rad, None);
         let c = ap.command(0.05);
         assert_eq!(c.velocity_ned, [0.5, -1.0, 0.2f32 as f64]);
         assert_eq!(c.yaw_rate, 0.3f32 as f64);
         // Force bit set as well: still a velocity target.
-        assert!(ap.handle(0.1, &header(), &setpoint(MavFrame::MAV_FRAME_LOCAL_OFFSET_NED, 1479 | 512, [0.0; 3], 0.0, 0.0), &v).is_accepted());
+        assert!(ap
+            .handle(
+                0.1,
+                &header(),
+                &setpoint(
+                    MavFrame::MAV_FRAME_LOCAL_OFFSET_NED,
+                    1479 | 512,
+                    [0.0; 3],
+                    0.0,
+                    0.0
+                ),
+                &v
+            )
+            .is_accepted());
     }
 
     #[test]
@@ -633,20 +762,76 @@ mod tests {
         let v = vehicle(0.0);
         let mut ap = Autopilot::new(&AutopilotConfig::default());
         // Position only (velocity, acceleration, yaw rate ignored): 0b1101_1111_1000 = 3576.
-        let pos_mask = MASK_VELOCITY_IGNORE | MASK_ACCEL_IGNORE | MASK_YAW_RATE_IGNORE | MASK_YAW_IGNORE;
-        let r = ap.handle(0.0, &header(), &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, pos_mask, [0.0; 3], 0.0, 0.0), &v);
-        assert_eq!(r, CommandResult::Rejected(RejectReason::UnsupportedTypeMask(pos_mask)));
+        let pos_mask =
+            MASK_VELOCITY_IGNORE | MASK_ACCEL_IGNORE | MASK_YAW_RATE_IGNORE | MASK_YAW_IGNORE;
+        let r = ap.handle(
+            0.0,
+            &header(),
+            &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, pos_mask, [0.0; 3], 0.0, 0.0),
+            &v,
+        );
+        assert_eq!(
+            r,
+            CommandResult::Rejected(RejectReason::UnsupportedTypeMask(pos_mask))
+        );
         // Velocity with acceleration.
-        let r = ap.handle(0.0, &header(), &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, MASK_POSITION_IGNORE | MASK_YAW_IGNORE, [0.0; 3], 0.0, 0.0), &v);
-        assert!(matches!(r, CommandResult::Rejected(RejectReason::UnsupportedTypeMask(_))));
+        let r = ap.handle(
+            0.0,
+            &header(),
+            &setpoint(
+                MavFrame::MAV_FRAME_LOCAL_NED,
+                MASK_POSITION_IGNORE | MASK_YAW_IGNORE,
+                [0.0; 3],
+                0.0,
+                0.0,
+            ),
+            &v,
+        );
+        assert!(matches!(
+            r,
+            CommandResult::Rejected(RejectReason::UnsupportedTypeMask(_))
+        ));
         // Velocity with vz ignored.
-        let r = ap.handle(0.0, &header(), &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, 1479 | 32, [0.0; 3], 0.0, 0.0), &v);
-        assert!(matches!(r, CommandResult::Rejected(RejectReason::UnsupportedTypeMask(_))));
+        let r = ap.handle(
+            0.0,
+            &header(),
+            &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, 1479 | 32, [0.0; 3], 0.0, 0.0),
+            &v,
+        );
+        assert!(matches!(
+            r,
+            CommandResult::Rejected(RejectReason::UnsupportedTypeMask(_))
+        ));
         // Global frame.
-        let r = ap.handle(0.0, &header(), &setpoint(MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT, 1479, [0.0; 3], 0.0, 0.0), &v);
-        assert_eq!(r, CommandResult::Rejected(RejectReason::UnsupportedFrame(3)));
+        let r = ap.handle(
+            0.0,
+            &header(),
+            &setpoint(
+                MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT,
+                1479,
+                [0.0; 3],
+                0.0,
+                0.0,
+            ),
+            &v,
+        );
+        assert_eq!(
+            r,
+            CommandResult::Rejected(RejectReason::UnsupportedFrame(3))
+        );
         // NaN.
-        let r = ap.handle(0.0, &header(), &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, 1479, [f32::NAN, 0.0, 0.0], 0.0, 0.0), &v);
+        let r = ap.handle(
+            0.0,
+            &header(),
+            &setpoint(
+                MavFrame::MAV_FRAME_LOCAL_NED,
+                1479,
+                [f32::NAN, 0.0, 0.0],
+                0.0,
+                0.0,
+            ),
+            &v,
+        );
         assert_eq!(r, CommandResult::Rejected(RejectReason::NotFinite));
         assert_eq!(ap.stats().rejected, 5);
         assert_eq!(ap.stats().accepted, 0);
@@ -658,47 +843,106 @@ mod tests {
         // Heading east: body forward is NED east, body right is NED south.
         let v = vehicle(FRAC_PI_2);
         let mut ap = Autopilot::new(&AutopilotConfig::default());
-        assert!(ap.handle(0.0, &header(), &setpoint(BODY_NED, 1479, [2.0, 0.0, 0.5], 0.0, 0.0), &v).is_accepted());
+        assert!(ap
+            .handle(
+                0.0,
+                &header(),
+                &setpoint(BODY_NED, 1479, [2.0, 0.0, 0.5], 0.0, 0.0),
+                &v
+            )
+            .is_accepted());
         let c = ap.command(0.01).velocity_ned;
-        assert!(c[0].abs() < 1e-6 && (c[1] - 2.0).abs() < 1e-6 && (c[2] - 0.5).abs() < 1e-9, "{c:?}");
+        assert!(
+            c[0].abs() < 1e-6 && (c[1] - 2.0).abs() < 1e-6 && (c[2] - 0.5).abs() < 1e-9,
+            "{c:?}"
+        );
         #[allow(deprecated)]
         let body_offset = MavFrame::MAV_FRAME_BODY_OFFSET_NED;
-        assert!(ap.handle(0.1, &header(), &setpoint(body_offset, 1479, [0.0, 1.0, 0.0], 0.0, 0.0), &v).is_accepted());
+        assert!(ap
+            .handle(
+                0.1,
+                &header(),
+                &setpoint(body_offset, 1479, [0.0, 1.0, 0.0], 0.0, 0.0),
+                &v
+            )
+            .is_accepted());
         let c = ap.command(0.11).velocity_ned;
         assert!((c[0] + 1.0).abs() < 1e-6 && c[1].abs() < 1e-6, "{c:?}");
         // The NED frame is not rotated.
-        assert!(ap.handle(0.2, &header(), &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, 1479, [2.0, 0.0, 0.0], 0.0, 0.0), &v).is_accepted());
+        assert!(ap
+            .handle(
+                0.2,
+                &header(),
+                &setpoint(
+                    MavFrame::MAV_FRAME_LOCAL_NED,
+                    1479,
+                    [2.0, 0.0, 0.0],
+                    0.0,
+                    0.0
+                ),
+                &v
+            )
+            .is_accepted());
         assert_eq!(ap.command(0.21).velocity_ned, [2.0, 0.0, 0.0]);
     }
 
     #[test]
     fn body_frame_command_flies_east_when_heading_east() {
         let mut v = vehicle(FRAC_PI_2);
-        let mut w = Wind::new(1, &WindConfig { mean_speed_m_s: [0.0, 0.0], gust_sigma_m_s: 0.0, gust_tau_s: 1.0 });
+        let mut w = Wind::new(
+            1,
+            &WindConfig {
+                mean_speed_m_s: [0.0, 0.0],
+                gust_sigma_m_s: 0.0,
+                gust_tau_s: 1.0,
+            },
+        );
         let mut ap = Autopilot::new(&AutopilotConfig::default());
         let dt = 0.005;
         for k in 0..1000 {
             let t = k as f64 * dt;
             if k % 20 == 0 {
-                ap.handle(t, &header(), &setpoint(BODY_NED, 1479, [1.0, 0.0, 0.0], 0.0, 0.0), &v);
+                ap.handle(
+                    t,
+                    &header(),
+                    &setpoint(BODY_NED, 1479, [1.0, 0.0, 0.0], 0.0, 0.0),
+                    &v,
+                );
             }
             let c = ap.command(t);
             v.step(dt, &c, &mut w);
             ap.outgoing(t + dt, &v);
         }
         let vel = v.velocity_ned();
-        assert!((vel[1] - 1.0).abs() < 0.01 && vel[0].abs() < 1e-6, "{vel:?}");
+        assert!(
+            (vel[1] - 1.0).abs() < 0.01 && vel[0].abs() < 1e-6,
+            "{vel:?}"
+        );
     }
 
     #[test]
     fn yaw_angle_target_is_flown_and_relative_in_body_frames() {
         let mut v = vehicle(0.0);
-        let mut w = Wind::new(1, &WindConfig { mean_speed_m_s: [0.0, 0.0], gust_sigma_m_s: 0.0, gust_tau_s: 1.0 });
+        let mut w = Wind::new(
+            1,
+            &WindConfig {
+                mean_speed_m_s: [0.0, 0.0],
+                gust_sigma_m_s: 0.0,
+                gust_tau_s: 1.0,
+            },
+        );
         let mut ap = Autopilot::new(&AutopilotConfig::default());
         // Yaw used (bit 1024 clear), yaw rate ignored: 1479 - 1024 + 2048.
         let mask = MASK_POSITION_IGNORE | MASK_ACCEL_IGNORE | MASK_YAW_RATE_IGNORE;
-        let r = ap.handle(0.0, &header(), &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, mask, [0.0; 3], -2.5, 0.0), &v);
-        let CommandResult::Accepted(a) = r else { panic!() };
+        let r = ap.handle(
+            0.0,
+            &header(),
+            &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, mask, [0.0; 3], -2.5, 0.0),
+            &v,
+        );
+        let CommandResult::Accepted(a) = r else {
+            panic!()
+        };
         assert_eq!(a.yaw_rad, Some(-2.5f32 as f64));
         let dt = 0.005;
         // The target persists after the velocity timeout.
@@ -711,8 +955,15 @@ mod tests {
         assert!((v.attitude()[2] + 2.5).abs() < 0.01, "{:?}", v.attitude());
         assert_eq!(ap.stats().timeouts, 1);
         // Relative in the body frame: +0.5 rad from the current heading.
-        let r = ap.handle(10.0, &header(), &setpoint(BODY_NED, mask, [0.0; 3], 0.5, 0.0), &v);
-        let CommandResult::Accepted(a) = r else { panic!() };
+        let r = ap.handle(
+            10.0,
+            &header(),
+            &setpoint(BODY_NED, mask, [0.0; 3], 0.5, 0.0),
+            &v,
+        );
+        let CommandResult::Accepted(a) = r else {
+            panic!()
+        };
         assert!((a.yaw_rad.unwrap() - wrap_pi(v.attitude()[2] + 0.5)).abs() < 1e-6);
     }
 
@@ -720,14 +971,40 @@ mod tests {
     fn timeout_returns_to_hover() {
         let v = vehicle(0.0);
         let mut ap = Autopilot::new(&AutopilotConfig::default());
-        assert!(ap.handle(1.0, &header(), &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, 1479, [1.0, 0.0, 0.0], 0.0, 0.2), &v).is_accepted());
+        assert!(ap
+            .handle(
+                1.0,
+                &header(),
+                &setpoint(
+                    MavFrame::MAV_FRAME_LOCAL_NED,
+                    1479,
+                    [1.0, 0.0, 0.0],
+                    0.0,
+                    0.2
+                ),
+                &v
+            )
+            .is_accepted());
         assert_eq!(ap.command(3.9).velocity_ned, [1.0, 0.0, 0.0]);
         assert_eq!(ap.command(4.0).yaw_rate, 0.2f32 as f64);
         assert_eq!(ap.command(4.01), VelocityCommand::HOVER);
         assert_eq!(ap.command(5.0), VelocityCommand::HOVER);
         assert_eq!(ap.stats().timeouts, 1);
         // A new setpoint revives it.
-        assert!(ap.handle(5.0, &header(), &setpoint(MavFrame::MAV_FRAME_LOCAL_NED, 1479, [0.0, 1.0, 0.0], 0.0, 0.0), &v).is_accepted());
+        assert!(ap
+            .handle(
+                5.0,
+                &header(),
+                &setpoint(
+                    MavFrame::MAV_FRAME_LOCAL_NED,
+                    1479,
+                    [0.0, 1.0, 0.0],
+                    0.0,
+                    0.0
+                ),
+                &v
+            )
+            .is_accepted());
         assert_eq!(ap.command(5.1).velocity_ned, [0.0, 1.0, 0.0]);
         assert_eq!(ap.command(9.0), VelocityCommand::HOVER);
         assert_eq!(ap.stats().timeouts, 2);
@@ -736,26 +1013,47 @@ mod tests {
     #[test]
     fn pilot_switches_to_guided_after_the_configured_time() {
         let v = vehicle(0.0);
-        let mut ap = Autopilot::new(&AutopilotConfig { guided_after_s: 5.0, ..Default::default() });
+        let mut ap = Autopilot::new(&AutopilotConfig {
+            guided_after_s: 5.0,
+            ..Default::default()
+        });
         assert!(!ap.is_guided());
         assert!(ap.is_armed());
         let hb = |msgs: Vec<MavMessage>| {
-            msgs.into_iter().find_map(|m| if let MavMessage::HEARTBEAT(h) = m { Some(h.custom_mode) } else { None })
+            msgs.into_iter().find_map(|m| {
+                if let MavMessage::HEARTBEAT(h) = m {
+                    Some(h.custom_mode)
+                } else {
+                    None
+                }
+            })
         };
         assert_eq!(hb(ap.outgoing(0.0, &v)), Some(COPTER_MODE_LOITER));
-        let sp = setpoint(MavFrame::MAV_FRAME_LOCAL_NED, 1479, [1.0, 0.0, 0.0], 0.0, 0.0);
+        let sp = setpoint(
+            MavFrame::MAV_FRAME_LOCAL_NED,
+            1479,
+            [1.0, 0.0, 0.0],
+            0.0,
+            0.0,
+        );
         assert!(!ap.handle(4.9, &header(), &sp, &v).is_accepted());
         assert!(ap.handle(5.0, &header(), &sp, &v).is_accepted());
         assert!(ap.is_guided());
         assert_eq!(hb(ap.outgoing(5.0, &v)), Some(COPTER_MODE_GUIDED));
         assert_eq!(ap.command(5.1).velocity_ned, [1.0, 0.0, 0.0]);
         // A script's set_guided cancels the pending switch.
-        let mut ap = Autopilot::new(&AutopilotConfig { guided_after_s: 5.0, ..Default::default() });
+        let mut ap = Autopilot::new(&AutopilotConfig {
+            guided_after_s: 5.0,
+            ..Default::default()
+        });
         ap.set_guided(false);
         ap.command(6.0);
         assert!(!ap.is_guided());
         // start_guided = false never switches by itself.
-        let mut ap = Autopilot::new(&AutopilotConfig { start_guided: false, ..Default::default() });
+        let mut ap = Autopilot::new(&AutopilotConfig {
+            start_guided: false,
+            ..Default::default()
+        });
         ap.command(100.0);
         assert!(!ap.is_guided());
         assert_eq!(ap.identity(), (1, 1));

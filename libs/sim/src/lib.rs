@@ -61,12 +61,14 @@ pub mod wind;
 
 mod rng;
 
-pub use autopilot::{AcceptedSetpoint, Autopilot, AutopilotStats, CommandResult, IgnoreReason, RejectReason};
+pub use autopilot::{
+    AcceptedSetpoint, Autopilot, AutopilotStats, CommandResult, IgnoreReason, RejectReason,
+};
 pub use math::{wrap_deg, wrap_pi, GRAVITY_M_S2};
 pub use outcome::{FlightRecorder, Outcome};
 pub use params::{
-    AutopilotConfig, CameraConfig, CameraModel, ParamError, ScenarioConfig, SimConfig, SimPace, SuccessConfig, VehicleConfig,
-    WindConfig,
+    AutopilotConfig, CameraConfig, CameraModel, ParamError, ScenarioConfig, SimConfig, SimPace,
+    SuccessConfig, VehicleConfig, WindConfig,
 };
 pub use scenario::{camera_pose, geometry, render_camera, Geometry, Scenario};
 pub use vehicle::{Multicopter, VehicleStart, VelocityCommand};

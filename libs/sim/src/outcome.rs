@@ -113,7 +113,11 @@ impl FlightRecorder {
         self.min_distance_m = self.min_distance_m.min(geo.distance_m);
         let speed = norm(vehicle.velocity_ned());
         self.recent.push_back((t_s, speed));
-        while self.recent.front().is_some_and(|&(t, _)| t < t_s - HOVER_WINDOW_S) {
+        while self
+            .recent
+            .front()
+            .is_some_and(|&(t, _)| t < t_s - HOVER_WINDOW_S)
+        {
             self.recent.pop_front();
         }
         if self.at_target_now(geo, speed) {
@@ -144,7 +148,13 @@ impl FlightRecorder {
     }
 
     /// Decide the outcome with the final state at `t_s` (also recorded, if not already).
-    pub fn finish(&self, t_s: f64, vehicle: &Multicopter, geo: &Geometry, end_reason: &str) -> Outcome {
+    pub fn finish(
+        &self,
+        t_s: f64,
+        vehicle: &Multicopter,
+        geo: &Geometry,
+        end_reason: &str,
+    ) -> Outcome {
         let mut rec = self.clone();
         if rec.last_pos.is_none() || t_s > rec.last_t {
             rec.step(t_s, vehicle, geo);
@@ -166,10 +176,16 @@ impl FlightRecorder {
             ));
         }
         if !(geo.relative_yaw_deg.abs() <= c.yaw_tolerance_deg) {
-            why.push(format!("final relative yaw {:.1}° exceeds ±{}°", geo.relative_yaw_deg, c.yaw_tolerance_deg));
+            why.push(format!(
+                "final relative yaw {:.1}° exceeds ±{}°",
+                geo.relative_yaw_deg, c.yaw_tolerance_deg
+            ));
         }
         if !(final_speed < c.hover_speed_m_s) {
-            why.push(format!("not hovering: speed {final_speed:.2} m/s (limit {} m/s)", c.hover_speed_m_s));
+            why.push(format!(
+                "not hovering: speed {final_speed:.2} m/s (limit {} m/s)",
+                c.hover_speed_m_s
+            ));
         }
         if !(t_s <= self.max_time_s) {
             why.push(format!("took {t_s:.1} s (limit {} s)", self.max_time_s));
@@ -193,7 +209,11 @@ impl FlightRecorder {
             min_rotor_plane_m: rec.min_rotor_plane_m,
             min_distance_m: rec.min_distance_m,
             end_reason: end_reason.to_string(),
-            failure: if why.is_empty() { None } else { Some(why.join("; ")) },
+            failure: if why.is_empty() {
+                None
+            } else {
+                Some(why.join("; "))
+            },
             lockstep_misses: 0,
         }
     }
@@ -208,11 +228,23 @@ mod tests {
     use crate::wind::Wind;
 
     fn calm() -> Wind {
-        Wind::new(1, &WindConfig { mean_speed_m_s: [0.0, 0.0], gust_sigma_m_s: 0.0, gust_tau_s: 1.0 })
+        Wind::new(
+            1,
+            &WindConfig {
+                mean_speed_m_s: [0.0, 0.0],
+                gust_sigma_m_s: 0.0,
+                gust_tau_s: 1.0,
+            },
+        )
     }
 
     /// Fly straight along −axis from the start to `target` in front of the hub (perfect control).
-    fn fly_to(s: &Scenario, cfg: &SimConfig, plane_target: f64, lateral_fix: bool) -> (Multicopter, FlightRecorder, f64) {
+    fn fly_to(
+        s: &Scenario,
+        cfg: &SimConfig,
+        plane_target: f64,
+        lateral_fix: bool,
+    ) -> (Multicopter, FlightRecorder, f64) {
         let mut v = Multicopter::new(&s.start, &VehicleConfig::default());
         let mut w = calm();
         let mut rec = FlightRecorder::from_config(s.seed, cfg);
@@ -236,7 +268,10 @@ mod tests {
                 e[0] -= lat * right[0];
                 e[1] -= lat * right[1];
             }
-            let cmd = VelocityCommand { velocity_ned: [0.5 * e[0], 0.5 * e[1], 0.5 * e[2]], yaw_rate: 0.0 };
+            let cmd = VelocityCommand {
+                velocity_ned: [0.5 * e[0], 0.5 * e[1], 0.5 * e[2]],
+                yaw_rate: 0.0,
+            };
             v.step(dt, &cmd, &mut w);
             t += dt;
             rec.step(t, &v, &geometry(s, &v));
@@ -259,8 +294,14 @@ mod tests {
         assert!(o.min_rotor_plane_m > 4.9 && o.min_rotor_plane_m <= 5.0 + 1e-9);
         assert!(o.min_distance_m <= o.final_distance_m + 1e-9);
         // Path length at least the straight-line distance from the start.
-        let start_to_goal = ((s.start_distance_m - 5.0).powi(2) + s.start_lateral_m.powi(2) + s.start_height_m.powi(2)).sqrt();
-        assert!(o.path_length_m >= start_to_goal - 0.05 && o.path_length_m < start_to_goal * 1.2, "{o:?}");
+        let start_to_goal = ((s.start_distance_m - 5.0).powi(2)
+            + s.start_lateral_m.powi(2)
+            + s.start_height_m.powi(2))
+        .sqrt();
+        assert!(
+            o.path_length_m >= start_to_goal - 0.05 && o.path_length_m < start_to_goal * 1.2,
+            "{o:?}"
+        );
         assert_eq!(o.end_reason, "arrived");
         assert!(rec.time_at_target_s() > 10.0);
         // Serialises for the result files.
@@ -281,18 +322,30 @@ mod tests {
         let (v, rec, t) = fly_to(&s, &cfg, 7.0, true);
         let o = rec.finish(t, &v, &geometry(&s, &v), "max_time");
         assert!(!o.success);
-        assert!(o.failure.as_deref().unwrap().contains("final distance"), "{o:?}");
+        assert!(
+            o.failure.as_deref().unwrap().contains("final distance"),
+            "{o:?}"
+        );
 
         // Keeping the lateral offset: relative yaw fails (when the offset is large enough).
-        let s2 = (0..50).map(|k| Scenario::from_seed(k, &cfg)).find(|s| s.start_lateral_m.abs() > 3.0).unwrap();
+        let s2 = (0..50)
+            .map(|k| Scenario::from_seed(k, &cfg))
+            .find(|s| s.start_lateral_m.abs() > 3.0)
+            .unwrap();
         let (v, rec, t) = fly_to(&s2, &cfg, 5.0, false);
         let o = rec.finish(t, &v, &geometry(&s2, &v), "max_time");
         assert!(!o.success);
-        assert!(o.failure.as_deref().unwrap().contains("relative yaw"), "{o:?}");
+        assert!(
+            o.failure.as_deref().unwrap().contains("relative yaw"),
+            "{o:?}"
+        );
 
         // Too late.
         let (v, rec, t) = fly_to(&s, &cfg, 5.0, true);
-        let o = rec.clone().with_max_time(30.0).finish(t, &v, &geometry(&s, &v), "arrived");
+        let o = rec
+            .clone()
+            .with_max_time(30.0)
+            .finish(t, &v, &geometry(&s, &v), "arrived");
         assert!(!o.success);
         assert!(o.failure.as_deref().unwrap().contains("took"), "{o:?}");
 
@@ -303,7 +356,10 @@ mod tests {
         for _ in 0..(40.0 / 0.005) as usize {
             let g = geometry(&s, &v);
             let e = 5.0 - g.rotor_plane_m;
-            let cmd = VelocityCommand { velocity_ned: [0.5 * e * axis[0], 0.5 * e * axis[1], 0.0], yaw_rate: 0.0 };
+            let cmd = VelocityCommand {
+                velocity_ned: [0.5 * e * axis[0], 0.5 * e * axis[1], 0.0],
+                yaw_rate: 0.0,
+            };
             v.step(0.005, &cmd, &mut w);
             t += 0.005;
             rec.step(t, &v, &geometry(&s, &v));
@@ -312,7 +368,10 @@ mod tests {
         assert!(!o.success);
         assert!(o.min_rotor_plane_m < 2.1);
         let f = o.failure.unwrap();
-        assert!(f.contains("rotor plane") && !f.contains("final distance"), "{f}");
+        assert!(
+            f.contains("rotor plane") && !f.contains("final distance"),
+            "{f}"
+        );
 
         // Still moving at the end.
         let mut v = Multicopter::new(&s.start, &VehicleConfig::default());
@@ -320,7 +379,14 @@ mod tests {
         let mut w = calm();
         let mut t = 0.0;
         for _ in 0..400 {
-            v.step(0.005, &VelocityCommand { velocity_ned: [0.0, 0.0, 1.0], yaw_rate: 0.0 }, &mut w);
+            v.step(
+                0.005,
+                &VelocityCommand {
+                    velocity_ned: [0.0, 0.0, 1.0],
+                    yaw_rate: 0.0,
+                },
+                &mut w,
+            );
             t += 0.005;
             rec.step(t, &v, &geometry(&s, &v));
         }

@@ -110,7 +110,11 @@ pub struct CameraConfig {
 
 impl Default for CameraConfig {
     fn default() -> Self {
-        CameraConfig { model: CameraModel::Gopro, scale: 0.5, mount_pitch_deg: 0.0 }
+        CameraConfig {
+            model: CameraModel::Gopro,
+            scale: 0.5,
+            mount_pitch_deg: 0.0,
+        }
     }
 }
 
@@ -219,7 +223,11 @@ pub struct WindConfig {
 
 impl Default for WindConfig {
     fn default() -> Self {
-        WindConfig { mean_speed_m_s: [0.0, 4.0], gust_sigma_m_s: 1.0, gust_tau_s: 2.0 }
+        WindConfig {
+            mean_speed_m_s: [0.0, 4.0],
+            gust_sigma_m_s: 1.0,
+            gust_tau_s: 2.0,
+        }
     }
 }
 
@@ -295,7 +303,14 @@ impl Default for SuccessConfig {
 }
 
 /// `[lo, hi]` with `lo <= hi`, both within `[min, max]`.
-fn range(c: &Check, prefix: &str, key: &str, r: [f64; 2], min: f64, max: f64) -> Result<(), ParamError> {
+fn range(
+    c: &Check,
+    prefix: &str,
+    key: &str,
+    r: [f64; 2],
+    min: f64,
+    max: f64,
+) -> Result<(), ParamError> {
     c.closed(key, r[0], min, max)?;
     c.closed(key, r[1], min, max)?;
     if r[0] > r[1] {
@@ -315,7 +330,12 @@ impl SimConfig {
         c.open_closed("fps", self.fps, 0.0, 240.0)?;
         c.closed("physics_hz", self.physics_hz, self.fps, 10_000.0)?;
         c.open_closed("max_time_s", self.max_time_s, 0.0, MAX_TIME_S)?;
-        c.closed("lockstep_timeout_ms", self.lockstep_timeout_ms as f64, 10.0, 60_000.0)?;
+        c.closed(
+            "lockstep_timeout_ms",
+            self.lockstep_timeout_ms as f64,
+            10.0,
+            60_000.0,
+        )?;
         c.closed("end_after_done_s", self.end_after_done_s, 0.0, 60.0)?;
 
         let c = Check::new("sim.camera");
@@ -349,7 +369,14 @@ impl SimConfig {
 
         let c = Check::new("sim.wind");
         let w = &self.wind;
-        range(&c, "sim.wind", "mean_speed_m_s", w.mean_speed_m_s, 0.0, 30.0)?;
+        range(
+            &c,
+            "sim.wind",
+            "mean_speed_m_s",
+            w.mean_speed_m_s,
+            0.0,
+            30.0,
+        )?;
         c.closed("gust_sigma_m_s", w.gust_sigma_m_s, 0.0, 10.0)?;
         c.open_closed("gust_tau_s", w.gust_tau_s, 0.0, 600.0)?;
 
@@ -357,9 +384,23 @@ impl SimConfig {
         let c = Check::new(p);
         let s = &self.scenario;
         range(&c, p, "distance_m", s.distance_m, 3.0, MAX_DISTANCE_M)?;
-        range(&c, p, "lateral_m", s.lateral_m, -MAX_DISTANCE_M, MAX_DISTANCE_M)?;
+        range(
+            &c,
+            p,
+            "lateral_m",
+            s.lateral_m,
+            -MAX_DISTANCE_M,
+            MAX_DISTANCE_M,
+        )?;
         range(&c, p, "height_m", s.height_m, -60.0, 60.0)?;
-        range(&c, p, "heading_offset_deg", s.heading_offset_deg, -180.0, 180.0)?;
+        range(
+            &c,
+            p,
+            "heading_offset_deg",
+            s.heading_offset_deg,
+            -180.0,
+            180.0,
+        )?;
         if let Some(h) = s.rotor_axis_heading_deg {
             if !(h.is_finite() && (0.0..360.0).contains(&h)) {
                 return Err(ParamError {
@@ -433,7 +474,10 @@ mod tests {
         assert_eq!(e.key, "sim.scenario.distance_m");
         assert!(e.allowed.contains("lo <= hi"));
 
-        let c = SimConfig { physics_hz: 10.0, ..Default::default() };
+        let c = SimConfig {
+            physics_hz: 10.0,
+            ..Default::default()
+        };
         assert_eq!(c.validate().unwrap_err().key, "sim.physics_hz");
 
         let mut c = SimConfig::default();
@@ -442,7 +486,10 @@ mod tests {
 
         let mut c = SimConfig::default();
         c.scenario.rotor_axis_heading_deg = Some(360.0);
-        assert_eq!(c.validate().unwrap_err().key, "sim.scenario.rotor_axis_heading_deg");
+        assert_eq!(
+            c.validate().unwrap_err().key,
+            "sim.scenario.rotor_axis_heading_deg"
+        );
 
         let mut c = SimConfig::default();
         c.wind.gust_tau_s = 0.0;

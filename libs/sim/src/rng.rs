@@ -11,7 +11,9 @@ impl Rng {
     /// Stream `stream` of seed `seed`. Different streams of one seed are independent, so adding a
     /// draw to one purpose never shifts the numbers of another.
     pub fn new(seed: u64, stream: u64) -> Rng {
-        let mut r = Rng { state: seed ^ stream.wrapping_mul(0xD1B5_4A32_D192_ED03) };
+        let mut r = Rng {
+            state: seed ^ stream.wrapping_mul(0xD1B5_4A32_D192_ED03),
+        };
         // Decorrelate nearby seeds before the first use.
         r.next_u64();
         r
@@ -61,9 +63,24 @@ mod tests {
 
     #[test]
     fn deterministic_and_streams_differ() {
-        let a: Vec<u64> = (0..4).map({ let mut r = Rng::new(5, 1); move |_| r.next_u64() }).collect();
-        let b: Vec<u64> = (0..4).map({ let mut r = Rng::new(5, 1); move |_| r.next_u64() }).collect();
-        let c: Vec<u64> = (0..4).map({ let mut r = Rng::new(5, 2); move |_| r.next_u64() }).collect();
+        let a: Vec<u64> = (0..4)
+            .map({
+                let mut r = Rng::new(5, 1);
+                move |_| r.next_u64()
+            })
+            .collect();
+        let b: Vec<u64> = (0..4)
+            .map({
+                let mut r = Rng::new(5, 1);
+                move |_| r.next_u64()
+            })
+            .collect();
+        let c: Vec<u64> = (0..4)
+            .map({
+                let mut r = Rng::new(5, 2);
+                move |_| r.next_u64()
+            })
+            .collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
     }

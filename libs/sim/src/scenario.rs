@@ -94,7 +94,11 @@ impl Scenario {
             scene,
             hub_ned,
             rotor_axis_heading_rad: heading,
-            start: VehicleStart { position_ned: start_ned, velocity_ned: [0.0; 3], yaw_rad: yaw },
+            start: VehicleStart {
+                position_ned: start_ned,
+                velocity_ned: [0.0; 3],
+                yaw_rad: yaw,
+            },
             start_distance_m: distance,
             start_lateral_m: lateral,
             start_height_m: height,
@@ -188,7 +192,11 @@ fn scene_for(seed: u64, cfg: &SimConfig) -> Scene {
     };
     s.second_turbine = sc.second_turbine;
     s.propellers_in_view = sc.propellers;
-    s.jpeg_quality = if sc.jpeg { Some(s.jpeg_quality.unwrap_or(r.range(55.0, 95.0) as u8)) } else { None };
+    s.jpeg_quality = if sc.jpeg {
+        Some(s.jpeg_quality.unwrap_or(r.range(55.0, 95.0) as u8))
+    } else {
+        None
+    };
     s
 }
 
@@ -217,7 +225,11 @@ pub fn render_camera(camera: &CameraConfig) -> Camera {
 /// The renderer's camera pose for the vehicle state: position relative to the hub in world axes,
 /// and the camera orientation (body attitude composed with the mount pitch) as yaw relative to
 /// the horizontal line of sight to the hub, absolute pitch and clockwise roll.
-pub fn camera_pose(scenario: &Scenario, vehicle: &Multicopter, camera: &CameraConfig) -> CameraPose {
+pub fn camera_pose(
+    scenario: &Scenario,
+    vehicle: &Multicopter,
+    camera: &CameraConfig,
+) -> CameraPose {
     let (x_axis, y_axis) = axes(scenario.rotor_axis_heading_rad);
     let d = sub(vehicle.position_ned(), scenario.hub_ned);
     let [roll, pitch, yaw] = vehicle.attitude();
@@ -228,7 +240,11 @@ pub fn camera_pose(scenario: &Scenario, vehicle: &Multicopter, camera: &CameraCo
 
     let horiz = fwd[0].hypot(fwd[1]);
     // Looking straight up or down has no heading: take the body's.
-    let heading = if horiz > 1e-9 { fwd[1].atan2(fwd[0]) } else { yaw };
+    let heading = if horiz > 1e-9 {
+        fwd[1].atan2(fwd[0])
+    } else {
+        yaw
+    };
     let cam_pitch = (-fwd[2]).clamp(-1.0, 1.0).asin();
     // Decompose the roll about the optical axis against the level camera of the same heading
     // and pitch (the renderer's construction).
@@ -290,7 +306,9 @@ pub fn geometry(scenario: &Scenario, vehicle: &Multicopter) -> Geometry {
         lateral_m,
         height_m: -d[2],
         rotor_plane_m,
-        heading_error_deg: wrap_deg((vehicle.attitude()[2] - bearing_to_hub(scenario, d)).to_degrees()),
+        heading_error_deg: wrap_deg(
+            (vehicle.attitude()[2] - bearing_to_hub(scenario, d)).to_degrees(),
+        ),
     }
 }
 
@@ -323,7 +341,10 @@ mod tests {
     }
 
     fn small_cam() -> CameraConfig {
-        CameraConfig { scale: 0.125, ..Default::default() }
+        CameraConfig {
+            scale: 0.125,
+            ..Default::default()
+        }
     }
 
     fn render(sc: &Scenario, pose: &CameraPose, cam: &CameraConfig) -> Truth {
@@ -343,7 +364,13 @@ mod tests {
         assert_ne!(a.rotor_axis_heading_rad, b.rotor_axis_heading_rad);
         assert_ne!(a.scene, b.scene);
         assert_ne!(a.wind_mean_ned, b.wind_mean_ned);
-        assert_eq!(Scenario::from_config(&SimConfig { seed: 42, ..cfg.clone() }), a);
+        assert_eq!(
+            Scenario::from_config(&SimConfig {
+                seed: 42,
+                ..cfg.clone()
+            }),
+            a
+        );
     }
 
     #[test]
@@ -356,7 +383,10 @@ mod tests {
             assert!((sc_cfg.distance_m[0]..=sc_cfg.distance_m[1]).contains(&s.start_distance_m));
             assert!((sc_cfg.lateral_m[0]..=sc_cfg.lateral_m[1]).contains(&s.start_lateral_m));
             assert!((sc_cfg.height_m[0]..=sc_cfg.height_m[1]).contains(&s.start_height_m));
-            assert!((sc_cfg.heading_offset_deg[0]..=sc_cfg.heading_offset_deg[1]).contains(&s.start_heading_offset_deg));
+            assert!(
+                (sc_cfg.heading_offset_deg[0]..=sc_cfg.heading_offset_deg[1])
+                    .contains(&s.start_heading_offset_deg)
+            );
             assert!((0.0..std::f64::consts::TAU).contains(&s.rotor_axis_heading_rad));
             headings.push(s.rotor_axis_heading_rad);
             min_h = min_h.min(s.start_heading_offset_deg);
@@ -379,7 +409,9 @@ mod tests {
             assert!((off - s.start_heading_offset_deg).abs() < 1e-9);
             // Origin on the ground under the start.
             assert_eq!(s.start.position_ned[0], 0.0);
-            assert!((-s.start.position_ned[2] - (s.scene.hub_height_m + s.start_height_m)).abs() < 1e-9);
+            assert!(
+                (-s.start.position_ned[2] - (s.scene.hub_height_m + s.start_height_m)).abs() < 1e-9
+            );
             assert!((s.tower_base_ned()[2]).abs() < 1e-9);
         }
         // Headings cover the circle (yaw wrap is exercised) and the offsets their range.
@@ -403,7 +435,9 @@ mod tests {
         };
         let s = Scenario::from_seed(7, &cfg);
         assert_ne!(s.scene.distractor, Distractor::None);
-        assert!(s.scene.second_turbine && s.scene.propellers_in_view && s.scene.jpeg_quality.is_some());
+        assert!(
+            s.scene.second_turbine && s.scene.propellers_in_view && s.scene.jpeg_quality.is_some()
+        );
         assert!((s.rotor_axis_heading_rad - 123f64.to_radians()).abs() < 1e-12);
         assert_eq!(s.start_distance_m, 30.0);
         assert_eq!(s.scene_for_frame(9).frame, 9);
@@ -437,8 +471,15 @@ mod tests {
         assert_eq!((c.width, c.height), (960, 540));
         assert!((c.fx - Camera::gopro_hero3().fx / 2.0).abs() < 1e-9);
         assert_eq!((c.cx, c.cy), (479.5, 269.5));
-        assert_eq!((c.k1, c.k2), (Camera::gopro_hero3().k1, Camera::gopro_hero3().k2));
-        let u = render_camera(&CameraConfig { model: CameraModel::Usb, scale: 1.0, mount_pitch_deg: 0.0 });
+        assert_eq!(
+            (c.k1, c.k2),
+            (Camera::gopro_hero3().k1, Camera::gopro_hero3().k2)
+        );
+        let u = render_camera(&CameraConfig {
+            model: CameraModel::Usb,
+            scale: 1.0,
+            mount_pitch_deg: 0.0,
+        });
         assert_eq!(u, Camera::usb_narrow());
     }
 
@@ -459,7 +500,10 @@ mod tests {
             let cam = render_camera(&small_cam());
             let t = render(&s, &pose, &small_cam());
             let hub = t.hub_px.unwrap();
-            assert!((hub[0] - cam.cx).abs() < 1e-6 && (hub[1] - cam.cy).abs() < 1e-6, "{hub:?}");
+            assert!(
+                (hub[0] - cam.cx).abs() < 1e-6 && (hub[1] - cam.cy).abs() < 1e-6,
+                "{hub:?}"
+            );
             assert!((t.distance_m - g.distance_m).abs() < 1e-9);
             assert!((t.relative_yaw_deg - g.relative_yaw_deg).abs() < 1e-9);
             assert!((g.relative_yaw_deg - 4f64.atan2(20.0).to_degrees()).abs() < 1e-9);
@@ -473,13 +517,19 @@ mod tests {
         let p = at_offsets(&s, 15.0, -3.0, -6.0);
         let v = vehicle_at(&s, p, 0.0, 0.0, bearing(&s, p));
         let elevation = 6f64.atan2(15f64.hypot(3.0)).to_degrees();
-        let cam = CameraConfig { mount_pitch_deg: elevation, ..small_cam() };
+        let cam = CameraConfig {
+            mount_pitch_deg: elevation,
+            ..small_cam()
+        };
         let pose = camera_pose(&s, &v, &cam);
         assert!((pose.pitch_deg - elevation).abs() < 1e-9);
         let t = render(&s, &pose, &cam);
         let c = render_camera(&cam);
         let hub = t.hub_px.unwrap();
-        assert!((hub[0] - c.cx).abs() < 1e-6 && (hub[1] - c.cy).abs() < 1e-6, "{hub:?}");
+        assert!(
+            (hub[0] - c.cx).abs() < 1e-6 && (hub[1] - c.cy).abs() < 1e-6,
+            "{hub:?}"
+        );
         let g = geometry(&s, &v);
         assert!((t.distance_m - g.distance_m).abs() < 1e-9);
         assert!((t.relative_yaw_deg - g.relative_yaw_deg).abs() < 1e-9);
@@ -500,7 +550,10 @@ mod tests {
         };
         // Yaw left (heading decreases): the hub moves right.
         let left = hub_px(0.0, 0.0, b - 10f64.to_radians());
-        assert!(left[0] > c.cx + 5.0 && (left[1] - c.cy).abs() < 1e-6, "{left:?}");
+        assert!(
+            left[0] > c.cx + 5.0 && (left[1] - c.cy).abs() < 1e-6,
+            "{left:?}"
+        );
         let v = vehicle_at(&s, p, 0.0, 0.0, b - 10f64.to_radians());
         assert!((camera_pose(&s, &v, &cam).yaw_deg + 10.0).abs() < 1e-9);
         assert!((geometry(&s, &v).heading_error_deg + 10.0).abs() < 1e-9);
@@ -509,7 +562,10 @@ mod tests {
         let v = vehicle_at(&s, p, 0.0, -8f64.to_radians(), b);
         assert!((camera_pose(&s, &v, &cam).pitch_deg + 8.0).abs() < 1e-9);
         let down = hub_px(0.0, -8f64.to_radians(), b);
-        assert!(down[1] < c.cy - 5.0 && (down[0] - c.cx).abs() < 1e-6, "{down:?}");
+        assert!(
+            down[1] < c.cy - 5.0 && (down[0] - c.cx).abs() < 1e-6,
+            "{down:?}"
+        );
         // Roll right (right side down): camera roll positive; a hub to the right of the centre
         // (vehicle yawed left) rises in the image.
         let v = vehicle_at(&s, p, 10f64.to_radians(), 0.0, b);
@@ -523,13 +579,19 @@ mod tests {
         // The renderer's hub_cam_m (hub in the camera frame: x right, y down, z forward) must equal
         // the hub expressed in our camera axes built directly from the body rotation.
         let cfg = SimConfig::default();
-        for (seed, roll, pitch, dyaw, mount) in
-            [(1u64, 0.1, -0.15, 0.2, 0.0), (2, -0.2, 0.1, -0.3, 12.0), (3, 0.25, 0.2, 0.05, -20.0), (4, 0.0, 0.0, 3.0, 0.0)]
-        {
+        for (seed, roll, pitch, dyaw, mount) in [
+            (1u64, 0.1, -0.15, 0.2, 0.0),
+            (2, -0.2, 0.1, -0.3, 12.0),
+            (3, 0.25, 0.2, 0.05, -20.0),
+            (4, 0.0, 0.0, 3.0, 0.0),
+        ] {
             let s = Scenario::from_seed(seed, &cfg);
             let p = at_offsets(&s, 18.0, -5.0, -3.0);
             let v = vehicle_at(&s, p, roll, pitch, bearing(&s, p) + dyaw);
-            let cam = CameraConfig { mount_pitch_deg: mount, ..small_cam() };
+            let cam = CameraConfig {
+                mount_pitch_deg: mount,
+                ..small_cam()
+            };
             let pose = camera_pose(&s, &v, &cam);
             let t = render(&s, &pose, &cam);
             let r = body_to_ned(roll, pitch, v.attitude()[2]);
@@ -540,7 +602,11 @@ mod tests {
             let d = sub(s.hub_ned, p);
             let expected = [dot(d, right), dot(d, down), dot(d, fwd)];
             for i in 0..3 {
-                assert!((t.hub_cam_m[i] - expected[i]).abs() < 1e-6, "seed {seed}: {:?} vs {expected:?}", t.hub_cam_m);
+                assert!(
+                    (t.hub_cam_m[i] - expected[i]).abs() < 1e-6,
+                    "seed {seed}: {:?} vs {expected:?}",
+                    t.hub_cam_m
+                );
             }
         }
     }

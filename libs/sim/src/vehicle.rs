@@ -53,7 +53,10 @@ pub struct VelocityCommand {
 
 impl VelocityCommand {
     /// Hold position and heading.
-    pub const HOVER: VelocityCommand = VelocityCommand { velocity_ned: [0.0; 3], yaw_rate: 0.0 };
+    pub const HOVER: VelocityCommand = VelocityCommand {
+        velocity_ned: [0.0; 3],
+        yaw_rate: 0.0,
+    };
 }
 
 /// The simulated multicopter.
@@ -128,7 +131,10 @@ impl Multicopter {
         if !self.trimmed {
             // The vehicle was already hovering in this wind before the simulation started.
             self.disturbance_est = disturbance;
-            let a_th = [self.vel[0] * drag - disturbance[0], self.vel[1] * drag - disturbance[1]];
+            let a_th = [
+                self.vel[0] * drag - disturbance[0],
+                self.vel[1] * drag - disturbance[1],
+            ];
             let (r, p) = tilt_for(a_th, lift, self.yaw);
             self.roll = r;
             self.pitch = p;
@@ -156,7 +162,11 @@ impl Multicopter {
 
         // Yaw.
         let max_rate = c.max_yaw_rate_deg_s.to_radians();
-        let r_cmd = if cmd.yaw_rate.is_finite() { cmd.yaw_rate.clamp(-max_rate, max_rate) } else { 0.0 };
+        let r_cmd = if cmd.yaw_rate.is_finite() {
+            cmd.yaw_rate.clamp(-max_rate, max_rate)
+        } else {
+            0.0
+        };
         self.yaw_rate += (r_cmd - self.yaw_rate) * (1.0 - (-dt / c.yaw_tc_s).exp());
         self.yaw = wrap_pi(self.yaw + self.yaw_rate * dt);
 
@@ -277,11 +287,22 @@ mod tests {
     use crate::params::WindConfig;
 
     fn calm() -> Wind {
-        Wind::new(1, &WindConfig { mean_speed_m_s: [0.0, 0.0], gust_sigma_m_s: 0.0, gust_tau_s: 2.0 })
+        Wind::new(
+            1,
+            &WindConfig {
+                mean_speed_m_s: [0.0, 0.0],
+                gust_sigma_m_s: 0.0,
+                gust_tau_s: 2.0,
+            },
+        )
     }
 
     fn start(yaw: f64) -> VehicleStart {
-        VehicleStart { position_ned: [0.0, 0.0, -70.0], velocity_ned: [0.0; 3], yaw_rad: yaw }
+        VehicleStart {
+            position_ned: [0.0, 0.0, -70.0],
+            velocity_ned: [0.0; 3],
+            yaw_rad: yaw,
+        }
     }
 
     const DT: f64 = 0.005;
@@ -307,7 +328,10 @@ mod tests {
         let mut v = Multicopter::new(&start(0.0), &cfg);
         let mut w = calm();
         // 1 m/s north: the initial demand 1/0.6 = 1.7 m/s² is below the acceleration limit.
-        let cmd = VelocityCommand { velocity_ned: [1.0, 0.0, 0.0], yaw_rate: 0.0 };
+        let cmd = VelocityCommand {
+            velocity_ned: [1.0, 0.0, 0.0],
+            yaw_rate: 0.0,
+        };
         run(&mut v, &mut w, cmd, cfg.velocity_tc_s);
         // First-order lag would give 63 %; the attitude lag (0.15 s) delays it a little.
         let at_tau = v.velocity_ned()[0];
@@ -321,7 +345,11 @@ mod tests {
         // At constant speed in calm air the thrust only balances the rotor drag: nose down by
         // atan(c·v/g).
         let expected = -(cfg.drag_per_s * 1.0 / GRAVITY_M_S2).atan();
-        assert!((v.attitude()[1] - expected).abs() < 1e-4, "{:?}", v.attitude());
+        assert!(
+            (v.attitude()[1] - expected).abs() < 1e-4,
+            "{:?}",
+            v.attitude()
+        );
     }
 
     #[test]
@@ -330,21 +358,54 @@ mod tests {
         // Heading east; command east (forward) then south (to the right).
         let mut v = Multicopter::new(&start(std::f64::consts::FRAC_PI_2), &cfg);
         let mut w = calm();
-        run(&mut v, &mut w, VelocityCommand { velocity_ned: [0.0, 2.0, 0.0], yaw_rate: 0.0 }, 0.5);
+        run(
+            &mut v,
+            &mut w,
+            VelocityCommand {
+                velocity_ned: [0.0, 2.0, 0.0],
+                yaw_rate: 0.0,
+            },
+            0.5,
+        );
         let [roll, pitch, _] = v.attitude();
-        assert!(pitch < -5f64.to_radians(), "forward acceleration pitches the nose down: {pitch}");
+        assert!(
+            pitch < -5f64.to_radians(),
+            "forward acceleration pitches the nose down: {pitch}"
+        );
         assert!(roll.abs() < 1e-9);
         assert!(v.body_rates()[1].abs() < 1.0);
 
         let mut v = Multicopter::new(&start(std::f64::consts::FRAC_PI_2), &cfg);
-        run(&mut v, &mut w, VelocityCommand { velocity_ned: [-2.0, 0.0, 0.0], yaw_rate: 0.0 }, 0.5);
+        run(
+            &mut v,
+            &mut w,
+            VelocityCommand {
+                velocity_ned: [-2.0, 0.0, 0.0],
+                yaw_rate: 0.0,
+            },
+            0.5,
+        );
         let [roll, pitch, _] = v.attitude();
-        assert!(roll > 5f64.to_radians(), "accelerating right rolls right side down: {roll}");
+        assert!(
+            roll > 5f64.to_radians(),
+            "accelerating right rolls right side down: {roll}"
+        );
         assert!(pitch.abs() < 1e-9);
         // Decelerating: nose up.
-        run(&mut v, &mut w, VelocityCommand { velocity_ned: [-2.0, 0.0, 0.0], yaw_rate: 0.0 }, 5.0);
+        run(
+            &mut v,
+            &mut w,
+            VelocityCommand {
+                velocity_ned: [-2.0, 0.0, 0.0],
+                yaw_rate: 0.0,
+            },
+            5.0,
+        );
         run(&mut v, &mut w, VelocityCommand::HOVER, 0.4);
-        assert!(v.attitude()[0] < -2f64.to_radians(), "braking a rightward motion rolls left");
+        assert!(
+            v.attitude()[0] < -2f64.to_radians(),
+            "braking a rightward motion rolls left"
+        );
     }
 
     #[test]
@@ -352,7 +413,10 @@ mod tests {
         let cfg = VehicleConfig::default();
         let mut v = Multicopter::new(&start(0.0), &cfg);
         let mut w = calm();
-        let cmd = VelocityCommand { velocity_ned: [20.0, 0.0, 0.0], yaw_rate: 0.0 };
+        let cmd = VelocityCommand {
+            velocity_ned: [20.0, 0.0, 0.0],
+            yaw_rate: 0.0,
+        };
         let mut max_a: f64 = 0.0;
         for _ in 0..2000 {
             v.step(DT, &cmd, &mut w);
@@ -363,7 +427,15 @@ mod tests {
         // Speed limit.
         assert!((v.velocity_ned()[0] - cfg.max_speed_m_s).abs() < 1e-3);
         // Climb limit.
-        run(&mut v, &mut w, VelocityCommand { velocity_ned: [0.0, 0.0, -9.0], yaw_rate: 0.0 }, 6.0);
+        run(
+            &mut v,
+            &mut w,
+            VelocityCommand {
+                velocity_ned: [0.0, 0.0, -9.0],
+                yaw_rate: 0.0,
+            },
+            6.0,
+        );
         assert!((v.velocity_ned()[2] + cfg.max_climb_m_s).abs() < 1e-3);
     }
 
@@ -373,9 +445,20 @@ mod tests {
         let mut v = Multicopter::new(&start(3.0), &cfg);
         let mut w = calm();
         // Ask for 5 rad/s: limited to 90 °/s.
-        run(&mut v, &mut w, VelocityCommand { velocity_ned: [0.0; 3], yaw_rate: 5.0 }, 2.0);
+        run(
+            &mut v,
+            &mut w,
+            VelocityCommand {
+                velocity_ned: [0.0; 3],
+                yaw_rate: 5.0,
+            },
+            2.0,
+        );
         let r = v.body_rates()[2];
-        assert!((r - cfg.max_yaw_rate_deg_s.to_radians()).abs() < 1e-3, "{r}");
+        assert!(
+            (r - cfg.max_yaw_rate_deg_s.to_radians()).abs() < 1e-3,
+            "{r}"
+        );
         assert!(r <= cfg.max_yaw_rate_deg_s.to_radians());
         let yaw = v.attitude()[2];
         assert!(yaw > -std::f64::consts::PI && yaw <= std::f64::consts::PI);
@@ -384,7 +467,15 @@ mod tests {
         assert!((yaw - expected).abs() < 0.01, "{yaw} vs {expected}");
         // The yaw rate response has the configured lag.
         let mut v = Multicopter::new(&start(0.0), &cfg);
-        run(&mut v, &mut w, VelocityCommand { velocity_ned: [0.0; 3], yaw_rate: 0.5 }, cfg.yaw_tc_s);
+        run(
+            &mut v,
+            &mut w,
+            VelocityCommand {
+                velocity_ned: [0.0; 3],
+                yaw_rate: 0.5,
+            },
+            cfg.yaw_tc_s,
+        );
         let frac = v.body_rates()[2] / 0.5;
         assert!((frac - 0.632).abs() < 0.01, "{frac}");
     }
@@ -394,11 +485,21 @@ mod tests {
         let cfg = VehicleConfig::default();
         let mut v = Multicopter::new(&start(0.0), &cfg);
         // 5 m/s air moving east (wind from the west), no gusts.
-        let mut w = Wind::new(1, &WindConfig { mean_speed_m_s: [5.0, 5.0], gust_sigma_m_s: 0.0, gust_tau_s: 2.0 });
+        let mut w = Wind::new(
+            1,
+            &WindConfig {
+                mean_speed_m_s: [5.0, 5.0],
+                gust_sigma_m_s: 0.0,
+                gust_tau_s: 2.0,
+            },
+        );
         let m = w.mean_ned();
         run(&mut v, &mut w, VelocityCommand::HOVER, 20.0);
         let p = v.position_ned();
-        assert!(p[0].abs() < 1e-6 && p[1].abs() < 1e-6, "trimmed at the start, so no drift: {p:?}");
+        assert!(
+            p[0].abs() < 1e-6 && p[1].abs() < 1e-6,
+            "trimmed at the start, so no drift: {p:?}"
+        );
         // Tilted into the wind: the thrust's horizontal part points upwind.
         let [roll, pitch, _] = v.attitude();
         let a_fwd = -GRAVITY_M_S2 * pitch.tan();
@@ -415,7 +516,14 @@ mod tests {
     fn gusts_cause_velocity_errors_of_a_few_decimetres_per_second() {
         let cfg = VehicleConfig::default();
         let mut v = Multicopter::new(&start(0.0), &cfg);
-        let mut w = Wind::new(5, &WindConfig { mean_speed_m_s: [4.0, 4.0], gust_sigma_m_s: 1.0, gust_tau_s: 2.0 });
+        let mut w = Wind::new(
+            5,
+            &WindConfig {
+                mean_speed_m_s: [4.0, 4.0],
+                gust_sigma_m_s: 1.0,
+                gust_tau_s: 2.0,
+            },
+        );
         let mut sum2 = 0.0;
         let mut max: f64 = 0.0;
         let n = (120.0 / DT) as usize;
@@ -439,7 +547,10 @@ mod tests {
         let fly = || {
             let mut v = Multicopter::new(&start(0.5), &cfg);
             let mut w = Wind::new(9, &WindConfig::default());
-            let cmd = VelocityCommand { velocity_ned: [1.0, -0.5, 0.2], yaw_rate: 0.1 };
+            let cmd = VelocityCommand {
+                velocity_ned: [1.0, -0.5, 0.2],
+                yaw_rate: 0.1,
+            };
             run(&mut v, &mut w, cmd, 5.0);
             (v.position_ned(), v.attitude(), v.body_rates())
         };

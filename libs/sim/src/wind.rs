@@ -34,7 +34,13 @@ impl Wind {
         let dir = rng.range(0.0, std::f64::consts::TAU);
         let sigma = cfg.gust_sigma_m_s.max(0.0);
         let gust = [sigma * rng.gaussian(), sigma * rng.gaussian(), 0.0];
-        Wind { rng, mean: [speed * dir.cos(), speed * dir.sin(), 0.0], gust, sigma, tau: cfg.gust_tau_s }
+        Wind {
+            rng,
+            mean: [speed * dir.cos(), speed * dir.sin(), 0.0],
+            gust,
+            sigma,
+            tau: cfg.gust_tau_s,
+        }
     }
 
     /// Advance the gust by `dt` seconds and return the wind (air velocity, NED, m/s) after it.
@@ -53,7 +59,11 @@ impl Wind {
 
     /// The wind now (mean + gust), NED, m/s.
     pub fn current(&self) -> [f64; 3] {
-        [self.mean[0] + self.gust[0], self.mean[1] + self.gust[1], 0.0]
+        [
+            self.mean[0] + self.gust[0],
+            self.mean[1] + self.gust[1],
+            0.0,
+        ]
     }
 
     /// The mean wind, NED, m/s.
@@ -68,7 +78,10 @@ impl Wind {
 
     /// Meteorological direction the mean wind blows *from*, degrees clockwise from north, [0, 360).
     pub fn from_heading_deg(&self) -> f64 {
-        (-self.mean[1]).atan2(-self.mean[0]).to_degrees().rem_euclid(360.0)
+        (-self.mean[1])
+            .atan2(-self.mean[0])
+            .to_degrees()
+            .rem_euclid(360.0)
     }
 }
 
@@ -89,7 +102,11 @@ mod tests {
 
     #[test]
     fn mean_speed_in_range_and_gust_statistics() {
-        let cfg = WindConfig { mean_speed_m_s: [1.0, 3.0], gust_sigma_m_s: 1.5, gust_tau_s: 2.0 };
+        let cfg = WindConfig {
+            mean_speed_m_s: [1.0, 3.0],
+            gust_sigma_m_s: 1.5,
+            gust_tau_s: 2.0,
+        };
         for seed in 0..50 {
             let w = Wind::new(seed, &cfg);
             let m = w.mean_ned();
@@ -100,19 +117,30 @@ mod tests {
         // Gust variance and correlation time over a long run.
         let mut w = Wind::new(11, &cfg);
         let dt = 0.05;
-        let xs: Vec<f64> = (0..400_000).map(|_| w.step(dt)[0] - w.mean_ned()[0]).collect();
+        let xs: Vec<f64> = (0..400_000)
+            .map(|_| w.step(dt)[0] - w.mean_ned()[0])
+            .collect();
         let var = xs.iter().map(|x| x * x).sum::<f64>() / xs.len() as f64;
         assert!((var.sqrt() - 1.5).abs() < 0.1, "sigma {}", var.sqrt());
         // Autocorrelation at one correlation time is e^-1.
         let lag = (2.0 / dt) as usize;
-        let cov = xs.iter().zip(&xs[lag..]).map(|(a, b)| a * b).sum::<f64>() / (xs.len() - lag) as f64;
-        assert!((cov / var - (-1.0f64).exp()).abs() < 0.06, "rho {}", cov / var);
+        let cov =
+            xs.iter().zip(&xs[lag..]).map(|(a, b)| a * b).sum::<f64>() / (xs.len() - lag) as f64;
+        assert!(
+            (cov / var - (-1.0f64).exp()).abs() < 0.06,
+            "rho {}",
+            cov / var
+        );
         assert!(xs.iter().all(|x| x.is_finite()));
     }
 
     #[test]
     fn calm_config_gives_no_wind() {
-        let cfg = WindConfig { mean_speed_m_s: [0.0, 0.0], gust_sigma_m_s: 0.0, gust_tau_s: 2.0 };
+        let cfg = WindConfig {
+            mean_speed_m_s: [0.0, 0.0],
+            gust_sigma_m_s: 0.0,
+            gust_tau_s: 2.0,
+        };
         let mut w = Wind::new(1, &cfg);
         for _ in 0..100 {
             assert_eq!(w.step(0.01), [0.0, 0.0, 0.0]);
@@ -123,7 +151,10 @@ mod tests {
     fn from_heading_is_opposite_to_the_air_velocity() {
         let mut w = Wind::new(1, &WindConfig::default());
         w.mean = [-3.0, 0.0, 0.0]; // air moving south = wind from the north
-        assert!((w.from_heading_deg() - 0.0).abs() < 1e-9 || (w.from_heading_deg() - 360.0).abs() < 1e-9);
+        assert!(
+            (w.from_heading_deg() - 0.0).abs() < 1e-9
+                || (w.from_heading_deg() - 360.0).abs() < 1e-9
+        );
         w.mean = [0.0, -2.0, 0.0]; // air moving west = wind from the east
         assert!((w.from_heading_deg() - 90.0).abs() < 1e-9);
     }

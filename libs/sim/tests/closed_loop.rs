@@ -2,7 +2,9 @@
 //! target hover on several seeds, under the default (gusty) wind, and the outcome rules accept it.
 
 use hubtrack_sim::*;
-use mavlink::dialects::common::{MavFrame, MavMessage, PositionTargetTypemask, SET_POSITION_TARGET_LOCAL_NED_DATA};
+use mavlink::dialects::common::{
+    MavFrame, MavMessage, PositionTargetTypemask, SET_POSITION_TARGET_LOCAL_NED_DATA,
+};
 
 fn setpoint(v: [f64; 3], yaw_rate: f64) -> MavMessage {
     MavMessage::SET_POSITION_TARGET_LOCAL_NED(SET_POSITION_TARGET_LOCAL_NED_DATA {
@@ -31,7 +33,11 @@ fn fly(seed: u64, cfg: &SimConfig) -> (Outcome, AutopilotStats) {
     let mut wind = s.wind(&cfg.wind);
     let mut ap = Autopilot::new(&cfg.autopilot);
     let mut rec = FlightRecorder::from_config(seed, cfg);
-    let header = mavlink::MavHeader { system_id: 1, component_id: 191, sequence: 0 };
+    let header = mavlink::MavHeader {
+        system_id: 1,
+        component_id: 191,
+        sequence: 0,
+    };
     let dt = 1.0 / cfg.physics_hz;
     let steps_per_setpoint = (cfg.physics_hz / 10.0).round() as u64;
     let axis = s.rotor_axis_ned();
@@ -46,7 +52,11 @@ fn fly(seed: u64, cfg: &SimConfig) -> (Outcome, AutopilotStats) {
         if k.is_multiple_of(steps_per_setpoint) {
             let g = geometry(&s, &v);
             let p = v.position_ned();
-            let mut vel = [0.4 * (goal[0] - p[0]), 0.4 * (goal[1] - p[1]), 0.4 * (goal[2] - p[2])];
+            let mut vel = [
+                0.4 * (goal[0] - p[0]),
+                0.4 * (goal[1] - p[1]),
+                0.4 * (goal[2] - p[2]),
+            ];
             let n = vel[0].hypot(vel[1]);
             if n > 2.0 {
                 vel[0] *= 2.0 / n;

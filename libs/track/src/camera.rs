@@ -50,12 +50,20 @@ impl Pinhole {
 
     /// Camera for a `width` × `height` frame with focal length `f_px`.
     pub fn with_focal(width: u32, height: u32, f_px: f64) -> Pinhole {
-        Pinhole { f_px, cx: (f64::from(width) - 1.0) / 2.0, cy: (f64::from(height) - 1.0) / 2.0 }
+        Pinhole {
+            f_px,
+            cx: (f64::from(width) - 1.0) / 2.0,
+            cy: (f64::from(height) - 1.0) / 2.0,
+        }
     }
 
     /// Viewing ray of a pixel in the camera frame, `z = 1`.
     pub fn ray(&self, px: [f64; 2]) -> Vector3<f64> {
-        Vector3::new((px[0] - self.cx) / self.f_px, (px[1] - self.cy) / self.f_px, 1.0)
+        Vector3::new(
+            (px[0] - self.cx) / self.f_px,
+            (px[1] - self.cy) / self.f_px,
+            1.0,
+        )
     }
 
     /// Pixel of a camera-frame point; `None` behind (or beside) the camera.
@@ -63,7 +71,10 @@ impl Pinhole {
         if p.z <= MIN_FORWARD_FRACTION * p.norm() {
             return None;
         }
-        Some([self.cx + self.f_px * p.x / p.z, self.cy + self.f_px * p.y / p.z])
+        Some([
+            self.cx + self.f_px * p.x / p.z,
+            self.cy + self.f_px * p.y / p.z,
+        ])
     }
 }
 
@@ -125,7 +136,10 @@ pub fn camera_pose_at(
     let w = Vector3::from(v.body_rates_rad_s);
     let r_wb = r_wb0 * Rotation3::new(w * age);
     let v_w = (use_velocity && v.position_valid).then(|| Vector3::from(v.velocity_ned_m_s));
-    Some(CameraPose { r_wc: r_wb * r_bc, v_w })
+    Some(CameraPose {
+        r_wc: r_wb * r_bc,
+        v_w,
+    })
 }
 
 /// Camera position at `t_ns`, world frame (NED), m: the vehicle's local position carried on
@@ -180,8 +194,8 @@ pub fn ego_motion(
         (Some(d), Some(v)) if d > 0.0 => {
             let h0 = u_w * d; // point relative to the camera before
             let h1 = h0 - v * dt; // and after the camera moved
-            // Bearing (clockwise from north) of the camera seen from the point; the relative
-            // yaw grows when that bearing turns anticlockwise (camera moves to its right).
+                                  // Bearing (clockwise from north) of the camera seen from the point; the relative
+                                  // yaw grows when that bearing turns anticlockwise (camera moves to its right).
             let bearing = |h: &Vector3<f64>| (-h.y).atan2(-h.x);
             let horizontal = |h: &Vector3<f64>| h.x.hypot(h.y);
             let dyaw = if horizontal(&h0) > 0.0 && horizontal(&h1) > 0.0 {
@@ -195,7 +209,11 @@ pub fn ego_motion(
     };
     let p_c1 = p1.r_wc.inverse() * h_w;
     let px1 = cam.project(&p_c1)?;
-    Some(EgoMotion { px: px1, range_m: range, relative_yaw_change_rad: dyaw })
+    Some(EgoMotion {
+        px: px1,
+        range_m: range,
+        relative_yaw_change_rad: dyaw,
+    })
 }
 
 /// Wraps an angle to (−π, π].
@@ -214,7 +232,10 @@ mod tests {
 
     fn pose(roll: f64, pitch: f64, yaw: f64) -> CameraPose {
         let r_bc = camera_to_body(0.0);
-        CameraPose { r_wc: Rotation3::from_euler_angles(roll, pitch, yaw) * r_bc, v_w: None }
+        CameraPose {
+            r_wc: Rotation3::from_euler_angles(roll, pitch, yaw) * r_bc,
+            v_w: None,
+        }
     }
 
     #[test]
@@ -243,21 +264,41 @@ mod tests {
         let c = [cam.cx, cam.cy];
         let d = 0.05;
         let m = ego_motion(&cam, c, &pose(0.0, 0.0, 0.0), &pose(0.0, 0.0, d), 0.1, None).unwrap();
-        assert!((m.px[0] - (cam.cx - cam.f_px * d.tan())).abs() < 1e-9, "{:?}", m.px);
+        assert!(
+            (m.px[0] - (cam.cx - cam.f_px * d.tan())).abs() < 1e-9,
+            "{:?}",
+            m.px
+        );
         assert!((m.px[1] - cam.cy).abs() < 1e-9);
         let m = ego_motion(&cam, c, &pose(0.0, 0.0, 0.0), &pose(0.0, d, 0.0), 0.1, None).unwrap();
-        assert!((m.px[1] - (cam.cy + cam.f_px * d.tan())).abs() < 1e-9, "{:?}", m.px);
+        assert!(
+            (m.px[1] - (cam.cy + cam.f_px * d.tan())).abs() < 1e-9,
+            "{:?}",
+            m.px
+        );
         assert!((m.px[0] - cam.cx).abs() < 1e-9);
         // Roll right wing down: a point on the right of the image moves up.
         let right = [cam.cx + 300.0, cam.cy];
-        let m = ego_motion(&cam, right, &pose(0.0, 0.0, 0.0), &pose(d, 0.0, 0.0), 0.1, None).unwrap();
+        let m = ego_motion(
+            &cam,
+            right,
+            &pose(0.0, 0.0, 0.0),
+            &pose(d, 0.0, 0.0),
+            0.1,
+            None,
+        )
+        .unwrap();
         assert!(m.px[1] < cam.cy - 10.0, "{:?}", m.px);
     }
 
     #[test]
     fn rates_extrapolate_the_attitude() {
         let r_bc = camera_to_body(0.0);
-        let mut v = VehicleState { attitude_valid: true, recv_ns: 1_000_000_000, ..Default::default() };
+        let mut v = VehicleState {
+            attitude_valid: true,
+            recv_ns: 1_000_000_000,
+            ..Default::default()
+        };
         v.body_rates_rad_s = [0.0, 0.0, 0.5];
         let p = camera_pose_at(&v, 1_200_000_000, 0.5, &r_bc, true).unwrap();
         let (_, _, yaw) = (p.r_wc * r_bc.inverse()).euler_angles();
@@ -278,7 +319,11 @@ mod tests {
         let dyaw = m.relative_yaw_change_rad.unwrap();
         assert!((dyaw - (1.0f64 / 20.0).atan()).abs() < 1e-9, "{dyaw}");
         // The point stays put in the world, the camera moved right: it appears left of centre.
-        assert!((m.px[0] - (cam.cx - cam.f_px / 20.0)).abs() < 1e-6, "{:?}", m.px);
+        assert!(
+            (m.px[0] - (cam.cx - cam.f_px / 20.0)).abs() < 1e-6,
+            "{:?}",
+            m.px
+        );
         assert!((m.range_m.unwrap() - 401f64.sqrt()).abs() < 1e-9);
     }
 }

@@ -47,16 +47,29 @@ impl Estimate {
 
 /// Depth of an object of real size `real_size_m` that appears `size_px` large:
 /// `d = f·D/w`, `σ_d = d·σ_w/w`. `None` for a non-positive or non-finite size.
-pub fn distance_from_size(f_px: f64, real_size_m: f64, size_px: f64, size_std_px: f64) -> Option<Estimate> {
+pub fn distance_from_size(
+    f_px: f64,
+    real_size_m: f64,
+    size_px: f64,
+    size_std_px: f64,
+) -> Option<Estimate> {
     if !(size_px.is_finite() && size_px > 0.0 && f_px > 0.0 && real_size_m > 0.0) {
         return None;
     }
     let d = f_px * real_size_m / size_px;
-    Some(Estimate { value: d, std: d * size_std_px / size_px })
+    Some(Estimate {
+        value: d,
+        std: d * size_std_px / size_px,
+    })
 }
 
 /// Depth of the tower axis from the tower width: [`distance_from_size`] with the tower diameter.
-pub fn distance_from_tower_width(f_px: f64, tower_diameter_m: f64, width_px: f64, width_std_px: f64) -> Option<Estimate> {
+pub fn distance_from_tower_width(
+    f_px: f64,
+    tower_diameter_m: f64,
+    width_px: f64,
+    width_std_px: f64,
+) -> Option<Estimate> {
     distance_from_size(f_px, tower_diameter_m, width_px, width_std_px)
 }
 
@@ -65,8 +78,18 @@ pub fn distance_from_tower_width(f_px: f64, tower_diameter_m: f64, width_px: f64
 /// half-angle `asin(R/d)`, so its image radius is `r = f·R / √(d² − R²)` and
 /// `d = R·√(1 + (f/r)²)` (the flat-disc `f·R/r` reads 4–5 % short at 5–10 m, which is the whole
 /// ±0.5 m tolerance at the 5 m target). `σ_d = |∂d/∂r|·σ_r = R·f² / (r³·√(1 + (f/r)²))·σ_r`.
-pub fn distance_from_spinner(f_px: f64, spinner_diameter_m: f64, radius_px: f64, radius_std_px: f64) -> Option<Estimate> {
-    if !(f_px > 0.0 && spinner_diameter_m > 0.0 && radius_px > 0.0 && radius_px.is_finite() && radius_std_px >= 0.0) {
+pub fn distance_from_spinner(
+    f_px: f64,
+    spinner_diameter_m: f64,
+    radius_px: f64,
+    radius_std_px: f64,
+) -> Option<Estimate> {
+    if !(f_px > 0.0
+        && spinner_diameter_m > 0.0
+        && radius_px > 0.0
+        && radius_px.is_finite()
+        && radius_std_px >= 0.0)
+    {
         return None;
     }
     let rr = spinner_diameter_m / 2.0;
@@ -80,12 +103,18 @@ pub fn distance_from_spinner(f_px: f64, spinner_diameter_m: f64, radius_px: f64,
 /// `σ² = 1 / Σ(1/σᵢ²)`. `None` if there is none (non-finite or non-positive std are skipped).
 pub fn fuse(estimates: &[Estimate]) -> Option<Estimate> {
     let (mut w_sum, mut wx_sum) = (0.0, 0.0);
-    for e in estimates.iter().filter(|e| e.value.is_finite() && e.std.is_finite() && e.std > 0.0) {
+    for e in estimates
+        .iter()
+        .filter(|e| e.value.is_finite() && e.std.is_finite() && e.std > 0.0)
+    {
         let w = 1.0 / e.var();
         w_sum += w;
         wx_sum += w * e.value;
     }
-    (w_sum > 0.0).then(|| Estimate { value: wx_sum / w_sum, std: (1.0 / w_sum).sqrt() })
+    (w_sum > 0.0).then(|| Estimate {
+        value: wx_sum / w_sum,
+        std: (1.0 / w_sum).sqrt(),
+    })
 }
 
 /// Relative yaw from the hub–tower gap (eq. 7.14 with the project sign, see the module docs):
@@ -102,23 +131,33 @@ pub fn yaw_from_gap(
     offset_m: f64,
     max_abs_rad: f64,
 ) -> Option<Estimate> {
-    if !(gap_px.is_finite() && tower_depth.value.is_finite() && tower_depth.value > 0.0 && f_px > 0.0 && offset_m > 0.0)
+    if !(gap_px.is_finite()
+        && tower_depth.value.is_finite()
+        && tower_depth.value > 0.0
+        && f_px > 0.0
+        && offset_m > 0.0)
     {
         return None;
     }
     let k = f_px * offset_m;
     let s_max = max_abs_rad.sin();
     let s = (-gap_px * tower_depth.value / k).clamp(-s_max, s_max);
-    let sigma_s = ((tower_depth.value * gap_std_px / k).powi(2) + (gap_px * tower_depth.std / k).powi(2)).sqrt();
+    let sigma_s = ((tower_depth.value * gap_std_px / k).powi(2)
+        + (gap_px * tower_depth.std / k).powi(2))
+    .sqrt();
     let psi = s.asin();
-    Some(Estimate { value: psi, std: sigma_s / psi.cos() })
+    Some(Estimate {
+        value: psi,
+        std: sigma_s / psi.cos(),
+    })
 }
 
 /// Image offset, in units of the focal length, of the nacelle's far rear corner from the hub at
 /// relative yaw `psi` ≥ 0 and hub distance `d`: the corner is `rear_m` behind the hub along the
 /// rotor axis and `half_width_m` to its side, so `(Lr·sin ψ + w·cos ψ) / (d + Lr·cos ψ − w·sin ψ)`.
 pub fn nacelle_end_offset(psi: f64, d: f64, rear_m: f64, half_width_m: f64) -> f64 {
-    (rear_m * psi.sin() + half_width_m * psi.cos()) / (d + rear_m * psi.cos() - half_width_m * psi.sin())
+    (rear_m * psi.sin() + half_width_m * psi.cos())
+        / (d + rear_m * psi.cos() - half_width_m * psi.sin())
 }
 
 /// Bisection steps inverting [`nacelle_end_offset`] (the bracket halves each step).
@@ -139,7 +178,13 @@ pub fn yaw_from_nacelle(
     max_abs_rad: f64,
 ) -> Option<Estimate> {
     let d = distance.value;
-    if !(dx_px.is_finite() && d.is_finite() && d > 0.0 && f_px > 0.0 && rear_m > 0.0 && max_abs_rad > 0.0) {
+    if !(dx_px.is_finite()
+        && d.is_finite()
+        && d > 0.0
+        && f_px > 0.0
+        && rear_m > 0.0
+        && max_abs_rad > 0.0)
+    {
         return None;
     }
     let target = dx_px.abs() / f_px;
@@ -152,19 +197,27 @@ pub fn yaw_from_nacelle(
     } else {
         for _ in 0..NACELLE_BISECT_ITERS {
             let mid = 0.5 * (lo + hi);
-            if offset(mid, d) < target { lo = mid } else { hi = mid }
+            if offset(mid, d) < target {
+                lo = mid
+            } else {
+                hi = mid
+            }
         }
     }
     let psi = 0.5 * (lo + hi);
     // Slopes of the offset in ψ and in d (central differences).
     let h = 1e-4;
-    let slope_psi = (offset(psi + h, d) - offset((psi - h).max(0.0), d)) / (psi + h - (psi - h).max(0.0));
+    let slope_psi =
+        (offset(psi + h, d) - offset((psi - h).max(0.0), d)) / (psi + h - (psi - h).max(0.0));
     let slope_d = (offset(psi, d + h) - offset(psi, d - h)) / (2.0 * h);
     if slope_psi <= 0.0 {
         return None;
     }
     let var = (dx_std_px / f_px).powi(2) + (slope_d * distance.std).powi(2);
-    Some(Estimate { value: psi.copysign(dx_px), std: var.sqrt() / slope_psi })
+    Some(Estimate {
+        value: psi.copysign(dx_px),
+        std: var.sqrt() / slope_psi,
+    })
 }
 
 /// How far, in standard deviations, the nacelle's end seen `dx_px` beside the hub sticks out
@@ -173,7 +226,14 @@ pub fn yaw_from_nacelle(
 /// so head-on its corners peek out beside the spinner farther than the rear-corner model's
 /// `f·w / (d + rear)`). `dx_std_px` covers the end and the hub; the distance's std adds through
 /// the floor's slope. A reading near the floor says nothing about the yaw, not even its sign.
-pub fn nacelle_excess_sigma(dx_px: f64, dx_std_px: f64, distance: Estimate, f_px: f64, front_m: f64, half_width_m: f64) -> f64 {
+pub fn nacelle_excess_sigma(
+    dx_px: f64,
+    dx_std_px: f64,
+    distance: Estimate,
+    f_px: f64,
+    front_m: f64,
+    half_width_m: f64,
+) -> f64 {
     let depth = distance.value + front_m;
     if !(dx_px.is_finite() && depth > 0.0 && f_px > 0.0) {
         return f64::NEG_INFINITY;
@@ -223,7 +283,9 @@ fn fit_theta0(alphas: &[f64], n_blades: f64, psi: f64) -> (f64, f64) {
     };
     for _ in 0..BLADE_THETA_ITERS {
         let rs = residuals(theta0);
-        let (num, den) = rs.iter().fold((0.0, 0.0), |(n, d), (r, j)| (n + r * j, d + j * j));
+        let (num, den) = rs
+            .iter()
+            .fold((0.0, 0.0), |(n, d), (r, j)| (n + r * j, d + j * j));
         if den > 0.0 {
             theta0 += num / den;
         }
@@ -264,7 +326,10 @@ pub fn blade_skew_yaw(
         .map(|k| (k, cost(k as f64 * step)))
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(k, _)| k)?;
-    let (mut lo, mut hi) = ((best_k as f64 - 1.0).max(0.0) * step, (best_k as f64 + 1.0).min(BLADE_GRID_STEPS as f64) * step);
+    let (mut lo, mut hi) = (
+        (best_k as f64 - 1.0).max(0.0) * step,
+        (best_k as f64 + 1.0).min(BLADE_GRID_STEPS as f64) * step,
+    );
     let g = (5f64.sqrt() - 1.0) / 2.0;
     let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
     let (mut f1, mut f2) = (cost(x1), cost(x2));
@@ -334,14 +399,20 @@ mod tests {
         // f·R/d (r = 40 px → 40.03 m); at 5 m it is 5 % wider than the flat disc, and the
         // formula inverts it exactly.
         let s = distance_from_spinner(1000.0, 3.2, 40.0, 1.0).unwrap();
-        assert!((s.value - 1.6 * (1.0f64 + 625.0).sqrt()).abs() < 1e-12 && (s.value - 40.0).abs() < 0.05);
+        assert!(
+            (s.value - 1.6 * (1.0f64 + 625.0).sqrt()).abs() < 1e-12
+                && (s.value - 40.0).abs() < 0.05
+        );
         assert!((s.std - 1.0).abs() < 0.01);
         for d in [4.0, 5.0, 8.0] {
             let r = 1000.0 * 1.6 / (d * d - 1.6f64 * 1.6).sqrt();
             let e = distance_from_spinner(1000.0, 3.2, r, 1.0).unwrap();
             assert!((e.value - d).abs() < 1e-9, "{d}: {}", e.value);
             let e1 = distance_from_spinner(1000.0, 3.2, r - 1.0, 1.0).unwrap();
-            assert!(((e1.value - e.value) - e.std).abs() < 0.02 * e.std, "first-order std at {d} m");
+            assert!(
+                ((e1.value - e.value) - e.std).abs() < 0.02 * e.std,
+                "first-order std at {d} m"
+            );
         }
         assert!(distance_from_spinner(1000.0, 3.2, 0.0, 1.0).is_none());
         assert!(distance_from_tower_width(1000.0, 2.2, 0.0, 1.0).is_none());
@@ -350,8 +421,14 @@ mod tests {
 
     #[test]
     fn fusion_weights_the_lower_variance_more() {
-        let a = Estimate { value: 40.0, std: 1.0 };
-        let b = Estimate { value: 30.0, std: 3.0 };
+        let a = Estimate {
+            value: 40.0,
+            std: 1.0,
+        };
+        let b = Estimate {
+            value: 30.0,
+            std: 3.0,
+        };
         let f = fuse(&[a, b]).unwrap();
         // Weights 1 and 1/9: (40 + 30/9) / (1 + 1/9) = 39.0
         assert!((f.value - 39.0).abs() < 1e-12, "{f:?}");
@@ -364,9 +441,16 @@ mod tests {
     #[test]
     fn yaw_from_gap_hand_case_and_sign() {
         // f = 1000 px, L = 5 m, tower depth 40 m, gap −62.5 px: sin ψ = 62.5·40/5000 = 0.5 → +30°.
-        let d = Estimate { value: 40.0, std: 0.0 };
+        let d = Estimate {
+            value: 40.0,
+            std: 0.0,
+        };
         let e = yaw_from_gap(-62.5, 1.0, d, 1000.0, 5.0, 85f64.to_radians()).unwrap();
-        assert!((e.value.to_degrees() - 30.0).abs() < 1e-9, "{}", e.value.to_degrees());
+        assert!(
+            (e.value.to_degrees() - 30.0).abs() < 1e-9,
+            "{}",
+            e.value.to_degrees()
+        );
         // σ_s = 40·1/5000 = 0.008 → σ_ψ = 0.008 / cos 30°.
         assert!((e.std - 0.008 / 30f64.to_radians().cos()).abs() < 1e-12);
         // Hub right of the tower → camera on the viewer's left → negative yaw.
@@ -398,8 +482,23 @@ mod tests {
             let gap = proj(hub) - proj(tower);
             assert_eq!(gap < 0.0, psi > 0.0, "ψ = {psi_deg}: gap {gap}");
             let depth = d + l * psi.cos();
-            let e = yaw_from_gap(gap, 1.0, Estimate { value: depth, std: 0.0 }, f, l, 1.5).unwrap();
-            assert!((e.value - psi).abs() < 1e-9, "ψ = {psi_deg}: got {}", e.value.to_degrees());
+            let e = yaw_from_gap(
+                gap,
+                1.0,
+                Estimate {
+                    value: depth,
+                    std: 0.0,
+                },
+                f,
+                l,
+                1.5,
+            )
+            .unwrap();
+            assert!(
+                (e.value - psi).abs() < 1e-9,
+                "ψ = {psi_deg}: got {}",
+                e.value.to_degrees()
+            );
         }
     }
 
@@ -407,7 +506,9 @@ mod tests {
         (0..3)
             .map(|k| {
                 let t = (theta0_deg + 120.0 * k as f64).to_radians();
-                apparent_blade_angle(t, psi_deg.to_radians()).to_degrees().rem_euclid(360.0)
+                apparent_blade_angle(t, psi_deg.to_radians())
+                    .to_degrees()
+                    .rem_euclid(360.0)
             })
             .collect()
     }
@@ -416,18 +517,30 @@ mod tests {
     fn nacelle_excess_over_the_head_on_front_corners() {
         // Hand case: f = 1000 px, half width 1.7 m, front face 1.2 m behind the hub, 30 m:
         // head-on the front corners are 1000·1.7/31.2 = 54.487 px beside the hub.
-        let exact = Estimate { value: 30.0, std: 0.0 };
+        let exact = Estimate {
+            value: 30.0,
+            std: 0.0,
+        };
         let floor = 1000.0 * 1.7 / 31.2;
         let e = nacelle_excess_sigma(floor + 10.0, 5.0, exact, 1000.0, 1.2, 1.7);
         assert!((e - 2.0).abs() < 1e-9, "{e}");
         // Either side; a reading inside the floor is negative.
-        assert!((nacelle_excess_sigma(-(floor + 10.0), 5.0, exact, 1000.0, 1.2, 1.7) - 2.0).abs() < 1e-9);
+        assert!(
+            (nacelle_excess_sigma(-(floor + 10.0), 5.0, exact, 1000.0, 1.2, 1.7) - 2.0).abs()
+                < 1e-9
+        );
         assert!(nacelle_excess_sigma(floor - 5.0, 5.0, exact, 1000.0, 1.2, 1.7) < 0.0);
         // A distance std of 3.12 m moves the floor by 54.487·3.12/31.2 = 5.449 px: σ = hypot(5, 5.449).
-        let loose = Estimate { value: 30.0, std: 3.12 };
+        let loose = Estimate {
+            value: 30.0,
+            std: 3.12,
+        };
         let e = nacelle_excess_sigma(floor + 10.0, 5.0, loose, 1000.0, 1.2, 1.7);
         assert!((e - 10.0 / 5f64.hypot(floor * 0.1)).abs() < 1e-9, "{e}");
-        assert_eq!(nacelle_excess_sigma(f64::NAN, 5.0, exact, 1000.0, 1.2, 1.7), f64::NEG_INFINITY);
+        assert_eq!(
+            nacelle_excess_sigma(f64::NAN, 5.0, exact, 1000.0, 1.2, 1.7),
+            f64::NEG_INFINITY
+        );
     }
 
     #[test]
@@ -435,7 +548,10 @@ mod tests {
         // Hand case: 20 m, ψ = 20°, rear 11.2 m, half width 1.7 m, f = 1000 px:
         // X = 11.2·0.3420 + 1.7·0.9397 = 5.4278 m, Z = 20 + 11.2·0.9397 − 1.7·0.3420 = 29.943 m,
         // dx = 1000·X/Z = 181.27 px.
-        let d = Estimate { value: 20.0, std: 0.0 };
+        let d = Estimate {
+            value: 20.0,
+            std: 0.0,
+        };
         let e = yaw_from_nacelle(181.27, 2.0, d, 1000.0, 11.2, 1.7, 1.4).unwrap();
         assert!((e.value.to_degrees() - 20.0).abs() < 0.01, "{e:?}");
         let m = yaw_from_nacelle(-181.27, 2.0, d, 1000.0, 11.2, 1.7, 1.4).unwrap();
@@ -445,8 +561,25 @@ mod tests {
         assert!((e.std.to_degrees() - 0.314).abs() < 0.01, "{e:?}");
         // An offset inside the front-view one (1000·1.7/31.2 = 54.5 px) reads as 0; a distance
         // uncertainty widens the std.
-        assert_eq!(yaw_from_nacelle(40.0, 2.0, d, 1000.0, 11.2, 1.7, 1.4).unwrap().value, 0.0);
-        let wide = yaw_from_nacelle(181.27, 2.0, Estimate { value: 20.0, std: 2.0 }, 1000.0, 11.2, 1.7, 1.4).unwrap();
+        assert_eq!(
+            yaw_from_nacelle(40.0, 2.0, d, 1000.0, 11.2, 1.7, 1.4)
+                .unwrap()
+                .value,
+            0.0
+        );
+        let wide = yaw_from_nacelle(
+            181.27,
+            2.0,
+            Estimate {
+                value: 20.0,
+                std: 2.0,
+            },
+            1000.0,
+            11.2,
+            1.7,
+            1.4,
+        )
+        .unwrap();
         assert!(wide.std > e.std);
     }
 
@@ -457,8 +590,16 @@ mod tests {
         for &theta0 in &[0.0, 17.0, 45.0, 90.0, 200.0] {
             let a = blades(theta0, 30.0);
             let e = blade_skew_yaw(&a, 3, s, max, 10.83).unwrap();
-            assert!((e.value.to_degrees() - 30.0).abs() < 0.05, "θ0 {theta0}: {}", e.value.to_degrees());
-            assert!(e.std > 0.0 && e.std.to_degrees() < 30.0, "std {}", e.std.to_degrees());
+            assert!(
+                (e.value.to_degrees() - 30.0).abs() < 0.05,
+                "θ0 {theta0}: {}",
+                e.value.to_degrees()
+            );
+            assert!(
+                e.std > 0.0 && e.std.to_degrees() < 30.0,
+                "std {}",
+                e.std.to_degrees()
+            );
             // The sign of ψ is invisible: −30° gives the same magnitude.
             let e = blade_skew_yaw(&blades(theta0, -30.0), 3, s, max, 10.83).unwrap();
             assert!((e.value.to_degrees() - 30.0).abs() < 0.05);
@@ -477,7 +618,14 @@ mod tests {
     #[test]
     fn blade_skew_rejects_inconsistent_blades() {
         // Three lines 30° apart cannot be a foreshortened 120° star.
-        assert!(blade_skew_yaw(&[0.0, 30.0, 60.0], 3, 2f64.to_radians(), 85f64.to_radians(), 10.83).is_none());
+        assert!(blade_skew_yaw(
+            &[0.0, 30.0, 60.0],
+            3,
+            2f64.to_radians(),
+            85f64.to_radians(),
+            10.83
+        )
+        .is_none());
         assert!(blade_skew_yaw(&[0.0], 3, 0.03, 1.4, 10.83).is_none());
     }
 }

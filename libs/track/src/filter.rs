@@ -34,17 +34,30 @@ impl CvModel {
     /// Model from the thesis's per-step values: damping γ and process noise `q` per reference
     /// step of `1 / reference_rate_hz` s, at resolution scale `scale` (image width / reference
     /// width).
-    pub fn from_thesis(damping: f64, process_noise: f64, reference_rate_hz: f64, scale: f64) -> CvModel {
+    pub fn from_thesis(
+        damping: f64,
+        process_noise: f64,
+        reference_rate_hz: f64,
+        scale: f64,
+    ) -> CvModel {
         let t_ref = 1.0 / reference_rate_hz;
         let q = process_noise * scale * scale;
-        CvModel { lambda: -damping.ln() / t_ref, q_pos: q / t_ref, q_vel: q / t_ref.powi(3) }
+        CvModel {
+            lambda: -damping.ln() / t_ref,
+            q_pos: q / t_ref,
+            q_vel: q / t_ref.powi(3),
+        }
     }
 
     /// `(a, b)`: over `dt`, velocity ← a·velocity, position ← position + b·velocity.
     pub fn transition(&self, dt: f64) -> (f64, f64) {
         let u = self.lambda * dt;
         let a = (-u).exp();
-        let b = if u < SERIES_THRESHOLD { dt * (1.0 - u / 2.0 + u * u / 6.0) } else { -(-u).exp_m1() / self.lambda };
+        let b = if u < SERIES_THRESHOLD {
+            dt * (1.0 - u / 2.0 + u * u / 6.0)
+        } else {
+            -(-u).exp_m1() / self.lambda
+        };
         (a, b)
     }
 
@@ -62,9 +75,17 @@ impl CvModel {
             let e1 = -(-u).exp_m1(); // 1 − e^{−u}
             let e2 = -(-2.0 * u).exp_m1(); // 1 − e^{−2u}
             let l = self.lambda;
-            (e2 / (2.0 * l), (e1 - e2 / 2.0) / (l * l), (u - 2.0 * e1 + e2 / 2.0) / l.powi(3))
+            (
+                e2 / (2.0 * l),
+                (e1 - e2 / 2.0) / (l * l),
+                (u - 2.0 * e1 + e2 / 2.0) / l.powi(3),
+            )
         };
-        (self.q_pos * dt + self.q_vel * int_bb, self.q_vel * int_ab, self.q_vel * int_aa)
+        (
+            self.q_pos * dt + self.q_vel * int_bb,
+            self.q_vel * int_ab,
+            self.q_vel * int_aa,
+        )
     }
 }
 
@@ -130,7 +151,9 @@ impl HubFilter {
         let h = h();
         let nu = Vector2::new(z[0], z[1]) - h * self.x;
         let s = h * self.p * h.transpose() + Matrix2::identity() * r;
-        let d2 = s.try_inverse().map_or(f64::INFINITY, |si| (nu.transpose() * si * nu)[(0, 0)]);
+        let d2 = s
+            .try_inverse()
+            .map_or(f64::INFINITY, |si| (nu.transpose() * si * nu)[(0, 0)]);
         (nu, s, d2)
     }
 
@@ -182,7 +205,10 @@ impl ScalarFilter {
 
     /// Current estimate, if initialised.
     pub fn estimate(&self) -> Option<Estimate> {
-        self.initialised.then(|| Estimate { value: self.value, std: self.var.sqrt() })
+        self.initialised.then(|| Estimate {
+            value: self.value,
+            std: self.var.sqrt(),
+        })
     }
 
     /// Fuses measurement `z` at `t_ns` unless its normalised innovation² exceeds `gate_chi2`;
@@ -208,11 +234,21 @@ impl ScalarFilter {
             self.last_reject = None;
             return true;
         }
-        let consistent = self.last_reject.is_some_and(|p| (z.value - p.value).powi(2) <= gate_chi2 * (r + p.var()));
-        self.rejects = if consistent { self.rejects.saturating_add(1) } else { 1 };
+        let consistent = self
+            .last_reject
+            .is_some_and(|p| (z.value - p.value).powi(2) <= gate_chi2 * (r + p.var()));
+        self.rejects = if consistent {
+            self.rejects.saturating_add(1)
+        } else {
+            1
+        };
         self.last_reject = Some(z);
         if self.rejects >= jump_count {
-            log::debug!("scalar filter: persistent jump {} → {}, restarting", self.value, z.value);
+            log::debug!(
+                "scalar filter: persistent jump {} → {}, restarting",
+                self.value,
+                z.value
+            );
             self.restart(z, t_ns);
             return true;
         }
@@ -250,19 +286,32 @@ mod tests {
             many.predict(&m, 0.3 / 9.0, [0.0, 0.0], 0.0);
         }
         assert!((one.x - many.x).norm() < 1e-9, "{} vs {}", one.x, many.x);
-        assert!((one.p - many.p).norm() < 1e-9 * one.p.norm(), "{} vs {}", one.p, many.p);
+        assert!(
+            (one.p - many.p).norm() < 1e-9 * one.p.norm(),
+            "{} vs {}",
+            one.p,
+            many.p
+        );
     }
 
     #[test]
     fn noise_series_matches_closed_form_at_the_threshold() {
-        let m = CvModel { lambda: 1.0, q_pos: 0.0, q_vel: 1.0 };
+        let m = CvModel {
+            lambda: 1.0,
+            q_pos: 0.0,
+            q_vel: 1.0,
+        };
         let below = m.noise(SERIES_THRESHOLD * 0.999_999);
         let above = m.noise(SERIES_THRESHOLD * 1.000_001);
         for (x, y) in [(below.0, above.0), (below.1, above.1), (below.2, above.2)] {
             assert!((x - y).abs() <= 1e-5 * y.abs(), "{x} vs {y}");
         }
         // Undamped limit: white-noise acceleration integrals dt³/3, dt²/2, dt.
-        let m = CvModel { lambda: 0.0, q_pos: 0.0, q_vel: 2.0 };
+        let m = CvModel {
+            lambda: 0.0,
+            q_pos: 0.0,
+            q_vel: 2.0,
+        };
         let (pp, pv, vv) = m.noise(0.5);
         assert!((pp - 2.0 * 0.125 / 3.0).abs() < 1e-12);
         assert!((pv - 2.0 * 0.125).abs() < 1e-12);
@@ -272,13 +321,61 @@ mod tests {
     #[test]
     fn scalar_gates_and_accepts_persistent_jumps() {
         let mut f = ScalarFilter::default();
-        assert!(f.update(Estimate { value: 40.0, std: 1.0 }, 10.83, 3, 0));
-        assert!(f.update(Estimate { value: 40.5, std: 1.0 }, 10.83, 3, 1));
-        assert!(!f.update(Estimate { value: 5.0, std: 1.0 }, 10.83, 3, 2));
+        assert!(f.update(
+            Estimate {
+                value: 40.0,
+                std: 1.0
+            },
+            10.83,
+            3,
+            0
+        ));
+        assert!(f.update(
+            Estimate {
+                value: 40.5,
+                std: 1.0
+            },
+            10.83,
+            3,
+            1
+        ));
+        assert!(!f.update(
+            Estimate {
+                value: 5.0,
+                std: 1.0
+            },
+            10.83,
+            3,
+            2
+        ));
         assert!((f.value - 40.25).abs() < 0.5);
-        assert!(!f.update(Estimate { value: 20.0, std: 1.0 }, 10.83, 3, 3));
-        assert!(!f.update(Estimate { value: 20.2, std: 1.0 }, 10.83, 3, 4));
-        assert!(f.update(Estimate { value: 20.1, std: 1.0 }, 10.83, 3, 5));
+        assert!(!f.update(
+            Estimate {
+                value: 20.0,
+                std: 1.0
+            },
+            10.83,
+            3,
+            3
+        ));
+        assert!(!f.update(
+            Estimate {
+                value: 20.2,
+                std: 1.0
+            },
+            10.83,
+            3,
+            4
+        ));
+        assert!(f.update(
+            Estimate {
+                value: 20.1,
+                std: 1.0
+            },
+            10.83,
+            3,
+            5
+        ));
         assert_eq!(f.value, 20.1);
     }
 }

@@ -55,7 +55,10 @@ impl Triangulation {
         }
         let e = to_hub / d;
         let var = (e.transpose() * self.covariance * e)[(0, 0)];
-        (var.is_finite() && var > 0.0).then(|| Estimate { value: d, std: var.sqrt() })
+        (var.is_finite() && var > 0.0).then(|| Estimate {
+            value: d,
+            std: var.sqrt(),
+        })
     }
 }
 
@@ -66,7 +69,12 @@ impl Triangulation {
 /// more than `independent` sightings are used (successive frames see the same hub-placement
 /// error, so they are not independent). `None` with fewer than two sightings, with rays that
 /// are (nearly) parallel, or with a point behind any of the cameras.
-pub fn triangulate(sightings: &[Sighting], bearing_std_rad: f64, placement_std_m: f64, independent: usize) -> Option<Triangulation> {
+pub fn triangulate(
+    sightings: &[Sighting],
+    bearing_std_rad: f64,
+    placement_std_m: f64,
+    independent: usize,
+) -> Option<Triangulation> {
     let valid_std = bearing_std_rad > 0.0 && placement_std_m >= 0.0; // false for NaN
     if sightings.len() < 2 || !valid_std {
         return None;
@@ -81,7 +89,12 @@ pub fn triangulate(sightings: &[Sighting], bearing_std_rad: f64, placement_std_m
             b += p * s.camera_m * w;
         }
         let eig = SymmetricEigen::new(a);
-        let (lo, hi) = eig.eigenvalues.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), &e| (lo.min(e), hi.max(e)));
+        let (lo, hi) = eig
+            .eigenvalues
+            .iter()
+            .fold((f64::INFINITY, 0.0_f64), |(lo, hi), &e| {
+                (lo.min(e), hi.max(e))
+            });
         if hi.is_nan() || hi <= 0.0 || lo < MIN_CONDITION * hi {
             return None;
         }
@@ -103,7 +116,11 @@ pub fn triangulate(sightings: &[Sighting], bearing_std_rad: f64, placement_std_m
     }
     let n = sightings.len();
     let inflation = n as f64 / independent.clamp(1, n) as f64;
-    Some(Triangulation { hub_m: hub, covariance: inv * inflation, rms_residual_sigmas: (sum_sq / n as f64).sqrt() })
+    Some(Triangulation {
+        hub_m: hub,
+        covariance: inv * inflation,
+        rms_residual_sigmas: (sum_sq / n as f64).sqrt(),
+    })
 }
 
 /// The sightings of one hub track and the distance they give (see the module docs).
@@ -138,7 +155,11 @@ impl ParallaxRanger {
         }
         self.sightings.push_back(s);
         let window_ns = (cfg.window_s * NS_PER_S) as u64;
-        while self.sightings.front().is_some_and(|f| s.t_ns.saturating_sub(f.t_ns) > window_ns) {
+        while self
+            .sightings
+            .front()
+            .is_some_and(|f| s.t_ns.saturating_sub(f.t_ns) > window_ns)
+        {
             self.sightings.pop_front();
         }
     }
@@ -156,24 +177,39 @@ impl ParallaxRanger {
     /// pitching would make rays cross metres from the hub (a rendered flight read 5–9 m at 33 m
     /// in 3-D while climbing 1 m); the azimuths come from the heading alone. The horizontal
     /// distance is turned into the distance along `ray` by its elevation.
-    pub fn distance_from(&self, camera_m: &Vector3<f64>, ray: &Vector3<f64>, cfg: &ParallaxConfig) -> Option<Estimate> {
+    pub fn distance_from(
+        &self,
+        camera_m: &Vector3<f64>,
+        ray: &Vector3<f64>,
+        cfg: &ParallaxConfig,
+    ) -> Option<Estimate> {
         if !cfg.enabled || self.sightings.len() < cfg.min_sightings as usize {
             return None;
         }
         let std_rad = cfg.bearing_std_deg.to_radians();
         let (front, back) = self.sightings.as_slices();
         let all: Vec<Sighting> = front.iter().chain(back).copied().collect();
-        let tri = triangulate(&all, std_rad, cfg.hub_placement_std_m, cfg.independent_sightings as usize)?;
+        let tri = triangulate(
+            &all,
+            std_rad,
+            cfg.hub_placement_std_m,
+            cfg.independent_sightings as usize,
+        )?;
         if tri.rms_residual_sigmas > cfg.max_residual_sigmas {
             return None;
         }
         let here = Vector3::new(camera_m.x, camera_m.y, 0.0);
         let d = tri.distance_from(&here)?;
-        if d.std > cfg.max_relative_std * d.value || d.value < cfg.min_distance_baselines * baseline(&all, ray) {
+        if d.std > cfg.max_relative_std * d.value
+            || d.value < cfg.min_distance_baselines * baseline(&all, ray)
+        {
             return None;
         }
         let cos_elevation = ray.x.hypot(ray.y) / ray.norm();
-        (cos_elevation > 0.1).then(|| Estimate { value: d.value / cos_elevation, std: d.std / cos_elevation })
+        (cos_elevation > 0.1).then(|| Estimate {
+            value: d.value / cos_elevation,
+            std: d.std / cos_elevation,
+        })
     }
 }
 
@@ -188,7 +224,9 @@ fn baseline(sightings: &[Sighting], ray: &Vector3<f64>) -> f64 {
     let (lo, hi) = sightings
         .iter()
         .map(|s| s.camera_m.dot(&across) / n)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        });
     if hi >= lo {
         hi - lo
     } else {
@@ -201,7 +239,11 @@ fn baseline(sightings: &[Sighting], ray: &Vector3<f64>) -> f64 {
 fn horizontal(s: &Sighting) -> Option<Sighting> {
     let ray = Vector3::new(s.ray.x, s.ray.y, 0.0);
     let n = ray.norm();
-    (n > 1e-6 && n.is_finite()).then(|| Sighting { t_ns: s.t_ns, camera_m: Vector3::new(s.camera_m.x, s.camera_m.y, 0.0), ray: ray / n })
+    (n > 1e-6 && n.is_finite()).then(|| Sighting {
+        t_ns: s.t_ns,
+        camera_m: Vector3::new(s.camera_m.x, s.camera_m.y, 0.0),
+        ray: ray / n,
+    })
 }
 
 #[cfg(test)]
@@ -215,7 +257,11 @@ mod tests {
         let to_hub = Vector3::from(HUB) - c;
         // Turn the true ray by `error_rad` about the vertical (a hub placed a few px aside).
         let rot = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), error_rad);
-        Sighting { t_ns: (t_s * NS_PER_S) as u64, camera_m: c, ray: rot * to_hub.normalize() }
+        Sighting {
+            t_ns: (t_s * NS_PER_S) as u64,
+            camera_m: c,
+            ray: rot * to_hub.normalize(),
+        }
     }
 
     /// A camera position and its true ray to the hub.
@@ -231,9 +277,15 @@ mod tests {
     #[test]
     fn rays_from_a_sideways_pass_meet_at_the_hub() {
         // 4 m of sideways flight, 30 m from the hub: the exact rays give the exact point.
-        let s: Vec<Sighting> = (0..20).map(|i| sighting(i as f64 * 0.2, [0.0, -2.0 + 0.2 * i as f64, -60.0], 0.0)).collect();
+        let s: Vec<Sighting> = (0..20)
+            .map(|i| sighting(i as f64 * 0.2, [0.0, -2.0 + 0.2 * i as f64, -60.0], 0.0))
+            .collect();
         let tri = triangulate(&s, 0.01, 0.0, 10).unwrap();
-        assert!((tri.hub_m - Vector3::from(HUB)).norm() < 1e-6, "{:?}", tri.hub_m);
+        assert!(
+            (tri.hub_m - Vector3::from(HUB)).norm() < 1e-6,
+            "{:?}",
+            tri.hub_m
+        );
         assert!(tri.rms_residual_sigmas < 1e-6);
         let d = tri.distance_from(&s[19].camera_m).unwrap();
         let truth = (Vector3::from(HUB) - s[19].camera_m).norm();
@@ -249,7 +301,11 @@ mod tests {
         let s: Vec<Sighting> = (0..20)
             .map(|i| {
                 let c = Vector3::new(0.0, 0.0, -60.0) + dir * (0.3 * i as f64);
-                Sighting { t_ns: i * 100_000_000, camera_m: c, ray: dir }
+                Sighting {
+                    t_ns: i * 100_000_000,
+                    camera_m: c,
+                    ray: dir,
+                }
             })
             .collect();
         assert!(triangulate(&s, 0.01, 0.5, 10).is_none());
@@ -261,24 +317,39 @@ mod tests {
         let mut r = ParallaxRanger::default();
         // Hovering (gusts move it by centimetres): too little baseline for 20 % accuracy.
         for i in 0..30 {
-            r.push(sighting(i as f64 * 0.1, [0.0, 0.02 * (i % 3) as f64, -60.0], 0.0), &c);
+            r.push(
+                sighting(i as f64 * 0.1, [0.0, 0.02 * (i % 3) as f64, -60.0], 0.0),
+                &c,
+            );
         }
         let (cam, ray) = at([0.0, 0.0, -60.0]);
         assert!(r.distance_from(&cam, &ray, &c).is_none());
         // Then 3 m sideways with half-degree bearing noise: a distance within its error.
         for i in 0..30 {
             let err = if i % 2 == 0 { 0.5_f64 } else { -0.5 }.to_radians();
-            r.push(sighting(3.0 + i as f64 * 0.1, [0.0, 0.1 * i as f64, -60.0], err), &c);
+            r.push(
+                sighting(3.0 + i as f64 * 0.1, [0.0, 0.1 * i as f64, -60.0], err),
+                &c,
+            );
         }
         let (here, ray) = at([0.0, 2.9, -60.0]);
-        let d = r.distance_from(&here, &ray, &c).expect("distance after a sideways pass");
+        let d = r
+            .distance_from(&here, &ray, &c)
+            .expect("distance after a sideways pass");
         let truth = (Vector3::from(HUB) - here).norm();
-        assert!((d.value - truth).abs() < 2.0 * d.std + 0.5, "{d:?} vs {truth}");
+        assert!(
+            (d.value - truth).abs() < 2.0 * d.std + 0.5,
+            "{d:?} vs {truth}"
+        );
         // Rays of two different points (the track moved to a false hub unnoticed): they fan out
         // from where the cameras were, and a point that near is no triangulation.
         let mut bad = r.clone();
         for i in 0..30 {
-            let mut s = sighting(6.0 + i as f64 * 0.1, [0.0, 3.0 + 0.1 * i as f64, -60.0], 0.0);
+            let mut s = sighting(
+                6.0 + i as f64 * 0.1,
+                [0.0, 3.0 + 0.1 * i as f64, -60.0],
+                0.0,
+            );
             s.ray = (Vector3::new(30.0, -15.0, -60.0) - s.camera_m).normalize();
             bad.push(s, &c);
         }
@@ -291,10 +362,17 @@ mod tests {
         let c = cfg();
         let mut r = ParallaxRanger::default();
         for i in 0..100 {
-            r.push(sighting(i as f64 * 0.5, [0.0, 0.1 * i as f64, -60.0], 0.0), &c);
+            r.push(
+                sighting(i as f64 * 0.5, [0.0, 0.1 * i as f64, -60.0], 0.0),
+                &c,
+            );
         }
         let span = c.window_s / 0.5;
-        assert!((r.len() as f64 - (span + 1.0)).abs() <= 1.0, "{} sightings", r.len());
+        assert!(
+            (r.len() as f64 - (span + 1.0)).abs() <= 1.0,
+            "{} sightings",
+            r.len()
+        );
         r.push(sighting(1.0, [0.0, 0.0, -60.0], 0.0), &c);
         assert_eq!(r.len(), 1);
     }

@@ -19,8 +19,8 @@
 
 use serde::{Deserialize, Serialize};
 
-pub use hubtrack_types::params::ParamError;
 use hubtrack_types::params::Check;
+pub use hubtrack_types::params::ParamError;
 
 /// `[track]`: everything the tracker needs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
@@ -72,7 +72,11 @@ pub struct CameraConfig {
 
 impl Default for CameraConfig {
     fn default() -> Self {
-        CameraConfig { hfov_deg: 118.0, focal_length_per_width: GOPRO_FOCAL_PER_WIDTH, mount_pitch_deg: 0.0 }
+        CameraConfig {
+            hfov_deg: 118.0,
+            focal_length_per_width: GOPRO_FOCAL_PER_WIDTH,
+            mount_pitch_deg: 0.0,
+        }
     }
 }
 
@@ -141,7 +145,11 @@ pub struct ThesisFilterConfig {
 
 impl Default for ThesisFilterConfig {
     fn default() -> Self {
-        ThesisFilterConfig { damping: 0.95, process_noise: 1e-4, measurement_noise: 1e-1 }
+        ThesisFilterConfig {
+            damping: 0.95,
+            process_noise: 1e-4,
+            measurement_noise: 1e-1,
+        }
     }
 }
 
@@ -222,7 +230,12 @@ pub struct ModeConfig {
 
 impl Default for ModeConfig {
     fn default() -> Self {
-        ModeConfig { confirm_count: 3, coast_after_missed: 1, lost_after_s: 1.0, search_after_s: 5.0 }
+        ModeConfig {
+            confirm_count: 3,
+            coast_after_missed: 1,
+            lost_after_s: 1.0,
+            search_after_s: 5.0,
+        }
     }
 }
 
@@ -246,7 +259,12 @@ pub struct EgoMotionConfig {
 
 impl Default for EgoMotionConfig {
     fn default() -> Self {
-        EgoMotionConfig { enabled: true, use_velocity: true, max_state_age_s: 0.5, shift_std_fraction: 0.1 }
+        EgoMotionConfig {
+            enabled: true,
+            use_velocity: true,
+            max_state_age_s: 0.5,
+            shift_std_fraction: 0.1,
+        }
     }
 }
 
@@ -632,7 +650,6 @@ impl Default for YawConfig {
     }
 }
 
-
 /// Upper bound for pixel-valued parameters (px at the reference width).
 const MAX_PX: f64 = 1e4;
 /// Upper bound for times, s.
@@ -651,7 +668,12 @@ impl TrackConfig {
     pub fn validate(&self) -> Result<(), ParamError> {
         let c = Check::new("track.camera");
         c.open("hfov_deg", self.camera.hfov_deg, 0.0, 180.0)?;
-        c.closed("focal_length_per_width", self.camera.focal_length_per_width, 0.0, MAX_PX)?;
+        c.closed(
+            "focal_length_per_width",
+            self.camera.focal_length_per_width,
+            0.0,
+            MAX_PX,
+        )?;
         c.closed("mount_pitch_deg", self.camera.mount_pitch_deg, -90.0, 90.0)?;
 
         let c = Check::new("track.filter");
@@ -662,7 +684,12 @@ impl TrackConfig {
         c.open_closed("measurement_noise", f.measurement_noise, 0.0, MAX_NOISE)?;
         c.open_closed("reference_width_px", f.reference_width_px, 0.0, MAX_PX)?;
         c.open_closed("reference_rate_hz", f.reference_rate_hz, 0.0, 1000.0)?;
-        c.open_closed("initial_velocity_std_px_s", f.initial_velocity_std_px_s, 0.0, MAX_PX)?;
+        c.open_closed(
+            "initial_velocity_std_px_s",
+            f.initial_velocity_std_px_s,
+            0.0,
+            MAX_PX,
+        )?;
         c.closed("min_confidence", f.min_confidence, 0.0, 1.0)?;
 
         let c = Check::new("track.thesis_filter");
@@ -686,7 +713,12 @@ impl TrackConfig {
         c.count("confirm_count", m.confirm_count, 1, MAX_COUNT)?;
         c.count("coast_after_missed", m.coast_after_missed, 1, MAX_COUNT)?;
         c.open_closed("lost_after_s", m.lost_after_s, 0.0, MAX_TIME_S)?;
-        c.closed("search_after_s", m.search_after_s, m.lost_after_s, MAX_TIME_S)?;
+        c.closed(
+            "search_after_s",
+            m.search_after_s,
+            m.lost_after_s,
+            MAX_TIME_S,
+        )?;
 
         let c = Check::new("track.ego_motion");
         let e = &self.ego_motion;
@@ -698,13 +730,23 @@ impl TrackConfig {
         c.open_closed("tower_diameter_m", d.tower_diameter_m, 0.0, MAX_SIZE_M)?;
         c.open_closed("tower_width_std_px", d.tower_width_std_px, 0.0, MAX_PX)?;
         c.open_closed("spinner_diameter_m", d.spinner_diameter_m, 0.0, MAX_SIZE_M)?;
-        c.open_closed("spinner_radius_std_px", d.spinner_radius_std_px, 0.0, MAX_PX)?;
+        c.open_closed(
+            "spinner_radius_std_px",
+            d.spinner_radius_std_px,
+            0.0,
+            MAX_PX,
+        )?;
         c.closed("min_size_px", d.min_size_px, 0.0, MAX_PX)?;
         c.open_closed("process_noise_m2_s", d.process_noise_m2_s, 0.0, MAX_NOISE)?;
         c.open_closed("gate_chi2", d.gate_chi2, 0.0, MAX_CHI2)?;
         c.open_closed("consistency_chi2", d.consistency_chi2, 0.0, MAX_CHI2)?;
         c.count("jump_accept_count", d.jump_accept_count, 1, MAX_COUNT)?;
-        c.closed("jump_min_distance_m", d.jump_min_distance_m, 0.0, MAX_SIZE_M)?;
+        c.closed(
+            "jump_min_distance_m",
+            d.jump_min_distance_m,
+            0.0,
+            MAX_SIZE_M,
+        )?;
         c.closed("jump_lockout_max_s", d.jump_lockout_max_s, 0.0, MAX_TIME_S)?;
         c.open_closed("max_std_m", d.max_std_m, 0.0, 1e4)?;
         c.open_closed("stale_after_s", d.stale_after_s, 0.0, MAX_TIME_S)?;
@@ -713,12 +755,27 @@ impl TrackConfig {
         let p = &self.parallax;
         c.open_closed("window_s", p.window_s, 0.0, MAX_TIME_S)?;
         c.open_closed("bearing_std_deg", p.bearing_std_deg, 0.0, 90.0)?;
-        c.closed("hub_placement_std_m", p.hub_placement_std_m, 0.0, MAX_SIZE_M)?;
-        c.count("independent_sightings", p.independent_sightings, 1, MAX_COUNT)?;
+        c.closed(
+            "hub_placement_std_m",
+            p.hub_placement_std_m,
+            0.0,
+            MAX_SIZE_M,
+        )?;
+        c.count(
+            "independent_sightings",
+            p.independent_sightings,
+            1,
+            MAX_COUNT,
+        )?;
         c.count("min_sightings", p.min_sightings, 2, MAX_COUNT)?;
         c.open_closed("max_relative_std", p.max_relative_std, 0.0, 10.0)?;
         c.open_closed("max_residual_sigmas", p.max_residual_sigmas, 0.0, 100.0)?;
-        c.closed("min_distance_baselines", p.min_distance_baselines, 0.0, 100.0)?;
+        c.closed(
+            "min_distance_baselines",
+            p.min_distance_baselines,
+            0.0,
+            100.0,
+        )?;
         c.open_closed("consistency_chi2", p.consistency_chi2, 0.0, MAX_CHI2)?;
 
         let c = Check::new("track.yaw");
@@ -727,28 +784,68 @@ impl TrackConfig {
         c.open_closed("gap_std_spinner_px", y.gap_std_spinner_px, 0.0, MAX_PX)?;
         c.open_closed("gap_std_lines_px", y.gap_std_lines_px, 0.0, MAX_PX)?;
         c.open_closed("blade_angle_std_deg", y.blade_angle_std_deg, 0.0, 90.0)?;
-        c.count("rotor_blades", y.rotor_blades, 2, hubtrack_types::MAX_BLADES as u32)?;
+        c.count(
+            "rotor_blades",
+            y.rotor_blades,
+            2,
+            hubtrack_types::MAX_BLADES as u32,
+        )?;
         c.count("min_blades", y.min_blades, 2, y.rotor_blades)?;
         c.open_closed("blade_fit_chi2", y.blade_fit_chi2, 0.0, MAX_CHI2)?;
         c.open_closed("nacelle_rear_m", y.nacelle_rear_m, 0.0, MAX_SIZE_M)?;
-        c.closed("nacelle_half_width_m", y.nacelle_half_width_m, 0.0, MAX_SIZE_M)?;
+        c.closed(
+            "nacelle_half_width_m",
+            y.nacelle_half_width_m,
+            0.0,
+            MAX_SIZE_M,
+        )?;
         c.open_closed("nacelle_std_px", y.nacelle_std_px, 0.0, MAX_PX)?;
         c.closed("nacelle_min_std_deg", y.nacelle_min_std_deg, 0.0, 90.0)?;
         c.open_closed("net_min_std_deg", y.net_min_std_deg, 0.0, 90.0)?;
         c.open_closed("net_max_std_deg", y.net_max_std_deg, 0.0, 90.0)?;
-        c.closed("net_fallback_after_s", y.net_fallback_after_s, 0.0, MAX_TIME_S)?;
+        c.closed(
+            "net_fallback_after_s",
+            y.net_fallback_after_s,
+            0.0,
+            MAX_TIME_S,
+        )?;
         c.closed("net_fallback_min_deg", y.net_fallback_min_deg, 0.0, 90.0)?;
-        c.closed("net_fallback_min_distance_m", y.net_fallback_min_distance_m, 0.0, MAX_SIZE_M)?;
+        c.closed(
+            "net_fallback_min_distance_m",
+            y.net_fallback_min_distance_m,
+            0.0,
+            MAX_SIZE_M,
+        )?;
         c.closed("nacelle_min_abs_deg", y.nacelle_min_abs_deg, 0.0, 90.0)?;
         c.closed("nacelle_gate_px", y.nacelle_gate_px, 0.0, 1e4)?;
         c.closed("nacelle_front_m", y.nacelle_front_m, 0.0, 50.0)?;
-        c.closed("nacelle_min_excess_sigma", y.nacelle_min_excess_sigma, 0.0, 10.0)?;
-        c.closed("nacelle_min_distance_m", y.nacelle_min_distance_m, 0.0, MAX_SIZE_M)?;
+        c.closed(
+            "nacelle_min_excess_sigma",
+            y.nacelle_min_excess_sigma,
+            0.0,
+            10.0,
+        )?;
+        c.closed(
+            "nacelle_min_distance_m",
+            y.nacelle_min_distance_m,
+            0.0,
+            MAX_SIZE_M,
+        )?;
         c.open("max_abs_deg", y.max_abs_deg, 0.0, 90.0)?;
-        c.open_closed("process_noise_deg2_s", y.process_noise_deg2_s, 0.0, MAX_NOISE)?;
+        c.open_closed(
+            "process_noise_deg2_s",
+            y.process_noise_deg2_s,
+            0.0,
+            MAX_NOISE,
+        )?;
         c.open_closed("gate_chi2", y.gate_chi2, 0.0, MAX_CHI2)?;
         c.count("jump_accept_count", y.jump_accept_count, 1, MAX_COUNT)?;
-        c.closed("jump_min_distance_m", y.jump_min_distance_m, 0.0, MAX_SIZE_M)?;
+        c.closed(
+            "jump_min_distance_m",
+            y.jump_min_distance_m,
+            0.0,
+            MAX_SIZE_M,
+        )?;
         c.closed("gap_max_width_ratio", y.gap_max_width_ratio, 1.0, 3.0)?;
         c.open_closed("max_std_deg", y.max_std_deg, 0.0, 180.0)?;
         c.open_closed("stale_after_s", y.stale_after_s, 0.0, MAX_TIME_S)?;
@@ -795,7 +892,10 @@ mod tests {
     fn serde_is_strict_and_fills_defaults() {
         let c: TrackConfig = serde_json::from_str(r#"{"filter": {"damping": 0.8}}"#).unwrap();
         assert_eq!(c.filter.damping, 0.8);
-        assert_eq!(c.filter.process_noise, FilterConfig::default().process_noise);
+        assert_eq!(
+            c.filter.process_noise,
+            FilterConfig::default().process_noise
+        );
         assert_eq!(c.gating, GatingConfig::default());
         assert!(serde_json::from_str::<TrackConfig>(r#"{"filter": {"dampnig": 0.9}}"#).is_err());
         assert!(serde_json::from_str::<TrackConfig>(r#"{"filtre": {}}"#).is_err());

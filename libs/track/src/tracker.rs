@@ -4,9 +4,13 @@
 use hubtrack_types::{Detection, TrackMode, TrackState, VehicleState};
 use nalgebra::Rotation3;
 
-use crate::camera::{camera_pose_at, camera_position_at, camera_to_body, dt_s, ego_motion, focal_length_px, CameraPose, Pinhole};
+use crate::camera::{
+    camera_pose_at, camera_position_at, camera_to_body, dt_s, ego_motion, focal_length_px,
+    CameraPose, Pinhole,
+};
 use crate::estimate::{
-    blade_skew_yaw, distance_from_spinner, distance_from_tower_width, fuse, nacelle_excess_sigma, yaw_from_gap, yaw_from_nacelle, Estimate,
+    blade_skew_yaw, distance_from_spinner, distance_from_tower_width, fuse, nacelle_excess_sigma,
+    yaw_from_gap, yaw_from_nacelle, Estimate,
 };
 use crate::filter::{CvModel, HubFilter, ScalarFilter};
 use crate::parallax::{ParallaxRanger, Sighting};
@@ -217,7 +221,10 @@ impl Core {
         let t0 = self.t_ns.unwrap_or(t_ns);
         let dt = dt_s(t_ns, t0);
         let t = if dt < 0.0 {
-            log::warn!("track: time stamp went backwards by {:.3} s; not predicting", -dt);
+            log::warn!(
+                "track: time stamp went backwards by {:.3} s; not predicting",
+                -dt
+            );
             t0
         } else {
             t_ns
@@ -226,7 +233,12 @@ impl Core {
         let cam = self.camera();
         let pose1 = self.pose_at(t);
         let (damping, process_noise, _) = self.noise();
-        let model = CvModel::from_thesis(damping, process_noise, self.cfg.filter.reference_rate_hz, self.scale());
+        let model = CvModel::from_thesis(
+            damping,
+            process_noise,
+            self.cfg.filter.reference_rate_hz,
+            self.scale(),
+        );
         let range = self.distance.estimate().map(|e| e.value);
         let frac2 = self.cfg.ego_motion.shift_std_fraction.powi(2);
         let pose0 = self.pose;
@@ -264,11 +276,18 @@ impl Core {
             (Some(r1), Some(r0)) => r1 - r0,
             _ => 0.0,
         };
-        self.distance.predict(dt, self.cfg.distance.process_noise_m2_s, d_shift, frac2 * d_shift * d_shift);
+        self.distance.predict(
+            dt,
+            self.cfg.distance.process_noise_m2_s,
+            d_shift,
+            frac2 * d_shift * d_shift,
+        );
         let y_shift = ego.and_then(|m| m.relative_yaw_change_rad).unwrap_or(0.0);
         let q_yaw = self.cfg.yaw.process_noise_deg2_s * 1f64.to_radians().powi(2);
-        self.yaw.predict(dt, q_yaw, y_shift, frac2 * y_shift * y_shift);
-        self.net_yaw.predict(dt, q_yaw, y_shift, frac2 * y_shift * y_shift);
+        self.yaw
+            .predict(dt, q_yaw, y_shift, frac2 * y_shift * y_shift);
+        self.net_yaw
+            .predict(dt, q_yaw, y_shift, frac2 * y_shift * y_shift);
 
         self.pose = pose1;
         self.t_ns = Some(t);
@@ -292,10 +311,16 @@ impl Core {
                 }
             }
         }
-        if self.candidate.is_some_and(|c| dt_s(t_ns, c.t_ns) >= lost_after) {
+        if self
+            .candidate
+            .is_some_and(|c| dt_s(t_ns, c.t_ns) >= lost_after)
+        {
             self.candidate = None;
         }
-        if self.before_jump.is_some_and(|(_, at)| dt_s(t_ns, at) > self.cfg.gating.jump_fallback_s) {
+        if self
+            .before_jump
+            .is_some_and(|(_, at)| dt_s(t_ns, at) > self.cfg.gating.jump_fallback_s)
+        {
             self.before_jump = None;
         }
     }
@@ -329,13 +354,19 @@ impl Core {
             return (true, None);
         };
         // Inside a filter's gate: a small Mahalanobis distance or a short innovation.
-        let in_gate = |nu_norm: f64, d2: f64| d2 <= g.chi2_threshold || nu_norm <= g.min_gate_px * scale;
+        let in_gate =
+            |nu_norm: f64, d2: f64| d2 <= g.chi2_threshold || nu_norm <= g.min_gate_px * scale;
         let (nu, _, d2) = track.filter.innovation(z, r);
         let inside = !gating || in_gate(nu.norm(), d2);
         let close = (nu.norm() <= g.estimate_gate_px * scale).then_some(nu.norm());
         if inside {
-            let robust = gating && g.robust_chi2 > 0.0 && d2 > g.robust_chi2 && nu.norm() > g.min_gate_px * scale;
-            track.filter.update(z, if robust { r * d2 / g.robust_chi2 } else { r });
+            let robust = gating
+                && g.robust_chi2 > 0.0
+                && d2 > g.robust_chi2
+                && nu.norm() > g.min_gate_px * scale;
+            track
+                .filter
+                .update(z, if robust { r * d2 / g.robust_chi2 } else { r });
             track.consistent = track.consistent.saturating_add(1);
             // The track before a jump is an alternative only while it is elsewhere: once its
             // prediction lies inside this track's gate the two have merged, and with its wide,
@@ -363,10 +394,17 @@ impl Core {
         // A confirmed track rejects the measurement. The track before a recent jump may take
         // it back, if it had more support than the new one has.
         let new_support = track.consistent;
-        if let Some((mut old, _)) = self.before_jump.filter(|(old, _)| gating && old.consistent > new_support) {
+        if let Some((mut old, _)) = self
+            .before_jump
+            .filter(|(old, _)| gating && old.consistent > new_support)
+        {
             let (nu_old, _, d2_old) = old.filter.innovation(z, r);
             if in_gate(nu_old.norm(), d2_old) {
-                log::info!("track: back to the track before the jump at ({:.1}, {:.1})", z[0], z[1]);
+                log::info!(
+                    "track: back to the track before the jump at ({:.1}, {:.1})",
+                    z[0],
+                    z[1]
+                );
                 old.filter.update(z, r);
                 old.consistent = old.consistent.saturating_add(1);
                 self.track = Some(old);
@@ -378,17 +416,27 @@ impl Core {
         // Count it towards a persistent jump.
         let radius = g.jump_consistency_px * scale;
         let count = match self.candidate {
-            Some(c) if ((c.px[0] - z[0]).powi(2) + (c.px[1] - z[1]).powi(2)).sqrt() <= radius => c.count + 1,
+            Some(c) if ((c.px[0] - z[0]).powi(2) + (c.px[1] - z[1]).powi(2)).sqrt() <= radius => {
+                c.count + 1
+            }
             _ => 1,
         };
         if count >= g.jump_accept_count {
-            log::info!("track: persistent jump to ({:.1}, {:.1}) accepted after {count} detections", z[0], z[1]);
+            log::info!(
+                "track: persistent jump to ({:.1}, {:.1}) accepted after {count} detections",
+                z[0],
+                z[1]
+            );
             let old = *track;
             self.start_track(z, count);
             self.before_jump = (self.cfg.gating.jump_fallback_s > 0.0).then_some((old, t_ns));
             return (true, None);
         }
-        log::debug!("track: gated out ({:.1}, {:.1}), Mahalanobis² {d2:.1}", z[0], z[1]);
+        log::debug!(
+            "track: gated out ({:.1}, {:.1}), Mahalanobis² {d2:.1}",
+            z[0],
+            z[1]
+        );
         self.candidate = Some(Candidate { px: z, count, t_ns });
         (false, None)
     }
@@ -403,7 +451,11 @@ impl Core {
         let usable = det.detected
             && det.confidence >= self.cfg.filter.min_confidence
             && det.hub_px.iter().all(|v| v.is_finite());
-        let (accepted, innovation_px) = if usable { self.measure_hub(det.hub_px, t) } else { (false, None) };
+        let (accepted, innovation_px) = if usable {
+            self.measure_hub(det.hub_px, t)
+        } else {
+            (false, None)
+        };
         if accepted {
             self.last_accept_ns = Some(t);
             self.missed_streak = 0;
@@ -413,7 +465,11 @@ impl Core {
             self.frames_since = self.frames_since.saturating_add(1);
         }
         if self.opts.raw_estimates {
-            self.raw = if usable { self.raw_estimates(det) } else { (None, None) };
+            self.raw = if usable {
+                self.raw_estimates(det)
+            } else {
+                (None, None)
+            };
         } else if let Some(nu) = innovation_px {
             self.filtered_estimates(det, t, nu);
         }
@@ -434,9 +490,21 @@ impl Core {
         let camera_m = camera_position_at(v, t, max_age)?;
         let pose = camera_pose_at(v, t, max_age, &self.r_bc, false)?;
         let ray = pose.r_wc * self.camera().ray(det.hub_px).normalize();
-        self.parallax.push(Sighting { t_ns: t, camera_m, ray }, cfg);
+        self.parallax.push(
+            Sighting {
+                t_ns: t,
+                camera_m,
+                ray,
+            },
+            cfg,
+        );
         let d = self.parallax.distance_from(&camera_m, &ray, cfg)?;
-        log::trace!("parallax distance {:.1}±{:.1} m from {} sightings", d.value, d.std, self.parallax.len());
+        log::trace!(
+            "parallax distance {:.1}±{:.1} m from {} sightings",
+            d.value,
+            d.std,
+            self.parallax.len()
+        );
         Some(d)
     }
 
@@ -447,7 +515,12 @@ impl Core {
         if !det.tower_found || det.tower_width_px < d.min_size_px * s {
             return None;
         }
-        distance_from_tower_width(self.camera().f_px, d.tower_diameter_m, det.tower_width_px, d.tower_width_std_px * s)
+        distance_from_tower_width(
+            self.camera().f_px,
+            d.tower_diameter_m,
+            det.tower_width_px,
+            d.tower_width_std_px * s,
+        )
     }
 
     /// The thesis's per-frame estimates: distance from the tower width (depth of the tower, eq.
@@ -478,7 +551,12 @@ impl Core {
         let max_yaw = yc.max_abs_deg.to_radians();
 
         let spinner = if det.circle_found && 2.0 * det.circle[2] >= dc.min_size_px * s {
-            distance_from_spinner(f, dc.spinner_diameter_m, det.circle[2], dc.spinner_radius_std_px * s)
+            distance_from_spinner(
+                f,
+                dc.spinner_diameter_m,
+                det.circle[2],
+                dc.spinner_radius_std_px * s,
+            )
         } else {
             None
         };
@@ -495,11 +573,16 @@ impl Core {
         let mut rejected_width_ratio = None;
         if let (Some(td), Some(sp)) = (tower, spinner) {
             let tower_hub = td.value - offset;
-            let chi2 = (tower_hub - sp.value).powi(2) / (td.std.powi(2) + sp.std.powi(2)).max(1e-12);
+            let chi2 =
+                (tower_hub - sp.value).powi(2) / (td.std.powi(2) + sp.std.powi(2)).max(1e-12);
             if chi2 > dc.consistency_chi2 {
                 tower_disputed = true;
                 match self.distance.estimate() {
-                    Some(prior) if (sp.value - prior.value).abs() < (tower_hub - prior.value).abs() => tower = None,
+                    Some(prior)
+                        if (sp.value - prior.value).abs() < (tower_hub - prior.value).abs() =>
+                    {
+                        tower = None
+                    }
                     Some(_) => spinner = None,
                     None => (tower, spinner) = (None, None),
                 }
@@ -509,11 +592,15 @@ impl Core {
                     let expected_px = f * dc.tower_diameter_m / (sp.value + offset * psi.cos());
                     rejected_width_ratio = Some(det.tower_width_px / expected_px);
                 }
-                log::debug!("tower {tower_hub:.1} m and spinner {:.1} m disagree (chi2 {chi2:.0}): kept {}", sp.value, match (tower, spinner) {
-                    (Some(_), _) => "tower",
-                    (_, Some(_)) => "spinner",
-                    _ => "neither",
-                });
+                log::debug!(
+                    "tower {tower_hub:.1} m and spinner {:.1} m disagree (chi2 {chi2:.0}): kept {}",
+                    sp.value,
+                    match (tower, spinner) {
+                        (Some(_), _) => "tower",
+                        (_, Some(_)) => "spinner",
+                        _ => "neither",
+                    }
+                );
             }
         }
 
@@ -521,16 +608,34 @@ impl Core {
         // dropped, the tower's gap with it (see `[track.parallax]`).
         let parallax = self.parallax_distance(det, t);
         if let Some(p) = parallax {
-            let disagrees = |m: Estimate| (m.value - p.value).powi(2) / (m.var() + p.var()).max(1e-12) > self.cfg.parallax.consistency_chi2;
-            if tower.is_some_and(|td| disagrees(Estimate { value: td.value - offset, std: td.std })) {
-                log::debug!("tower {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped", tower.map_or(0.0, |td| td.value - offset), p.value, p.std);
+            let disagrees = |m: Estimate| {
+                (m.value - p.value).powi(2) / (m.var() + p.var()).max(1e-12)
+                    > self.cfg.parallax.consistency_chi2
+            };
+            if tower.is_some_and(|td| {
+                disagrees(Estimate {
+                    value: td.value - offset,
+                    std: td.std,
+                })
+            }) {
+                log::debug!(
+                    "tower {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped",
+                    tower.map_or(0.0, |td| td.value - offset),
+                    p.value,
+                    p.std
+                );
                 tower = None;
                 tower_disputed = true;
                 tower_rejected = true;
                 rejected_width_ratio = None;
             }
             if spinner.is_some_and(disagrees) {
-                log::debug!("spinner {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped", spinner.map_or(0.0, |sp| sp.value), p.value, p.std);
+                log::debug!(
+                    "spinner {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped",
+                    spinner.map_or(0.0, |sp| sp.value),
+                    p.value,
+                    p.std
+                );
                 spinner = None;
             }
         }
@@ -541,15 +646,29 @@ impl Core {
         let tower_depth = tower.or_else(|| {
             let d = self.distance.estimate().or(spinner_seen)?;
             let psi = yaw_prior.map_or(0.0, |e| e.value);
-            Some(Estimate { value: d.value + offset * psi.cos(), std: d.std })
+            Some(Estimate {
+                value: d.value + offset * psi.cos(),
+                std: d.std,
+            })
         });
-        let band_undisputed = if yc.gap_from_disputed_tower { !tower_rejected } else { !tower_disputed };
+        let band_undisputed = if yc.gap_from_disputed_tower {
+            !tower_rejected
+        } else {
+            !tower_disputed
+        };
         let band_on_tower = band_undisputed
-            || rejected_width_ratio.is_some_and(|r| r <= yc.gap_max_width_ratio && r * yc.gap_max_width_ratio >= 1.0);
+            || rejected_width_ratio
+                .is_some_and(|r| r <= yc.gap_max_width_ratio && r * yc.gap_max_width_ratio >= 1.0);
         let gap = if det.tower_found && det.detected && band_on_tower {
             // How well the hub end of the gap is known depends on how the hub was found.
-            let gap_std = if det.circle_found { yc.gap_std_spinner_px } else { yc.gap_std_lines_px };
-            tower_depth.and_then(|td| yaw_from_gap(det.hub_tower_gap_px, gap_std * s, td, f, offset, max_yaw))
+            let gap_std = if det.circle_found {
+                yc.gap_std_spinner_px
+            } else {
+                yc.gap_std_lines_px
+            };
+            tower_depth.and_then(|td| {
+                yaw_from_gap(det.hub_tower_gap_px, gap_std * s, td, f, offset, max_yaw)
+            })
         } else {
             None
         };
@@ -559,24 +678,54 @@ impl Core {
         // `nacelle_gate_px`).
         let hub_settled = yc.nacelle_gate_px <= 0.0 || innovation_px <= yc.nacelle_gate_px * s;
         let on_spinner = det.circle_found || !yc.nacelle_needs_spinner;
-        let nacelle = if yc.use_nacelle && det.detected && det.nacelle_found && hub_settled && on_spinner {
-            self.distance.estimate().or(spinner).filter(|d| d.value >= yc.nacelle_min_distance_m).and_then(|d| {
-                // Only an end well beyond the head-on front corners (see `nacelle_min_excess_sigma`).
-                let hub_std = if det.circle_found { yc.gap_std_spinner_px } else { yc.gap_std_lines_px };
-                let excess = nacelle_excess_sigma(det.nacelle_end_dx_px, yc.nacelle_std_px.hypot(hub_std) * s, d, f, yc.nacelle_front_m, yc.nacelle_half_width_m);
-                if excess < yc.nacelle_min_excess_sigma {
-                    return None;
-                }
-                let e = yaw_from_nacelle(det.nacelle_end_dx_px, yc.nacelle_std_px * s, d, f, yc.nacelle_rear_m, yc.nacelle_half_width_m, max_yaw)?;
-                // Near zero yaw the side is a toss-up (see `nacelle_min_abs_deg`).
-                (e.value.abs() >= yc.nacelle_min_abs_deg.to_radians())
-                    .then(|| Estimate { value: e.value, std: e.std.max(yc.nacelle_min_std_deg.to_radians()) })
-            })
-        } else {
-            None
-        };
+        let nacelle =
+            if yc.use_nacelle && det.detected && det.nacelle_found && hub_settled && on_spinner {
+                self.distance
+                    .estimate()
+                    .or(spinner)
+                    .filter(|d| d.value >= yc.nacelle_min_distance_m)
+                    .and_then(|d| {
+                        // Only an end well beyond the head-on front corners (see `nacelle_min_excess_sigma`).
+                        let hub_std = if det.circle_found {
+                            yc.gap_std_spinner_px
+                        } else {
+                            yc.gap_std_lines_px
+                        };
+                        let excess = nacelle_excess_sigma(
+                            det.nacelle_end_dx_px,
+                            yc.nacelle_std_px.hypot(hub_std) * s,
+                            d,
+                            f,
+                            yc.nacelle_front_m,
+                            yc.nacelle_half_width_m,
+                        );
+                        if excess < yc.nacelle_min_excess_sigma {
+                            return None;
+                        }
+                        let e = yaw_from_nacelle(
+                            det.nacelle_end_dx_px,
+                            yc.nacelle_std_px * s,
+                            d,
+                            f,
+                            yc.nacelle_rear_m,
+                            yc.nacelle_half_width_m,
+                            max_yaw,
+                        )?;
+                        // Near zero yaw the side is a toss-up (see `nacelle_min_abs_deg`).
+                        (e.value.abs() >= yc.nacelle_min_abs_deg.to_radians()).then(|| Estimate {
+                            value: e.value,
+                            std: e.std.max(yc.nacelle_min_std_deg.to_radians()),
+                        })
+                    })
+            } else {
+                None
+            };
         let gap = match (gap, nacelle) {
-            (Some(g), Some(n)) if (g.value - n.value).powi(2) / (g.var() + n.var()) > yc.gate_chi2 => None,
+            (Some(g), Some(n))
+                if (g.value - n.value).powi(2) / (g.var() + n.var()) > yc.gate_chi2 =>
+            {
+                None
+            }
             (g, _) => g,
         };
         // The learned yaw network's reading (see `use_net`); with `net_vetoes_gap` a gap or
@@ -584,23 +733,47 @@ impl Core {
         let net = (yc.use_net && det.detected && det.yaw_net_valid && det.yaw_net_deg.is_finite())
             .then_some(det.yaw_net_std_deg)
             .filter(|s| s.is_finite() && *s <= yc.net_max_std_deg)
-            .map(|s| Estimate { value: det.yaw_net_deg.to_radians(), std: s.max(yc.net_min_std_deg).to_radians() });
+            .map(|s| Estimate {
+                value: det.yaw_net_deg.to_radians(),
+                std: s.max(yc.net_min_std_deg).to_radians(),
+            });
         let contradicts = |m: Option<Estimate>| match (m, net) {
-            (Some(m), Some(n)) => yc.net_vetoes_gap && (m.value - n.value).powi(2) / (m.var() + n.var()) > yc.gate_chi2,
+            (Some(m), Some(n)) => {
+                yc.net_vetoes_gap
+                    && (m.value - n.value).powi(2) / (m.var() + n.var()) > yc.gate_chi2
+            }
             _ => false,
         };
         let gap = if contradicts(gap) { None } else { gap };
         let nacelle = if contradicts(nacelle) { None } else { nacelle };
         let n = (det.blade_count as usize).min(det.blade_angles_deg.len());
         let blade = if yc.use_blade_skew && n >= yc.min_blades as usize {
-            blade_skew_yaw(&det.blade_angles_deg[..n], yc.rotor_blades, yc.blade_angle_std_deg.to_radians(), max_yaw, yc.blade_fit_chi2)
+            blade_skew_yaw(
+                &det.blade_angles_deg[..n],
+                yc.rotor_blades,
+                yc.blade_angle_std_deg.to_radians(),
+                max_yaw,
+                yc.blade_fit_chi2,
+            )
         } else {
             None
         };
         // The blade skew gives |ψ|; its sign comes from the gap (and the filtered yaw).
-        let sign_ref = fuse(&[gap, nacelle, yaw_prior].into_iter().flatten().collect::<Vec<_>>());
-        let blade_signed = blade.zip(sign_ref).map(|(b, r)| Estimate { value: b.value.copysign(r.value), std: b.std });
-        let show = |e: Option<Estimate>| e.map_or("-".to_string(), |e| format!("{:+.1}±{:.1}°", e.value.to_degrees(), e.std.to_degrees()));
+        let sign_ref = fuse(
+            &[gap, nacelle, yaw_prior]
+                .into_iter()
+                .flatten()
+                .collect::<Vec<_>>(),
+        );
+        let blade_signed = blade.zip(sign_ref).map(|(b, r)| Estimate {
+            value: b.value.copysign(r.value),
+            std: b.std,
+        });
+        let show = |e: Option<Estimate>| {
+            e.map_or("-".to_string(), |e| {
+                format!("{:+.1}±{:.1}°", e.value.to_degrees(), e.std.to_degrees())
+            })
+        };
         log::debug!(
             "yaw, frame {}: gap {} nacelle {} blades {} network {} prior {}",
             det.stamps.seq,
@@ -610,20 +783,35 @@ impl Core {
             show(net),
             show(yaw_prior)
         );
-        let cues = [gap, nacelle, blade_signed].into_iter().flatten().collect::<Vec<_>>();
+        let cues = [gap, nacelle, blade_signed]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>();
         // The readings the fallback trusts: from `net_fallback_min_distance_m` out (closer, the
         // network's error grows past the approach's yaw tolerance).
         let net_trusted = net.filter(|_| {
-            yc.net_fallback_min_distance_m <= 0.0 || self.distance.estimate().is_some_and(|d| d.value >= yc.net_fallback_min_distance_m)
+            yc.net_fallback_min_distance_m <= 0.0
+                || self
+                    .distance
+                    .estimate()
+                    .is_some_and(|d| d.value >= yc.net_fallback_min_distance_m)
         });
         if let Some(n) = net_trusted {
-            self.net_yaw.update(n, yc.gate_chi2, yc.jump_accept_count, t);
+            self.net_yaw
+                .update(n, yc.gate_chi2, yc.jump_accept_count, t);
         }
         let net_fused = net.filter(|_| yc.net_fuse);
         if let Some(m) = fuse(&cues.iter().copied().chain(net_fused).collect::<Vec<_>>()) {
             // No jumps close in (see `jump_min_distance_m`): only gated updates.
-            let close = self.distance.estimate().is_some_and(|d| d.value < yc.jump_min_distance_m);
-            let jump_count = if close { u32::MAX } else { yc.jump_accept_count };
+            let close = self
+                .distance
+                .estimate()
+                .is_some_and(|d| d.value < yc.jump_min_distance_m);
+            let jump_count = if close {
+                u32::MAX
+            } else {
+                yc.jump_accept_count
+            };
             if self.yaw.update(m, yc.gate_chi2, jump_count, t) && !cues.is_empty() {
                 self.yaw_cue_ns = Some(t);
                 self.net_fallback = false;
@@ -633,16 +821,33 @@ impl Core {
             // once the network's filtered reading stands `net_fallback_min_deg` from the stale
             // yaw, it restarts the yaw and carries it, every trusted reading fused, until a cue
             // returns.
-            let cue_age_s = self.yaw_cue_ns.or(self.first_ns).map_or(0.0, |c| dt_s(t, c));
+            let cue_age_s = self
+                .yaw_cue_ns
+                .or(self.first_ns)
+                .map_or(0.0, |c| dt_s(t, c));
             if self.net_fallback {
                 if let Some(n) = net_trusted {
                     self.yaw.update(n, yc.gate_chi2, yc.jump_accept_count, t);
                 }
-            } else if let Some(reference) = self.net_yaw.estimate().filter(|_| cue_age_s >= yc.net_fallback_after_s) {
-                let far = self.yaw.estimate().is_none_or(|y| (reference.value - y.value).abs() >= yc.net_fallback_min_deg.to_radians());
+            } else if let Some(reference) = self
+                .net_yaw
+                .estimate()
+                .filter(|_| cue_age_s >= yc.net_fallback_after_s)
+            {
+                let far = self.yaw.estimate().is_none_or(|y| {
+                    (reference.value - y.value).abs() >= yc.net_fallback_min_deg.to_radians()
+                });
                 if far {
                     let std = reference.std.max(yc.net_min_std_deg.to_radians());
-                    self.yaw.update(Estimate { value: reference.value, std }, yc.gate_chi2, 1, t);
+                    self.yaw.update(
+                        Estimate {
+                            value: reference.value,
+                            std,
+                        },
+                        yc.gate_chi2,
+                        1,
+                        t,
+                    );
                     self.net_fallback = true;
                 }
             }
@@ -653,14 +858,39 @@ impl Core {
         let tower_hub = tower.and_then(|td| {
             let (psi, sig) = yaw_now.map_or((0.0, 0.0), |e| (e.value, e.std));
             let value = td.value - offset * psi.cos();
-            (value > 0.0).then(|| Estimate { value, std: td.std.hypot(offset * psi.sin() * sig) })
+            (value > 0.0).then(|| Estimate {
+                value,
+                std: td.std.hypot(offset * psi.sin() * sig),
+            })
         });
-        if let Some(m) = fuse(&[tower_hub, spinner, parallax].into_iter().flatten().collect::<Vec<_>>()) {
+        if let Some(m) = fuse(
+            &[tower_hub, spinner, parallax]
+                .into_iter()
+                .flatten()
+                .collect::<Vec<_>>(),
+        ) {
             // No jumps close in (see `distance.jump_min_distance_m`): only gated updates, while
             // the filter has accepted a reading within `jump_lockout_max_s`.
-            let recent = dc.jump_lockout_max_s <= 0.0 || self.distance.last_accept_ns.is_some_and(|a| dt_s(t, a) <= dc.jump_lockout_max_s);
-            let close = recent && self.distance.estimate().is_some_and(|d| d.value < dc.jump_min_distance_m);
-            self.distance.update(m, dc.gate_chi2, if close { u32::MAX } else { dc.jump_accept_count }, t);
+            let recent = dc.jump_lockout_max_s <= 0.0
+                || self
+                    .distance
+                    .last_accept_ns
+                    .is_some_and(|a| dt_s(t, a) <= dc.jump_lockout_max_s);
+            let close = recent
+                && self
+                    .distance
+                    .estimate()
+                    .is_some_and(|d| d.value < dc.jump_min_distance_m);
+            self.distance.update(
+                m,
+                dc.gate_chi2,
+                if close {
+                    u32::MAX
+                } else {
+                    dc.jump_accept_count
+                },
+                t,
+            );
         }
     }
 
@@ -685,7 +915,9 @@ impl Core {
 
     /// Seconds since the last accepted detection (since the first frame if there was none).
     fn time_since_detection(&self, t_ns: u64) -> f64 {
-        self.last_accept_ns.or(self.first_ns).map_or(0.0, |a| dt_s(t_ns, a).max(0.0))
+        self.last_accept_ns
+            .or(self.first_ns)
+            .map_or(0.0, |a| dt_s(t_ns, a).max(0.0))
     }
 
     fn output(&self, t_ns: u64, seq: u64, capture_ns: u64) -> TrackState {
@@ -695,7 +927,11 @@ impl Core {
         let (hub_px, vel, cov) = match &self.track {
             Some(tr) => {
                 let (x, p) = (&tr.filter.x, &tr.filter.p);
-                ([x[0], x[1]], [x[2], x[3]], [p[(0, 0)], p[(0, 1)], p[(1, 0)], p[(1, 1)]])
+                (
+                    [x[0], x[1]],
+                    [x[2], x[3]],
+                    [p[(0, 0)], p[(0, 1)], p[(1, 0)], p[(1, 1)]],
+                )
             }
             None => {
                 // No track: "anywhere in the image".
@@ -716,19 +952,46 @@ impl Core {
                 })
             };
             (
-                fresh(&self.distance, self.cfg.distance.stale_after_s, self.cfg.distance.max_std_m),
-                fresh(&self.yaw, self.cfg.yaw.stale_after_s, self.cfg.yaw.max_std_deg.to_radians()),
+                fresh(
+                    &self.distance,
+                    self.cfg.distance.stale_after_s,
+                    self.cfg.distance.max_std_m,
+                ),
+                fresh(
+                    &self.yaw,
+                    self.cfg.yaw.stale_after_s,
+                    self.cfg.yaw.max_std_deg.to_radians(),
+                ),
             )
         };
         // Report the last values (flagged invalid) rather than zeros when they went stale.
-        let distance_any = distance.or(if self.opts.raw_estimates { None } else { self.distance.estimate() });
-        let yaw_any = yaw.or(if self.opts.raw_estimates { None } else { self.yaw.estimate() });
+        let distance_any = distance.or(if self.opts.raw_estimates {
+            None
+        } else {
+            self.distance.estimate()
+        });
+        let yaw_any = yaw.or(if self.opts.raw_estimates {
+            None
+        } else {
+            self.yaw.estimate()
+        });
         let ray = self.camera().ray(hub_px);
-        let hub_bearing_deg = [ray.x.atan2(ray.z).to_degrees(), (-ray.y).atan2(ray.x.hypot(ray.z)).to_degrees()];
+        let hub_bearing_deg = [
+            ray.x.atan2(ray.z).to_degrees(),
+            (-ray.y).atan2(ray.x.hypot(ray.z)).to_degrees(),
+        ];
         // The network's filtered yaw, on the frames whose reading it took.
-        let net_yaw = self.net_yaw.estimate().filter(|_| self.net_yaw.last_accept_ns == Some(t_ns));
+        let net_yaw = self
+            .net_yaw
+            .estimate()
+            .filter(|_| self.net_yaw.last_accept_ns == Some(t_ns));
         TrackState {
-            stamps: hubtrack_types::Stamps { seq, capture_ns, recv_ns: 0, publish_ns: 0 },
+            stamps: hubtrack_types::Stamps {
+                seq,
+                capture_ns,
+                recv_ns: 0,
+                publish_ns: 0,
+            },
             mode,
             search_requested: matches!(mode, TrackMode::Lost | TrackMode::Acquiring)
                 && since >= self.cfg.modes.search_after_s,
@@ -772,7 +1035,15 @@ impl Tracker {
     /// A tracker with a validated configuration.
     pub fn new(config: crate::params::TrackConfig) -> Result<Tracker, crate::params::ParamError> {
         Ok(Tracker {
-            core: Core::new(config, Options { gating: true, ego_motion: true, raw_estimates: false, thesis_filter: false })?,
+            core: Core::new(
+                config,
+                Options {
+                    gating: true,
+                    ego_motion: true,
+                    raw_estimates: false,
+                    thesis_filter: false,
+                },
+            )?,
         })
     }
 
@@ -816,9 +1087,19 @@ pub struct BaselineTracker {
 impl BaselineTracker {
     /// A baseline tracker; uses `camera`, `filter`, `modes`, and the sizes and noise of
     /// `distance` and `yaw` from the configuration.
-    pub fn new(config: crate::params::TrackConfig) -> Result<BaselineTracker, crate::params::ParamError> {
+    pub fn new(
+        config: crate::params::TrackConfig,
+    ) -> Result<BaselineTracker, crate::params::ParamError> {
         Ok(BaselineTracker {
-            core: Core::new(config, Options { gating: false, ego_motion: false, raw_estimates: true, thesis_filter: true })?,
+            core: Core::new(
+                config,
+                Options {
+                    gating: false,
+                    ego_motion: false,
+                    raw_estimates: true,
+                    thesis_filter: true,
+                },
+            )?,
         })
     }
 

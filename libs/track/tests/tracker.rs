@@ -33,7 +33,6 @@ impl Rng {
     }
 }
 
-
 /// These tests build their scenes with a plain pinhole camera of 118° horizontal FOV; state it
 /// rather than rely on the default lens (the GoPro's centre focal length).
 fn pinhole_config() -> TrackConfig {
@@ -47,7 +46,11 @@ fn ns(t: f64) -> u64 {
 }
 
 fn det(seq: u64, t: f64, px: Option<[f64; 2]>) -> Detection {
-    let mut d = Detection { image_width: W, image_height: H, ..Default::default() };
+    let mut d = Detection {
+        image_width: W,
+        image_height: H,
+        ..Default::default()
+    };
     d.stamps.seq = seq;
     d.stamps.capture_ns = ns(t);
     if let Some(p) = px {
@@ -82,7 +85,14 @@ fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
 
 /// Feeds a static hub at `p` for `secs` at `fps` with noise `sigma`; returns the last state and
 /// the next frame index.
-fn settle(tr: &mut Tracker, p: [f64; 2], secs: f64, fps: f64, sigma: f64, rng: &mut Rng) -> (TrackState, u64) {
+fn settle(
+    tr: &mut Tracker,
+    p: [f64; 2],
+    secs: f64,
+    fps: f64,
+    sigma: f64,
+    rng: &mut Rng,
+) -> (TrackState, u64) {
     let n = (secs * fps) as u64;
     let mut s = TrackState::default();
     for k in 0..n {
@@ -99,11 +109,18 @@ fn converges_on_a_constant_velocity_target_with_noise() {
     let p0 = [400.0, 700.0];
     // Damped, the filter lags a steadily moving target (its velocity decays between
     // measurements), the more so the more it smooths: ~6 px at 65 px/s with the defaults.
-    for (damping, pos_tol, vel_tol) in [(1.0, 2.0, 8.0), (pinhole_config().filter.damping, 8.0, 0.4 * 65.0)] {
+    for (damping, pos_tol, vel_tol) in [
+        (1.0, 2.0, 8.0),
+        (pinhole_config().filter.damping, 8.0, 0.4 * 65.0),
+    ] {
         let mut cfg = pinhole_config();
         cfg.filter.damping = damping;
         // The baseline with the same filter values, to compare the filters alone.
-        cfg.thesis_filter = ThesisFilterConfig { damping, process_noise: cfg.filter.process_noise, measurement_noise: cfg.filter.measurement_noise };
+        cfg.thesis_filter = ThesisFilterConfig {
+            damping,
+            process_noise: cfg.filter.process_noise,
+            measurement_noise: cfg.filter.measurement_noise,
+        };
         let mut tr = Tracker::new(cfg.clone()).unwrap();
         let mut base = BaselineTracker::new(cfg).unwrap();
         let mut rng = Rng::new(7);
@@ -127,11 +144,23 @@ fn converges_on_a_constant_velocity_target_with_noise() {
         let e = dist(s.hub_px, truth);
         let ev = dist(s.hub_velocity_px_s, v);
         assert!(e < pos_tol, "γ {damping}: position error {e:.2} px");
-        assert!(ev < vel_tol, "γ {damping}: velocity error {ev:.2} px/s ({:?})", s.hub_velocity_px_s);
+        assert!(
+            ev < vel_tol,
+            "γ {damping}: velocity error {ev:.2} px/s ({:?})",
+            s.hub_velocity_px_s
+        );
         // Same filter without gating on clean data: the baseline agrees.
-        assert!(dist(b.hub_px, s.hub_px) < 1e-6, "baseline {:?} vs {:?}", b.hub_px, s.hub_px);
+        assert!(
+            dist(b.hub_px, s.hub_px) < 1e-6,
+            "baseline {:?} vs {:?}",
+            b.hub_px,
+            s.hub_px
+        );
         if damping == 1.0 {
-            assert!(filt_err2 < 0.5 * raw_err2, "filter does not reduce noise: {filt_err2} vs {raw_err2}");
+            assert!(
+                filt_err2 < 0.5 * raw_err2,
+                "filter does not reduce noise: {filt_err2} vs {raw_err2}"
+            );
         }
         // The covariance is symmetric and positive.
         let c = s.hub_covariance;
@@ -153,7 +182,10 @@ fn damping_through_a_long_dropout() {
     let mut k = 0;
     while frame_t(k, fps) < 6.0 {
         let t = frame_t(k, fps) - 1.0;
-        s = tr.update(&det(k, frame_t(k, fps), Some([300.0 + 120.0 * t, 500.0])), None);
+        s = tr.update(
+            &det(k, frame_t(k, fps), Some([300.0 + 120.0 * t, 500.0])),
+            None,
+        );
         k += 1;
     }
     let t0 = frame_t(k - 1, fps);
@@ -168,17 +200,28 @@ fn damping_through_a_long_dropout() {
         k += 1;
         let ratio = s.hub_velocity_px_s[0] / prev_v;
         if prev_v.abs() > 1e-6 {
-            assert!((ratio - gamma).abs() < 1e-6, "step {j}: velocity ratio {ratio}");
+            assert!(
+                (ratio - gamma).abs() < 1e-6,
+                "step {j}: velocity ratio {ratio}"
+            );
         }
         prev_v = s.hub_velocity_px_s[0];
         // Bounded: never beyond the limit of the damped motion.
         let bound = v0 * t_ref / (1.0 / gamma).ln();
-        assert!(s.hub_px[0] - x0 <= bound + 1e-6, "position ran away: {} > {bound}", s.hub_px[0] - x0);
+        assert!(
+            s.hub_px[0] - x0 <= bound + 1e-6,
+            "position ran away: {} > {bound}",
+            s.hub_px[0] - x0
+        );
     }
     assert_eq!(s.mode, TrackMode::Lost);
     assert!(s.hub_velocity_px_s[0].abs() < 1e-6 * v0);
     let bound = v0 * t_ref / (1.0 / gamma).ln();
-    assert!((s.hub_px[0] - x0 - bound).abs() < 0.01 * bound, "final travel {} vs {bound}", s.hub_px[0] - x0);
+    assert!(
+        (s.hub_px[0] - x0 - bound).abs() < 0.01 * bound,
+        "final travel {} vs {bound}",
+        s.hub_px[0] - x0
+    );
     assert!(s.hub_px[0] < W as f64, "the predicted hub left the image");
 }
 
@@ -202,9 +245,21 @@ fn gating_rejects_an_injected_outlier_the_baseline_jumps() {
     let outlier = [p[0] + 400.0, p[1] - 150.0];
     s = tr.update(&det(k, frame_t(k, fps), Some(outlier)), None);
     b = base.update(&det(k, frame_t(k, fps), Some(outlier)), None);
-    assert!(dist(s.hub_px, before_t) < 1.0, "tracker moved {} px", dist(s.hub_px, before_t));
-    assert!(dist(b.hub_px, before_b) > 20.0, "baseline moved only {} px", dist(b.hub_px, before_b));
-    assert_eq!(s.mode, TrackMode::Coasting, "a gated-out frame counts as missed");
+    assert!(
+        dist(s.hub_px, before_t) < 1.0,
+        "tracker moved {} px",
+        dist(s.hub_px, before_t)
+    );
+    assert!(
+        dist(b.hub_px, before_b) > 20.0,
+        "baseline moved only {} px",
+        dist(b.hub_px, before_b)
+    );
+    assert_eq!(
+        s.mode,
+        TrackMode::Coasting,
+        "a gated-out frame counts as missed"
+    );
     assert_eq!(s.frames_since_detection, 1);
     // The next good detection: tracking again, still on the hub.
     k += 1;
@@ -229,11 +284,19 @@ fn a_false_feature_every_third_frame_pulls_the_robust_track_less() {
         let (_, mut k) = settle(&mut tr, hub, 2.0, fps, 2.0, &mut rng);
         let mut off = 0.0;
         for i in 0..60 {
-            let z = if i % 3 == 0 { [hub[0], hub[1] + 75.0] } else { hub };
+            let z = if i % 3 == 0 {
+                [hub[0], hub[1] + 75.0]
+            } else {
+                hub
+            };
             let s = tr.update(&det(k, frame_t(k, fps), Some(z)), None);
             k += 1;
             if i % 3 != 0 {
-                assert_eq!(s.mode, TrackMode::Tracking, "robust_chi2 {robust_chi2}: the hub is accepted");
+                assert_eq!(
+                    s.mode,
+                    TrackMode::Tracking,
+                    "robust_chi2 {robust_chi2}: the hub is accepted"
+                );
             }
             if i >= 30 {
                 off += dist(s.hub_px, hub) / 30.0;
@@ -242,8 +305,14 @@ fn a_false_feature_every_third_frame_pulls_the_robust_track_less() {
         offsets.push(off);
     }
     let (robust, plain) = (offsets[0], offsets[1]);
-    assert!(plain > 20.0, "the false feature is inside the plain gate and pulls: {plain:.1} px");
-    assert!(robust < 0.7 * plain, "robust {robust:.1} px vs plain {plain:.1} px");
+    assert!(
+        plain > 20.0,
+        "the false feature is inside the plain gate and pulls: {plain:.1} px"
+    );
+    assert!(
+        robust < 0.7 * plain,
+        "robust {robust:.1} px vs plain {plain:.1} px"
+    );
 }
 
 #[test]
@@ -264,15 +333,34 @@ fn the_true_hub_seen_again_after_a_false_jump_brings_the_old_track_back() {
             s = tr.update(&det(k, frame_t(k, fps), Some(false_feature)), None);
             k += 1;
         }
-        assert!(dist(s.hub_px, false_feature) < 5.0, "the jump was accepted: {:?}", s.hub_px);
+        assert!(
+            dist(s.hub_px, false_feature) < 5.0,
+            "the jump was accepted: {:?}",
+            s.hub_px
+        );
         // The first detection of the hub again.
-        s = tr.update(&det(k, frame_t(k, fps), Some([hub[0] + rng.normal(), hub[1] + rng.normal()])), None);
+        s = tr.update(
+            &det(
+                k,
+                frame_t(k, fps),
+                Some([hub[0] + rng.normal(), hub[1] + rng.normal()]),
+            ),
+            None,
+        );
         if fallback_s > 0.0 {
-            assert!(dist(s.hub_px, hub) < 3.0, "back on the hub at once: {:?}", s.hub_px);
+            assert!(
+                dist(s.hub_px, hub) < 3.0,
+                "back on the hub at once: {:?}",
+                s.hub_px
+            );
             assert_eq!(s.mode, TrackMode::Tracking);
         } else {
             // Without the fallback it is an outlier of the false track.
-            assert!(dist(s.hub_px, false_feature) < 5.0, "still on the false feature: {:?}", s.hub_px);
+            assert!(
+                dist(s.hub_px, false_feature) < 5.0,
+                "still on the false feature: {:?}",
+                s.hub_px
+            );
             assert_eq!(s.mode, TrackMode::Coasting);
         }
     }
@@ -285,7 +373,11 @@ fn the_true_hub_seen_again_after_a_false_jump_brings_the_old_track_back() {
         k += 1;
     }
     let s = tr.update(&det(k, frame_t(k, 15.0), Some([500.0, 300.0])), None);
-    assert!(dist(s.hub_px, [960.0, 660.0]) < 5.0, "a third place took the track: {:?}", s.hub_px);
+    assert!(
+        dist(s.hub_px, [960.0, 660.0]) < 5.0,
+        "a third place took the track: {:?}",
+        s.hub_px
+    );
     assert_eq!(s.mode, TrackMode::Coasting);
 }
 
@@ -305,10 +397,17 @@ fn a_persistent_jump_is_accepted_after_the_configured_count() {
             let s = tr.update(&det(k, frame_t(k, fps), Some(z)), None);
             k += 1;
             if i < count {
-                assert!(dist(s.hub_px, old) < 2.0, "count {count}: moved after {i} detections");
+                assert!(
+                    dist(s.hub_px, old) < 2.0,
+                    "count {count}: moved after {i} detections"
+                );
                 assert_eq!(s.mode, TrackMode::Coasting);
             } else {
-                assert!(dist(s.hub_px, new) < 5.0, "count {count}: not accepted after {i}: {:?}", s.hub_px);
+                assert!(
+                    dist(s.hub_px, new) < 5.0,
+                    "count {count}: not accepted after {i}: {:?}",
+                    s.hub_px
+                );
                 assert_eq!(s.mode, TrackMode::Tracking);
                 assert_eq!(s.frames_since_detection, 0);
             }
@@ -323,15 +422,22 @@ fn a_persistent_jump_is_accepted_after_the_configured_count() {
         let z = [200.0 + 250.0 * i as f64, 100.0 + 120.0 * (i % 3) as f64];
         let s = tr.update(&det(k, frame_t(k, 30.0), Some(z)), None);
         k += 1;
-        assert!(dist(s.hub_px, old) < 3.0, "scattered outlier {i} moved the track to {:?}", s.hub_px);
+        assert!(
+            dist(s.hub_px, old) < 3.0,
+            "scattered outlier {i} moved the track to {:?}",
+            s.hub_px
+        );
     }
 }
 
 #[test]
 fn mode_transitions_with_their_time_limits() {
     let cfg = pinhole_config();
-    let (confirm, lost_after, search_after) =
-        (cfg.modes.confirm_count as u64, cfg.modes.lost_after_s, cfg.modes.search_after_s);
+    let (confirm, lost_after, search_after) = (
+        cfg.modes.confirm_count as u64,
+        cfg.modes.lost_after_s,
+        cfg.modes.search_after_s,
+    );
     let mut tr = Tracker::new(cfg).unwrap();
     let fps = 30.0;
     let p = [960.0, 540.0];
@@ -340,13 +446,24 @@ fn mode_transitions_with_their_time_limits() {
     let s = tr.update(&det(k, frame_t(k, fps), None), None);
     assert_eq!(s.mode, TrackMode::Acquiring);
     assert!(!s.search_requested);
-    assert_eq!(tr.predict_at(ns(frame_t(0, fps) + search_after + 0.01)).mode, TrackMode::Acquiring);
-    assert!(tr.predict_at(ns(frame_t(0, fps) + search_after + 0.01)).search_requested);
+    assert_eq!(
+        tr.predict_at(ns(frame_t(0, fps) + search_after + 0.01))
+            .mode,
+        TrackMode::Acquiring
+    );
+    assert!(
+        tr.predict_at(ns(frame_t(0, fps) + search_after + 0.01))
+            .search_requested
+    );
     k += 1;
     for i in 1..=confirm {
         let s = tr.update(&det(k, frame_t(k, fps), Some(p)), None);
         k += 1;
-        let want = if i < confirm { TrackMode::Acquiring } else { TrackMode::Tracking };
+        let want = if i < confirm {
+            TrackMode::Acquiring
+        } else {
+            TrackMode::Tracking
+        };
         assert_eq!(s.mode, want, "after {i} detections");
     }
     let t_last = frame_t(k - 1, fps);
@@ -366,7 +483,11 @@ fn mode_transitions_with_their_time_limits() {
             assert_eq!(s.mode, TrackMode::Lost, "at {since:.3} s");
             seen_lost_at.get_or_insert(since);
         }
-        assert_eq!(s.search_requested, since >= search_after - 1e-9, "at {since:.3} s");
+        assert_eq!(
+            s.search_requested,
+            since >= search_after - 1e-9,
+            "at {since:.3} s"
+        );
         if s.search_requested {
             seen_search_at.get_or_insert(since);
         }
@@ -382,7 +503,11 @@ fn mode_transitions_with_their_time_limits() {
         let s = tr.update(&det(k, frame_t(k, fps), Some(q)), None);
         k += 1;
         assert!(!s.search_requested);
-        let want = if i < confirm { TrackMode::Acquiring } else { TrackMode::Tracking };
+        let want = if i < confirm {
+            TrackMode::Acquiring
+        } else {
+            TrackMode::Tracking
+        };
         assert_eq!(s.mode, want, "re-acquisition after {i} detections");
         assert!(dist(s.hub_px, q) < 1e-6);
     }
@@ -428,17 +553,35 @@ fn dt_comes_from_the_stamps_not_the_frame_count() {
     let a = run_at(30.0, 1.0);
     let b = run_at(15.0, 1.0);
     assert_eq!(a.stamps.capture_ns, b.stamps.capture_ns);
-    assert!(dist(a.hub_px, b.hub_px) < 0.5, "30 fps {:?} vs 15 fps {:?}", a.hub_px, b.hub_px);
+    assert!(
+        dist(a.hub_px, b.hub_px) < 0.5,
+        "30 fps {:?} vs 15 fps {:?}",
+        a.hub_px,
+        b.hub_px
+    );
     assert!(dist(a.hub_px, [850.0, 500.0]) < 1.0, "{:?}", a.hub_px);
-    assert!(dist(a.hub_velocity_px_s, b.hub_velocity_px_s) < 1.0, "{:?} vs {:?}", a.hub_velocity_px_s, b.hub_velocity_px_s);
+    assert!(
+        dist(a.hub_velocity_px_s, b.hub_velocity_px_s) < 1.0,
+        "{:?} vs {:?}",
+        a.hub_velocity_px_s,
+        b.hub_velocity_px_s
+    );
     assert_eq!(a.mode, TrackMode::Lost);
-    assert!((a.time_since_detection_s - 1.0).abs() < 1e-9 && (b.time_since_detection_s - 1.0).abs() < 1e-9);
+    assert!(
+        (a.time_since_detection_s - 1.0).abs() < 1e-9
+            && (b.time_since_detection_s - 1.0).abs() < 1e-9
+    );
     // Default damping: the damped model's velocity bias depends a little on the measurement rate,
     // but both coast by the same damped law in time. (Stepping once per frame, as the thesis did,
     // the 15 fps run would coast ≈ 10 px further than the 30 fps one.)
     let a = run_at(30.0, pinhole_config().filter.damping);
     let b = run_at(15.0, pinhole_config().filter.damping);
-    assert!(dist(a.hub_px, b.hub_px) < 3.0, "30 fps {:?} vs 15 fps {:?}", a.hub_px, b.hub_px);
+    assert!(
+        dist(a.hub_px, b.hub_px) < 3.0,
+        "30 fps {:?} vs 15 fps {:?}",
+        a.hub_px,
+        b.hub_px
+    );
 
     // Pure prediction composes exactly: one 1 s step equals 30 small ones.
     let mut tr = Tracker::new(pinhole_config()).unwrap();
@@ -454,7 +597,12 @@ fn dt_comes_from_the_stamps_not_the_frame_count() {
         s = many.update(&det(100 + j, t_last + j as f64 / 30.0, None), None);
     }
     assert_eq!(s.stamps.capture_ns, one.stamps.capture_ns);
-    assert!(dist(one.hub_px, s.hub_px) < 1e-6, "{:?} vs {:?}", one.hub_px, s.hub_px);
+    assert!(
+        dist(one.hub_px, s.hub_px) < 1e-6,
+        "{:?} vs {:?}",
+        one.hub_px,
+        s.hub_px
+    );
     for i in 0..4 {
         assert!((one.hub_covariance[i] - s.hub_covariance[i]).abs() < 1e-6 * one.hub_covariance[0]);
     }
@@ -491,16 +639,29 @@ fn attitude_aided_prediction_through_a_yaw_turn() {
     }
     let dpsi: f64 = 0.2;
     let expected = CX - f * dpsi.tan();
-    assert!((s.hub_px[0] - expected).abs() < 1.0, "x {} expected {expected} (f·Δψ = {})", s.hub_px[0], f * dpsi);
+    assert!(
+        (s.hub_px[0] - expected).abs() < 1.0,
+        "x {} expected {expected} (f·Δψ = {})",
+        s.hub_px[0],
+        f * dpsi
+    );
     assert!((s.hub_px[1] - CY).abs() < 1.0);
     assert!(s.hub_px[0] < CX - 0.9 * f * dpsi, "moved the wrong way");
     assert_eq!(s.mode, TrackMode::Coasting);
-    assert!((b.hub_px[0] - CX).abs() < 1.0, "baseline ignores the vehicle: {:?}", b.hub_px);
+    assert!(
+        (b.hub_px[0] - CX).abs() < 1.0,
+        "baseline ignores the vehicle: {:?}",
+        b.hub_px
+    );
 
     // predict_at extrapolates the turn with the last body rates, without changing the state.
     let before = tr.clone().update(&det(999, t0 + 0.6, None), None);
     let ahead = tr.predict_at(ns(t0 + 0.6));
-    assert!(ahead.hub_px[0] < s.hub_px[0] - 0.5 * f * rate * 0.1 * 0.9, "{:?}", ahead.hub_px);
+    assert!(
+        ahead.hub_px[0] < s.hub_px[0] - 0.5 * f * rate * 0.1 * 0.9,
+        "{:?}",
+        ahead.hub_px
+    );
     assert!((ahead.hub_px[0] - before.hub_px[0]).abs() < 1e-9);
     let again = tr.predict_at(ns(t0 + 0.6));
     assert_eq!(again, ahead);
@@ -515,13 +676,23 @@ fn attitude_aided_prediction_of_a_pitch() {
     let p = [CX + 100.0, CY - 50.0];
     for k in 0..30 {
         let t = frame_t(k, fps);
-        tr.update(&det(k, t, Some(p)), Some(&vehicle(t, 0.0, 0.0, 0.0, [0.0; 3])));
+        tr.update(
+            &det(k, t, Some(p)),
+            Some(&vehicle(t, 0.0, 0.0, 0.0, [0.0; 3])),
+        );
     }
     let t = frame_t(30, fps);
     let dtheta: f64 = 0.05;
-    let s = tr.update(&det(30, t, None), Some(&vehicle(t, 0.0, dtheta, 0.0, [0.0; 3])));
+    let s = tr.update(
+        &det(30, t, None),
+        Some(&vehicle(t, 0.0, dtheta, 0.0, [0.0; 3])),
+    );
     // Nose up: the scene moves down by ≈ f·Δθ.
-    assert!((s.hub_px[1] - p[1] - f * dtheta).abs() < 0.05 * f * dtheta, "{:?}", s.hub_px);
+    assert!(
+        (s.hub_px[1] - p[1] - f * dtheta).abs() < 0.05 * f * dtheta,
+        "{:?}",
+        s.hub_px
+    );
     assert!((s.hub_px[0] - p[0]).abs() < 0.05 * f * dtheta);
 }
 
@@ -538,12 +709,19 @@ fn tracking_through_a_turn_keeps_detections_inside_the_gate() {
     let mut worst: f64 = 0.0;
     for k in 0..45 {
         let t = frame_t(k, fps);
-        let yaw = if k < 15 { 0.0 } else { rate * (k - 15) as f64 / fps };
+        let yaw = if k < 15 {
+            0.0
+        } else {
+            rate * (k - 15) as f64 / fps
+        };
         let r = if k < 15 { 0.0 } else { rate };
         // A point 300 px right of the centre at yaw 0, seen through a pinhole yawing right.
         let x = CX + f * ((300.0 / f).atan() - yaw).tan();
         let z = [x + rng.normal(), CY + rng.normal()];
-        let s = tr.update(&det(k, t, Some(z)), Some(&vehicle(t, 0.0, 0.0, yaw, [0.0, 0.0, r])));
+        let s = tr.update(
+            &det(k, t, Some(z)),
+            Some(&vehicle(t, 0.0, 0.0, yaw, [0.0, 0.0, r])),
+        );
         if k >= 3 {
             assert_eq!(s.mode, TrackMode::Tracking, "frame {k}: {:?}", s);
             worst = worst.max((s.hub_px[0] - x).abs());
@@ -553,7 +731,15 @@ fn tracking_through_a_turn_keeps_detections_inside_the_gate() {
 }
 
 /// A detection of a turbine at hub distance `d_hub` and relative yaw `psi_deg`, pixel noise `noise`.
-fn full_det(seq: u64, t: f64, d_hub: f64, psi_deg: f64, cfg: &TrackConfig, rng: &mut Rng, noise: f64) -> Detection {
+fn full_det(
+    seq: u64,
+    t: f64,
+    d_hub: f64,
+    psi_deg: f64,
+    cfg: &TrackConfig,
+    rng: &mut Rng,
+    noise: f64,
+) -> Detection {
     let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
     let psi = psi_deg.to_radians();
     let l = cfg.yaw.hub_tower_offset_m;
@@ -563,11 +749,16 @@ fn full_det(seq: u64, t: f64, d_hub: f64, psi_deg: f64, cfg: &TrackConfig, rng: 
     d.tower_width_px = f * cfg.distance.tower_diameter_m / d_tower + noise * rng.normal();
     d.hub_tower_gap_px = -f * l * psi.sin() / d_tower + noise * rng.normal();
     d.circle_found = true;
-    d.circle = [CX, CY, f * cfg.distance.spinner_diameter_m / (2.0 * d_hub) + 0.5 * noise * rng.normal()];
+    d.circle = [
+        CX,
+        CY,
+        f * cfg.distance.spinner_diameter_m / (2.0 * d_hub) + 0.5 * noise * rng.normal(),
+    ];
     d.blade_count = 3;
     for k in 0..3 {
         let th = (37.0 + 120.0 * k as f64).to_radians();
-        d.blade_angles_deg[k] = hubtrack_track::estimate::apparent_blade_angle(th, psi).to_degrees()
+        d.blade_angles_deg[k] = hubtrack_track::estimate::apparent_blade_angle(th, psi)
+            .to_degrees()
             + 0.5 * noise * rng.normal();
     }
     d
@@ -579,7 +770,8 @@ fn nacelle_dx(cfg: &TrackConfig, d_hub: f64, psi_deg: f64) -> f64 {
     let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
     let (rear, half) = (cfg.yaw.nacelle_rear_m, cfg.yaw.nacelle_half_width_m);
     let p = psi_deg.to_radians().abs();
-    psi_deg.signum() * f * (rear * p.sin() + half * p.cos()) / (d_hub + rear * p.cos() - half * p.sin())
+    psi_deg.signum() * f * (rear * p.sin() + half * p.cos())
+        / (d_hub + rear * p.cos() - half * p.sin())
 }
 
 /// Tracks `frames` detections at 30 fps of a turbine at `d_hub`, `psi_deg` (pixel noise 0.5),
@@ -620,18 +812,35 @@ fn distance_and_yaw_are_fused_and_filtered() {
             s = tr.update(&d, None);
             b = base.update(&d, None);
             if k > 60 {
-                raw_dist_err2 += (b.distance_m - (30.0 + cfg.yaw.hub_tower_offset_m * psi_deg.to_radians().cos())).powi(2);
+                raw_dist_err2 += (b.distance_m
+                    - (30.0 + cfg.yaw.hub_tower_offset_m * psi_deg.to_radians().cos()))
+                .powi(2);
                 filt_dist_err2 += (s.distance_m - 30.0).powi(2);
                 n_err += 1.0;
             }
         }
         assert!(s.distance_valid && s.yaw_valid);
-        assert!((s.distance_m - 30.0).abs() < 1.0, "ψ {psi_deg}: distance {} ± {}", s.distance_m, s.distance_std_m);
-        assert!((s.yaw_deg - psi_deg).abs() < 3.0, "yaw {} ± {}", s.yaw_deg, s.yaw_std_deg);
+        assert!(
+            (s.distance_m - 30.0).abs() < 1.0,
+            "ψ {psi_deg}: distance {} ± {}",
+            s.distance_m,
+            s.distance_std_m
+        );
+        assert!(
+            (s.yaw_deg - psi_deg).abs() < 3.0,
+            "yaw {} ± {}",
+            s.yaw_deg,
+            s.yaw_std_deg
+        );
         assert_eq!(s.yaw_deg > 0.0, psi_deg > 0.0, "yaw sign");
         assert!(s.distance_std_m > 0.0 && s.distance_std_m < b.distance_std_m);
         assert!(s.yaw_std_deg > 0.0 && s.yaw_std_deg < b.yaw_std_deg);
-        assert!(filt_dist_err2 < raw_dist_err2, "filtered {} vs raw {}", (filt_dist_err2 / n_err).sqrt(), (raw_dist_err2 / n_err).sqrt());
+        assert!(
+            filt_dist_err2 < raw_dist_err2,
+            "filtered {} vs raw {}",
+            (filt_dist_err2 / n_err).sqrt(),
+            (raw_dist_err2 / n_err).sqrt()
+        );
         // The baseline reports the raw tower depth and the thesis yaw with its sign.
         assert!(b.distance_valid && b.yaw_valid);
         assert_eq!(b.yaw_deg > 0.0, psi_deg > 0.0);
@@ -642,7 +851,9 @@ fn distance_and_yaw_are_fused_and_filtered() {
         assert!(s.distance_valid && s.yaw_valid);
         assert!(!b.distance_valid && !b.yaw_valid);
         // They go stale without measurements.
-        let later = tr.predict_at(ns(t + cfg.distance.stale_after_s.max(cfg.yaw.stale_after_s) + 0.1));
+        let later = tr.predict_at(ns(t
+            + cfg.distance.stale_after_s.max(cfg.yaw.stale_after_s)
+            + 0.1));
         assert!(!later.distance_valid && !later.yaw_valid);
         assert!(later.distance_std_m > s.distance_std_m);
     }
@@ -670,7 +881,12 @@ fn blades_give_yaw_when_the_gap_is_weak() {
     let with = run(true);
     let without = run(false);
     assert!((with.yaw_deg - 40.0).abs() < 1.0, "{}", with.yaw_deg);
-    assert!(with.yaw_std_deg < without.yaw_std_deg, "{} vs {}", with.yaw_std_deg, without.yaw_std_deg);
+    assert!(
+        with.yaw_std_deg < without.yaw_std_deg,
+        "{} vs {}",
+        with.yaw_std_deg,
+        without.yaw_std_deg
+    );
 }
 
 #[test]
@@ -681,7 +897,10 @@ fn a_distance_spike_is_gated() {
     let mut rng = Rng::new(8);
     let mut k = 0;
     while k < 60 {
-        tr.update(&full_det(k, frame_t(k, 30.0), 25.0, 0.0, &cfg, &mut rng, 0.5), None);
+        tr.update(
+            &full_det(k, frame_t(k, 30.0), 25.0, 0.0, &cfg, &mut rng, 0.5),
+            None,
+        );
         k += 1;
     }
     let mut d = full_det(k, frame_t(k, 30.0), 25.0, 0.0, &cfg, &mut rng, 0.5);
@@ -701,14 +920,20 @@ fn sizes_are_measured_only_from_detections_close_to_the_track() {
         let mut rng = Rng::new(9);
         let mut before = TrackState::default();
         for k in 0..60 {
-            before = tr.update(&full_det(k, frame_t(k, 30.0), 25.0, 0.0, &cfg, &mut rng, 0.5), None);
+            before = tr.update(
+                &full_det(k, frame_t(k, 30.0), 25.0, 0.0, &cfg, &mut rng, 0.5),
+                None,
+            );
         }
         let mut d = full_det(60, frame_t(60, 30.0), 25.0, 0.0, &cfg, &mut rng, 0.5);
         d.tower_found = false;
         d.circle[2] *= 1.1;
         d.hub_px = [CX + offset, CY];
         let s = tr.update(&d, None);
-        assert_eq!(s.frames_since_detection, 0, "the detection is accepted into the hub track");
+        assert_eq!(
+            s.frames_since_detection, 0,
+            "the detection is accepted into the hub track"
+        );
         s.distance_m - before.distance_m
     };
     let off = cfg.gating.estimate_gate_px * W as f64 / cfg.filter.reference_width_px + 10.0;
@@ -732,7 +957,10 @@ fn behaviour_does_not_depend_on_the_resolution() {
                 d.detected = true;
                 d.confidence = 1.0;
                 let s = k as f64 / 30.0;
-                d.hub_px = [(700.0 + 80.0 * s + 2.0 * rng.normal()) * sx, (300.0 + 2.0 * rng.normal()) * sx];
+                d.hub_px = [
+                    (700.0 + 80.0 * s + 2.0 * rng.normal()) * sx,
+                    (300.0 + 2.0 * rng.normal()) * sx,
+                ];
                 if k == 50 {
                     d.hub_px = [100.0 * sx, 900.0 * sx]; // an outlier
                 }
@@ -746,7 +974,9 @@ fn behaviour_does_not_depend_on_the_resolution() {
     for (a, b) in big.iter().zip(&small) {
         assert_eq!(a.mode, b.mode);
         assert!((a.hub_px[0] - 4.0 * b.hub_px[0]).abs() < 1e-6 * a.hub_px[0].abs().max(1.0));
-        assert!((a.hub_covariance[0] - 16.0 * b.hub_covariance[0]).abs() < 1e-6 * a.hub_covariance[0]);
+        assert!(
+            (a.hub_covariance[0] - 16.0 * b.hub_covariance[0]).abs() < 1e-6 * a.hub_covariance[0]
+        );
     }
 }
 
@@ -783,10 +1013,17 @@ fn low_confidence_and_bad_config() {
     let mut d = det(0, 1.0, Some([500.0, 400.0]));
     d.confidence = 0.3;
     let s = tr.update(&d, None);
-    assert_eq!(s.hub_px, [CX, CY], "a low-confidence detection is a missed frame");
+    assert_eq!(
+        s.hub_px,
+        [CX, CY],
+        "a low-confidence detection is a missed frame"
+    );
     let mut bad = pinhole_config();
     bad.modes.lost_after_s = -1.0;
-    assert_eq!(Tracker::new(bad.clone()).unwrap_err().key, "track.modes.lost_after_s");
+    assert_eq!(
+        Tracker::new(bad.clone()).unwrap_err().key,
+        "track.modes.lost_after_s"
+    );
     assert!(BaselineTracker::new(bad).is_err());
 }
 
@@ -809,8 +1046,17 @@ fn a_tower_band_inconsistent_with_the_spinner_is_dropped() {
         s = tr.update(&d, None);
     }
     assert!(s.distance_valid && s.yaw_valid);
-    assert!((s.distance_m - d_hub).abs() < 0.5, "distance {} (the wide band would pull it toward {:.1})", s.distance_m, d_hub / 2.0);
-    assert!((s.yaw_deg - psi_deg).abs() < 2.0, "yaw {} (the band's zero gap would pull it toward 0)", s.yaw_deg);
+    assert!(
+        (s.distance_m - d_hub).abs() < 0.5,
+        "distance {} (the wide band would pull it toward {:.1})",
+        s.distance_m,
+        d_hub / 2.0
+    );
+    assert!(
+        (s.yaw_deg - psi_deg).abs() < 2.0,
+        "yaw {} (the band's zero gap would pull it toward 0)",
+        s.yaw_deg
+    );
 }
 
 #[test]
@@ -841,8 +1087,17 @@ fn the_nacelle_sets_the_yaw_where_a_blade_hides_the_tower() {
     };
     let with = run(true);
     let without = run(false);
-    assert!(with.yaw_valid && (with.yaw_deg - psi_deg).abs() < 4.0, "with the nacelle: {} ± {}", with.yaw_deg, with.yaw_std_deg);
-    assert!((without.yaw_deg - psi_deg).abs() > 2.0 * (with.yaw_deg - psi_deg).abs(), "the gaps alone: {}", without.yaw_deg);
+    assert!(
+        with.yaw_valid && (with.yaw_deg - psi_deg).abs() < 4.0,
+        "with the nacelle: {} ± {}",
+        with.yaw_deg,
+        with.yaw_std_deg
+    );
+    assert!(
+        (without.yaw_deg - psi_deg).abs() > 2.0 * (with.yaw_deg - psi_deg).abs(),
+        "the gaps alone: {}",
+        without.yaw_deg
+    );
 }
 
 /// The yaw network's reading (`yaw.use_net`) vetoes the gaps that contradict it
@@ -874,9 +1129,23 @@ fn the_yaw_network_vetoes_gaps_from_a_blade_hiding_the_tower() {
     let veto = run(true, false);
     let fused = run(true, true);
     let without = run(false, false);
-    assert!(veto.yaw_valid && (veto.yaw_deg - psi_deg).abs() < 3.0, "vetoing: {} ± {}", veto.yaw_deg, veto.yaw_std_deg);
-    assert!(fused.yaw_valid && (fused.yaw_deg - psi_deg).abs() < 3.0, "fused: {} ± {}", fused.yaw_deg, fused.yaw_std_deg);
-    assert!(without.yaw_valid && without.yaw_deg > psi_deg + 5.0, "the gaps alone: {}", without.yaw_deg);
+    assert!(
+        veto.yaw_valid && (veto.yaw_deg - psi_deg).abs() < 3.0,
+        "vetoing: {} ± {}",
+        veto.yaw_deg,
+        veto.yaw_std_deg
+    );
+    assert!(
+        fused.yaw_valid && (fused.yaw_deg - psi_deg).abs() < 3.0,
+        "fused: {} ± {}",
+        fused.yaw_deg,
+        fused.yaw_std_deg
+    );
+    assert!(
+        without.yaw_valid && without.yaw_deg > psi_deg + 5.0,
+        "the gaps alone: {}",
+        without.yaw_deg
+    );
 }
 
 /// The tower gone close in (6 m, true yaw −12°): 1.5 s of a hub–tower gap that reads 0° (and no
@@ -910,8 +1179,18 @@ fn the_yaw_network_carries_the_yaw_when_the_tower_is_gone() {
     let psi_deg = -12.0;
     // Every reading, even at 6 m (see the next test).
     let (stale, carried) = (tower_gone_at_6_m(0.0, 0.0), tower_gone_at_6_m(1.0, 0.0));
-    assert!(!stale.yaw_valid && stale.yaw_deg.abs() < 3.0, "without the fallback the wrong yaw goes stale ({} ± {})", stale.yaw_deg, stale.yaw_std_deg);
-    assert!((carried.yaw_deg - psi_deg).abs() < 5.0, "with it the network's reading: {} ± {}", carried.yaw_deg, carried.yaw_std_deg);
+    assert!(
+        !stale.yaw_valid && stale.yaw_deg.abs() < 3.0,
+        "without the fallback the wrong yaw goes stale ({} ± {})",
+        stale.yaw_deg,
+        stale.yaw_std_deg
+    );
+    assert!(
+        (carried.yaw_deg - psi_deg).abs() < 5.0,
+        "with it the network's reading: {} ± {}",
+        carried.yaw_deg,
+        carried.yaw_std_deg
+    );
     // A network 4° off a right stale yaw leaves it.
     let mut c = pinhole_config();
     c.yaw.use_nacelle = false;
@@ -926,7 +1205,11 @@ fn the_yaw_network_carries_the_yaw_when_the_tower_is_gone() {
             d.yaw_net_std_deg = 3.0;
         }
     });
-    assert!((kept.yaw_deg - psi_deg).abs() < 1.5, "a near reading leaves the yaw: {}", kept.yaw_deg);
+    assert!(
+        (kept.yaw_deg - psi_deg).abs() < 1.5,
+        "a near reading leaves the yaw: {}",
+        kept.yaw_deg
+    );
 }
 
 /// The fallback takes only the network readings from `yaw.net_fallback_min_distance_m` out:
@@ -935,8 +1218,18 @@ fn the_yaw_network_carries_the_yaw_when_the_tower_is_gone() {
 #[test]
 fn the_yaw_fallback_trusts_the_network_only_from_its_minimum_distance() {
     let (trusted, ignored) = (tower_gone_at_6_m(1.0, 5.0), tower_gone_at_6_m(1.0, 8.0));
-    assert!((trusted.yaw_deg + 12.0).abs() < 5.0, "readings from beyond the limit are used: {} ± {}", trusted.yaw_deg, trusted.yaw_std_deg);
-    assert!(ignored.yaw_deg.abs() < 3.0, "readings from inside it are not: {} ± {}", ignored.yaw_deg, ignored.yaw_std_deg);
+    assert!(
+        (trusted.yaw_deg + 12.0).abs() < 5.0,
+        "readings from beyond the limit are used: {} ± {}",
+        trusted.yaw_deg,
+        trusted.yaw_std_deg
+    );
+    assert!(
+        ignored.yaw_deg.abs() < 3.0,
+        "readings from inside it are not: {} ± {}",
+        ignored.yaw_deg,
+        ignored.yaw_std_deg
+    );
 }
 
 /// The network's trusted readings are published beside the geometric yaw (`net_yaw_*`, for the
@@ -957,9 +1250,22 @@ fn the_networks_trusted_yaw_is_published_beside_the_geometric_one() {
         })
     };
     let far = run(12.0, 1);
-    assert!(far.net_yaw_valid && (far.net_yaw_deg + 2.0).abs() < 1.5, "12 m: {} ± {}", far.net_yaw_deg, far.net_yaw_std_deg);
-    assert!(far.net_yaw_std_deg > 0.0 && far.net_yaw_std_deg < 3.0, "filtered: ± {}", far.net_yaw_std_deg);
-    assert!(far.yaw_valid && (far.yaw_deg - 6.0).abs() < 1.5, "the geometric yaw stays the gaps': {}", far.yaw_deg);
+    assert!(
+        far.net_yaw_valid && (far.net_yaw_deg + 2.0).abs() < 1.5,
+        "12 m: {} ± {}",
+        far.net_yaw_deg,
+        far.net_yaw_std_deg
+    );
+    assert!(
+        far.net_yaw_std_deg > 0.0 && far.net_yaw_std_deg < 3.0,
+        "filtered: ± {}",
+        far.net_yaw_std_deg
+    );
+    assert!(
+        far.yaw_valid && (far.yaw_deg - 6.0).abs() < 1.5,
+        "the geometric yaw stays the gaps': {}",
+        far.yaw_deg
+    );
     // The last frame (149) carries no reading.
     let gaps = run(12.0, 2);
     assert!(!gaps.net_yaw_valid, "a frame without a reading: {gaps:?}");
@@ -988,8 +1294,17 @@ fn a_run_of_merged_tower_bands_close_in_does_not_restart_the_distance() {
         })
     };
     let (jumped, kept) = (run(0.0), run(pinhole_config().distance.jump_min_distance_m));
-    assert!(jumped.distance_m < 4.0, "without the rule the merged bands take the distance: {}", jumped.distance_m);
-    assert!((kept.distance_m - 5.0).abs() < 0.5, "with it the spinner keeps it: {} ± {}", kept.distance_m, kept.distance_std_m);
+    assert!(
+        jumped.distance_m < 4.0,
+        "without the rule the merged bands take the distance: {}",
+        jumped.distance_m
+    );
+    assert!(
+        (kept.distance_m - 5.0).abs() < 0.5,
+        "with it the spinner keeps it: {} ± {}",
+        kept.distance_m,
+        kept.distance_std_m
+    );
 }
 
 /// A wrong first distance close in does not lock the filter for good
@@ -1012,11 +1327,22 @@ fn a_wrong_close_start_does_not_lock_out_the_true_distance() {
         })
     };
     let locked = run(0.0, 60 + 30 * 12);
-    assert!(!(locked.distance_valid && (locked.distance_m - 30.0).abs() < 3.0), "without a limit the rule keeps it out: {locked:?}");
+    assert!(
+        !(locked.distance_valid && (locked.distance_m - 30.0).abs() < 3.0),
+        "without a limit the rule keeps it out: {locked:?}"
+    );
     let held = run(10.0, 60 + 30 * 8);
-    assert!(!(held.distance_valid && (held.distance_m - 30.0).abs() < 3.0), "for 8 s it still holds: {held:?}");
+    assert!(
+        !(held.distance_valid && (held.distance_m - 30.0).abs() < 3.0),
+        "for 8 s it still holds: {held:?}"
+    );
     let back = run(10.0, 60 + 30 * 12);
-    assert!(back.distance_valid && (back.distance_m - 30.0).abs() < 1.5, "after 10 s without a reading: {} ± {}", back.distance_m, back.distance_std_m);
+    assert!(
+        back.distance_valid && (back.distance_m - 30.0).abs() < 1.5,
+        "after 10 s without a reading: {} ± {}",
+        back.distance_m,
+        back.distance_std_m
+    );
 }
 
 /// A nacelle end measured from a hub the detector placed by blade lines alone (no spinner
@@ -1043,8 +1369,16 @@ fn a_nacelle_end_without_a_spinner_circle_is_not_used() {
         })
     };
     let (kept, used) = (run(true), run(false));
-    assert!(used.yaw_valid && used.yaw_deg > 5.0, "the wrong end, used, gives the wrong sign: {}", used.yaw_deg);
-    assert!((kept.yaw_deg - psi_deg).abs() < 3.0, "the last yaw stays ({})", kept.yaw_deg);
+    assert!(
+        used.yaw_valid && used.yaw_deg > 5.0,
+        "the wrong end, used, gives the wrong sign: {}",
+        used.yaw_deg
+    );
+    assert!(
+        (kept.yaw_deg - psi_deg).abs() < 3.0,
+        "the last yaw stays ({})",
+        kept.yaw_deg
+    );
 }
 
 /// Close in, a run of wrong tower bands (the blade pointing down in front of the tower) does
@@ -1067,10 +1401,19 @@ fn a_persistent_wrong_gap_close_in_is_no_yaw_jump() {
     assert!(cfg.yaw.jump_min_distance_m > 15.0 && cfg.yaw.jump_min_distance_m < 22.0);
     for d_hub in [6.5, 15.0] {
         let close = run(d_hub);
-        assert!((close.yaw_deg - psi_deg).abs() < 3.0, "{d_hub} m: yaw {} ± {} (the bands say +40)", close.yaw_deg, close.yaw_std_deg);
+        assert!(
+            (close.yaw_deg - psi_deg).abs() < 3.0,
+            "{d_hub} m: yaw {} ± {} (the bands say +40)",
+            close.yaw_deg,
+            close.yaw_std_deg
+        );
     }
     let far = run(22.0);
-    assert!(far.yaw_deg > 30.0, "22 m: a persistent jump is accepted: {}", far.yaw_deg);
+    assert!(
+        far.yaw_deg > 30.0,
+        "22 m: a persistent jump is accepted: {}",
+        far.yaw_deg
+    );
 }
 
 /// Close in, a band a little wider than the tower fails the width test against the spinner
@@ -1091,9 +1434,21 @@ fn a_slightly_wide_tower_band_close_in_still_gives_the_yaw() {
         })
     };
     let kept = run(1.2, 1.15);
-    assert!(kept.yaw_valid && (kept.yaw_deg - psi_deg).abs() < 1.5, "1.15x band: yaw {} ± {}", kept.yaw_deg, kept.yaw_std_deg);
-    assert!(kept.distance_valid && (kept.distance_m - d_hub).abs() < 0.3, "the spinner's distance: {}", kept.distance_m);
-    assert!(!run(1.0, 1.15).yaw_valid, "ratio 1: a dropped band gives no yaw");
+    assert!(
+        kept.yaw_valid && (kept.yaw_deg - psi_deg).abs() < 1.5,
+        "1.15x band: yaw {} ± {}",
+        kept.yaw_deg,
+        kept.yaw_std_deg
+    );
+    assert!(
+        kept.distance_valid && (kept.distance_m - d_hub).abs() < 0.3,
+        "the spinner's distance: {}",
+        kept.distance_m
+    );
+    assert!(
+        !run(1.0, 1.15).yaw_valid,
+        "ratio 1: a dropped band gives no yaw"
+    );
     assert!(!run(1.2, 2.0).yaw_valid, "a 2x band gives no yaw");
 }
 
@@ -1120,9 +1475,17 @@ fn a_small_nacelle_yaw_of_the_wrong_side_is_not_used() {
     };
     assert!(cfg.yaw.nacelle_min_abs_deg > 5.5);
     let with_rule = run(cfg.yaw.nacelle_min_abs_deg);
-    assert!(with_rule.yaw_valid && (with_rule.yaw_deg - psi_deg).abs() < 2.0, "rule on: {}", with_rule.yaw_deg);
+    assert!(
+        with_rule.yaw_valid && (with_rule.yaw_deg - psi_deg).abs() < 2.0,
+        "rule on: {}",
+        with_rule.yaw_deg
+    );
     let without = run(0.0);
-    assert!(without.yaw_deg > 2.0, "rule off, the wrong side owns the yaw: {}", without.yaw_deg);
+    assert!(
+        without.yaw_deg > 2.0,
+        "rule off, the wrong side owns the yaw: {}",
+        without.yaw_deg
+    );
 }
 
 /// When the tower band and the spinner disagree on the distance, one of them is wrong, and the
@@ -1151,9 +1514,19 @@ fn a_tower_band_the_spinner_disputes_gives_no_gap() {
         })
     };
     let off = run(false);
-    assert!(off.yaw_valid && (off.yaw_deg - psi_deg).abs() < 2.0, "rule on: yaw {} ± {}", off.yaw_deg, off.yaw_std_deg);
+    assert!(
+        off.yaw_valid && (off.yaw_deg - psi_deg).abs() < 2.0,
+        "rule on: yaw {} ± {}",
+        off.yaw_deg,
+        off.yaw_std_deg
+    );
     let on = run(true);
-    assert!(on.yaw_deg - psi_deg > 8.0, "disputed bands give the gap: yaw {} ± {}", on.yaw_deg, on.yaw_std_deg);
+    assert!(
+        on.yaw_deg - psi_deg > 8.0,
+        "disputed bands give the gap: yaw {} ± {}",
+        on.yaw_deg,
+        on.yaw_std_deg
+    );
 }
 
 /// Head-on, the nacelle's front corners peek out beside the spinner farther than the rear
@@ -1176,9 +1549,18 @@ fn a_nacelle_end_near_the_head_on_front_corners_is_not_used() {
     };
     assert!(7.0 > cfg.yaw.nacelle_min_abs_deg);
     let with_rule = run(2.0);
-    assert!(with_rule.yaw_valid && (with_rule.yaw_deg - psi_deg).abs() < 2.0, "rule on: {} ± {}", with_rule.yaw_deg, with_rule.yaw_std_deg);
+    assert!(
+        with_rule.yaw_valid && (with_rule.yaw_deg - psi_deg).abs() < 2.0,
+        "rule on: {} ± {}",
+        with_rule.yaw_deg,
+        with_rule.yaw_std_deg
+    );
     let without = run(0.0);
-    assert!(without.yaw_deg > 3.0, "rule off, the front corner owns the yaw: {}", without.yaw_deg);
+    assert!(
+        without.yaw_deg > 3.0,
+        "rule off, the front corner owns the yaw: {}",
+        without.yaw_deg
+    );
 }
 
 /// The nacelle end is measured from the detected hub and takes its error whole: with
@@ -1210,9 +1592,18 @@ fn a_nacelle_end_from_an_unsettled_hub_is_not_used() {
     };
     assert!(18.0 / 4.0 < cfg.gating.estimate_gate_px);
     let gated = run(3.0);
-    assert!(gated.yaw_valid && (gated.yaw_deg - psi_deg).abs() < 2.0, "gate 3 px: {} ± {}", gated.yaw_deg, gated.yaw_std_deg);
+    assert!(
+        gated.yaw_valid && (gated.yaw_deg - psi_deg).abs() < 2.0,
+        "gate 3 px: {} ± {}",
+        gated.yaw_deg,
+        gated.yaw_std_deg
+    );
     let open = run(0.0);
-    assert!(open.yaw_deg - psi_deg > 4.0, "no gate, the unsettled hub's reading owns the yaw: {}", open.yaw_deg);
+    assert!(
+        open.yaw_deg - psi_deg > 4.0,
+        "no gate, the unsettled hub's reading owns the yaw: {}",
+        open.yaw_deg
+    );
 }
 
 /// A sideways pass 33 m in front of the hub (east at 1 m/s, the nose kept on the hub) with a
@@ -1241,12 +1632,22 @@ fn sideways_pass_with_half_size_cues(cfg: &TrackConfig) -> TrackState {
         let pose = camera_pose_at(&v, ns(t), 1.0, &r_bc, false).unwrap();
         let px = cam.project(&(pose.r_wc.inverse() * to_hub)).unwrap();
         let d_hub = to_hub.norm();
-        let mut d = det(k, t, Some([px[0] + 2.0 * rng.normal(), px[1] + 2.0 * rng.normal()]));
+        let mut d = det(
+            k,
+            t,
+            Some([px[0] + 2.0 * rng.normal(), px[1] + 2.0 * rng.normal()]),
+        );
         d.tower_found = true;
-        d.tower_width_px = 0.5 * f * cfg.distance.tower_diameter_m / (d_hub + cfg.yaw.hub_tower_offset_m) + 0.3 * rng.normal();
+        d.tower_width_px = 0.5 * f * cfg.distance.tower_diameter_m
+            / (d_hub + cfg.yaw.hub_tower_offset_m)
+            + 0.3 * rng.normal();
         d.hub_tower_gap_px = 0.0;
         d.circle_found = true;
-        d.circle = [px[0], px[1], 0.5 * f * cfg.distance.spinner_diameter_m / (2.0 * d_hub) + 0.2 * rng.normal()];
+        d.circle = [
+            px[0],
+            px[1],
+            0.5 * f * cfg.distance.spinner_diameter_m / (2.0 * d_hub) + 0.2 * rng.normal(),
+        ];
         s = tr.update(&d, Some(&v));
     }
     s
@@ -1257,9 +1658,18 @@ fn motion_parallax_corrects_a_tower_and_spinner_that_agree_on_twice_the_distance
     let mut off = pinhole_config();
     off.parallax.enabled = false;
     let fooled = sideways_pass_with_half_size_cues(&off);
-    assert!(fooled.distance_valid && fooled.distance_m > 55.0, "without parallax: {} m", fooled.distance_m);
+    assert!(
+        fooled.distance_valid && fooled.distance_m > 55.0,
+        "without parallax: {} m",
+        fooled.distance_m
+    );
     let s = sideways_pass_with_half_size_cues(&pinhole_config());
     // At the end of the pass the hub is hypot(33, 9) = 34.2 m away.
     let truth = 33.0_f64.hypot(9.0);
-    assert!(s.distance_valid && (s.distance_m - truth).abs() < 0.15 * truth, "with parallax: {} ± {} m for {truth:.1}", s.distance_m, s.distance_std_m);
+    assert!(
+        s.distance_valid && (s.distance_m - truth).abs() < 0.15 * truth,
+        "with parallax: {} ± {} m for {truth:.1}",
+        s.distance_m,
+        s.distance_std_m
+    );
 }

@@ -19,19 +19,36 @@ fn clamp_u8(v: i32) -> u8 {
 }
 
 /// Converts a packed YUYV 4:2:2 image (`stride` bytes per row) to tightly packed BGR8.
-pub fn yuyv_to_bgr(src: &[u8], width: usize, height: usize, stride: usize, dst: &mut [u8]) -> Result<(), CaptureError> {
+pub fn yuyv_to_bgr(
+    src: &[u8],
+    width: usize,
+    height: usize,
+    stride: usize,
+    dst: &mut [u8],
+) -> Result<(), CaptureError> {
     check_len(dst, width * height * 3)?;
-    if !width.is_multiple_of(2) || stride < width * 2 || src.len() < stride * (height.max(1) - 1) + width * 2 {
+    if !width.is_multiple_of(2)
+        || stride < width * 2
+        || src.len() < stride * (height.max(1) - 1) + width * 2
+    {
         return Err(CaptureError::BadFrame {
             seq: 0,
-            reason: format!("YUYV buffer of {} bytes does not hold {width}x{height} (stride {stride})", src.len()),
+            reason: format!(
+                "YUYV buffer of {} bytes does not hold {width}x{height} (stride {stride})",
+                src.len()
+            ),
         });
     }
     for row in 0..height {
         let s = &src[row * stride..row * stride + width * 2];
         let d = &mut dst[row * width * 3..(row + 1) * width * 3];
         for (quad, out) in s.chunks_exact(4).zip(d.chunks_exact_mut(6)) {
-            let (y0, u, y1, v) = (quad[0] as i32, quad[1] as i32 - UV_OFFSET, quad[2] as i32, quad[3] as i32 - UV_OFFSET);
+            let (y0, u, y1, v) = (
+                quad[0] as i32,
+                quad[1] as i32 - UV_OFFSET,
+                quad[2] as i32,
+                quad[3] as i32 - UV_OFFSET,
+            );
             let r = V_TO_R * v;
             let g = -U_TO_G * u - V_TO_G * v;
             let b = U_TO_B * u;
@@ -65,7 +82,12 @@ pub fn mat_to_bgr(mat: &Mat, dst: &mut [u8]) -> Result<(), CaptureError> {
             converted = m;
             &converted
         }
-        n => return Err(CaptureError::BadFrame { seq: 0, reason: format!("{n}-channel image") }),
+        n => {
+            return Err(CaptureError::BadFrame {
+                seq: 0,
+                reason: format!("{n}-channel image"),
+            })
+        }
     };
     if bgr.is_continuous() {
         dst.copy_from_slice(bgr.data_bytes()?);
@@ -79,14 +101,25 @@ pub fn mat_to_bgr(mat: &Mat, dst: &mut [u8]) -> Result<(), CaptureError> {
 }
 
 /// Writes tightly packed BGR8 pixels to an image file (format from the extension: .png, .jpg, ...).
-pub fn write_bgr_image(path: &std::path::Path, width: u32, height: u32, bgr: &[u8]) -> Result<(), CaptureError> {
+pub fn write_bgr_image(
+    path: &std::path::Path,
+    width: u32,
+    height: u32,
+    bgr: &[u8],
+) -> Result<(), CaptureError> {
     use opencv::prelude::*;
     check_len(bgr, width as usize * height as usize * 3)?;
     let flat = Mat::new_rows_cols_with_data(height as i32, (width * 3) as i32, bgr)?;
     let mat = flat.reshape(3, height as i32)?;
-    let name = path.to_str().ok_or_else(|| CaptureError::BadFrame { seq: 0, reason: "non-UTF-8 path".into() })?;
+    let name = path.to_str().ok_or_else(|| CaptureError::BadFrame {
+        seq: 0,
+        reason: "non-UTF-8 path".into(),
+    })?;
     if !opencv::imgcodecs::imwrite_def(name, &mat)? {
-        return Err(CaptureError::BadFrame { seq: 0, reason: format!("cannot write {name}") });
+        return Err(CaptureError::BadFrame {
+            seq: 0,
+            reason: format!("cannot write {name}"),
+        });
     }
     Ok(())
 }
@@ -113,7 +146,9 @@ mod tests {
     #[test]
     fn yuyv_honours_stride_padding() {
         // 2x2 image, stride 8 (4 bytes padding per row), second row white.
-        let src = [16u8, 128, 16, 128, 9, 9, 9, 9, 235, 128, 235, 128, 9, 9, 9, 9];
+        let src = [
+            16u8, 128, 16, 128, 9, 9, 9, 9, 235, 128, 235, 128, 9, 9, 9, 9,
+        ];
         let mut dst = [0u8; 12];
         yuyv_to_bgr(&src, 2, 2, 8, &mut dst).unwrap();
         assert!(dst[..6].iter().all(|&c| c == 0));
@@ -125,6 +160,9 @@ mod tests {
         let mut dst = [0u8; 12];
         assert!(yuyv_to_bgr(&[0u8; 6], 2, 2, 4, &mut dst).is_err());
         let mut small = [0u8; 5];
-        assert!(matches!(yuyv_to_bgr(&[0u8; 8], 2, 2, 4, &mut small), Err(CaptureError::BufferSize { .. })));
+        assert!(matches!(
+            yuyv_to_bgr(&[0u8; 8], 2, 2, 4, &mut small),
+            Err(CaptureError::BufferSize { .. })
+        ));
     }
 }

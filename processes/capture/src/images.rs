@@ -14,7 +14,9 @@ pub const IMAGE_EXTENSIONS: &[&str] = &["jpg", "jpeg", "png", "bmp", "tif", "tif
 /// Lists the images named by `pattern`: a folder's images in file-name order, a single file, or
 /// the matches of a glob in name order.
 pub fn list_images(pattern: &str) -> Result<Vec<PathBuf>, CaptureError> {
-    let not_found = || CaptureError::ImagesNotFound { pattern: pattern.into() };
+    let not_found = || CaptureError::ImagesNotFound {
+        pattern: pattern.into(),
+    };
     if pattern.is_empty() {
         return Err(not_found());
     }
@@ -81,12 +83,24 @@ impl ImageSource {
             .map(|m| m.cols() as usize * m.rows() as usize * 3)
             .ok_or_else(|| {
                 if files.len() == 1 {
-                    CaptureError::ImageUnreadable { path: files[0].clone() }
+                    CaptureError::ImageUnreadable {
+                        path: files[0].clone(),
+                    }
                 } else {
-                    CaptureError::NoReadableImage { pattern: pattern.into(), count: files.len() }
+                    CaptureError::NoReadableImage {
+                        pattern: pattern.into(),
+                        count: files.len(),
+                    }
                 }
             })?;
-        Ok(ImageSource { pattern: pattern.into(), files, next: 0, looping, readable_this_pass: 0, max_len })
+        Ok(ImageSource {
+            pattern: pattern.into(),
+            files,
+            next: 0,
+            looping,
+            readable_this_pass: 0,
+            max_len,
+        })
     }
 }
 
@@ -114,7 +128,10 @@ impl FrameSource for ImageSource {
                 return Ok(Step::End);
             }
             if self.readable_this_pass == 0 {
-                return Err(CaptureError::NoReadableImage { pattern: self.pattern.clone(), count: self.files.len() });
+                return Err(CaptureError::NoReadableImage {
+                    pattern: self.pattern.clone(),
+                    count: self.files.len(),
+                });
             }
             self.next = 0;
             self.readable_this_pass = 0;

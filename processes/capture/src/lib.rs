@@ -72,7 +72,9 @@ pub enum CaptureError {
         path: PathBuf,
     },
     /// No image matched the configured path.
-    #[error("no image found at `{pattern}` (a folder of .jpg/.jpeg/.png/.bmp/.tif, a file, or a glob)")]
+    #[error(
+        "no image found at `{pattern}` (a folder of .jpg/.jpeg/.png/.bmp/.tif, a file, or a glob)"
+    )]
     ImagesNotFound {
         /// The configured path.
         pattern: String,
@@ -113,7 +115,10 @@ pub enum CaptureError {
 impl CaptureError {
     /// A per-frame problem after which the source can go on with the next frame.
     pub fn is_per_frame(&self) -> bool {
-        matches!(self, CaptureError::ImageUnreadable { .. } | CaptureError::BadFrame { .. })
+        matches!(
+            self,
+            CaptureError::ImageUnreadable { .. } | CaptureError::BadFrame { .. }
+        )
     }
 }
 
@@ -189,9 +194,18 @@ pub trait FrameSource {
 pub fn open_source(config: &CaptureConfig) -> Result<Box<dyn FrameSource>, CaptureError> {
     Ok(match config.source {
         SourceKind::V4l => Box::new(v4l_source::V4lSource::open(&config.v4l)?),
-        SourceKind::Video => Box::new(video::VideoSource::open(&config.video.path, config.looping)?),
-        SourceKind::Images => Box::new(images::ImageSource::open(&config.images.path, config.looping)?),
-        SourceKind::Synthetic => Box::new(synthetic::SyntheticSource::new(&config.synthetic, config.fps)?),
+        SourceKind::Video => Box::new(video::VideoSource::open(
+            &config.video.path,
+            config.looping,
+        )?),
+        SourceKind::Images => Box::new(images::ImageSource::open(
+            &config.images.path,
+            config.looping,
+        )?),
+        SourceKind::Synthetic => Box::new(synthetic::SyntheticSource::new(
+            &config.synthetic,
+            config.fps,
+        )?),
     })
 }
 
@@ -200,6 +214,9 @@ pub(crate) fn check_len(buf: &[u8], expected: usize) -> Result<(), CaptureError>
     if buf.len() == expected {
         Ok(())
     } else {
-        Err(CaptureError::BufferSize { expected, got: buf.len() })
+        Err(CaptureError::BufferSize {
+            expected,
+            got: buf.len(),
+        })
     }
 }

@@ -15,7 +15,10 @@ use std::time::{Duration, Instant};
 const DEAD_NODE_CLEANUP_INTERVAL: Duration = Duration::from_secs(1);
 
 #[derive(Parser)]
-#[command(name = "hubtrack-capture", about = "Publish camera frames on the hubtrack frames service")]
+#[command(
+    name = "hubtrack-capture",
+    about = "Publish camera frames on the hubtrack frames service"
+)]
 struct Args {
     #[command(flatten)]
     config: ConfigArgs,
@@ -27,7 +30,12 @@ fn main() {
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let Stage { config, shutdown, node, mut status } = Stage::start("capture", &args.config)?;
+    let Stage {
+        config,
+        shutdown,
+        node,
+        mut status,
+    } = Stage::start("capture", &args.config)?;
     let cfg = &config.capture;
     let mut source = open_source(cfg)?;
     log::info!("source: {}", source.describe());
@@ -41,7 +49,10 @@ fn run() -> anyhow::Result<()> {
     };
     let mut pacer = Pacer::new(fps);
     let mut last_cleanup = Instant::now();
-    log::info!("publishing at {}", fps.map_or("source rate".into(), |f| format!("{f} fps")));
+    log::info!(
+        "publishing at {}",
+        fps.map_or("source rate".into(), |f| format!("{f} fps"))
+    );
 
     while !shutdown.requested() {
         if cfg.max_frames > 0 && sink.next_seq >= cfg.max_frames {

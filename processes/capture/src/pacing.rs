@@ -13,7 +13,9 @@ impl Pacer {
     /// `fps = None` releases immediately (fast mode, self-paced cameras).
     pub fn new(fps: Option<f64>) -> Pacer {
         Pacer {
-            period: fps.filter(|f| *f > 0.0).map(|f| Duration::from_secs_f64(1.0 / f)),
+            period: fps
+                .filter(|f| *f > 0.0)
+                .map(|f| Duration::from_secs_f64(1.0 / f)),
             next: Instant::now(),
         }
     }

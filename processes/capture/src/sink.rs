@@ -18,7 +18,12 @@ pub struct ShmSink {
 impl ShmSink {
     /// Wraps a frame publisher for frames of `source`.
     pub fn new(publisher: FramePublisher, source: FrameSourceKind) -> ShmSink {
-        ShmSink { publisher, source, next_seq: 0, last: None }
+        ShmSink {
+            publisher,
+            source,
+            next_seq: 0,
+            last: None,
+        }
     }
 }
 

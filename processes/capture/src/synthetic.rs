@@ -70,7 +70,14 @@ impl SyntheticSource {
         scene.turbine_present = true;
         scene.noise_sigma = cfg.noise_sigma as f32;
         let base_rotor_deg = scene.rotor_angle_deg;
-        Ok(SyntheticSource { cfg: cfg.clone(), fps, renderer: Renderer::new(camera), scene, base_rotor_deg, index: 0 })
+        Ok(SyntheticSource {
+            cfg: cfg.clone(),
+            fps,
+            renderer: Renderer::new(camera),
+            scene,
+            base_rotor_deg,
+            index: 0,
+        })
     }
 
     /// Renders frame `index` of the path into `out` (also used by tests to compare pixels).
@@ -101,7 +108,10 @@ impl FrameSource for SyntheticSource {
         let (w, h) = self.size();
         format!(
             "synthetic {w}x{h} seed {} path {:.0} m -> {:.0} m over {:.0} s",
-            self.cfg.seed, self.cfg.start_distance_m, self.cfg.end_distance_m, self.cfg.path_duration_s
+            self.cfg.seed,
+            self.cfg.start_distance_m,
+            self.cfg.end_distance_m,
+            self.cfg.path_duration_s
         )
     }
     fn max_frame_len(&self) -> usize {
@@ -117,8 +127,16 @@ impl FrameSource for SyntheticSource {
         self.index += 1;
         // The truth is known only after rendering: the fill returns it for the header. The frame
         // is stamped when rendered (capture_ns: None), as a camera frame is when dequeued.
-        let info = FrameInfo { width, height, format: PixelFormat::Bgr8, capture_ns: None, truth: FrameTruth::default() };
-        sink.publish(info, &mut |out| Ok(Some(frame_truth(&self.render_index(index, out)?))))?;
+        let info = FrameInfo {
+            width,
+            height,
+            format: PixelFormat::Bgr8,
+            capture_ns: None,
+            truth: FrameTruth::default(),
+        };
+        sink.publish(info, &mut |out| {
+            Ok(Some(frame_truth(&self.render_index(index, out)?)))
+        })?;
         Ok(Step::Frame)
     }
 }

@@ -45,16 +45,28 @@ pub struct Granted {
 
 /// Checks what the driver granted against the request: an unconvertible format is an error,
 /// any other difference is a warning (returned for the log).
-pub fn check_granted(path: &Path, req: &V4lConfig, granted: &Granted) -> Result<(Pixel, Vec<String>), CaptureError> {
+pub fn check_granted(
+    path: &Path,
+    req: &V4lConfig,
+    granted: &Granted,
+) -> Result<(Pixel, Vec<String>), CaptureError> {
     let pixel = match granted.fourcc.as_str() {
         "MJPG" | "JPEG" => Pixel::Mjpg,
         "YUYV" => Pixel::Yuyv,
-        other => return Err(CaptureError::UnsupportedFormat { path: path.into(), fourcc: other.into() }),
+        other => {
+            return Err(CaptureError::UnsupportedFormat {
+                path: path.into(),
+                fourcc: other.into(),
+            })
+        }
     };
     let mut warnings = Vec::new();
     let wanted = fourcc_text(req.format);
     if granted.fourcc != wanted && !(wanted == "MJPG" && granted.fourcc == "JPEG") {
-        warnings.push(format!("asked for {wanted}, driver granted {}", granted.fourcc));
+        warnings.push(format!(
+            "asked for {wanted}, driver granted {}",
+            granted.fourcc
+        ));
     }
     if (granted.width, granted.height) != (req.width, req.height) {
         warnings.push(format!(
@@ -64,14 +76,21 @@ pub fn check_granted(path: &Path, req: &V4lConfig, granted: &Granted) -> Result<
     }
     if let Some(fps) = granted.fps {
         if (fps - req.fps).abs() > 0.5 {
-            warnings.push(format!("asked for {} fps, driver granted {fps:.2} fps", req.fps));
+            warnings.push(format!(
+                "asked for {} fps, driver granted {fps:.2} fps",
+                req.fps
+            ));
         }
     }
     if pixel == Pixel::Yuyv && granted.stride < granted.width * 2 {
         return Err(CaptureError::Device {
             path: path.into(),
             what: "format",
-            reason: format!("YUYV stride {} below 2*width {}", granted.stride, granted.width * 2),
+            reason: format!(
+                "YUYV stride {} below 2*width {}",
+                granted.stride,
+                granted.width * 2
+            ),
         });
     }
     Ok((pixel, warnings))
@@ -97,8 +116,12 @@ fn fourcc_text(f: V4lFormat) -> &'static str {
 fn device_error(path: &Path, what: &'static str, e: io::Error) -> CaptureError {
     match e.raw_os_error() {
         Some(2) => CaptureError::DeviceNotFound { path: path.into() }, // ENOENT
-        Some(16) => CaptureError::DeviceBusy { path: path.into() }, // EBUSY
-        _ => CaptureError::Device { path: path.into(), what, reason: e.to_string() },
+        Some(16) => CaptureError::DeviceBusy { path: path.into() },    // EBUSY
+        _ => CaptureError::Device {
+            path: path.into(),
+            what,
+            reason: e.to_string(),
+        },
     }
 }
 
@@ -119,13 +142,24 @@ impl V4lSource {
             return Err(CaptureError::DeviceNotFound { path });
         }
         let dev = Device::with_path(&path).map_err(|e| device_error(&path, "open", e))?;
-        let mut fmt = dev.format().map_err(|e| device_error(&path, "read format", e))?;
+        let mut fmt = dev
+            .format()
+            .map_err(|e| device_error(&path, "read format", e))?;
         fmt.width = cfg.width;
         fmt.height = cfg.height;
-        fmt.fourcc = FourCC::new(fourcc_text(cfg.format).as_bytes().try_into().expect("4-byte fourcc"));
-        let fmt = dev.set_format(&fmt).map_err(|e| device_error(&path, "set format", e))?;
+        fmt.fourcc = FourCC::new(
+            fourcc_text(cfg.format)
+                .as_bytes()
+                .try_into()
+                .expect("4-byte fourcc"),
+        );
+        let fmt = dev
+            .set_format(&fmt)
+            .map_err(|e| device_error(&path, "set format", e))?;
         let params = dev
-            .set_params(&v4l::video::capture::Parameters::with_fps(cfg.fps.round() as u32))
+            .set_params(&v4l::video::capture::Parameters::with_fps(
+                cfg.fps.round() as u32
+            ))
             .map_err(|e| device_error(&path, "set frame rate", e))?;
         let fps = (params.interval.numerator > 0)
             .then(|| params.interval.denominator as f64 / params.interval.numerator as f64);
@@ -152,17 +186,29 @@ impl V4lSource {
             granted.fourcc,
             granted.fps.map_or("?".into(), |f| format!("{f:.2}"))
         );
-        Ok(V4lSource { path, stream, granted, pixel, decoded: Mat::default() })
+        Ok(V4lSource {
+            path,
+            stream,
+            granted,
+            pixel,
+            decoded: Mat::default(),
+        })
     }
 }
 
 /// Applies the exposure settings; a camera without these controls gets a warning, not an error.
 fn set_exposure(dev: &Device, path: &Path, cfg: &V4lConfig) {
     let controls = if cfg.auto_exposure {
-        vec![Control { id: CID_EXPOSURE_AUTO, value: Value::Integer(EXPOSURE_APERTURE_PRIORITY) }]
+        vec![Control {
+            id: CID_EXPOSURE_AUTO,
+            value: Value::Integer(EXPOSURE_APERTURE_PRIORITY),
+        }]
     } else {
         vec![
-            Control { id: CID_EXPOSURE_AUTO, value: Value::Integer(EXPOSURE_MANUAL) },
+            Control {
+                id: CID_EXPOSURE_AUTO,
+                value: Value::Integer(EXPOSURE_MANUAL),
+            },
             Control {
                 id: CID_EXPOSURE_ABSOLUTE,
                 value: Value::Integer(i64::from((cfg.exposure_us / EXPOSURE_UNIT_US).max(1))),
@@ -172,7 +218,10 @@ fn set_exposure(dev: &Device, path: &Path, cfg: &V4lConfig) {
     for c in controls {
         let id = c.id;
         if let Err(e) = dev.set_control(c) {
-            log::warn!("{}: exposure control {id:#x} not applied: {e}", path.display());
+            log::warn!(
+                "{}: exposure control {id:#x} not applied: {e}",
+                path.display()
+            );
         }
     }
 }
@@ -197,22 +246,40 @@ impl FrameSource for V4lSource {
         true
     }
     fn next_frame(&mut self, sink: &mut dyn FrameSink) -> Result<Step, CaptureError> {
-        let (buf, meta) = self.stream.next().map_err(|e| device_error(&self.path, "dequeue frame", e))?;
+        let (buf, meta) = self
+            .stream
+            .next()
+            .map_err(|e| device_error(&self.path, "dequeue frame", e))?;
         let capture_ns = monotonic_ns();
         let used = (meta.bytesused as usize).min(buf.len());
         let data = &buf[..used];
         let seq = meta.sequence as u64;
-        let (w, h, stride) = (self.granted.width, self.granted.height, self.granted.stride as usize);
+        let (w, h, stride) = (
+            self.granted.width,
+            self.granted.height,
+            self.granted.stride as usize,
+        );
         match self.pixel {
             Pixel::Yuyv => {
-                let info = FrameInfo { width: w, height: h, format: PixelFormat::Bgr8, capture_ns: Some(capture_ns), truth: FrameTruth::default() };
-                sink.publish(info, &mut |out| yuyv_to_bgr(data, w as usize, h as usize, stride, out).map(|_| None))?;
+                let info = FrameInfo {
+                    width: w,
+                    height: h,
+                    format: PixelFormat::Bgr8,
+                    capture_ns: Some(capture_ns),
+                    truth: FrameTruth::default(),
+                };
+                sink.publish(info, &mut |out| {
+                    yuyv_to_bgr(data, w as usize, h as usize, stride, out).map(|_| None)
+                })?;
             }
             Pixel::Mjpg => {
                 let encoded = Vector::<u8>::from_slice(data);
                 self.decoded = imgcodecs::imdecode(&encoded, imgcodecs::IMREAD_COLOR)?;
                 if opencv::core::MatTraitConst::empty(&self.decoded) {
-                    return Err(CaptureError::BadFrame { seq, reason: "MJPG frame does not decode".into() });
+                    return Err(CaptureError::BadFrame {
+                        seq,
+                        reason: "MJPG frame does not decode".into(),
+                    });
                 }
                 let m = &self.decoded;
                 let info = FrameInfo {
@@ -222,7 +289,9 @@ impl FrameSource for V4lSource {
                     capture_ns: Some(capture_ns),
                     truth: FrameTruth::default(),
                 };
-                sink.publish(info, &mut |out| crate::convert::mat_to_bgr(m, out).map(|_| None))?;
+                sink.publish(info, &mut |out| {
+                    crate::convert::mat_to_bgr(m, out).map(|_| None)
+                })?;
             }
         }
         Ok(Step::Frame)
@@ -234,13 +303,24 @@ mod tests {
     use super::*;
 
     fn granted(fourcc: &str, w: u32, h: u32, fps: Option<f64>) -> Granted {
-        Granted { width: w, height: h, fourcc: fourcc.into(), stride: w * 2, fps }
+        Granted {
+            width: w,
+            height: h,
+            fourcc: fourcc.into(),
+            stride: w * 2,
+            fps,
+        }
     }
 
     #[test]
     fn exact_grant_has_no_warnings() {
         let req = V4lConfig::default();
-        let (pixel, w) = check_granted(Path::new("/dev/video0"), &req, &granted("MJPG", 1280, 720, Some(30.0))).unwrap();
+        let (pixel, w) = check_granted(
+            Path::new("/dev/video0"),
+            &req,
+            &granted("MJPG", 1280, 720, Some(30.0)),
+        )
+        .unwrap();
         assert_eq!(pixel, Pixel::Mjpg);
         assert!(w.is_empty(), "{w:?}");
     }
@@ -248,7 +328,12 @@ mod tests {
     #[test]
     fn different_size_format_and_rate_are_reported() {
         let req = V4lConfig::default();
-        let (pixel, w) = check_granted(Path::new("/dev/video0"), &req, &granted("YUYV", 640, 480, Some(15.0))).unwrap();
+        let (pixel, w) = check_granted(
+            Path::new("/dev/video0"),
+            &req,
+            &granted("YUYV", 640, 480, Some(15.0)),
+        )
+        .unwrap();
         assert_eq!(pixel, Pixel::Yuyv);
         assert_eq!(w.len(), 3, "{w:?}");
         assert!(w.iter().any(|m| m.contains("640x480")));
@@ -258,22 +343,42 @@ mod tests {
     #[test]
     fn unconvertible_format_is_an_error() {
         let req = V4lConfig::default();
-        let err = check_granted(Path::new("/dev/video3"), &req, &granted("NV12", 1280, 720, None)).unwrap_err();
-        assert!(err.to_string().contains("NV12") && err.to_string().contains("/dev/video3"), "{err}");
+        let err = check_granted(
+            Path::new("/dev/video3"),
+            &req,
+            &granted("NV12", 1280, 720, None),
+        )
+        .unwrap_err();
+        assert!(
+            err.to_string().contains("NV12") && err.to_string().contains("/dev/video3"),
+            "{err}"
+        );
     }
 
     #[test]
     fn missing_device_is_named() {
-        let cfg = V4lConfig { device: "/dev/video-does-not-exist".into(), ..V4lConfig::default() };
+        let cfg = V4lConfig {
+            device: "/dev/video-does-not-exist".into(),
+            ..V4lConfig::default()
+        };
         let err = V4lSource::open(&cfg).err().expect("must fail");
         assert!(matches!(err, CaptureError::DeviceNotFound { .. }));
-        assert!(err.to_string().contains("/dev/video-does-not-exist"), "{err}");
+        assert!(
+            err.to_string().contains("/dev/video-does-not-exist"),
+            "{err}"
+        );
     }
 
     #[test]
     fn os_errors_map_to_clear_errors() {
         let p = Path::new("/dev/video0");
-        assert!(matches!(device_error(p, "open", io::Error::from_raw_os_error(16)), CaptureError::DeviceBusy { .. }));
-        assert!(matches!(device_error(p, "open", io::Error::from_raw_os_error(2)), CaptureError::DeviceNotFound { .. }));
+        assert!(matches!(
+            device_error(p, "open", io::Error::from_raw_os_error(16)),
+            CaptureError::DeviceBusy { .. }
+        ));
+        assert!(matches!(
+            device_error(p, "open", io::Error::from_raw_os_error(2)),
+            CaptureError::DeviceNotFound { .. }
+        ));
     }
 }

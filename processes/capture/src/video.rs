@@ -79,7 +79,9 @@ impl FrameSource for VideoSource {
             }
             self.cap.set(videoio::CAP_PROP_POS_FRAMES, 0.0)?;
             if !self.cap.read(&mut self.frame)? || self.frame.empty() {
-                return Err(CaptureError::VideoUnreadable { path: self.path.clone() });
+                return Err(CaptureError::VideoUnreadable {
+                    path: self.path.clone(),
+                });
             }
         }
         let m = &self.frame;

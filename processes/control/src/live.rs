@@ -3,14 +3,16 @@
 
 use crate::setpoint::{may_command, Controller, TRACK_BUFFER};
 use anyhow::Context;
-use hubtrack_mavlink::{companion_heartbeat, velocity_setpoint, Endpoint, Link, MavHeader, VehicleMonitor};
+use hubtrack_mavlink::{
+    companion_heartbeat, velocity_setpoint, Endpoint, Link, MavHeader, VehicleMonitor,
+};
 use hubtrack_runtime::config::{ClockSource, ControlConfig};
 use hubtrack_runtime::ipc::{MsgPublisher, MsgSubscriber};
 use hubtrack_runtime::stage::Stage;
 use hubtrack_runtime::status::StatusReporter;
 use hubtrack_types::services::{CLOCK, TRACK, VEHICLE};
 use hubtrack_types::time::monotonic_ns;
-use hubtrack_types::{ApproachTask, SimClock, Setpoint, Text64, TrackState};
+use hubtrack_types::{ApproachTask, Setpoint, SimClock, Text64, TrackState};
 use std::time::Duration;
 
 /// Longest the loop sleeps waiting for a track state before polling the MAVLink link again: a
@@ -23,13 +25,27 @@ const STATS_LOG_INTERVAL_NS: u64 = 10_000_000_000;
 /// Runs live control until SIGINT/SIGTERM.
 pub fn run(stage: Stage) -> anyhow::Result<()> {
     let mut controller = Controller::new(&stage)?;
-    let Stage { config, shutdown, node, mut status } = stage;
+    let Stage {
+        config,
+        shutdown,
+        node,
+        mut status,
+    } = stage;
     let cfg = &config.control;
     let endpoint: Endpoint = cfg.link.parse().context("control.link")?;
-    let mut link = Link::open(&endpoint).with_context(|| format!("cannot open the autopilot link {endpoint}"))?;
+    let mut link = Link::open(&endpoint)
+        .with_context(|| format!("cannot open the autopilot link {endpoint}"))?;
     match link.local_addr() {
-        Some(local) => log::info!("MAVLink link {endpoint} (local {local}) as system {} component {}", cfg.system_id, cfg.component_id),
-        None => log::info!("MAVLink link {endpoint} as system {} component {}", cfg.system_id, cfg.component_id),
+        Some(local) => log::info!(
+            "MAVLink link {endpoint} (local {local}) as system {} component {}",
+            cfg.system_id,
+            cfg.component_id
+        ),
+        None => log::info!(
+            "MAVLink link {endpoint} as system {} component {}",
+            cfg.system_id,
+            cfg.component_id
+        ),
     }
 
     let tracks = MsgSubscriber::<TrackState>::new(&node, &TRACK, TRACK_BUFFER)?;
@@ -40,9 +56,16 @@ pub fn run(stage: Stage) -> anyhow::Result<()> {
     let vehicle_out = MsgPublisher::new(&node, &VEHICLE)?;
 
     let ms_to_ns = |ms: u64| ms * 1_000_000;
-    let mut monitor = VehicleMonitor::new(ms_to_ns(cfg.link_timeout_ms), ms_to_ns(cfg.vehicle_timeout_ms));
+    let mut monitor = VehicleMonitor::new(
+        ms_to_ns(cfg.link_timeout_ms),
+        ms_to_ns(cfg.vehicle_timeout_ms),
+    );
     let started_ns = monotonic_ns();
-    let mut header = MavHeader { system_id: cfg.system_id.into(), component_id: cfg.component_id, sequence: 0 };
+    let mut header = MavHeader {
+        system_id: cfg.system_id.into(),
+        component_id: cfg.component_id,
+        sequence: 0,
+    };
     let heartbeat_period_ns = (1e9 / cfg.heartbeat_hz) as u64;
     let resend_period_ns = (1e9 / cfg.setpoint_rate_hz) as u64;
     let input_timeout_ns = ms_to_ns(cfg.input_timeout_ms);
@@ -76,7 +99,12 @@ pub fn run(stage: Stage) -> anyhow::Result<()> {
                 Vec::new()
             }
         };
-        if let Some(c) = clock.as_ref().map(|c| c.receive_newest()).transpose()?.flatten() {
+        if let Some(c) = clock
+            .as_ref()
+            .map(|c| c.receive_newest())
+            .transpose()?
+            .flatten()
+        {
             sim_now_ns = c.now_ns;
         }
         let now_ns = match cfg.clock {
@@ -109,7 +137,16 @@ pub fn run(stage: Stage) -> anyhow::Result<()> {
             let setpoint = controller.step(&track, &vehicle, recv_ns);
             last = Some((setpoint, recv_ns));
             stale_reported = false;
-            let sent = command(&mut link, &mut header, &monitor, now_ns, cfg, uptime_ms, &setpoint, &mut status);
+            let sent = command(
+                &mut link,
+                &mut header,
+                &monitor,
+                now_ns,
+                cfg,
+                uptime_ms,
+                &setpoint,
+                &mut status,
+            );
             if sent {
                 last_sent_ns = recv_ns;
             }
@@ -140,14 +177,24 @@ pub fn run(stage: Stage) -> anyhow::Result<()> {
                     stale_reported = true;
                 }
             } else if now_wall.saturating_sub(last_sent_ns) >= resend_period_ns
-                && command(&mut link, &mut header, &monitor, now_ns, cfg, uptime_ms, &setpoint, &mut status)
+                && command(
+                    &mut link,
+                    &mut header,
+                    &monitor,
+                    now_ns,
+                    cfg,
+                    uptime_ms,
+                    &setpoint,
+                    &mut status,
+                )
             {
                 last_sent_ns = now_wall;
             }
         }
 
         let stats = link.stats();
-        if stats != last_stats && wall_ns.saturating_sub(last_stats_log_ns) >= STATS_LOG_INTERVAL_NS {
+        if stats != last_stats && wall_ns.saturating_sub(last_stats_log_ns) >= STATS_LOG_INTERVAL_NS
+        {
             log::info!(
                 "link: {} frames in, {} out; skipped {} garbage bytes, {} CRC errors, {} unknown messages",
                 stats.frames_in, stats.frames_out, stats.garbage_bytes, stats.crc_errors, stats.unknown_ids
@@ -179,17 +226,34 @@ fn command(
     setpoint: &Setpoint,
     status: &mut StatusReporter,
 ) -> bool {
-    let Some(target) = monitor.target() else { return false };
+    let Some(target) = monitor.target() else {
+        return false;
+    };
     if !may_command(setpoint.task, monitor.guided_and_armed(now_ns)) {
         return false;
     }
-    let v = [setpoint.vx_m_s as f32, setpoint.vy_m_s as f32, setpoint.vz_m_s as f32];
-    let msg = velocity_setpoint(target, uptime_ms, cfg.setpoint_frame, v, setpoint.yaw_rate_rad_s as f32);
+    let v = [
+        setpoint.vx_m_s as f32,
+        setpoint.vy_m_s as f32,
+        setpoint.vz_m_s as f32,
+    ];
+    let msg = velocity_setpoint(
+        target,
+        uptime_ms,
+        cfg.setpoint_frame,
+        v,
+        setpoint.yaw_rate_rad_s as f32,
+    );
     send(link, header, &msg, status)
 }
 
 /// Sends one message, numbering it; a failure is logged and counted, never fatal.
-fn send(link: &mut Link, header: &mut MavHeader, msg: &hubtrack_mavlink::MavMessage, status: &mut StatusReporter) -> bool {
+fn send(
+    link: &mut Link,
+    header: &mut MavHeader,
+    msg: &hubtrack_mavlink::MavMessage,
+    status: &mut StatusReporter,
+) -> bool {
     header.sequence = header.sequence.wrapping_add(1);
     match link.send(*header, msg) {
         Ok(()) => true,

@@ -20,7 +20,10 @@ use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_runtime::stage::Stage;
 
 #[derive(Parser)]
-#[command(name = "hubtrack-control", about = "Fly the T1/T2/T3 approach: track in, MAVLink setpoints out")]
+#[command(
+    name = "hubtrack-control",
+    about = "Fly the T1/T2/T3 approach: track in, MAVLink setpoints out"
+)]
 struct Args {
     #[command(flatten)]
     config: ConfigArgs,

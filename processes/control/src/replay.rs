@@ -25,10 +25,18 @@ const VEHICLE_BUFFER: usize = 16;
 /// Runs replayed control until SIGINT/SIGTERM.
 pub fn run(stage: Stage) -> anyhow::Result<()> {
     let mut controller = Controller::new(&stage)?;
-    let Stage { config, shutdown, node, mut status } = stage;
+    let Stage {
+        config,
+        shutdown,
+        node,
+        mut status,
+    } = stage;
     let cfg = &config.control;
     let ms_to_ns = |ms: u64| ms * 1_000_000;
-    let (link_timeout_ns, state_timeout_ns) = (ms_to_ns(cfg.link_timeout_ms), ms_to_ns(cfg.vehicle_timeout_ms));
+    let (link_timeout_ns, state_timeout_ns) = (
+        ms_to_ns(cfg.link_timeout_ms),
+        ms_to_ns(cfg.vehicle_timeout_ms),
+    );
     let tracks = MsgSubscriber::<TrackState>::new(&node, &TRACK, TRACK_BUFFER)?;
     let vehicles = MsgSubscriber::<VehicleState>::polling(&node, &VEHICLE, VEHICLE_BUFFER)?;
     log::info!("replay mode: no MAVLink link; vehicle states from the vehicle service, time from the track states");
@@ -57,7 +65,9 @@ pub fn run(stage: Stage) -> anyhow::Result<()> {
     status.publish_now();
     log::info!(
         "stopped: {} setpoints published from {} track states and {} vehicle states",
-        status.status.outputs, status.status.inputs, vehicles_received
+        status.status.outputs,
+        status.status.inputs,
+        vehicles_received
     );
     Ok(())
 }

@@ -21,8 +21,12 @@ pub struct Controller {
 impl Controller {
     /// The approach configured in `[control.approach]`, publishing on the setpoints service.
     pub fn new(stage: &Stage) -> anyhow::Result<Controller> {
-        let approach = Approach::new(stage.config.control.approach.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
-        Ok(Controller { approach, out: MsgPublisher::new(&stage.node, &SETPOINTS)? })
+        let approach = Approach::new(stage.config.control.approach.clone())
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        Ok(Controller {
+            approach,
+            out: MsgPublisher::new(&stage.node, &SETPOINTS)?,
+        })
     }
 
     /// Steps the approach once for `track`, at its capture time, with `vehicle`; logs a task
@@ -38,7 +42,12 @@ impl Controller {
             log::info!("task {:?} → {:?}: {}", t.from, t.to, t.reason);
         }
         Setpoint {
-            stamps: Stamps { seq: track.stamps.seq, capture_ns: track.stamps.capture_ns, recv_ns, publish_ns: 0 },
+            stamps: Stamps {
+                seq: track.stamps.seq,
+                capture_ns: track.stamps.capture_ns,
+                recv_ns,
+                publish_ns: 0,
+            },
             task: out.task,
             sent: false,
             vx_m_s: out.vx_m_s,
@@ -50,7 +59,11 @@ impl Controller {
     }
 
     /// Publishes `setpoint` with its publish stamp and counts it.
-    pub fn publish(&self, mut setpoint: Setpoint, status: &mut StatusReporter) -> anyhow::Result<()> {
+    pub fn publish(
+        &self,
+        mut setpoint: Setpoint,
+        status: &mut StatusReporter,
+    ) -> anyhow::Result<()> {
         setpoint.stamps.publish_ns = monotonic_ns();
         self.out.publish(setpoint)?;
         status.status.outputs += 1;

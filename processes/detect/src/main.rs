@@ -11,7 +11,8 @@ use hubtrack_runtime::stage::Stage;
 use hubtrack_types::services::{DETECTIONS, OVERLAY, TRACK, VEHICLE};
 use hubtrack_types::time::monotonic_ns;
 use hubtrack_types::{
-    DetectOverlay, Detection, OverlayKind, OverlaySegment, Stamps, TrackState, VehicleState, MAX_OVERLAY_LINES,
+    DetectOverlay, Detection, OverlayKind, OverlaySegment, Stamps, TrackState, VehicleState,
+    MAX_OVERLAY_LINES,
 };
 use std::time::Duration;
 
@@ -22,7 +23,10 @@ const FRAME_WAIT: Duration = Duration::from_millis(50);
 const MAX_ATTITUDE_AGE_NS: u64 = 200_000_000;
 
 #[derive(Parser)]
-#[command(name = "hubtrack-detect", about = "Detect the turbine hub in the newest frame")]
+#[command(
+    name = "hubtrack-detect",
+    about = "Detect the turbine hub in the newest frame"
+)]
 struct Args {
     #[command(flatten)]
     config: ConfigArgs,
@@ -34,7 +38,12 @@ fn main() {
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let Stage { config, shutdown, node, mut status } = Stage::start("detect", &args.config)?;
+    let Stage {
+        config,
+        shutdown,
+        node,
+        mut status,
+    } = Stage::start("detect", &args.config)?;
     let mut detector = Detector::new(config.detect.clone())?;
     log::info!("mode {:?}", config.detect.mode);
 
@@ -56,7 +65,9 @@ fn run() -> anyhow::Result<()> {
         if let Some(t) = tracks.receive_newest()? {
             last_track = Some(t);
         }
-        let Some(sample) = frames.receive_newest()? else { continue };
+        let Some(sample) = frames.receive_newest()? else {
+            continue;
+        };
         let recv_ns = monotonic_ns();
         status.status.inputs += 1;
         let header = *sample.user_header();
@@ -68,9 +79,13 @@ fn run() -> anyhow::Result<()> {
             data: sample.payload(),
         };
         let roll_rad = last_vehicle
-            .filter(|v| v.attitude_valid && header.capture_ns.abs_diff(v.recv_ns) < MAX_ATTITUDE_AGE_NS)
+            .filter(|v| {
+                v.attitude_valid && header.capture_ns.abs_diff(v.recv_ns) < MAX_ATTITUDE_AGE_NS
+            })
             .map(|v| v.roll_rad);
-        let hints = last_track.as_ref().map_or_else(Hints::default, |t| Hints::from_track(t, header.width, header.height, header.capture_ns));
+        let hints = last_track.as_ref().map_or_else(Hints::default, |t| {
+            Hints::from_track(t, header.width, header.height, header.capture_ns)
+        });
         let output = match detector.detect(&image, &Hints { roll_rad, ..hints }) {
             Ok(o) => o,
             Err(e) => {
@@ -82,9 +97,21 @@ fn run() -> anyhow::Result<()> {
         drop(sample); // the frame goes back to capture's pool before we publish
         let mut detection = output.detection;
         detection.frames_skipped = frames.skipped;
-        detection.stamps = Stamps { seq: header.seq, capture_ns: header.capture_ns, recv_ns, publish_ns: 0 };
-        let mut overlay = DetectOverlay { detection, ..Default::default() };
-        for (slot, line) in overlay.segments.iter_mut().zip(output.overlay.lines.iter().take(MAX_OVERLAY_LINES)) {
+        detection.stamps = Stamps {
+            seq: header.seq,
+            capture_ns: header.capture_ns,
+            recv_ns,
+            publish_ns: 0,
+        };
+        let mut overlay = DetectOverlay {
+            detection,
+            ..Default::default()
+        };
+        for (slot, line) in overlay
+            .segments
+            .iter_mut()
+            .zip(output.overlay.lines.iter().take(MAX_OVERLAY_LINES))
+        {
             *slot = OverlaySegment {
                 a: [line.a[0] as f32, line.a[1] as f32],
                 b: [line.b[0] as f32, line.b[1] as f32],
@@ -110,6 +137,10 @@ fn run() -> anyhow::Result<()> {
         status.status.dropped = frames.lost;
     }
     status.publish_now();
-    log::info!("processed {} frames, skipped {}", status.status.outputs, frames.skipped);
+    log::info!(
+        "processed {} frames, skipped {}",
+        status.status.outputs,
+        frames.skipped
+    );
     Ok(())
 }

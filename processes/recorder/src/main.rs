@@ -17,7 +17,9 @@ use hubtrack_runtime::stage::Stage;
 use hubtrack_runtime::status::StatusReporter;
 use hubtrack_types::services::{DETECTIONS, OVERLAY, SETPOINTS, STATUS, TRACK, VEHICLE};
 use hubtrack_types::time::{monotonic_ns, realtime_ns};
-use hubtrack_types::{DetectOverlay, Detection, FrameHeader, Setpoint, StageStatus, TrackState, VehicleState};
+use hubtrack_types::{
+    DetectOverlay, Detection, FrameHeader, Setpoint, StageStatus, TrackState, VehicleState,
+};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
 use std::time::{Duration, Instant};
@@ -30,7 +32,10 @@ const RESULT_BUFFER: usize = 64;
 const STATS_INTERVAL: Duration = Duration::from_secs(1);
 
 #[derive(Parser)]
-#[command(name = "hubtrack-recorder", about = "Record every hubtrack service to an MCAP file")]
+#[command(
+    name = "hubtrack-recorder",
+    about = "Record every hubtrack service to an MCAP file"
+)]
 struct Args {
     #[command(flatten)]
     config: ConfigArgs,
@@ -41,9 +46,22 @@ struct Args {
 
 /// What the reader hands the writer.
 enum Item {
-    Frame { header: FrameHeader, pixels: Option<Vec<u8>>, log_time: u64 },
-    Json { kind: ChannelKind, seq: u64, publish_ns: u64, log_time: u64, json: JsonMsg },
-    Overlay { overlay: Box<DetectOverlay>, log_time: u64 },
+    Frame {
+        header: FrameHeader,
+        pixels: Option<Vec<u8>>,
+        log_time: u64,
+    },
+    Json {
+        kind: ChannelKind,
+        seq: u64,
+        publish_ns: u64,
+        log_time: u64,
+        json: JsonMsg,
+    },
+    Overlay {
+        overlay: Box<DetectOverlay>,
+        log_time: u64,
+    },
 }
 
 /// Frames whose wall-clock capture time the writer remembers, to stamp overlays exactly like
@@ -66,7 +84,12 @@ fn main() {
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let Stage { config, shutdown, node, mut status } = Stage::start("recorder", &args.config)?;
+    let Stage {
+        config,
+        shutdown,
+        node,
+        mut status,
+    } = Stage::start("recorder", &args.config)?;
     let cfg = config.recorder.clone();
 
     let recording = Recording::create(&args.output, &options(&cfg))?;
@@ -80,7 +103,11 @@ fn run() -> anyhow::Result<()> {
     let setpoints = MsgSubscriber::<Setpoint>::polling(&node, &SETPOINTS, RESULT_BUFFER)?;
     let vehicle = MsgSubscriber::<VehicleState>::polling(&node, &VEHICLE, RESULT_BUFFER)?;
     let status_in = MsgSubscriber::<StageStatus>::polling(&node, &STATUS, RESULT_BUFFER)?;
-    let overlays = MsgSubscriber::<DetectOverlay>::polling(&node, &OVERLAY, OVERLAY.qos.subscriber_max_buffer_size)?;
+    let overlays = MsgSubscriber::<DetectOverlay>::polling(
+        &node,
+        &OVERLAY,
+        OVERLAY.qos.subscriber_max_buffer_size,
+    )?;
 
     // Fixed pool of frame buffers: `free` holds empty ones, `queue` carries filled ones.
     let (free_tx, free_rx) = mpsc::sync_channel::<Vec<u8>>(cfg.queue_frames);
@@ -91,7 +118,16 @@ fn run() -> anyhow::Result<()> {
     let (stats_tx, stats_rx) = mpsc::channel::<RecorderStats>();
     let writer = std::thread::Builder::new()
         .name("mcap-writer".into())
-        .spawn(move || write_loop(recording, queue_rx, free_tx, stats_tx, cfg.flush_interval_ms, cfg.min_free_mib))?;
+        .spawn(move || {
+            write_loop(
+                recording,
+                queue_rx,
+                free_tx,
+                stats_tx,
+                cfg.flush_interval_ms,
+                cfg.min_free_mib,
+            )
+        })?;
 
     let mut stats = RecorderStats::default();
     let mut stats_at = Instant::now();
@@ -118,25 +154,78 @@ fn run() -> anyhow::Result<()> {
                 None
             };
             drop(sample); // release shared memory before the (possibly slow) hand-off
-            enqueue(&queue_tx, Item::Frame { header, pixels, log_time }, &mut stats, &mut status);
+            enqueue(
+                &queue_tx,
+                Item::Frame {
+                    header,
+                    pixels,
+                    log_time,
+                },
+                &mut stats,
+                &mut status,
+            );
         }
         stats.frames_lost = frames.lost;
         let now = realtime_ns();
         macro_rules! drain {
             ($sub:expr, $kind:expr, $variant:ident, $seq:expr, $pub_ns:expr) => {
                 while let Some(m) = $sub.receive()? {
-                    let item = Item::Json { kind: $kind, seq: $seq(&m), publish_ns: $pub_ns(&m), log_time: now, json: JsonMsg::$variant(m) };
+                    let item = Item::Json {
+                        kind: $kind,
+                        seq: $seq(&m),
+                        publish_ns: $pub_ns(&m),
+                        log_time: now,
+                        json: JsonMsg::$variant(m),
+                    };
                     enqueue(&queue_tx, item, &mut stats, &mut status);
                 }
             };
         }
-        drain!(detections, ChannelKind::Detection, Detection, |m: &Detection| m.stamps.seq, |m: &Detection| m.stamps.publish_ns);
-        drain!(track, ChannelKind::Track, Track, |m: &TrackState| m.stamps.seq, |m: &TrackState| m.stamps.publish_ns);
-        drain!(setpoints, ChannelKind::Setpoint, Setpoint, |m: &Setpoint| m.stamps.seq, |m: &Setpoint| m.stamps.publish_ns);
-        drain!(vehicle, ChannelKind::Vehicle, Vehicle, |_: &VehicleState| 0, |m: &VehicleState| m.publish_ns);
-        drain!(status_in, ChannelKind::Status, Status, |_: &StageStatus| 0, |m: &StageStatus| m.publish_ns);
+        drain!(
+            detections,
+            ChannelKind::Detection,
+            Detection,
+            |m: &Detection| m.stamps.seq,
+            |m: &Detection| m.stamps.publish_ns
+        );
+        drain!(
+            track,
+            ChannelKind::Track,
+            Track,
+            |m: &TrackState| m.stamps.seq,
+            |m: &TrackState| m.stamps.publish_ns
+        );
+        drain!(
+            setpoints,
+            ChannelKind::Setpoint,
+            Setpoint,
+            |m: &Setpoint| m.stamps.seq,
+            |m: &Setpoint| m.stamps.publish_ns
+        );
+        drain!(
+            vehicle,
+            ChannelKind::Vehicle,
+            Vehicle,
+            |_: &VehicleState| 0,
+            |m: &VehicleState| m.publish_ns
+        );
+        drain!(
+            status_in,
+            ChannelKind::Status,
+            Status,
+            |_: &StageStatus| 0,
+            |m: &StageStatus| m.publish_ns
+        );
         while let Some(o) = overlays.receive()? {
-            enqueue(&queue_tx, Item::Overlay { overlay: Box::new(o), log_time: now }, &mut stats, &mut status);
+            enqueue(
+                &queue_tx,
+                Item::Overlay {
+                    overlay: Box::new(o),
+                    log_time: now,
+                },
+                &mut stats,
+                &mut status,
+            );
         }
 
         while let Ok(s) = stats_rx.try_recv() {
@@ -171,7 +260,9 @@ fn run() -> anyhow::Result<()> {
         json: JsonMsg::Recorder(stats),
     });
     drop(queue_tx);
-    let final_stats = writer.join().map_err(|_| anyhow::anyhow!("writer thread panicked"))??;
+    let final_stats = writer
+        .join()
+        .map_err(|_| anyhow::anyhow!("writer thread panicked"))??;
     stats.frames_recorded = final_stats.frames_recorded;
     stats.frames_dropped_disk = final_stats.frames_dropped_disk;
     stats.messages_recorded = final_stats.messages_recorded;
@@ -203,7 +294,12 @@ fn options(cfg: &RecorderConfig) -> RecordingOptions {
 }
 
 /// Hands an item to the writer without ever blocking the reader; a full queue drops it.
-fn enqueue(queue: &SyncSender<Item>, item: Item, stats: &mut RecorderStats, status: &mut StatusReporter) {
+fn enqueue(
+    queue: &SyncSender<Item>,
+    item: Item,
+    stats: &mut RecorderStats,
+    status: &mut StatusReporter,
+) {
     match queue.try_send(item) {
         Ok(()) => {}
         Err(TrySendError::Full(Item::Frame { .. })) => {
@@ -232,7 +328,12 @@ impl DiskGuard {
             _ => PathBuf::from("."),
         };
         let c = std::ffi::CString::new(dir.as_os_str().as_encoded_bytes()).unwrap_or_default();
-        let mut guard = DiskGuard { dir: c, shown: dir, min_free: min_free_mib << 20, low: false };
+        let mut guard = DiskGuard {
+            dir: c,
+            shown: dir,
+            min_free: min_free_mib << 20,
+            low: false,
+        };
         guard.check();
         guard
     }
@@ -254,7 +355,9 @@ impl DiskGuard {
         if self.min_free == 0 {
             return;
         }
-        let Some(free) = self.free_bytes() else { return };
+        let Some(free) = self.free_bytes() else {
+            return;
+        };
         if !self.low && free < self.min_free {
             self.low = true;
             log::error!(
@@ -266,7 +369,11 @@ impl DiskGuard {
             );
         } else if self.low && free > 2 * self.min_free {
             self.low = false;
-            log::warn!("disk space back ({} MiB free on {}): recording frame pixels again", free >> 20, self.shown.display());
+            log::warn!(
+                "disk space back ({} MiB free on {}): recording frame pixels again",
+                free >> 20,
+                self.shown.display()
+            );
         }
     }
 }
@@ -297,7 +404,8 @@ fn write_loop(
     let mut reported = RecorderStats::default();
     let mut last_frame = FrameHeader::default();
     let mut reader_stats = RecorderStats::default();
-    let mut image_times = std::collections::VecDeque::<(u64, u64)>::with_capacity(IMAGE_TIME_MEMORY);
+    let mut image_times =
+        std::collections::VecDeque::<(u64, u64)>::with_capacity(IMAGE_TIME_MEMORY);
     loop {
         let item = match queue.recv_timeout(flush_interval) {
             Ok(item) => Some(item),
@@ -305,13 +413,18 @@ fn write_loop(
             Err(mpsc::RecvTimeoutError::Disconnected) => break,
         };
         match item {
-            Some(Item::Frame { header, pixels, log_time }) => {
+            Some(Item::Frame {
+                header,
+                pixels,
+                log_time,
+            }) => {
                 let keep_pixels = pixels.is_some() && !disk.low;
                 if pixels.is_some() && disk.low {
                     stats.frames_dropped_disk += 1;
                 }
                 let written = if keep_pixels { pixels.as_deref() } else { None };
-                rec.write_frame(&header, written, log_time).context("writing a frame")?;
+                rec.write_frame(&header, written, log_time)
+                    .context("writing a frame")?;
                 stats.frames_recorded += 1;
                 stats.bytes_written += written.map_or(0, |p| p.len() as u64);
                 last_frame = header;
@@ -323,7 +436,13 @@ fn write_loop(
                     let _ = free.try_send(buf);
                 }
             }
-            Some(Item::Json { kind, seq, publish_ns, log_time, json }) => {
+            Some(Item::Json {
+                kind,
+                seq,
+                publish_ns,
+                log_time,
+                json,
+            }) => {
                 let publish_time = rec.to_realtime(publish_ns);
                 let r = match &json {
                     JsonMsg::Detection(m) => rec.write_json(kind, seq, log_time, publish_time, m),
@@ -333,7 +452,13 @@ fn write_loop(
                     JsonMsg::Status(m) => rec.write_json(kind, seq, log_time, publish_time, m),
                     JsonMsg::Recorder(reader) => {
                         reader_stats = *reader;
-                        rec.write_json(kind, last_frame.seq, log_time, publish_time, &merged(&reader_stats, &stats))
+                        rec.write_json(
+                            kind,
+                            last_frame.seq,
+                            log_time,
+                            publish_time,
+                            &merged(&reader_stats, &stats),
+                        )
                     }
                 };
                 r.context("writing a message")?;
@@ -346,7 +471,8 @@ fn write_loop(
                     .rev()
                     .find(|(s, _)| *s == seq)
                     .map_or_else(|| rec.to_realtime(overlay.stamps.capture_ns), |(_, t)| *t);
-                rec.write_overlay(&overlay, image_time, log_time).context("writing an overlay")?;
+                rec.write_overlay(&overlay, image_time, log_time)
+                    .context("writing an overlay")?;
                 stats.messages_recorded += 1;
             }
             None => {}
@@ -362,7 +488,13 @@ fn write_loop(
         }
     }
     let now = realtime_ns();
-    rec.write_json(ChannelKind::Recorder, last_frame.seq, now, now, &merged(&reader_stats, &stats))?;
+    rec.write_json(
+        ChannelKind::Recorder,
+        last_frame.seq,
+        now,
+        now,
+        &merged(&reader_stats, &stats),
+    )?;
     rec.finish().context("finishing the file")?;
     Ok(stats)
 }

@@ -24,10 +24,15 @@ use hubtrack_render::Renderer;
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_runtime::ipc::{FramePublisher, MsgPublisher, MsgSubscriber};
 use hubtrack_runtime::stage::Stage;
-use hubtrack_sim::{camera_pose, geometry, render_camera, Autopilot, FlightRecorder, Multicopter, Scenario, SimPace, Wind};
+use hubtrack_sim::{
+    camera_pose, geometry, render_camera, Autopilot, FlightRecorder, Multicopter, Scenario,
+    SimPace, Wind,
+};
 use hubtrack_types::services::{CLOCK, SETPOINTS, VEHICLE};
 use hubtrack_types::time::monotonic_ns;
-use hubtrack_types::{ApproachTask, FrameSourceKind, PixelFormat, Setpoint, SimClock, VehicleState};
+use hubtrack_types::{
+    ApproachTask, FrameSourceKind, PixelFormat, Setpoint, SimClock, VehicleState,
+};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -35,7 +40,10 @@ use std::time::{Duration, Instant};
 const LOCKSTEP_POLL: Duration = Duration::from_millis(1);
 
 #[derive(Parser)]
-#[command(name = "hubtrack-sim", about = "Simulated ArduCopter with a rendered camera (demo and `hubtrack fly`)")]
+#[command(
+    name = "hubtrack-sim",
+    about = "Simulated ArduCopter with a rendered camera (demo and `hubtrack fly`)"
+)]
 struct Args {
     #[command(flatten)]
     config: ConfigArgs,
@@ -50,7 +58,12 @@ fn main() {
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let Stage { config, shutdown, node, mut status } = Stage::start("sim", &args.config)?;
+    let Stage {
+        config,
+        shutdown,
+        node,
+        mut status,
+    } = Stage::start("sim", &args.config)?;
     let cfg = &config.sim;
     let scenario = Scenario::from_seed(cfg.seed, cfg);
     let camera = render_camera(&cfg.camera);
@@ -59,11 +72,19 @@ fn run() -> anyhow::Result<()> {
     let mut wind = Wind::new(cfg.seed, &cfg.wind);
     let mut autopilot = Autopilot::new(&cfg.autopilot);
     let endpoint: Endpoint = cfg.link.parse().context("sim.link")?;
-    let mut link = Link::open(&endpoint).with_context(|| format!("cannot open the MAVLink link {endpoint}"))?;
+    let mut link = Link::open(&endpoint)
+        .with_context(|| format!("cannot open the MAVLink link {endpoint}"))?;
     let (sys, comp) = autopilot.identity();
-    let mut header = MavHeader { system_id: sys.into(), component_id: comp, sequence: 0 };
+    let mut header = MavHeader {
+        system_id: sys.into(),
+        component_id: comp,
+        sequence: 0,
+    };
 
-    let mut sink = ShmSink::new(FramePublisher::new(&node, camera.frame_bytes())?, FrameSourceKind::Sim);
+    let mut sink = ShmSink::new(
+        FramePublisher::new(&node, camera.frame_bytes())?,
+        FrameSourceKind::Sim,
+    );
     let clock = MsgPublisher::<SimClock>::new(&node, &CLOCK)?;
     let setpoints = MsgSubscriber::<Setpoint>::new(&node, &SETPOINTS, 16)?;
     let vehicle_states = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, 16)?;
@@ -107,13 +128,23 @@ fn run() -> anyhow::Result<()> {
         if cfg.pace == SimPace::Realtime {
             // Hold until the wall clock catches up, handling commands as they come.
             while let Some(left) = Duration::from_secs_f64(t).checked_sub(wall0.elapsed()) {
-                receive_commands(&mut link, &mut autopilot, t, &vehicle, left.min(Duration::from_millis(5)));
+                receive_commands(
+                    &mut link,
+                    &mut autopilot,
+                    t,
+                    &vehicle,
+                    left.min(Duration::from_millis(5)),
+                );
                 if shutdown.requested() {
                     break;
                 }
             }
         }
-        clock.publish(SimClock { now_ns, step, publish_ns: monotonic_ns() })?;
+        clock.publish(SimClock {
+            now_ns,
+            step,
+            publish_ns: monotonic_ns(),
+        })?;
         let sent_any = !outgoing.is_empty();
         let reflected = ReflectedState::of(&outgoing);
         for msg in outgoing.drain(..) {
@@ -134,7 +165,10 @@ fn run() -> anyhow::Result<()> {
             })?;
             if got.is_none() {
                 lockstep_misses += 1;
-                log::warn!("t={t:.2}s: control did not publish the vehicle state within {} ms; going on", lockstep_timeout.as_millis());
+                log::warn!(
+                    "t={t:.2}s: control did not publish the vehicle state within {} ms; going on",
+                    lockstep_timeout.as_millis()
+                );
             }
         }
 
@@ -150,7 +184,9 @@ fn run() -> anyhow::Result<()> {
             truth: Default::default(),
         };
         sink.publish(info, &mut |out| {
-            let truth = renderer.render(&scene, &pose, out).map_err(|e| hubtrack_capture::CaptureError::Render(e.to_string()))?;
+            let truth = renderer
+                .render(&scene, &pose, out)
+                .map_err(|e| hubtrack_capture::CaptureError::Render(e.to_string()))?;
             Ok(Some(frame_truth(&truth)))
         })?;
         status.status.outputs += 1;
@@ -158,10 +194,15 @@ fn run() -> anyhow::Result<()> {
         // The pipeline's answer: in lockstep wait for control's setpoint of this frame.
         let mut answer: Option<Setpoint> = None;
         if cfg.pace == SimPace::Lockstep {
-            answer = wait_for(&setpoints, lockstep_timeout, &shutdown, |s| s.stamps.seq >= seq)?;
+            answer = wait_for(&setpoints, lockstep_timeout, &shutdown, |s| {
+                s.stamps.seq >= seq
+            })?;
             if answer.is_none() {
                 lockstep_misses += 1;
-                log::warn!("t={t:.2}s frame {seq}: no setpoint within {} ms; going on", lockstep_timeout.as_millis());
+                log::warn!(
+                    "t={t:.2}s frame {seq}: no setpoint within {} ms; going on",
+                    lockstep_timeout.as_millis()
+                );
             }
             receive_commands(&mut link, &mut autopilot, t, &vehicle, Duration::ZERO);
         } else {
@@ -224,7 +265,13 @@ fn run() -> anyhow::Result<()> {
 }
 
 /// Hands every command that arrived (waiting at most `wait`) to the autopilot.
-fn receive_commands(link: &mut Link, autopilot: &mut Autopilot, t: f64, vehicle: &Multicopter, wait: Duration) {
+fn receive_commands(
+    link: &mut Link,
+    autopilot: &mut Autopilot,
+    t: f64,
+    vehicle: &Multicopter,
+    wait: Duration,
+) {
     match link.recv(wait) {
         Ok(msgs) => {
             for (h, m) in &msgs {
@@ -261,9 +308,13 @@ impl ReflectedState {
     }
 
     fn is_shown_by(&self, v: &VehicleState) -> bool {
-        let same = |sent: [f32; 3], seen: [f64; 3]| sent.iter().zip(seen).all(|(&a, b)| f64::from(a) == b);
-        self.attitude.is_none_or(|a| v.attitude_valid && same(a, [v.roll_rad, v.pitch_rad, v.yaw_rad]))
-            && self.position.is_none_or(|p| v.position_valid && same(p, v.position_ned_m))
+        let same =
+            |sent: [f32; 3], seen: [f64; 3]| sent.iter().zip(seen).all(|(&a, b)| f64::from(a) == b);
+        self.attitude
+            .is_none_or(|a| v.attitude_valid && same(a, [v.roll_rad, v.pitch_rad, v.yaw_rad]))
+            && self
+                .position
+                .is_none_or(|p| v.position_valid && same(p, v.position_ned_m))
     }
 }
 

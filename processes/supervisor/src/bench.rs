@@ -7,8 +7,8 @@ use hubtrack_capture::synthetic::SyntheticSource;
 use hubtrack_runtime::config::{Config, SyntheticCamera};
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read, Write};
-use std::path::Path;
 use std::os::unix::net::UnixStream;
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -85,7 +85,9 @@ pub fn frames(args: FramesBenchArgs) -> anyhow::Result<()> {
         socket_hop(&frame, fps, seconds - 1.0)
     });
     let shm = iceoryx2_hop(&args, camera)?;
-    let uds = socket.join().map_err(|_| anyhow::anyhow!("socket hop panicked"))??;
+    let uds = socket
+        .join()
+        .map_err(|_| anyhow::anyhow!("socket hop panicked"))??;
 
     let mut shm_lat = shm.latency_us.clone();
     let mut uds_lat = uds.latency_us.clone();
@@ -98,20 +100,46 @@ pub fn frames(args: FramesBenchArgs) -> anyhow::Result<()> {
         args.seconds,
         std::thread::available_parallelism().map_or(0, |n| n.get())
     );
-    println!("{:<34}{:>22}{:>22}", "", "iceoryx2 (zero-copy)", "Unix socket (copy)");
-    println!("{:<34}{:>22}{:>22}", "frames published", shm.published, uds.published);
-    println!("{:<34}{:>22}{:>22}", "frames received by a reader", shm.received, uds.received);
+    println!(
+        "{:<34}{:>22}{:>22}",
+        "", "iceoryx2 (zero-copy)", "Unix socket (copy)"
+    );
+    println!(
+        "{:<34}{:>22}{:>22}",
+        "frames published", shm.published, uds.published
+    );
+    println!(
+        "{:<34}{:>22}{:>22}",
+        "frames received by a reader", shm.received, uds.received
+    );
     println!(
         "{:<34}{:>22}{:>22}",
         "frames recorded (MCAP)",
         shm.recorded.map_or("-".into(), |n| n.to_string()),
         "-"
     );
-    println!("{:<34}{:>22}{:>22}", "frames dropped / lost", shm.dropped, uds.dropped);
-    println!("{:<34}{:>22.0}{:>22.0}", "publish -> receive p50 [us]", s50, u50);
-    println!("{:<34}{:>22.0}{:>22.0}", "publish -> receive p99 [us]", s99, u99);
-    println!("{:<34}{:>22.0}{:>22.0}", "publish -> receive max [us]", smax, umax);
-    println!("{:<34}{:>22.1}{:>22}", "p50 ratio (socket / iceoryx2)", u50 / s50, "");
+    println!(
+        "{:<34}{:>22}{:>22}",
+        "frames dropped / lost", shm.dropped, uds.dropped
+    );
+    println!(
+        "{:<34}{:>22.0}{:>22.0}",
+        "publish -> receive p50 [us]", s50, u50
+    );
+    println!(
+        "{:<34}{:>22.0}{:>22.0}",
+        "publish -> receive p99 [us]", s99, u99
+    );
+    println!(
+        "{:<34}{:>22.0}{:>22.0}",
+        "publish -> receive max [us]", smax, umax
+    );
+    println!(
+        "{:<34}{:>22.1}{:>22}",
+        "p50 ratio (socket / iceoryx2)",
+        u50 / s50,
+        ""
+    );
     println!("renderer per {w}x{h} frame: median {r50:.2} ms, p99 {r99:.2} ms (budget at {} fps: {:.1} ms)", args.fps, 1e3 / args.fps);
     Ok(())
 }
@@ -137,7 +165,14 @@ fn iceoryx2_hop(args: &FramesBenchArgs, camera: SyntheticCamera) -> anyhow::Resu
     if args.record {
         let mut a = common.clone();
         a.extend(["--output".to_string(), rec_path.display().to_string()]);
-        recorder = Some(Stage::spawn("recorder", &stage_binary("recorder")?, &a, false, 0, true)?);
+        recorder = Some(Stage::spawn(
+            "recorder",
+            &stage_binary("recorder")?,
+            &a,
+            false,
+            0,
+            true,
+        )?);
         std::thread::sleep(Duration::from_millis(300));
     }
     let exe = std::env::current_exe()?;
@@ -149,9 +184,21 @@ fn iceoryx2_hop(args: &FramesBenchArgs, camera: SyntheticCamera) -> anyhow::Resu
         .context("starting the tap reader")?;
     // Read the reader's lines while it runs: a full pipe would block it and lose frames.
     let tap_out = tap.stdout.take().expect("piped");
-    let lines = std::thread::spawn(move || BufReader::new(tap_out).lines().map_while(Result::ok).collect::<Vec<_>>());
+    let lines = std::thread::spawn(move || {
+        BufReader::new(tap_out)
+            .lines()
+            .map_while(Result::ok)
+            .collect::<Vec<_>>()
+    });
     std::thread::sleep(Duration::from_millis(300));
-    let mut capture = Stage::spawn("capture", &stage_binary("capture")?, &common, false, 0, true)?;
+    let mut capture = Stage::spawn(
+        "capture",
+        &stage_binary("capture")?,
+        &common,
+        false,
+        0,
+        true,
+    )?;
     std::thread::sleep(Duration::from_secs_f64(args.seconds));
     capture.stop(Duration::from_secs(3));
     let mut latency_us = Vec::new();
@@ -159,7 +206,10 @@ fn iceoryx2_hop(args: &FramesBenchArgs, camera: SyntheticCamera) -> anyhow::Resu
     let mut last = None;
     let mut lost = 0;
     let _ = tap.wait();
-    for line in lines.join().map_err(|_| anyhow::anyhow!("tap reader thread panicked"))? {
+    for line in lines
+        .join()
+        .map_err(|_| anyhow::anyhow!("tap reader thread panicked"))?
+    {
         let v: serde_json::Value = serde_json::from_str(&line)?;
         received += 1;
         latency_us.push(v["latency_us"].as_f64().unwrap_or(f64::NAN));
@@ -175,7 +225,13 @@ fn iceoryx2_hop(args: &FramesBenchArgs, camera: SyntheticCamera) -> anyhow::Resu
         let _ = std::fs::remove_file(&rec_path);
     }
     let _ = std::fs::remove_dir(&dir);
-    Ok(HopResult { published, received, recorded, dropped: lost, latency_us })
+    Ok(HopResult {
+        published,
+        received,
+        recorded,
+        dropped: lost,
+        latency_us,
+    })
 }
 
 /// The same frames, written whole into a Unix stream socket by one thread and read whole by
@@ -213,8 +269,16 @@ fn socket_hop(frame: &[u8], fps: f64, seconds: f64) -> anyhow::Result<HopResult>
         tx.write_all(frame)?;
     }
     drop(tx);
-    let (received, latency_us) = reader.join().map_err(|_| anyhow::anyhow!("reader panicked"))??;
-    Ok(HopResult { published: n, received, recorded: None, dropped: n - received, latency_us })
+    let (received, latency_us) = reader
+        .join()
+        .map_err(|_| anyhow::anyhow!("reader panicked"))??;
+    Ok(HopResult {
+        published: n,
+        received,
+        recorded: None,
+        dropped: n - received,
+        latency_us,
+    })
 }
 
 /// The stages `hubtrack bench pipeline` runs, in pipeline order.
@@ -262,7 +326,10 @@ fn proc_sample(pid: u32) -> Option<ProcSample> {
         .and_then(|l| l.split_whitespace().nth(1))
         .and_then(|v| v.parse().ok())
         .unwrap_or(0);
-    Some(ProcSample { cpu_ticks, peak_rss_kb })
+    Some(ProcSample {
+        cpu_ticks,
+        peak_rss_kb,
+    })
 }
 
 fn children(pid: u32) -> Vec<u32> {
@@ -278,7 +345,9 @@ fn children(pid: u32) -> Vec<u32> {
 }
 
 fn proc_name(pid: u32) -> String {
-    std::fs::read_to_string(format!("/proc/{pid}/comm")).map(|s| s.trim().to_string()).unwrap_or_default()
+    std::fs::read_to_string(format!("/proc/{pid}/comm"))
+        .map(|s| s.trim().to_string())
+        .unwrap_or_default()
 }
 
 /// Runs the pipeline benchmark: each configuration pinned to `--cpus`, recorder on.
@@ -299,7 +368,9 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
     std::fs::create_dir_all(&dir)?;
     let rec = dir.join("pipeline.mcap");
     let exe = std::env::current_exe()?;
-    let taskset = ["/usr/bin/taskset", "/bin/taskset"].into_iter().find(|p| Path::new(p).exists());
+    let taskset = ["/usr/bin/taskset", "/bin/taskset"]
+        .into_iter()
+        .find(|p| Path::new(p).exists());
     let run_args: Vec<String> = vec![
         "run".into(),
         "--record".into(),
@@ -322,7 +393,14 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
         "--set".into(),
         format!("run.nice.capture={SYNTHETIC_CAMERA_NICE}"),
     ];
-    let run_args: Vec<String> = run_args.into_iter().chain(args.set.iter().flat_map(|kv| ["--set".to_string(), kv.clone()])).collect();
+    let run_args: Vec<String> = run_args
+        .into_iter()
+        .chain(
+            args.set
+                .iter()
+                .flat_map(|kv| ["--set".to_string(), kv.clone()]),
+        )
+        .collect();
     let mut cmd = match taskset {
         Some(ts) => {
             let mut c = Command::new(ts);
@@ -336,13 +414,24 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
             c
         }
     };
-    eprintln!("[bench] {camera} at {fps} fps for {} s, pinned to cpus {} ...", args.seconds, args.cpus);
-    let mut run = cmd.env(hubtrack_runtime::ipc::DOMAIN_ENV, &domain).stdout(Stdio::null()).stderr(Stdio::null()).spawn()?;
+    eprintln!(
+        "[bench] {camera} at {fps} fps for {} s, pinned to cpus {} ...",
+        args.seconds, args.cpus
+    );
+    let mut run = cmd
+        .env(hubtrack_runtime::ipc::DOMAIN_ENV, &domain)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()?;
     let run_pid = run.id();
     // The copying baseline's frame (sent after the run: see below).
     let mut source = SyntheticSource::new(
         &hubtrack_runtime::config::SyntheticConfig {
-            camera: if camera == "usb" { SyntheticCamera::Usb } else { SyntheticCamera::Gopro },
+            camera: if camera == "usb" {
+                SyntheticCamera::Usb
+            } else {
+                SyntheticCamera::Gopro
+            },
             ..Default::default()
         },
         fps,
@@ -356,21 +445,39 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
     while run.try_wait()?.is_none() {
         let mut pids = vec![run_pid];
         pids.extend(children(run_pid));
-        let all: Vec<u32> = pids.iter().flat_map(|p| std::iter::once(*p).chain(children(*p))).collect();
+        let all: Vec<u32> = pids
+            .iter()
+            .flat_map(|p| std::iter::once(*p).chain(children(*p)))
+            .collect();
         for pid in all {
             if let Some(s) = proc_sample(pid) {
                 let name = proc_name(pid);
                 first.entry(pid).or_insert((name, s, Instant::now()));
                 // The peak of all samples: an exiting process (zombie) reports no VmHWM.
-                let peak = last.get(&pid).map_or(0, |(p, _)| p.peak_rss_kb).max(s.peak_rss_kb);
-                last.insert(pid, (ProcSample { peak_rss_kb: peak, ..s }, Instant::now()));
+                let peak = last
+                    .get(&pid)
+                    .map_or(0, |(p, _)| p.peak_rss_kb)
+                    .max(s.peak_rss_kb);
+                last.insert(
+                    pid,
+                    (
+                        ProcSample {
+                            peak_rss_kb: peak,
+                            ..s
+                        },
+                        Instant::now(),
+                    ),
+                );
             }
         }
         std::thread::sleep(Duration::from_millis(500));
     }
     // The copying baseline: the same frames at the same rate over a Unix socket, alone after
     // the run, so that neither measurement loads the other.
-    eprintln!("[bench] Unix-socket copy of the same frames for {:.0} s ...", (args.seconds - 3.0).max(1.0));
+    eprintln!(
+        "[bench] Unix-socket copy of the same frames for {:.0} s ...",
+        (args.seconds - 3.0).max(1.0)
+    );
     let uds = socket_hop(&frame, fps, (args.seconds - 3.0).max(1.0))?;
     let tick = 100.0; // USER_HZ on Linux
     let mut per_name: BTreeMap<String, (f64, u64)> = BTreeMap::new();

@@ -60,7 +60,11 @@ pub struct DetectArgs {
 
 /// Parses `X,Y` (two finite numbers).
 fn parse_point(s: &str) -> Result<[f64; 2], String> {
-    let v: Vec<f64> = s.split(',').map(|p| p.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|e| format!("{s:?}: {e}"))?;
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("{s:?}: {e}"))?;
     match v[..] {
         [x, y] if x.is_finite() && y.is_finite() => Ok([x, y]),
         _ => Err(format!("{s:?}: expected X,Y")),
@@ -84,7 +88,11 @@ pub fn expand(paths: &[PathBuf]) -> Vec<PathBuf> {
     for p in paths {
         if p.is_dir() {
             let mut files: Vec<PathBuf> = std::fs::read_dir(p)
-                .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|f| f.is_file() && has_image_extension(f)).collect())
+                .map(|rd| {
+                    rd.filter_map(|e| e.ok().map(|e| e.path()))
+                        .filter(|f| f.is_file() && has_image_extension(f))
+                        .collect()
+                })
                 .unwrap_or_default();
             files.sort();
             out.extend(files);
@@ -97,7 +105,10 @@ pub fn expand(paths: &[PathBuf]) -> Vec<PathBuf> {
 
 /// A BGR8 OpenCV image as a detector view (no copy).
 pub fn view_of(mat: &Mat) -> anyhow::Result<ImageView<'_>> {
-    anyhow::ensure!(mat.is_continuous() && mat.channels() == 3, "image is not continuous BGR8");
+    anyhow::ensure!(
+        mat.is_continuous() && mat.channels() == 3,
+        "image is not continuous BGR8"
+    );
     Ok(ImageView {
         width: mat.cols() as u32,
         height: mat.rows() as u32,
@@ -134,7 +145,12 @@ pub fn run(args: DetectArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn detect_one(det: &mut Detector, path: &Path, annotate: Option<&Path>, hints: &Hints) -> anyhow::Result<serde_json::Value> {
+fn detect_one(
+    det: &mut Detector,
+    path: &Path,
+    annotate: Option<&Path>,
+    hints: &Hints,
+) -> anyhow::Result<serde_json::Value> {
     if !path.exists() {
         anyhow::bail!("no such file");
     }
@@ -144,7 +160,9 @@ fn detect_one(det: &mut Detector, path: &Path, annotate: Option<&Path>, hints: &
     let out = det.detect_still(&view, hints)?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     if let Some(dir) = annotate {
-        let stem = path.file_stem().map_or("image".into(), |s| s.to_string_lossy().into_owned());
+        let stem = path
+            .file_stem()
+            .map_or("image".into(), |s| s.to_string_lossy().into_owned());
         draw_overlay(&mat, &out, None, &dir.join(format!("{stem}.png")))?;
     }
     Ok(result_json(path, view.width, view.height, &out, ms))
@@ -152,7 +170,13 @@ fn detect_one(det: &mut Detector, path: &Path, annotate: Option<&Path>, hints: &
 
 /// The JSON object of one image (keys are a contract: path, width, height, detected, hub,
 /// confidence, distance_m, yaw_deg, ms; the rest are extras).
-pub fn result_json(path: &Path, width: u32, height: u32, out: &Output, ms: f64) -> serde_json::Value {
+pub fn result_json(
+    path: &Path,
+    width: u32,
+    height: u32,
+    out: &Output,
+    ms: f64,
+) -> serde_json::Value {
     let d = &out.detection;
     json!({
         "path": path, "width": width, "height": height, "detected": d.detected,
@@ -169,7 +193,12 @@ pub fn result_json(path: &Path, width: u32, height: u32, out: &Output, ms: f64) 
 
 /// Draws what the detector saw over the image (and the truth segment, axis point to spinner
 /// centre, in red when given) and writes it.
-pub fn draw_overlay(image: &Mat, out: &Output, truth: Option<[[f64; 2]; 2]>, path: &Path) -> anyhow::Result<()> {
+pub fn draw_overlay(
+    image: &Mat,
+    out: &Output,
+    truth: Option<[[f64; 2]; 2]>,
+    path: &Path,
+) -> anyhow::Result<()> {
     let mut canvas = image.try_clone()?;
     let scale = (image.rows() as f64 / 540.0).max(1.0);
     let thickness = (2.0 * scale).round() as i32;
@@ -181,36 +210,123 @@ pub fn draw_overlay(image: &Mat, out: &Output, truth: Option<[[f64; 2]; 2]>, pat
             LineKind::Rejected => Scalar::new(0.0, 160.0, 240.0, 0.0),
             LineKind::Other => Scalar::new(200.0, 120.0, 100.0, 0.0),
         };
-        imgproc::line(&mut canvas, pt(l.a), pt(l.b), color, thickness, imgproc::LINE_AA, 0)?;
+        imgproc::line(
+            &mut canvas,
+            pt(l.a),
+            pt(l.b),
+            color,
+            thickness,
+            imgproc::LINE_AA,
+            0,
+        )?;
     }
     if let Some([x, y, r]) = out.overlay.search_circle {
-        imgproc::circle(&mut canvas, pt([x, y]), r.round() as i32, Scalar::new(60.0, 200.0, 60.0, 0.0), 1, imgproc::LINE_AA, 0)?;
+        imgproc::circle(
+            &mut canvas,
+            pt([x, y]),
+            r.round() as i32,
+            Scalar::new(60.0, 200.0, 60.0, 0.0),
+            1,
+            imgproc::LINE_AA,
+            0,
+        )?;
     }
     let d = &out.detection;
     if d.tower_found {
-        imgproc::circle(&mut canvas, pt(d.tower_top_px), (8.0 * scale) as i32, Scalar::new(255.0, 80.0, 20.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
+        imgproc::circle(
+            &mut canvas,
+            pt(d.tower_top_px),
+            (8.0 * scale) as i32,
+            Scalar::new(255.0, 80.0, 20.0, 0.0),
+            thickness,
+            imgproc::LINE_AA,
+            0,
+        )?;
     }
     if d.circle_found {
-        imgproc::circle(&mut canvas, pt([d.circle[0], d.circle[1]]), d.circle[2].round() as i32, Scalar::new(255.0, 0.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
+        imgproc::circle(
+            &mut canvas,
+            pt([d.circle[0], d.circle[1]]),
+            d.circle[2].round() as i32,
+            Scalar::new(255.0, 0.0, 255.0, 0.0),
+            thickness,
+            imgproc::LINE_AA,
+            0,
+        )?;
     }
     if d.detected {
         let c = pt(d.hub_px);
         let r = (14.0 * scale) as i32;
-        imgproc::circle(&mut canvas, c, r, Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
-        imgproc::line(&mut canvas, Point::new(c.x - 2 * r, c.y), Point::new(c.x + 2 * r, c.y), Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
-        imgproc::line(&mut canvas, Point::new(c.x, c.y - 2 * r), Point::new(c.x, c.y + 2 * r), Scalar::new(0.0, 255.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
+        imgproc::circle(
+            &mut canvas,
+            c,
+            r,
+            Scalar::new(0.0, 255.0, 255.0, 0.0),
+            thickness,
+            imgproc::LINE_AA,
+            0,
+        )?;
+        imgproc::line(
+            &mut canvas,
+            Point::new(c.x - 2 * r, c.y),
+            Point::new(c.x + 2 * r, c.y),
+            Scalar::new(0.0, 255.0, 255.0, 0.0),
+            thickness,
+            imgproc::LINE_AA,
+            0,
+        )?;
+        imgproc::line(
+            &mut canvas,
+            Point::new(c.x, c.y - 2 * r),
+            Point::new(c.x, c.y + 2 * r),
+            Scalar::new(0.0, 255.0, 255.0, 0.0),
+            thickness,
+            imgproc::LINE_AA,
+            0,
+        )?;
     }
     if d.detected && d.nacelle_found {
         // The nacelle's far end: an orange vertical tick beside the hub.
-        let (x, y, r) = ((d.hub_px[0] + d.nacelle_end_dx_px).round() as i32, d.hub_px[1].round() as i32, (14.0 * scale) as i32);
-        imgproc::line(&mut canvas, Point::new(x, y - r), Point::new(x, y + r), Scalar::new(0.0, 128.0, 255.0, 0.0), thickness, imgproc::LINE_AA, 0)?;
+        let (x, y, r) = (
+            (d.hub_px[0] + d.nacelle_end_dx_px).round() as i32,
+            d.hub_px[1].round() as i32,
+            (14.0 * scale) as i32,
+        );
+        imgproc::line(
+            &mut canvas,
+            Point::new(x, y - r),
+            Point::new(x, y + r),
+            Scalar::new(0.0, 128.0, 255.0, 0.0),
+            thickness,
+            imgproc::LINE_AA,
+            0,
+        )?;
     }
     if let Some([a, b]) = truth {
         let red = Scalar::new(0.0, 0.0, 255.0, 0.0);
-        imgproc::line(&mut canvas, pt(a), pt(b), red, thickness, imgproc::LINE_AA, 0)?;
-        imgproc::circle(&mut canvas, pt(b), (4.0 * scale) as i32, red, thickness, imgproc::LINE_AA, 0)?;
+        imgproc::line(
+            &mut canvas,
+            pt(a),
+            pt(b),
+            red,
+            thickness,
+            imgproc::LINE_AA,
+            0,
+        )?;
+        imgproc::circle(
+            &mut canvas,
+            pt(b),
+            (4.0 * scale) as i32,
+            red,
+            thickness,
+            imgproc::LINE_AA,
+            0,
+        )?;
     }
     let name = path.to_str().context("non-UTF-8 path")?;
-    anyhow::ensure!(opencv::imgcodecs::imwrite_def(name, &canvas)?, "cannot write {name}");
+    anyhow::ensure!(
+        opencv::imgcodecs::imwrite_def(name, &canvas)?,
+        "cannot write {name}"
+    );
     Ok(())
 }

@@ -7,7 +7,9 @@ use anyhow::Context;
 use hubtrack_capture::images::read_image;
 use hubtrack_detect::params::Mode;
 use hubtrack_detect::{Hints, ImageView, Output};
-use hubtrack_render::dataset::{photo_case, photo_case_close, photo_lenses, synth_case, SynthCase, CLASSES};
+use hubtrack_render::dataset::{
+    photo_case, photo_case_close, photo_lenses, synth_case, SynthCase, CLASSES,
+};
 use hubtrack_render::{Camera, Renderer};
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_types::PixelFormat;
@@ -78,26 +80,40 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let config = args.config.load()?;
     if let Some(dir) = &args.misses {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        std::fs::write(dir.join("misses.jsonl"), "").with_context(|| format!("writing {}", dir.display()))?;
+        std::fs::write(dir.join("misses.jsonl"), "")
+            .with_context(|| format!("writing {}", dir.display()))?;
     }
     if args.sequence {
-        let out = crate::eval_seq::Outputs { trace: args.trace.as_deref(), misses: args.misses.as_deref(), candidates: args.candidates.as_deref() };
+        let out = crate::eval_seq::Outputs {
+            trace: args.trace.as_deref(),
+            misses: args.misses.as_deref(),
+            candidates: args.candidates.as_deref(),
+        };
         return crate::eval_seq::run(&config, args.flights, args.frames, args.seed, out);
     }
     let misses = args.misses.as_deref();
     let mut cand_out = match &args.candidates {
-        Some(p) => Some(std::io::BufWriter::new(std::fs::File::create(p).with_context(|| format!("creating {}", p.display()))?)),
+        Some(p) => Some(std::io::BufWriter::new(
+            std::fs::File::create(p).with_context(|| format!("creating {}", p.display()))?,
+        )),
         None => None,
     };
-    let mut detectors = MODES.iter().map(|(m, _)| detector(&config.detect, Some(*m))).collect::<anyhow::Result<Vec<_>>>()?;
+    let mut detectors = MODES
+        .iter()
+        .map(|(m, _)| detector(&config.detect, Some(*m)))
+        .collect::<anyhow::Result<Vec<_>>>()?;
     let names: Vec<&str> = MODES.iter().map(|(_, n)| *n).collect();
     let mut truths = args.truth.clone();
     if truths.is_empty() && !args.no_photos {
-        let default = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/real-dev/truth.jsonl");
+        let default =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/real-dev/truth.jsonl");
         if default.is_file() {
             truths.push(default);
         } else {
-            eprintln!("[eval] skipping real photos: {} not found (../shared absent)", default.display());
+            eprintln!(
+                "[eval] skipping real photos: {} not found (../shared absent)",
+                default.display()
+            );
         }
     }
     for truth in &truths {
@@ -105,17 +121,63 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         print_table(&format!("real photos: {}", truth.display()), &names, &table);
     }
     if args.synthetic > 0 {
-        let table = eval_synthetic(args.synthetic, args.seed, args.as_stills, &mut detectors, misses, cand_out.as_mut())?;
-        let how = if args.as_stills { ", as still photos" } else { "" };
-        print_table(&format!("synthetic frames: {} per distance class, seed {}{how}", args.synthetic, args.seed), &names, &table);
+        let table = eval_synthetic(
+            args.synthetic,
+            args.seed,
+            args.as_stills,
+            &mut detectors,
+            misses,
+            cand_out.as_mut(),
+        )?;
+        let how = if args.as_stills {
+            ", as still photos"
+        } else {
+            ""
+        };
+        print_table(
+            &format!(
+                "synthetic frames: {} per distance class, seed {}{how}",
+                args.synthetic, args.seed
+            ),
+            &names,
+            &table,
+        );
     }
     if args.photo_like > 0 {
-        let table = eval_photo_like(args.photo_like, args.seed, false, &mut detectors, misses, cand_out.as_mut())?;
-        print_table(&format!("photo-like rendered views: {}, seed {}, as still photos", args.photo_like, args.seed), &names, &table);
+        let table = eval_photo_like(
+            args.photo_like,
+            args.seed,
+            false,
+            &mut detectors,
+            misses,
+            cand_out.as_mut(),
+        )?;
+        print_table(
+            &format!(
+                "photo-like rendered views: {}, seed {}, as still photos",
+                args.photo_like, args.seed
+            ),
+            &names,
+            &table,
+        );
     }
     if args.photo_close > 0 {
-        let table = eval_photo_like(args.photo_close, args.seed, true, &mut detectors, misses, cand_out.as_mut())?;
-        print_table(&format!("photo-like close views (5-12 m): {}, seed {}, as still photos", args.photo_close, args.seed), &names, &table);
+        let table = eval_photo_like(
+            args.photo_close,
+            args.seed,
+            true,
+            &mut detectors,
+            misses,
+            cand_out.as_mut(),
+        )?;
+        print_table(
+            &format!(
+                "photo-like close views (5-12 m): {}, seed {}, as still photos",
+                args.photo_close, args.seed
+            ),
+            &names,
+            &table,
+        );
     }
     if let Some(w) = cand_out.as_mut() {
         w.flush().context("writing the candidates file")?;
@@ -125,7 +187,9 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
 
 fn add(table: &mut Table, categories: &[String], truth: &Truth, outcomes: &[Outcome]) {
     for cat in categories {
-        let row = table.entry(cat.clone()).or_insert_with(|| vec![Tally::default(); outcomes.len()]);
+        let row = table
+            .entry(cat.clone())
+            .or_insert_with(|| vec![Tally::default(); outcomes.len()]);
         for (t, o) in row.iter_mut().zip(outcomes) {
             t.add(truth, o);
         }
@@ -134,19 +198,51 @@ fn add(table: &mut Table, categories: &[String], truth: &Truth, outcomes: &[Outc
 
 /// Every mode's output: as on a still photo (`hubtrack detect`) or as on a video frame (the
 /// detect stage).
-fn detect_all(detectors: &mut [hubtrack_detect::Detector], view: &ImageView<'_>, hints: &Hints, still: bool) -> anyhow::Result<Vec<Output>> {
-    detectors.iter_mut().map(|d| Ok(if still { d.detect_still(view, hints)? } else { d.detect(view, hints)? })).collect()
+fn detect_all(
+    detectors: &mut [hubtrack_detect::Detector],
+    view: &ImageView<'_>,
+    hints: &Hints,
+    still: bool,
+) -> anyhow::Result<Vec<Output>> {
+    detectors
+        .iter_mut()
+        .map(|d| {
+            Ok(if still {
+                d.detect_still(view, hints)?
+            } else {
+                d.detect(view, hints)?
+            })
+        })
+        .collect()
 }
 
 /// Scores every mode's output against the truth.
 fn score_all(outputs: &[Output], truth: &Truth, height: u32) -> Vec<Outcome> {
-    outputs.iter().map(|o| score(truth, o.detection.detected.then_some(o.detection.hub_px), height as f64)).collect()
+    outputs
+        .iter()
+        .map(|o| {
+            score(
+                truth,
+                o.detection.detected.then_some(o.detection.hub_px),
+                height as f64,
+            )
+        })
+        .collect()
 }
 
 /// Writes the overlay of the last (`default`) mode's output when it missed or fired on a
 /// negative; true when it did.
-pub(crate) fn write_miss(dir: Option<&Path>, name: &str, image: &Mat, truth: &Truth, outputs: &[Output], outcomes: &[Outcome]) -> anyhow::Result<bool> {
-    let (Some(dir), Some(out), Some(o)) = (dir, outputs.last(), outcomes.last()) else { return Ok(false) };
+pub(crate) fn write_miss(
+    dir: Option<&Path>,
+    name: &str,
+    image: &Mat,
+    truth: &Truth,
+    outputs: &[Output],
+    outcomes: &[Outcome],
+) -> anyhow::Result<bool> {
+    let (Some(dir), Some(out), Some(o)) = (dir, outputs.last(), outcomes.last()) else {
+        return Ok(false);
+    };
     let missed = match truth {
         Truth::Visible { .. } => !o.hit,
         Truth::Negative => o.detected,
@@ -163,7 +259,9 @@ pub(crate) fn write_miss(dir: Option<&Path>, name: &str, image: &Mat, truth: &Tr
     draw_overlay(image, out, truth_segment, &png)?;
     let line = serde_json::json!({"name": name, "truth": truth_segment, "error_pct": o.error_pct,
         "result": result_json(&png, image.cols() as u32, image.rows() as u32, out, 0.0)});
-    let mut f = std::fs::OpenOptions::new().append(true).open(dir.join("misses.jsonl"))?;
+    let mut f = std::fs::OpenOptions::new()
+        .append(true)
+        .open(dir.join("misses.jsonl"))?;
     writeln!(f, "{line}")?;
     Ok(true)
 }
@@ -172,7 +270,13 @@ pub(crate) fn write_miss(dir: Option<&Path>, name: &str, image: &Mat, truth: &Tr
 pub(crate) type CandidateSink = std::io::BufWriter<std::fs::File>;
 
 /// Writes the `default` mode's candidates of one image as a JSON line (see `--candidates`).
-pub(crate) fn write_candidates(out: Option<&mut CandidateSink>, name: &str, truth: &Truth, output: &Output, height: u32) -> anyhow::Result<()> {
+pub(crate) fn write_candidates(
+    out: Option<&mut CandidateSink>,
+    name: &str,
+    truth: &Truth,
+    output: &Output,
+    height: u32,
+) -> anyhow::Result<()> {
     let Some(out) = out else { return Ok(()) };
     let kind = match truth {
         Truth::Visible { .. } => "visible",
@@ -192,20 +296,37 @@ pub(crate) fn write_candidates(out: Option<&mut CandidateSink>, name: &str, trut
     Ok(())
 }
 
-fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>, mut cand_out: Option<&mut CandidateSink>) -> anyhow::Result<Table> {
+fn eval_truth_file(
+    path: &Path,
+    detectors: &mut [hubtrack_detect::Detector],
+    misses: Option<&Path>,
+    mut cand_out: Option<&mut CandidateSink>,
+) -> anyhow::Result<Table> {
     let dir = path.parent().unwrap_or(Path::new("."));
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let mut table = Table::new();
-    for (n, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
-        let v: serde_json::Value = serde_json::from_str(line).with_context(|| format!("{}:{}", path.display(), n + 1))?;
+    for (n, line) in text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
+        let v: serde_json::Value =
+            serde_json::from_str(line).with_context(|| format!("{}:{}", path.display(), n + 1))?;
         let file = dir.join(v["file"].as_str().context("truth line without `file`")?);
-        let xy = |k: &str| v[k].as_array().and_then(|a| Some([a.first()?.as_f64()?, a.get(1)?.as_f64()?]));
+        let xy = |k: &str| {
+            v[k].as_array()
+                .and_then(|a| Some([a.first()?.as_f64()?, a.get(1)?.as_f64()?]))
+        };
         let truth = match (v["set"].as_str(), v["hub_visible"].as_bool()) {
             (Some("negative"), _) => Truth::Negative,
             (_, Some(false)) => Truth::Hidden,
             _ => {
                 let hub = xy("hub").context("positive without hub")?;
-                Truth::Visible { axis: xy("axis_point").unwrap_or(hub), hub }
+                Truth::Visible {
+                    axis: xy("axis_point").unwrap_or(hub),
+                    hub,
+                }
             }
         };
         let mat = match read_image(&file) {
@@ -218,7 +339,9 @@ fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], mis
         let view = view_of(&mat)?;
         let outputs = detect_all(detectors, &view, &Hints::default(), true)?;
         let outcomes = score_all(&outputs, &truth, view.height);
-        let id = v["id"].as_str().map_or_else(|| format!("line{}", n + 1), |s| s.replace('/', "_"));
+        let id = v["id"]
+            .as_str()
+            .map_or_else(|| format!("line{}", n + 1), |s| s.replace('/', "_"));
         write_miss(misses, &id, &mat, &truth, &outputs, &outcomes)?;
         if let Some(out) = outputs.last() {
             write_candidates(cand_out.as_deref_mut(), &id, &truth, out, view.height)?;
@@ -236,12 +359,32 @@ fn eval_truth_file(path: &Path, detectors: &mut [hubtrack_detect::Detector], mis
 
 /// `per_class` synthetic frames per distance class (plus negatives), as video frames or, with
 /// `still`, as still photos.
-fn eval_synthetic(per_class: u64, seed: u64, still: bool, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>, mut cand_out: Option<&mut CandidateSink>) -> anyhow::Result<Table> {
+fn eval_synthetic(
+    per_class: u64,
+    seed: u64,
+    still: bool,
+    detectors: &mut [hubtrack_detect::Detector],
+    misses: Option<&Path>,
+    mut cand_out: Option<&mut CandidateSink>,
+) -> anyhow::Result<Table> {
     let mut table = Table::new();
     for (class, class_def) in CLASSES.iter().enumerate() {
-        let cases = (0..per_class + per_class / 12).map(|i| (format!("{}_{i:04}", class_def.0), synth_case(seed, class, i, i >= per_class)));
+        let cases = (0..per_class + per_class / 12).map(|i| {
+            (
+                format!("{}_{i:04}", class_def.0),
+                synth_case(seed, class, i, i >= per_class),
+            )
+        });
         let lenses = [Camera::gopro_hero3(), Camera::usb_narrow()];
-        eval_rendered(cases, lenses, still, detectors, misses, cand_out.as_deref_mut(), &mut table)?;
+        eval_rendered(
+            cases,
+            lenses,
+            still,
+            detectors,
+            misses,
+            cand_out.as_deref_mut(),
+            &mut table,
+        )?;
         eprintln!("[eval] synthetic class {} done", class_def.0);
     }
     Ok(table)
@@ -249,11 +392,31 @@ fn eval_synthetic(per_class: u64, seed: u64, still: bool, detectors: &mut [hubtr
 
 /// `count` photo-like rendered views (plus a twelfth as many negatives), the `close` ones or
 /// the others, detected as still photos are: no attitude, both pyramid levels.
-fn eval_photo_like(count: u64, seed: u64, close: bool, detectors: &mut [hubtrack_detect::Detector], misses: Option<&Path>, cand_out: Option<&mut CandidateSink>) -> anyhow::Result<Table> {
+fn eval_photo_like(
+    count: u64,
+    seed: u64,
+    close: bool,
+    detectors: &mut [hubtrack_detect::Detector],
+    misses: Option<&Path>,
+    cand_out: Option<&mut CandidateSink>,
+) -> anyhow::Result<Table> {
     let mut table = Table::new();
-    let (case, prefix): (fn(u64, u64, bool) -> SynthCase, _) = if close { (photo_case_close, "photoclose") } else { (photo_case, "photo") };
-    let cases = (0..count + count / 12).map(|i| (format!("{prefix}_{i:04}"), case(seed, i, i >= count)));
-    eval_rendered(cases, photo_lenses(), true, detectors, misses, cand_out, &mut table)?;
+    let (case, prefix): (fn(u64, u64, bool) -> SynthCase, _) = if close {
+        (photo_case_close, "photoclose")
+    } else {
+        (photo_case, "photo")
+    };
+    let cases =
+        (0..count + count / 12).map(|i| (format!("{prefix}_{i:04}"), case(seed, i, i >= count)));
+    eval_rendered(
+        cases,
+        photo_lenses(),
+        true,
+        detectors,
+        misses,
+        cand_out,
+        &mut table,
+    )?;
     Ok(table)
 }
 
@@ -269,27 +432,56 @@ fn eval_rendered(
     table: &mut Table,
 ) -> anyhow::Result<()> {
     let mut renderers = lenses.map(Renderer::new);
-    let mut buffers: Vec<Vec<u8>> = renderers.iter().map(|r| vec![0u8; r.camera().frame_bytes()]).collect();
+    let mut buffers: Vec<Vec<u8>> = renderers
+        .iter()
+        .map(|r| vec![0u8; r.camera().frame_bytes()])
+        .collect();
     for (name, case) in cases {
         let negative = case.categories.iter().any(|c| c == "negatives");
         let k = if case.wide { 0 } else { 1 };
-        let truth = renderers[k].render(&case.scene, &case.pose, &mut buffers[k]).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let truth = renderers[k]
+            .render(&case.scene, &case.pose, &mut buffers[k])
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
         let cam = renderers[k].camera();
-        let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &buffers[k] };
-        let t = if negative { Truth::Negative } else { Truth::of_rendered(&truth) };
-        let hints = if still { Hints::default() } else { Hints { roll_rad: Some(case.pose.roll_deg.to_radians()), ..Hints::default() } };
+        let view = ImageView {
+            width: cam.width,
+            height: cam.height,
+            stride: cam.width as usize * 3,
+            format: PixelFormat::Bgr8,
+            data: &buffers[k],
+        };
+        let t = if negative {
+            Truth::Negative
+        } else {
+            Truth::of_rendered(&truth)
+        };
+        let hints = if still {
+            Hints::default()
+        } else {
+            Hints {
+                roll_rad: Some(case.pose.roll_deg.to_radians()),
+                ..Hints::default()
+            }
+        };
         let outputs = detect_all(detectors, &view, &hints, still)?;
         let outcomes = score_all(&outputs, &t, view.height);
         if let Some(out) = outputs.last() {
             write_candidates(cand_out.as_deref_mut(), &name, &t, out, view.height)?;
         }
         if misses.is_some() {
-            let mat = Mat::from_slice(&buffers[k])?.reshape(3, cam.height as i32)?.try_clone()?;
+            let mat = Mat::from_slice(&buffers[k])?
+                .reshape(3, cam.height as i32)?
+                .try_clone()?;
             if write_miss(misses, &name, &mat, &t, &outputs, &outcomes)? {
                 // The rendered input too, to re-run `hubtrack detect` on (with RUST_LOG=trace).
-                let input = misses.unwrap_or(Path::new(".")).join(format!("{name}_input.png"));
+                let input = misses
+                    .unwrap_or(Path::new("."))
+                    .join(format!("{name}_input.png"));
                 let path = input.to_str().context("non-UTF-8 path")?;
-                anyhow::ensure!(opencv::imgcodecs::imwrite_def(path, &mat)?, "cannot write {path}");
+                anyhow::ensure!(
+                    opencv::imgcodecs::imwrite_def(path, &mat)?,
+                    "cannot write {path}"
+                );
             }
         }
         add(table, &case.categories, &t, &outcomes);

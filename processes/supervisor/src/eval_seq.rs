@@ -77,12 +77,19 @@ struct Scorer {
 
 impl Scorer {
     fn new() -> Scorer {
-        Scorer { m: Metrics::default(), locked: false, gap: 0, was_valid: false }
+        Scorer {
+            m: Metrics::default(),
+            locked: false,
+            gap: 0,
+            was_valid: false,
+        }
     }
 
     fn add(&mut self, s: &TrackState, truth: &hubtrack_render::Truth, height: f64) {
         self.m.frames += 1;
-        let (Some(hub), Some(nose)) = (truth.hub_px, truth.nose_px) else { return };
+        let (Some(hub), Some(nose)) = (truth.hub_px, truth.nose_px) else {
+            return;
+        };
         let err = point_segment_distance(s.hub_px, hub, nose) / height;
         let v = valid(s);
         if v && !self.was_valid && err > FALSE_LOCK_FRAC {
@@ -104,17 +111,30 @@ impl Scorer {
             self.gap += 1;
             self.m.longest_gap = self.m.longest_gap.max(self.gap);
         }
-        if s.distance_valid && (DISTANCE_SCORED_M.0..=DISTANCE_SCORED_M.1).contains(&truth.distance_m) {
-            self.m.dist_err_pct.push(100.0 * (s.distance_m - truth.distance_m).abs() / truth.distance_m);
+        if s.distance_valid
+            && (DISTANCE_SCORED_M.0..=DISTANCE_SCORED_M.1).contains(&truth.distance_m)
+        {
+            self.m
+                .dist_err_pct
+                .push(100.0 * (s.distance_m - truth.distance_m).abs() / truth.distance_m);
         }
         if s.yaw_valid && truth.relative_yaw_deg.abs() <= YAW_SCORED_DEG {
-            self.m.yaw_err_deg.push((s.yaw_deg - truth.relative_yaw_deg).abs());
+            self.m
+                .yaw_err_deg
+                .push((s.yaw_deg - truth.relative_yaw_deg).abs());
         }
     }
 }
 
 /// One frame of `--trace` output.
-fn trace_line(flight: u64, frame: usize, truth: &hubtrack_render::Truth, det: &Detection, ours: &TrackState, thesis: &TrackState) -> serde_json::Value {
+fn trace_line(
+    flight: u64,
+    frame: usize,
+    truth: &hubtrack_render::Truth,
+    det: &Detection,
+    ours: &TrackState,
+    thesis: &TrackState,
+) -> serde_json::Value {
     let track = |s: &TrackState| {
         serde_json::json!({
             "mode": format!("{:?}", s.mode).to_lowercase(),
@@ -151,14 +171,26 @@ pub struct Outputs<'a> {
 
 /// Runs `flights` flights of `frames` frames and prints the tables, writing the optional
 /// per-frame outputs on the way.
-pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, outputs: Outputs<'_>) -> anyhow::Result<()> {
+pub fn run(
+    config: &Config,
+    flights: u64,
+    frames: u64,
+    seed: u64,
+    outputs: Outputs<'_>,
+) -> anyhow::Result<()> {
     use std::io::Write as _;
     let mut trace = match outputs.trace {
-        Some(p) => Some(std::io::BufWriter::new(std::fs::File::create(p).map_err(|e| anyhow::anyhow!("creating {}: {e}", p.display()))?)),
+        Some(p) => Some(std::io::BufWriter::new(
+            std::fs::File::create(p)
+                .map_err(|e| anyhow::anyhow!("creating {}: {e}", p.display()))?,
+        )),
         None => None,
     };
     let mut cand_out = match outputs.candidates {
-        Some(p) => Some(std::io::BufWriter::new(std::fs::File::create(p).map_err(|e| anyhow::anyhow!("creating {}: {e}", p.display()))?)),
+        Some(p) => Some(std::io::BufWriter::new(
+            std::fs::File::create(p)
+                .map_err(|e| anyhow::anyhow!("creating {}: {e}", p.display()))?,
+        )),
         None => None,
     };
     let mut detector = Detector::new(config.detect.clone())?;
@@ -175,11 +207,15 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, outputs: Outpu
         "flight", "raw RMS", "filt RMS", "valid%", "gap", "dist med", "dist p90", "yaw med", "false",
         "filt RMS", "valid%", "gap", "dist med", "dist p90", "yaw med", "false"
     );
-    println!("{:<17} |{:^62} |{:^62}", "", "hubtrack tracker", "thesis filter (no gating, no attitude)");
+    println!(
+        "{:<17} |{:^62} |{:^62}",
+        "", "hubtrack tracker", "thesis filter (no gating, no attitude)"
+    );
     for f in 0..flights {
         let path = flight(seed.wrapping_add(f), frames);
         let mut ours = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let mut thesis = BaselineTracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let mut thesis =
+            BaselineTracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
         let (mut so, mut st) = (Scorer::new(), Scorer::new());
         let mut raw_sq = Vec::new();
         let mut prev_heading: Option<(f64, u64)> = None;
@@ -188,18 +224,45 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, outputs: Outpu
         // same detections, so the two columns differ by the filter alone.
         let mut last: Option<hubtrack_types::TrackState> = None;
         for (i, fr) in path.iter().enumerate() {
-            let truth = renderer.render(&fr.scene, &fr.pose, &mut pixels).map_err(|e| anyhow::anyhow!("{e}"))?;
-            let view = ImageView { width: cam.width, height: cam.height, stride: cam.width as usize * 3, format: PixelFormat::Bgr8, data: &pixels };
+            let truth = renderer
+                .render(&fr.scene, &fr.pose, &mut pixels)
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            let view = ImageView {
+                width: cam.width,
+                height: cam.height,
+                stride: cam.width as usize * 3,
+                format: PixelFormat::Bgr8,
+                data: &pixels,
+            };
             let capture_ns = (i as f64 / FLIGHT_FPS * 1e9).round() as u64;
-            let hints = last.as_ref().map_or_else(Hints::default, |t| Hints::from_track(t, cam.width, cam.height, capture_ns));
-            let hints = Hints { roll_rad: Some(fr.pose.roll_deg.to_radians()), ..hints };
+            let hints = last.as_ref().map_or_else(Hints::default, |t| {
+                Hints::from_track(t, cam.width, cam.height, capture_ns)
+            });
+            let hints = Hints {
+                roll_rad: Some(fr.pose.roll_deg.to_radians()),
+                ..hints
+            };
             let output = detector.detect(&view, &hints)?;
             if outputs.misses.is_some() && !fr.dropout {
-                write_sequence_miss(outputs.misses, &format!("f{f}_{i:03}"), &pixels, &cam, &truth, &output, &hints)?;
+                write_sequence_miss(
+                    outputs.misses,
+                    &format!("f{f}_{i:03}"),
+                    &pixels,
+                    &cam,
+                    &truth,
+                    &output,
+                    &hints,
+                )?;
             }
             if !fr.dropout {
                 let t = crate::score::Truth::of_rendered(&truth);
-                crate::eval::write_candidates(cand_out.as_mut(), &format!("f{f}_{i:03}"), &t, &output, cam.height)?;
+                crate::eval::write_candidates(
+                    cand_out.as_mut(),
+                    &format!("f{f}_{i:03}"),
+                    &t,
+                    &output,
+                    cam.height,
+                )?;
             }
             let mut det: Detection = output.detection;
             det.stamps.seq = i as u64;
@@ -209,10 +272,13 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, outputs: Outpu
             }
             if det.detected {
                 if let (Some(h), Some(n)) = (truth.hub_px, truth.nose_px) {
-                    raw_sq.push((100.0 * point_segment_distance(det.hub_px, h, n) / height).powi(2));
+                    raw_sq
+                        .push((100.0 * point_segment_distance(det.hub_px, h, n) / height).powi(2));
                 }
             }
-            let yaw_rate = prev_heading.map_or(0.0, |(h, t)| (fr.heading_rad - h) / ((capture_ns - t) as f64 / 1e9));
+            let yaw_rate = prev_heading.map_or(0.0, |(h, t)| {
+                (fr.heading_rad - h) / ((capture_ns - t) as f64 / 1e9)
+            });
             prev_heading = Some((fr.heading_rad, capture_ns));
             let vehicle = VehicleState {
                 recv_ns: capture_ns,
@@ -230,7 +296,11 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, outputs: Outpu
             let thesis_state = thesis.update(&det, None);
             st.add(&thesis_state, &truth, height);
             if let Some(w) = trace.as_mut() {
-                writeln!(w, "{}", trace_line(f, i, &truth, &det, &state, &thesis_state))?;
+                writeln!(
+                    w,
+                    "{}",
+                    trace_line(f, i, &truth, &det, &state, &thesis_state)
+                )?;
             }
             last = Some(state);
         }
@@ -248,7 +318,13 @@ pub fn run(config: &Config, flights: u64, frames: u64, seed: u64, outputs: Outpu
                 m.false_locks
             )
         };
-        println!("{:<8}{:>9.2} |{} |{}", f, rms(&so.m.raw_sq), row(&so.m), row(&st.m));
+        println!(
+            "{:<8}{:>9.2} |{} |{}",
+            f,
+            rms(&so.m.raw_sq),
+            row(&so.m),
+            row(&st.m)
+        );
         total_ours.merge(&so.m);
         total_thesis.merge(&st.m);
     }
@@ -266,7 +342,8 @@ distance error median {:.1} % p90 {:.1} % (8-30 m), yaw error median {:.1} deg p
     );
     println!("RMS in % of image height over frames with a valid estimate after first lock; gap = frames without one.");
     if let Some(w) = cand_out.as_mut() {
-        w.flush().map_err(|e| anyhow::anyhow!("writing the candidates file: {e}"))?;
+        w.flush()
+            .map_err(|e| anyhow::anyhow!("writing the candidates file: {e}"))?;
     }
     Ok(())
 }
@@ -289,12 +366,28 @@ fn write_sequence_miss(
     if outcome.hit || !outcome.detected {
         return Ok(());
     }
-    let mat = Mat::from_slice(pixels)?.reshape(3, cam.height as i32)?.try_clone()?;
-    if crate::eval::write_miss(dir, name, &mat, &t, std::slice::from_ref(output), &[outcome])? {
+    let mat = Mat::from_slice(pixels)?
+        .reshape(3, cam.height as i32)?
+        .try_clone()?;
+    if crate::eval::write_miss(
+        dir,
+        name,
+        &mat,
+        &t,
+        std::slice::from_ref(output),
+        &[outcome],
+    )? {
         // The rendered input too, to re-run `hubtrack detect` on (with RUST_LOG=trace).
-        let input = dir.unwrap_or(std::path::Path::new(".")).join(format!("{name}_input.png"));
-        let path = input.to_str().ok_or_else(|| anyhow::anyhow!("non-UTF-8 path {}", input.display()))?;
-        anyhow::ensure!(opencv::imgcodecs::imwrite_def(path, &mat)?, "cannot write {path}");
+        let input = dir
+            .unwrap_or(std::path::Path::new("."))
+            .join(format!("{name}_input.png"));
+        let path = input
+            .to_str()
+            .ok_or_else(|| anyhow::anyhow!("non-UTF-8 path {}", input.display()))?;
+        anyhow::ensure!(
+            opencv::imgcodecs::imwrite_def(path, &mat)?,
+            "cannot write {path}"
+        );
         // ... with the hints the tracker gave the detector, as `hubtrack detect` arguments.
         let mut args = Vec::new();
         if let Some([x, y]) = hints.predicted_hub_px {
@@ -307,7 +400,8 @@ fn write_sequence_miss(
             args.push(format!("--hint-roll={:.2}", r.to_degrees()));
         }
         let hints_path = input.with_extension("hints");
-        std::fs::write(&hints_path, args.join(" ") + "\n").with_context(|| format!("writing {}", hints_path.display()))?;
+        std::fs::write(&hints_path, args.join(" ") + "\n")
+            .with_context(|| format!("writing {}", hints_path.display()))?;
     }
     Ok(())
 }

@@ -62,8 +62,15 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             "hubtrack fly: {} flight(s) from seed {}, {}{}",
             args.seeds,
             args.first_seed,
-            if args.realtime { "real time" } else { "lockstep" },
-            args.record.as_ref().map(|r| format!(", recording to {}", r.display())).unwrap_or_default()
+            if args.realtime {
+                "real time"
+            } else {
+                "lockstep"
+            },
+            args.record
+                .as_ref()
+                .map(|r| format!(", recording to {}", r.display()))
+                .unwrap_or_default()
         );
         println!("{}", header());
     }
@@ -76,11 +83,18 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
         let (port, _port_lease) = free_udp_port()?;
         // A private IPC domain per flight: flights never see each other's services (nor a
         // pipeline or another `hubtrack fly` running on the machine), and no state is left over.
-        let domain = format!("{}fly-{}-{seed}", base.as_ref().map(|b| format!("{b}-")).unwrap_or_default(), std::process::id());
+        let domain = format!(
+            "{}fly-{}-{seed}",
+            base.as_ref().map(|b| format!("{b}-")).unwrap_or_default(),
+            std::process::id()
+        );
         // SAFETY (edition 2021: safe): set before any stage starts; the children inherit it.
         std::env::set_var(DOMAIN_ENV, &domain);
         log::info!("seed {seed}: IPC domain {domain} (HUBTRACK_DOMAIN={domain} hubtrack echo setpoints to watch)");
-        let record = args.record.as_ref().map(|r| recording_path(r, seed, args.seeds));
+        let record = args
+            .record
+            .as_ref()
+            .map(|r| recording_path(r, seed, args.seeds));
         let mut stages = vec!["detect", "track", "control", "sim"];
         if record.is_some() {
             stages.insert(0, "recorder");
@@ -91,15 +105,27 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             format!("sim.seed={seed}"),
             // A killed `hubtrack fly` must not leave simulated flights running.
             "run.stop_with_supervisor=true".to_string(),
-            format!("sim.pace=\"{}\"", if args.realtime { "realtime" } else { "lockstep" }),
+            format!(
+                "sim.pace=\"{}\"",
+                if args.realtime {
+                    "realtime"
+                } else {
+                    "lockstep"
+                }
+            ),
             "control.clock=\"sim\"".to_string(),
             format!("control.link=\"udpin:127.0.0.1:{port}\""),
             format!("sim.link=\"udpout:127.0.0.1:{port}\""),
         ]);
-        let config_args = ConfigArgs { config: args.config.config.clone(), overrides };
+        let config_args = ConfigArgs {
+            config: args.config.config.clone(),
+            overrides,
+        };
         let config = config_args.load()?;
         let outcome_path = dir.join(format!("outcome-{seed}.json"));
-        let wall_limit = Duration::from_secs_f64(config.sim.max_time_s * if args.realtime { 1.2 } else { 4.0 } + WALL_MARGIN_S);
+        let wall_limit = Duration::from_secs_f64(
+            config.sim.max_time_s * if args.realtime { 1.2 } else { 4.0 } + WALL_MARGIN_S,
+        );
         let report = supervise(RunOptions {
             config,
             config_args,
@@ -109,12 +135,21 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             interactive: false,
         })?;
         let outcome: Outcome = match std::fs::read_to_string(&outcome_path) {
-            Ok(text) => serde_json::from_str(&text).with_context(|| format!("outcome of seed {seed}"))?,
+            Ok(text) => {
+                serde_json::from_str(&text).with_context(|| format!("outcome of seed {seed}"))?
+            }
             Err(_) => {
                 // Not a flight result but a broken run (a stage given up on, a hang): said now,
                 // and the other seeds still fly; the command fails at the end.
-                let why = report.failure.unwrap_or_else(|| format!("no outcome within {:.0} s wall clock", wall_limit.as_secs_f64()));
-                log::error!("flight seed {seed} did not finish: {why}; going on with the next seed");
+                let why = report.failure.unwrap_or_else(|| {
+                    format!(
+                        "no outcome within {:.0} s wall clock",
+                        wall_limit.as_secs_f64()
+                    )
+                });
+                log::error!(
+                    "flight seed {seed} did not finish: {why}; going on with the next seed"
+                );
                 unfinished.push(format!("{seed} ({why})"));
                 continue;
             }
@@ -142,7 +177,12 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
         summary(&outcomes, args.record.as_deref(), args.seeds);
     }
     if !unfinished.is_empty() {
-        bail!("{} of {} flight(s) did not finish, seed(s): {}", unfinished.len(), args.seeds, unfinished.join("; "));
+        bail!(
+            "{} of {} flight(s) did not finish, seed(s): {}",
+            unfinished.len(),
+            args.seeds,
+            unfinished.join("; ")
+        );
     }
     Ok(())
 }
@@ -150,7 +190,16 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
 fn header() -> String {
     format!(
         "{:>5} {:>7} {:>8} {:>8} {:>8} {:>7} {:>7} {:>8} {:>6}  {}",
-        "seed", "result", "dist m", "yaw °", "lat m", "time s", "path m", "rotor m", "wall s", "end"
+        "seed",
+        "result",
+        "dist m",
+        "yaw °",
+        "lat m",
+        "time s",
+        "path m",
+        "rotor m",
+        "wall s",
+        "end"
     )
 }
 
@@ -168,21 +217,35 @@ fn row(l: &FlightLine) -> String {
         o.min_rotor_plane_m,
         l.wall_s,
         o.end_reason,
-        o.failure.as_deref().map(|f| format!(": {f}")).unwrap_or_default()
+        o.failure
+            .as_deref()
+            .map(|f| format!(": {f}"))
+            .unwrap_or_default()
     )
 }
 
 fn summary(outcomes: &[Outcome], record: Option<&Path>, seeds: u64) {
     let ok = outcomes.iter().filter(|o| o.success).count();
-    let closest = outcomes.iter().map(|o| o.min_rotor_plane_m).fold(f64::INFINITY, f64::min);
-    let mut times: Vec<f64> = outcomes.iter().filter(|o| o.success).map(|o| o.time_s).collect();
+    let closest = outcomes
+        .iter()
+        .map(|o| o.min_rotor_plane_m)
+        .fold(f64::INFINITY, f64::min);
+    let mut times: Vec<f64> = outcomes
+        .iter()
+        .filter(|o| o.success)
+        .map(|o| o.time_s)
+        .collect();
     times.sort_by(f64::total_cmp);
     println!(
         "\n{ok}/{} flights ended in hover at the target; closest approach to the rotor plane {closest:.2} m{}",
         outcomes.len(),
         times.get(times.len() / 2).map(|t| format!("; median time {t:.1} s")).unwrap_or_default()
     );
-    let perturbed: Vec<String> = outcomes.iter().filter(|o| o.lockstep_misses > 0).map(|o| o.seed.to_string()).collect();
+    let perturbed: Vec<String> = outcomes
+        .iter()
+        .filter(|o| o.lockstep_misses > 0)
+        .map(|o| o.seed.to_string())
+        .collect();
     if !perturbed.is_empty() {
         println!(
             "lockstep waits timed out in seed(s) {}: those flights are not reproducible from their seeds (the machine was too loaded)",
@@ -191,7 +254,15 @@ fn summary(outcomes: &[Outcome], record: Option<&Path>, seeds: u64) {
     }
     if let Some(r) = record {
         let first = recording_path(r, outcomes[0].seed, seeds);
-        println!("recordings: {} (open in Foxglove, or `hubtrack latency {}`)", if seeds == 1 { r.display().to_string() } else { format!("{}-seed*.mcap", r.with_extension("").display()) }, first.display());
+        println!(
+            "recordings: {} (open in Foxglove, or `hubtrack latency {}`)",
+            if seeds == 1 {
+                r.display().to_string()
+            } else {
+                format!("{}-seed*.mcap", r.with_extension("").display())
+            },
+            first.display()
+        );
     }
 }
 
@@ -200,7 +271,9 @@ fn recording_path(record: &Path, seed: u64, seeds: u64) -> PathBuf {
     if seeds == 1 {
         return record.to_path_buf();
     }
-    let stem = record.file_stem().map_or("flight".into(), |s| s.to_string_lossy().into_owned());
+    let stem = record
+        .file_stem()
+        .map_or("flight".into(), |s| s.to_string_lossy().into_owned());
     record.with_file_name(format!("{stem}-seed{seed}.mcap"))
 }
 
@@ -219,7 +292,8 @@ fn free_udp_port() -> anyhow::Result<(u16, std::fs::File)> {
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     for _ in 0..PORT_ATTEMPTS {
         let port = {
-            let sock = std::net::UdpSocket::bind("127.0.0.1:0").context("finding a free UDP port")?;
+            let sock =
+                std::net::UdpSocket::bind("127.0.0.1:0").context("finding a free UDP port")?;
             sock.local_addr()?.port()
         };
         let path = dir.join(format!("{port}.lock"));
@@ -231,8 +305,12 @@ fn free_udp_port() -> anyhow::Result<(u16, std::fs::File)> {
             .with_context(|| format!("opening {}", path.display()))?;
         match lease.try_lock() {
             Ok(()) => return Ok((port, lease)),
-            Err(std::fs::TryLockError::WouldBlock) => log::debug!("UDP port {port} is leased by another flight; picking again"),
-            Err(std::fs::TryLockError::Error(e)) => return Err(e).with_context(|| format!("locking {}", path.display())),
+            Err(std::fs::TryLockError::WouldBlock) => {
+                log::debug!("UDP port {port} is leased by another flight; picking again")
+            }
+            Err(std::fs::TryLockError::Error(e)) => {
+                return Err(e).with_context(|| format!("locking {}", path.display()))
+            }
         }
     }
     anyhow::bail!("no free UDP port for the autopilot link after {PORT_ATTEMPTS} attempts")
@@ -259,9 +337,14 @@ mod tests {
         ports.dedup();
         assert_eq!(ports.len(), leases.len(), "{ports:?}");
         let (port, lease) = free_udp_port().unwrap();
-        let path = std::env::temp_dir().join("hubtrack-udp-ports").join(format!("{port}.lock"));
+        let path = std::env::temp_dir()
+            .join("hubtrack-udp-ports")
+            .join(format!("{port}.lock"));
         let other = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
-        assert!(matches!(other.try_lock(), Err(std::fs::TryLockError::WouldBlock)), "held");
+        assert!(
+            matches!(other.try_lock(), Err(std::fs::TryLockError::WouldBlock)),
+            "held"
+        );
         drop(lease);
         other.try_lock().expect("released with the lease");
     }

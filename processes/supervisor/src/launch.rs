@@ -2,8 +2,8 @@
 
 use anyhow::{bail, Context};
 use std::io::{BufRead, BufReader, Write};
-use std::path::{Path, PathBuf};
 use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
@@ -19,7 +19,10 @@ pub fn stage_binary(name: &str) -> anyhow::Result<PathBuf> {
     let exe = std::env::current_exe().context("locating the hubtrack executable")?;
     let dir = match std::env::var_os(STAGE_DIR_ENV) {
         Some(d) => PathBuf::from(d),
-        None => exe.parent().context("hubtrack executable has no folder")?.to_path_buf(),
+        None => exe
+            .parent()
+            .context("hubtrack executable has no folder")?
+            .to_path_buf(),
     };
     let dir = dir.as_path();
     let bin = dir.join(format!("hubtrack-{name}"));
@@ -55,9 +58,19 @@ impl Stage {
     ///
     /// Call it from the thread that lives as long as the stage should: the kernel's parent-death
     /// signal fires when the *thread* that forked exits.
-    pub fn spawn(name: &str, binary: &Path, args: &[String], stdout_to_stderr: bool, nice: i32, stop_with_us: bool) -> anyhow::Result<Stage> {
+    pub fn spawn(
+        name: &str,
+        binary: &Path,
+        args: &[String],
+        stdout_to_stderr: bool,
+        nice: i32,
+        stop_with_us: bool,
+    ) -> anyhow::Result<Stage> {
         let mut cmd = Command::new(binary);
-        cmd.args(args).stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
+        cmd.args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
         let target = (own_nice()? + nice).clamp(-20, 19);
         // SAFETY: getpid(2) cannot fail.
         let parent = unsafe { libc::getpid() };
@@ -69,7 +82,14 @@ impl Stage {
                     return Err(std::io::Error::last_os_error());
                 }
                 if stop_with_us {
-                    if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM as libc::c_ulong, 0, 0, 0) != 0 {
+                    if libc::prctl(
+                        libc::PR_SET_PDEATHSIG,
+                        libc::SIGTERM as libc::c_ulong,
+                        0,
+                        0,
+                        0,
+                    ) != 0
+                    {
                         return Err(std::io::Error::last_os_error());
                     }
                     // We may have died between fork and prctl: then nobody would signal it.
@@ -80,9 +100,12 @@ impl Stage {
                 Ok(())
             });
         }
-        let mut child = cmd
-            .spawn()
-            .with_context(|| format!("starting stage {name} ({}) at nice {target} (ours {nice:+})", binary.display()))?;
+        let mut child = cmd.spawn().with_context(|| {
+            format!(
+                "starting stage {name} ({}) at nice {target} (ours {nice:+})",
+                binary.display()
+            )
+        })?;
         forward(name, child.stdout.take().expect("piped"), stdout_to_stderr);
         forward(name, child.stderr.take().expect("piped"), true);
         Ok(Stage {
@@ -122,7 +145,11 @@ impl Stage {
             }
             std::thread::sleep(EXIT_POLL);
         }
-        log::warn!("{} did not stop within {:?}: killing it", self.name, timeout);
+        log::warn!(
+            "{} did not stop within {:?}: killing it",
+            self.name,
+            timeout
+        );
         let _ = self.child.kill();
         self.exited = self.child.wait().ok();
         self.exited

@@ -18,19 +18,22 @@ use clap::{Parser, Subcommand};
 use hubtrack_capture::synthetic::SyntheticSource;
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_runtime::ipc::{open_node, FrameSubscriber, MsgSubscriber};
-use hubtrack_types::services::SUPERVISOR;
-use hubtrack_types::SupervisorStatus;
 use hubtrack_runtime::shutdown::Shutdown;
 use hubtrack_types::services::STATUS;
+use hubtrack_types::services::SUPERVISOR;
 use hubtrack_types::time::monotonic_ns;
 use hubtrack_types::StageStatus;
+use hubtrack_types::SupervisorStatus;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-
 #[derive(Parser)]
-#[command(name = "hubtrack", version, about = "Find, track and approach a wind-turbine hub: launcher and tools")]
+#[command(
+    name = "hubtrack",
+    version,
+    about = "Find, track and approach a wind-turbine hub: launcher and tools"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -214,7 +217,11 @@ pub(crate) fn forwarded(config: &ConfigArgs) -> Vec<String> {
     args
 }
 
-pub(crate) fn print_summary(elapsed: Duration, statuses: &BTreeMap<String, StageStatus>, segments: &[PathBuf]) {
+pub(crate) fn print_summary(
+    elapsed: Duration,
+    statuses: &BTreeMap<String, StageStatus>,
+    segments: &[PathBuf],
+) {
     let secs = elapsed.as_secs_f64();
     println!("\n== hubtrack run summary ({secs:.1} s) ==");
     if let Some(c) = statuses.get("capture") {
@@ -224,15 +231,25 @@ pub(crate) fn print_summary(elapsed: Duration, statuses: &BTreeMap<String, Stage
             c.outputs,
             c.outputs as f64 / up.max(1e-9),
             c.errors,
-            if c.errors > 0 { format!(" (last: {})", c.last_error.as_str()) } else { String::new() }
+            if c.errors > 0 {
+                format!(" (last: {})", c.last_error.as_str())
+            } else {
+                String::new()
+            }
         );
     }
     if let Some(s) = statuses.get("sim") {
-        println!("  sim       {} frames rendered, {} setpoints seen, {} errors", s.outputs, s.inputs, s.errors);
+        println!(
+            "  sim       {} frames rendered, {} setpoints seen, {} errors",
+            s.outputs, s.inputs, s.errors
+        );
     }
     for stage in ["detect", "track", "control"] {
         if let Some(s) = statuses.get(stage) {
-            println!("  {stage:<9} {} in, {} out, {} skipped, {} errors", s.inputs, s.outputs, s.skipped, s.errors);
+            println!(
+                "  {stage:<9} {} in, {} out, {} skipped, {} errors",
+                s.inputs, s.outputs, s.skipped, s.errors
+            );
         }
     }
     if let Some(r) = statuses.get("recorder") {
@@ -251,22 +268,35 @@ pub(crate) fn print_summary(elapsed: Duration, statuses: &BTreeMap<String, Stage
                     "  file      {} ({:.1} MB, {})",
                     path.display(),
                     info.size_bytes as f64 / 1e6,
-                    if info.finished { "finished" } else { "NOT finished: run `hubtrack recover` on it" }
+                    if info.finished {
+                        "finished"
+                    } else {
+                        "NOT finished: run `hubtrack recover` on it"
+                    }
                 );
-                let channels: Vec<String> = info.topic_counts.iter().map(|(t, n)| format!("{t} {n}")).collect();
+                let channels: Vec<String> = info
+                    .topic_counts
+                    .iter()
+                    .map(|(t, n)| format!("{t} {n}"))
+                    .collect();
                 println!("  channels  {}", channels.join(", "));
             }
             Err(e) => println!("  file      {} unreadable: {e}", path.display()),
         }
     }
     if let Some(path) = segments.first() {
-        println!("  open it   in Foxglove or Lichtblick (Open local file), or `hubtrack latency {}`", path.display());
+        println!(
+            "  open it   in Foxglove or Lichtblick (Open local file), or `hubtrack latency {}`",
+            path.display()
+        );
     }
 }
 
 /// `hubtrack-YYYYmmdd-HHMMSS.mcap` in UTC.
 pub(crate) fn timestamped_name() -> String {
-    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
     let (days, rem) = (secs / 86_400, secs % 86_400);
     // Civil-from-days (Howard Hinnant's algorithm), proleptic Gregorian, UTC.
     let z = days as i64 + 719_468;
@@ -278,7 +308,12 @@ pub(crate) fn timestamped_name() -> String {
     let d = doy - (153 * mp + 2) / 5 + 1;
     let m = if mp < 10 { mp + 3 } else { mp - 9 };
     let y = yoe + era * 400 + i64::from(m <= 2);
-    format!("hubtrack-{y:04}{m:02}{d:02}-{:02}{:02}{:02}.mcap", rem / 3600, rem % 3600 / 60, rem % 60)
+    format!(
+        "hubtrack-{y:04}{m:02}{d:02}-{:02}{:02}{:02}.mcap",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
 }
 
 fn recover(input: &Path, output: Option<PathBuf>) -> anyhow::Result<()> {
@@ -292,7 +327,11 @@ fn recover(input: &Path, output: Option<PathBuf>) -> anyhow::Result<()> {
         report.messages,
         input.display(),
         output.display(),
-        if report.input_complete { " (the input was complete)" } else { " (the input was cut short)" }
+        if report.input_complete {
+            " (the input was complete)"
+        } else {
+            " (the input was cut short)"
+        }
     );
     if let Some(why) = report.stopped_by {
         println!("reading stopped at: {why}");
@@ -325,11 +364,17 @@ fn status(json: bool, listen: f64) -> anyhow::Result<()> {
     let now = monotonic_ns();
     let mut stages = Vec::new();
     let names: Vec<String> = match &sup {
-        Some(s) => s.stages[..s.stage_count as usize].iter().map(|x| x.name.as_str().to_string()).collect(),
+        Some(s) => s.stages[..s.stage_count as usize]
+            .iter()
+            .map(|x| x.name.as_str().to_string())
+            .collect(),
         None => last.keys().cloned().collect(),
     };
     for name in names {
-        let sv = sup.as_ref().and_then(|s| s.stages.iter().find(|x| x.name.as_str() == name)).copied();
+        let sv = sup
+            .as_ref()
+            .and_then(|s| s.stages.iter().find(|x| x.name.as_str() == name))
+            .copied();
         let hb = last.get(&name).copied();
         let rate = |f: fn(&StageStatus) -> u64| -> Option<f64> {
             let (a, b) = (first.get(&name)?, last.get(&name)?);
@@ -337,10 +382,23 @@ fn status(json: bool, listen: f64) -> anyhow::Result<()> {
             (dt > 0.0).then(|| f(b).saturating_sub(f(a)) as f64 / dt)
         };
         let pid = sv.map(|s| s.pid).or(hb.map(|h| h.pid)).unwrap_or(0);
-        let started = sv.map(|s| s.started_ns).filter(|n| *n > 0).or(hb.map(|h| h.started_ns));
-        let state = sv.map_or(if hb.is_some() { "running".to_string() } else { "unknown".into() }, |s| {
-            serde_json::to_value(s.state).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default()
-        });
+        let started = sv
+            .map(|s| s.started_ns)
+            .filter(|n| *n > 0)
+            .or(hb.map(|h| h.started_ns));
+        let state = sv.map_or(
+            if hb.is_some() {
+                "running".to_string()
+            } else {
+                "unknown".into()
+            },
+            |s| {
+                serde_json::to_value(s.state)
+                    .ok()
+                    .and_then(|v| v.as_str().map(String::from))
+                    .unwrap_or_default()
+            },
+        );
         stages.push(serde_json::json!({
             "name": name, "pid": pid, "state": state,
             "restarts": sv.map_or(0, |s| s.restarts),
@@ -363,14 +421,24 @@ fn status(json: bool, listen: f64) -> anyhow::Result<()> {
         println!("{report}");
         return Ok(());
     }
-    println!("{:<10}{:>8}{:>12}{:>10}{:>10}{:>10}{:>10}{:>9}{:>8}  last error", "stage", "pid", "state", "uptime s", "restarts", "in/s", "out/s", "dropped", "errors");
+    println!(
+        "{:<10}{:>8}{:>12}{:>10}{:>10}{:>10}{:>10}{:>9}{:>8}  last error",
+        "stage", "pid", "state", "uptime s", "restarts", "in/s", "out/s", "dropped", "errors"
+    );
     let f = |v: &serde_json::Value| v.as_f64().map_or("-".into(), |x| format!("{x:.1}"));
     let n = |v: &serde_json::Value| v.as_u64().map_or("-".into(), |x| x.to_string());
     for s in report["stages"].as_array().into_iter().flatten() {
         println!(
             "{:<10}{:>8}{:>12}{:>10}{:>10}{:>10}{:>10}{:>9}{:>8}  {}",
-            s["name"].as_str().unwrap_or(""), n(&s["pid"]), s["state"].as_str().unwrap_or(""), f(&s["uptime_s"]),
-            n(&s["restarts"]), f(&s["inputs_per_s"]), f(&s["outputs_per_s"]), n(&s["dropped"]), n(&s["errors"]),
+            s["name"].as_str().unwrap_or(""),
+            n(&s["pid"]),
+            s["state"].as_str().unwrap_or(""),
+            f(&s["uptime_s"]),
+            n(&s["restarts"]),
+            f(&s["inputs_per_s"]),
+            f(&s["outputs_per_s"]),
+            n(&s["dropped"]),
+            n(&s["errors"]),
             s["last_error"].as_str().unwrap_or("")
         );
     }
@@ -382,13 +450,23 @@ fn check_config(args: &ConfigArgs, print: bool) -> anyhow::Result<()> {
     if print {
         print!("{}", toml::to_string(&config)?);
     } else {
-        println!("{}: ok", args.config.as_ref().map_or("built-in defaults".into(), |p| p.display().to_string()));
+        println!(
+            "{}: ok",
+            args.config
+                .as_ref()
+                .map_or("built-in defaults".into(), |p| p.display().to_string())
+        );
     }
     Ok(())
 }
 
 /// Prints a recording's report: one JSON object, or a title line and the table.
-fn show<R: serde::Serialize>(report: &R, json: bool, title: String, table: fn(&R)) -> anyhow::Result<()> {
+fn show<R: serde::Serialize>(
+    report: &R,
+    json: bool,
+    title: String,
+    table: fn(&R),
+) -> anyhow::Result<()> {
     if json {
         println!("{}", serde_json::to_string(report)?);
     } else {
@@ -400,12 +478,25 @@ fn show<R: serde::Serialize>(report: &R, json: bool, title: String, table: fn(&R
 
 fn latency(file: &Path, json: bool) -> anyhow::Result<()> {
     let report = hubtrack_record::latency::analyze(file)?;
-    show(&report, json, format!("latency from the stamps in {}", file.display()), hubtrack_record::latency::print)
+    show(
+        &report,
+        json,
+        format!("latency from the stamps in {}", file.display()),
+        hubtrack_record::latency::print,
+    )
 }
 
 fn diagnose(file: &Path, json: bool) -> anyhow::Result<()> {
     let report = hubtrack_record::flight::analyze(file)?;
-    show(&report, json, format!("{} against its truth, per band of true distance", file.display()), hubtrack_record::flight::print)
+    show(
+        &report,
+        json,
+        format!(
+            "{} against its truth, per band of true distance",
+            file.display()
+        ),
+        hubtrack_record::flight::print,
+    )
 }
 
 fn tap(args: TapArgs) -> anyhow::Result<()> {
@@ -415,12 +506,20 @@ fn tap(args: TapArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let mut n = 0u64;
     while !shutdown.requested() {
-        if args.count.is_some_and(|c| n >= c) || args.duration.is_some_and(|d| t0.elapsed().as_secs_f64() >= d) {
+        if args.count.is_some_and(|c| n >= c)
+            || args
+                .duration
+                .is_some_and(|d| t0.elapsed().as_secs_f64() >= d)
+        {
             break;
         }
         frames.wait(Duration::from_millis(20));
         loop {
-            let sample = if args.newest { frames.receive_newest()? } else { frames.receive()? };
+            let sample = if args.newest {
+                frames.receive_newest()?
+            } else {
+                frames.receive()?
+            };
             let Some(sample) = sample else { break };
             let recv_ns = monotonic_ns();
             let h = sample.user_header();
@@ -455,7 +554,10 @@ fn echo(args: EchoArgs) -> anyhow::Result<()> {
     }
 }
 
-fn echo_service<T>(spec: &hubtrack_types::services::ServiceSpec, args: &EchoArgs) -> anyhow::Result<()>
+fn echo_service<T>(
+    spec: &hubtrack_types::services::ServiceSpec,
+    args: &EchoArgs,
+) -> anyhow::Result<()>
 where
     T: std::fmt::Debug + Copy + serde::Serialize + iceoryx2::prelude::ZeroCopySend + 'static,
 {
@@ -466,7 +568,11 @@ where
     let t0 = Instant::now();
     let mut n = 0u64;
     let mut out = std::io::stdout().lock();
-    while !shutdown.requested() && !args.duration.is_some_and(|d| t0.elapsed().as_secs_f64() >= d) {
+    while !shutdown.requested()
+        && !args
+            .duration
+            .is_some_and(|d| t0.elapsed().as_secs_f64() >= d)
+    {
         sub.wait(Duration::from_millis(20));
         while let Some(msg) = sub.receive()? {
             writeln!(out, "{}", serde_json::to_string(&msg)?)?;
@@ -486,11 +592,21 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let mut source = SyntheticSource::new(&config.capture.synthetic, config.capture.fps)?;
     let (w, h) = source.size();
     let mut pixels = vec![0u8; w as usize * h as usize * 3];
-    let ext = args.out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = args
+        .out
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     let mut video = if ext == "avi" {
         let fourcc = opencv::videoio::VideoWriter::fourcc('M', 'J', 'P', 'G')?;
         let name = args.out.to_str().context("output path is not UTF-8")?;
-        let writer = opencv::videoio::VideoWriter::new_def(name, fourcc, config.capture.fps, opencv::core::Size::new(w as i32, h as i32))?;
+        let writer = opencv::videoio::VideoWriter::new_def(
+            name,
+            fourcc,
+            config.capture.fps,
+            opencv::core::Size::new(w as i32, h as i32),
+        )?;
         if !writer.is_opened()? {
             bail!("cannot write video {}", args.out.display());
         }
@@ -509,10 +625,14 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         } else if ["png", "jpg", "jpeg", "bmp"].contains(&ext.as_str()) {
             hubtrack_capture::convert::write_bgr_image(&args.out, w, h, &pixels)?;
         } else {
-            std::fs::write(&args.out, &pixels).with_context(|| format!("writing {}", args.out.display()))?;
+            std::fs::write(&args.out, &pixels)
+                .with_context(|| format!("writing {}", args.out.display()))?;
         }
         let t = hubtrack_capture::synthetic::frame_truth(&truth);
-        println!("{}", serde_json::json!({"seq": seq, "width": w, "height": h, "out": args.out, "truth": t}));
+        println!(
+            "{}",
+            serde_json::json!({"seq": seq, "width": w, "height": h, "out": args.out, "truth": t})
+        );
     }
     if let Some(mut writer) = video {
         writer.release()?;

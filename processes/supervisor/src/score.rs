@@ -11,7 +11,11 @@ pub const HIT_TOLERANCE: f64 = 0.03;
 pub fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 { (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let (cx, cy) = (a[0] + t * dx, a[1] + t * dy);
     ((p[0] - cx).powi(2) + (p[1] - cy).powi(2)).sqrt()
 }
@@ -32,7 +36,10 @@ impl Truth {
     /// its nose, else hidden.
     pub fn of_rendered(t: &hubtrack_render::Truth) -> Truth {
         match (t.turbine_in_view, t.hub_px, t.nose_px) {
-            (true, Some(hub), Some(nose)) => Truth::Visible { axis: hub, hub: nose },
+            (true, Some(hub), Some(nose)) => Truth::Visible {
+                axis: hub,
+                hub: nose,
+            },
             _ => Truth::Hidden,
         }
     }
@@ -54,9 +61,16 @@ pub fn score(truth: &Truth, detected_hub: Option<[f64; 2]>, image_height: f64) -
     match (truth, detected_hub) {
         (Truth::Visible { axis, hub }, Some(p)) => {
             let e = point_segment_distance(p, *axis, *hub) / image_height;
-            Outcome { detected: true, error_pct: Some(100.0 * e), hit: e <= HIT_TOLERANCE }
+            Outcome {
+                detected: true,
+                error_pct: Some(100.0 * e),
+                hit: e <= HIT_TOLERANCE,
+            }
         }
-        (_, d) => Outcome { detected: d.is_some(), ..Default::default() },
+        (_, d) => Outcome {
+            detected: d.is_some(),
+            ..Default::default()
+        },
     }
 }
 
@@ -125,7 +139,10 @@ pub fn print_table(title: &str, modes: &[&str], table: &Table) {
     println!("\n{title}");
     let mut head = format!("{:<22}{:>7}", "category", "images");
     for m in modes {
-        head += &format!(" | {:<8}{:>6}{:>6}{:>7}{:>7}{:>6}", m, "det%", "hit%", "med%h", "p90%h", "FP%");
+        head += &format!(
+            " | {:<8}{:>6}{:>6}{:>7}{:>7}{:>6}",
+            m, "det%", "hit%", "med%h", "p90%h", "FP%"
+        );
     }
     println!("{head}");
     for (cat, tallies) in table {
@@ -133,7 +150,13 @@ pub fn print_table(title: &str, modes: &[&str], table: &Table) {
         let mut row = format!("{:<22}{:>7}", cat, t0.visible + t0.negatives + t0.hidden);
         for t in tallies {
             let (med, p90) = t.error_percentiles();
-            let f = |v: f64| if v.is_nan() { "-".to_string() } else { format!("{v:.2}") };
+            let f = |v: f64| {
+                if v.is_nan() {
+                    "-".to_string()
+                } else {
+                    format!("{v:.2}")
+                }
+            };
             row += &format!(
                 " | {:<8}{:>6}{:>6}{:>7}{:>7}{:>6}",
                 "",
@@ -155,14 +178,26 @@ mod tests {
 
     #[test]
     fn distance_to_segment() {
-        assert_eq!(point_segment_distance([0.0, 1.0], [-1.0, 0.0], [1.0, 0.0]), 1.0);
-        assert_eq!(point_segment_distance([3.0, 0.0], [-1.0, 0.0], [1.0, 0.0]), 2.0);
-        assert_eq!(point_segment_distance([5.0, 5.0], [1.0, 1.0], [1.0, 1.0]), (32.0f64).sqrt());
+        assert_eq!(
+            point_segment_distance([0.0, 1.0], [-1.0, 0.0], [1.0, 0.0]),
+            1.0
+        );
+        assert_eq!(
+            point_segment_distance([3.0, 0.0], [-1.0, 0.0], [1.0, 0.0]),
+            2.0
+        );
+        assert_eq!(
+            point_segment_distance([5.0, 5.0], [1.0, 1.0], [1.0, 1.0]),
+            (32.0f64).sqrt()
+        );
     }
 
     #[test]
     fn hit_within_three_percent_of_height() {
-        let t = Truth::Visible { axis: [100.0, 100.0], hub: [120.0, 100.0] };
+        let t = Truth::Visible {
+            axis: [100.0, 100.0],
+            hub: [120.0, 100.0],
+        };
         assert!(score(&t, Some([110.0, 132.0]), 1080.0).hit);
         assert!(!score(&t, Some([110.0, 134.0]), 1080.0).hit);
         let o = score(&Truth::Negative, Some([1.0, 1.0]), 1080.0);

@@ -14,7 +14,9 @@ use hubtrack_runtime::ipc::{open_node, MsgPublisher, MsgSubscriber};
 use hubtrack_runtime::shutdown::Shutdown;
 use hubtrack_types::services::{STATUS, SUPERVISOR};
 use hubtrack_types::time::monotonic_ns;
-use hubtrack_types::{StageState, StageStatus, SupervisedStage, SupervisorStatus, Text64, MAX_STAGES};
+use hubtrack_types::{
+    StageState, StageStatus, SupervisedStage, SupervisorStatus, Text64, MAX_STAGES,
+};
 use std::collections::{BTreeMap, VecDeque};
 use std::os::unix::process::ExitStatusExt;
 use std::path::{Path, PathBuf};
@@ -58,7 +60,9 @@ pub fn segment_path(record: &Path, n: u32) -> PathBuf {
     if n == 0 {
         return record.to_path_buf();
     }
-    let stem = record.file_stem().map_or("recording".into(), |s| s.to_string_lossy().into_owned());
+    let stem = record
+        .file_stem()
+        .map_or("recording".into(), |s| s.to_string_lossy().into_owned());
     record.with_file_name(format!("{stem}.{n}.mcap"))
 }
 
@@ -114,7 +118,14 @@ impl Supervisor {
         let args = self.args_for(&self.stages[i]);
         let s = &mut self.stages[i];
         let nice = self.config.run.nice_of(s.name);
-        let stage = Stage::spawn(s.name, &s.binary, &args, self.stage_stdout_to_stderr, nice, self.config.run.stop_with_supervisor)?;
+        let stage = Stage::spawn(
+            s.name,
+            &s.binary,
+            &args,
+            self.stage_stdout_to_stderr,
+            nice,
+            self.config.run.stop_with_supervisor,
+        )?;
         log::info!("started {} (pid {}, nice {nice})", s.name, stage.pid());
         s.process = Some(stage);
         s.state = StageState::Starting;
@@ -137,12 +148,20 @@ impl Supervisor {
         };
         if !wanted {
             s.state = StageState::Stopped;
-            log::info!("{} ended ({reason}); policy {:?}: not restarted", s.name, s.policy);
+            log::info!(
+                "{} ended ({reason}); policy {:?}: not restarted",
+                s.name,
+                s.policy
+            );
             return;
         }
         let now = Instant::now();
         let window = Duration::from_secs_f64(restart.window_s);
-        while s.restart_times.front().is_some_and(|t| now.duration_since(*t) > window) {
+        while s
+            .restart_times
+            .front()
+            .is_some_and(|t| now.duration_since(*t) > window)
+        {
             s.restart_times.pop_front();
         }
         if s.restart_times.len() as u32 >= restart.max_restarts {
@@ -155,7 +174,8 @@ impl Supervisor {
             );
             return;
         }
-        let backoff = (restart.backoff_initial_ms << s.restart_times.len().min(20)).min(restart.backoff_max_ms);
+        let backoff = (restart.backoff_initial_ms << s.restart_times.len().min(20))
+            .min(restart.backoff_max_ms);
         s.restart_times.push_back(now);
         s.restarts += 1;
         if s.name == "recorder" {
@@ -163,11 +183,19 @@ impl Supervisor {
         }
         s.state = StageState::Restarting;
         s.next_start = Some(now + Duration::from_millis(backoff));
-        log::warn!("{} ended ({reason}): restart {} in {backoff} ms", s.name, s.restarts);
+        log::warn!(
+            "{} ended ({reason}): restart {} in {backoff} ms",
+            s.name,
+            s.restarts
+        );
     }
 
     fn status(&self) -> SupervisorStatus {
-        let mut out = SupervisorStatus { pid: std::process::id(), publish_ns: monotonic_ns(), ..Default::default() };
+        let mut out = SupervisorStatus {
+            pid: std::process::id(),
+            publish_ns: monotonic_ns(),
+            ..Default::default()
+        };
         for (slot, s) in out.stages.iter_mut().zip(&self.stages) {
             *slot = SupervisedStage {
                 name: Text64::new(s.name),
@@ -188,7 +216,10 @@ impl Supervisor {
 /// (camera or simulated flight) ends.
 pub fn run(args: crate::RunArgs) -> anyhow::Result<()> {
     let config = args.config.load()?;
-    let record = args.record.clone().unwrap_or_else(|| config.run.record_dir.join(crate::timestamped_name()));
+    let record = args
+        .record
+        .clone()
+        .unwrap_or_else(|| config.run.record_dir.join(crate::timestamped_name()));
     let report = supervise(RunOptions {
         config,
         config_args: args.config.clone(),
@@ -205,15 +236,25 @@ pub fn run(args: crate::RunArgs) -> anyhow::Result<()> {
 
 /// Runs the stages of `opts.config` once; see the module docs.
 pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
-    let RunOptions { config, config_args, record, duration, outcome, interactive } = opts;
+    let RunOptions {
+        config,
+        config_args,
+        record,
+        duration,
+        outcome,
+        interactive,
+    } = opts;
     let shutdown = Shutdown::install()?;
     let node = open_node("supervisor")?;
     let heartbeats = MsgSubscriber::<StageStatus>::new(&node, &STATUS, 64)?;
     let status_pub = MsgPublisher::<SupervisorStatus>::new(&node, &SUPERVISOR)?;
     let mut last_status: BTreeMap<String, StageStatus> = BTreeMap::new();
 
-    let names: Vec<&'static str> =
-        PIPELINE_ORDER.iter().copied().filter(|s| config.run.stages.iter().any(|c| c == s)).collect();
+    let names: Vec<&'static str> = PIPELINE_ORDER
+        .iter()
+        .copied()
+        .filter(|s| config.run.stages.iter().any(|c| c == s))
+        .collect();
     let mut stages = Vec::new();
     for name in &names {
         stages.push(Supervised {
@@ -236,7 +277,11 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
         println!(
             "hubtrack run: stages {}; {}",
             names.join(", "),
-            if recording { format!("recording to {}", record.display()) } else { "not recording".into() }
+            if recording {
+                format!("recording to {}", record.display())
+            } else {
+                "not recording".into()
+            }
         );
     }
     let mut sup = Supervisor {
@@ -274,7 +319,12 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
                     signal(p.pid(), libc::SIGKILL);
                     let _ = p.child.wait();
                 }
-                sup.ended(i, -9, format!("no heartbeat within {} ms of start", startup.as_millis()), true);
+                sup.ended(
+                    i,
+                    -9,
+                    format!("no heartbeat within {} ms of start", startup.as_millis()),
+                    true,
+                );
                 break;
             }
             std::thread::sleep(Duration::from_millis(5));
@@ -284,7 +334,10 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
     let started = Instant::now();
     let deadline = duration;
     let mut status_at = Instant::now() - STATUS_PERIOD;
-    while failure.is_none() && !shutdown.requested() && deadline.is_none_or(|d| started.elapsed() < d) {
+    while failure.is_none()
+        && !shutdown.requested()
+        && deadline.is_none_or(|d| started.elapsed() < d)
+    {
         std::thread::sleep(TICK);
         drain(&heartbeats, &mut sup, &mut last_status)?;
         let now = Instant::now();
@@ -308,13 +361,26 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
                 // Liveness: running stages must keep heart-beating (a SIGSTOPped or deadlocked
                 // process still exists but does nothing).
                 let last = s.last_heartbeat.unwrap_or(p.started);
-                let limit = if s.last_heartbeat.is_some() { liveness } else { startup };
+                let limit = if s.last_heartbeat.is_some() {
+                    liveness
+                } else {
+                    startup
+                };
                 if now.duration_since(last) > limit {
-                    log::error!("{} sent no heartbeat for {:?}: killing it (hung)", s.name, now.duration_since(last));
+                    log::error!(
+                        "{} sent no heartbeat for {:?}: killing it (hung)",
+                        s.name,
+                        now.duration_since(last)
+                    );
                     signal(p.pid(), libc::SIGKILL);
                     let st = p.child.wait().ok();
                     let code = st.map_or(-9, exit_code);
-                    sup.ended(i, code, format!("no heartbeat for {} ms", limit.as_millis()), true);
+                    sup.ended(
+                        i,
+                        code,
+                        format!("no heartbeat for {} ms", limit.as_millis()),
+                        true,
+                    );
                 }
             } else if s.next_start.is_some_and(|t| now >= t) {
                 if let Err(e) = sup.start(i) {
@@ -349,14 +415,26 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
     std::thread::sleep(Duration::from_millis(20));
     drain(&heartbeats, &mut sup, &mut last_status)?;
     let segments: Vec<PathBuf> = match sup.stages.iter().find(|s| s.name == "recorder") {
-        Some(r) => (0..=r.segment).map(|n| segment_path(&record, n)).filter(|p| p.exists()).collect(),
+        Some(r) => (0..=r.segment)
+            .map(|n| segment_path(&record, n))
+            .filter(|p| p.exists())
+            .collect(),
         None => Vec::new(),
     };
     if interactive {
         crate::print_summary(elapsed, &last_status, &segments);
         for s in &sup.stages {
             if s.restarts > 0 || s.state == StageState::Failed {
-                println!("  {:<9} {} restarts{}", s.name, s.restarts, if s.state == StageState::Failed { ", given up" } else { "" });
+                println!(
+                    "  {:<9} {} restarts{}",
+                    s.name,
+                    s.restarts,
+                    if s.state == StageState::Failed {
+                        ", given up"
+                    } else {
+                        ""
+                    }
+                );
             }
         }
     }

@@ -38,7 +38,11 @@ pub fn mode_name(m: TrackMode) -> &'static str {
 
 /// Runs the command.
 pub fn run(args: TrackArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(args.fps > 0.0 && args.fps.is_finite(), "--fps must be a positive number, got {}", args.fps);
+    anyhow::ensure!(
+        args.fps > 0.0 && args.fps.is_finite(),
+        "--fps must be a positive number, got {}",
+        args.fps
+    );
     let config = args.config.load()?;
     let mut det = detector(&config.detect, args.mode.map(Into::into))?;
     let mut tracker = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -50,7 +54,9 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         let (detection, error) = match read_image(&path) {
             Ok(mat) => {
                 let view = view_of(&mat)?;
-                let hints = last.as_ref().map_or_else(Hints::default, |t| Hints::from_track(t, view.width, view.height, capture_ns));
+                let hints = last.as_ref().map_or_else(Hints::default, |t| {
+                    Hints::from_track(t, view.width, view.height, capture_ns)
+                });
                 let mut d = det.detect(&view, &hints)?.detection;
                 d.stamps.seq = i as u64;
                 d.stamps.capture_ns = capture_ns;
@@ -65,7 +71,8 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         };
         let t = tracker.update(&detection, None);
         last = Some(t);
-        let has_track = !matches!(t.mode, TrackMode::Acquiring | TrackMode::Lost) || detection.detected;
+        let has_track =
+            !matches!(t.mode, TrackMode::Acquiring | TrackMode::Lost) || detection.detected;
         let mut line = json!({
             "path": path, "detected": detection.detected,
             "hub": has_track.then_some(t.hub_px),

@@ -4,7 +4,9 @@
 //! rendered frames only (never on `../shared/data`).
 
 use anyhow::Context;
-use hubtrack_detect::ranker::{assess, fit, FitSettings, RankingOutcome, TrainingFrame, FEATURES, FEATURE_NAMES};
+use hubtrack_detect::ranker::{
+    assess, fit, FitSettings, RankingOutcome, TrainingFrame, FEATURES, FEATURE_NAMES,
+};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `hubtrack train-ranker`.
@@ -38,19 +40,40 @@ pub struct TrainRankerArgs {
 /// Frames of one candidate file: (frame, is negative). Frames whose hub is hidden or cut count
 /// neither way and are left out.
 fn load(path: &Path) -> anyhow::Result<(Vec<TrainingFrame>, Vec<bool>)> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let (mut frames, mut negative) = (Vec::new(), Vec::new());
-    for (n, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+    for (n, line) in text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
         let at = || format!("{}:{}", path.display(), n + 1);
         let v: serde_json::Value = serde_json::from_str(line).with_context(at)?;
-        let truth = v["truth"].as_str().with_context(|| format!("{}: no `truth`", at()))?;
+        let truth = v["truth"]
+            .as_str()
+            .with_context(|| format!("{}: no `truth`", at()))?;
         if truth == "hidden" {
             continue;
         }
         let mut fr = TrainingFrame::default();
-        for c in v["candidates"].as_array().with_context(|| format!("{}: no `candidates`", at()))? {
-            let f: Vec<f64> = c["features"].as_array().into_iter().flatten().filter_map(|x| x.as_f64()).collect();
-            let f: [f64; FEATURES] = f.try_into().map_err(|f: Vec<f64>| anyhow::anyhow!("{}: {} features, expected {FEATURES} (file from another version?)", at(), f.len()))?;
+        for c in v["candidates"]
+            .as_array()
+            .with_context(|| format!("{}: no `candidates`", at()))?
+        {
+            let f: Vec<f64> = c["features"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .filter_map(|x| x.as_f64())
+                .collect();
+            let f: [f64; FEATURES] = f.try_into().map_err(|f: Vec<f64>| {
+                anyhow::anyhow!(
+                    "{}: {} features, expected {FEATURES} (file from another version?)",
+                    at(),
+                    f.len()
+                )
+            })?;
             fr.features.push(f);
             fr.on_hub.push(c["hit"].as_bool().unwrap_or(false));
         }
@@ -81,10 +104,21 @@ pub fn run(args: TrainRankerArgs) -> anyhow::Result<()> {
         frames.extend(a);
         negative.extend(b);
     }
-    anyhow::ensure!(!frames.is_empty(), "no frames with a visible or no turbine in the training files");
+    anyhow::ensure!(
+        !frames.is_empty(),
+        "no frames with a visible or no turbine in the training files"
+    );
     let original = frames.len();
     for name in &args.also_without {
-        let k = FEATURE_NAMES.iter().position(|n| n == name).with_context(|| format!("--also-without {name}: no such feature (one of {})", FEATURE_NAMES.join(", ")))?;
+        let k = FEATURE_NAMES
+            .iter()
+            .position(|n| n == name)
+            .with_context(|| {
+                format!(
+                    "--also-without {name}: no such feature (one of {})",
+                    FEATURE_NAMES.join(", ")
+                )
+            })?;
         let copies: Vec<TrainingFrame> = frames[..original]
             .iter()
             .map(|fr| {
@@ -93,18 +127,40 @@ pub fn run(args: TrainRankerArgs) -> anyhow::Result<()> {
                 c
             })
             .collect();
-        eprintln!("[train-ranker] {} more frames without `{name}`", copies.len());
+        eprintln!(
+            "[train-ranker] {} more frames without `{name}`",
+            copies.len()
+        );
         negative.extend_from_within(..original);
         frames.extend(copies);
     }
-    let settings = FitSettings { l2: args.l2, iterations: args.iterations, step: args.step };
+    let settings = FitSettings {
+        l2: args.l2,
+        iterations: args.iterations,
+        step: args.step,
+    };
     let w = fit(&frames, &settings);
-    report("training frames", &assess(&frames, &negative, &w, args.min_score));
+    report(
+        "training frames",
+        &assess(&frames, &negative, &w, args.min_score),
+    );
     for f in &args.holdout {
         let (a, b) = load(f)?;
-        report(&format!("held out: {}", f.file_name().and_then(|s| s.to_str()).unwrap_or("?")), &assess(&a, &b, &w, args.min_score));
+        report(
+            &format!(
+                "held out: {}",
+                f.file_name().and_then(|s| s.to_str()).unwrap_or("?")
+            ),
+            &assess(&a, &b, &w, args.min_score),
+        );
     }
-    println!("# fitted by `hubtrack train-ranker` (l2 {}, {} steps of {}) on {} frames", args.l2, args.iterations, args.step, frames.len());
+    println!(
+        "# fitted by `hubtrack train-ranker` (l2 {}, {} steps of {}) on {} frames",
+        args.l2,
+        args.iterations,
+        args.step,
+        frames.len()
+    );
     println!("[detect.default.ranker.weights]");
     for (name, x) in FEATURE_NAMES.iter().zip(w) {
         println!("{name} = {x:.3}");

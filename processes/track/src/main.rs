@@ -17,7 +17,10 @@ const INPUT_WAIT: Duration = Duration::from_millis(50);
 const DETECTION_BUFFER: usize = 16;
 
 #[derive(Parser)]
-#[command(name = "hubtrack-track", about = "Track the hub through the detections")]
+#[command(
+    name = "hubtrack-track",
+    about = "Track the hub through the detections"
+)]
 struct Args {
     #[command(flatten)]
     config: ConfigArgs,
@@ -29,7 +32,12 @@ fn main() {
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let Stage { config, shutdown, node, mut status } = Stage::start("track", &args.config)?;
+    let Stage {
+        config,
+        shutdown,
+        node,
+        mut status,
+    } = Stage::start("track", &args.config)?;
     let mut tracker = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
 
     let detections = MsgSubscriber::<Detection>::new(&node, &DETECTIONS, DETECTION_BUFFER)?;
@@ -55,7 +63,12 @@ fn run() -> anyhow::Result<()> {
             }
             last_seq = Some(det.stamps.seq);
             let mut state = tracker.update(&det, last_vehicle.as_ref());
-            state.stamps = Stamps { seq: det.stamps.seq, capture_ns: det.stamps.capture_ns, recv_ns, publish_ns: monotonic_ns() };
+            state.stamps = Stamps {
+                seq: det.stamps.seq,
+                capture_ns: det.stamps.capture_ns,
+                recv_ns,
+                publish_ns: monotonic_ns(),
+            };
             track.publish(state)?;
             status.status.outputs += 1;
         }

@@ -35,10 +35,18 @@ struct Diff {
 }
 
 fn diff(path: &str, a: &Value, b: &Value, out: &mut Diff) {
-    let field = |k: &str| if path.is_empty() { k.to_string() } else { format!("{path}.{k}") };
+    let field = |k: &str| {
+        if path.is_empty() {
+            k.to_string()
+        } else {
+            format!("{path}.{k}")
+        }
+    };
     match (a, b) {
         (Value::Number(x), Value::Number(y)) if x != y => {
-            out.largest = out.largest.max((x.as_f64().unwrap_or(0.0) - y.as_f64().unwrap_or(0.0)).abs());
+            out.largest = out
+                .largest
+                .max((x.as_f64().unwrap_or(0.0) - y.as_f64().unwrap_or(0.0)).abs());
             out.fields.insert(path.to_string());
         }
         (Value::Array(x), Value::Array(y)) if x.len() == y.len() => {
@@ -74,7 +82,8 @@ fn outputs(path: &Path, topic: &str) -> anyhow::Result<BTreeMap<u64, Value>> {
         if m.channel.topic == topic {
             if let Ok(v) = serde_json::from_slice::<Value>(&m.data) {
                 let seq = v["stamps"]["seq"].as_u64().unwrap_or(u64::from(m.sequence));
-                out.entry(seq).or_insert_with(|| strip_run_specific(topic, v));
+                out.entry(seq)
+                    .or_insert_with(|| strip_run_specific(topic, v));
             }
         }
     }
@@ -90,7 +99,11 @@ pub fn compare(old: &Path, new: &Path, stages: &[&str]) -> anyhow::Result<()> {
         "{:<14}{:>10}{:>10}{:>12}{:>12}{:>18}  differing fields",
         "channel", "compared", "exact", "only old", "only new", "largest diff"
     );
-    for (stage, topic) in [("detect", "/detections"), ("track", "/track"), ("control", "/setpoints")] {
+    for (stage, topic) in [
+        ("detect", "/detections"),
+        ("track", "/track"),
+        ("control", "/setpoints"),
+    ] {
         if !stages.contains(&stage) {
             continue;
         }
@@ -117,7 +130,11 @@ pub fn compare(old: &Path, new: &Path, stages: &[&str]) -> anyhow::Result<()> {
         let only_new = b.keys().filter(|k| !a.contains_key(k)).count();
         let mut fields: Vec<(String, u64)> = field_counts.into_iter().collect();
         fields.sort_by(|x, y| y.1.cmp(&x.1).then(x.0.cmp(&y.0)));
-        let mut named: Vec<String> = fields.iter().take(FIELDS_SHOWN).map(|(f, n)| format!("{f} ({n})")).collect();
+        let mut named: Vec<String> = fields
+            .iter()
+            .take(FIELDS_SHOWN)
+            .map(|(f, n)| format!("{f} ({n})"))
+            .collect();
         if fields.len() > FIELDS_SHOWN {
             named.push(format!("+{} more", fields.len() - FIELDS_SHOWN));
         }
@@ -142,12 +159,18 @@ mod tests {
         let mut d = Diff::default();
         diff("", &a, &b, &mut d);
         assert_eq!(d.largest, 0.5);
-        assert_eq!(d.fields.into_iter().collect::<Vec<_>>(), ["extra", "rates", "sent", "vx_m_s"]);
+        assert_eq!(
+            d.fields.into_iter().collect::<Vec<_>>(),
+            ["extra", "rates", "sent", "vx_m_s"]
+        );
     }
 
     #[test]
     fn run_specific_stamps_are_removed_and_sent_is_kept() {
         let v = json!({"stamps": {"seq": 3, "capture_ns": 9, "recv_ns": 10, "publish_ns": 11}, "sent": true});
-        assert_eq!(strip_run_specific("/setpoints", v), json!({"stamps": {"seq": 3, "capture_ns": 9}, "sent": true}));
+        assert_eq!(
+            strip_run_specific("/setpoints", v),
+            json!({"stamps": {"seq": 3, "capture_ns": 9}, "sent": true})
+        );
     }
 }

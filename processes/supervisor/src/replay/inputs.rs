@@ -136,9 +136,13 @@ struct StampsOnly {
 fn check_magic(path: &Path) -> anyhow::Result<()> {
     use std::io::Read;
     let mut magic = [0u8; 8];
-    let mut f = std::fs::File::open(path).map_err(|e| anyhow::anyhow!("opening {}: {e}", path.display()))?;
+    let mut f = std::fs::File::open(path)
+        .map_err(|e| anyhow::anyhow!("opening {}: {e}", path.display()))?;
     if f.read_exact(&mut magic).is_err() || &magic != hubtrack_record::reader::MCAP_MAGIC {
-        bail!("{} is not an MCAP file (empty, or bad magic)", path.display());
+        bail!(
+            "{} is not an MCAP file (empty, or bad magic)",
+            path.display()
+        );
     }
     Ok(())
 }
@@ -146,7 +150,10 @@ fn check_magic(path: &Path) -> anyhow::Result<()> {
 fn messages(path: &Path) -> anyhow::Result<mcap::io::MessageReader<BufReader<std::fs::File>>> {
     let file = std::fs::File::open(path)?;
     let options = LinearReaderOptions::default().with_skip_end_magic(true);
-    Ok(mcap::io::MessageReader::new_with_options(BufReader::new(file), options))
+    Ok(mcap::io::MessageReader::new_with_options(
+        BufReader::new(file),
+        options,
+    ))
 }
 
 /// Reads `path` once (as far as it is intact) for what replay into `first` needs to know.
@@ -174,7 +181,9 @@ pub fn survey(path: &Path, first: FirstStage) -> anyhow::Result<Survey> {
                 s.taken.entry(o.stamps.seq).or_insert(o.stamps.recv_ns);
             }
         }
-        if kind == Some(ChannelKind::Vehicle) && serde_json::from_slice::<VehicleState>(&m.data).is_ok() {
+        if kind == Some(ChannelKind::Vehicle)
+            && serde_json::from_slice::<VehicleState>(&m.data).is_ok()
+        {
             s.vehicles += 1;
         }
     }
@@ -196,7 +205,13 @@ impl Reader {
     /// Opens `path` for replay into `first`.
     pub fn open(path: &Path, first: FirstStage) -> anyhow::Result<Reader> {
         check_magic(path)?;
-        Ok(Reader { reader: messages(path)?, first, pending_image: None, stopped: None, undecodable: 0 })
+        Ok(Reader {
+            reader: messages(path)?,
+            first,
+            pending_image: None,
+            stopped: None,
+            undecodable: 0,
+        })
     }
 
     fn decode<T: serde::de::DeserializeOwned>(&mut self, data: &[u8]) -> Option<T> {
@@ -227,10 +242,14 @@ impl Iterator for Reader {
                     Err(_) => self.undecodable += 1,
                 },
                 (_, Some(ChannelKind::FrameHeader), FirstStage::Detect) => {
-                    let Some(h) = self.decode::<FrameHeader>(&m.data) else { continue };
+                    let Some(h) = self.decode::<FrameHeader>(&m.data) else {
+                        continue;
+                    };
                     // The recorder writes each image right before its header.
                     match self.pending_image.take() {
-                        Some((seq, pixels)) if seq == h.seq as u32 && pixels.len() == h.payload_len() => {
+                        Some((seq, pixels))
+                            if seq == h.seq as u32 && pixels.len() == h.payload_len() =>
+                        {
                             return Some(Input::Frame(h, pixels));
                         }
                         _ => self.undecodable += 1,
@@ -315,13 +334,23 @@ impl<I: Iterator<Item = Keyed>> Ordered<I> {
     fn pop_ready(&mut self) -> Option<Keyed> {
         // Nothing unread has a key below this: keys are never before publication, and nothing
         // unread was published more than the margin before the newest publish stamp read.
-        let settled = if self.exhausted { u64::MAX } else { self.frontier_ns.saturating_sub(REORDER_MARGIN_NS) };
+        let settled = if self.exhausted {
+            u64::MAX
+        } else {
+            self.frontier_ns.saturating_sub(REORDER_MARGIN_NS)
+        };
         let d = self.drivers.front().map(|k| k.key);
         let v = self.vehicles.front().map(|k| k.key);
         let from_drivers = match (d, v) {
             // Ties go to the vehicle state: it was there when the stage took the input.
             (Some(d), Some(v)) => d < v,
-            (Some(d), None) if self.vehicles_unread == 0 || d < settled || self.drivers.len() > MAX_HELD_DRIVERS => true,
+            (Some(d), None)
+                if self.vehicles_unread == 0
+                    || d < settled
+                    || self.drivers.len() > MAX_HELD_DRIVERS =>
+            {
+                true
+            }
             (None, Some(v)) if v < settled || self.vehicles.len() > MAX_HELD_VEHICLES => false,
             _ => return None,
         };
@@ -359,20 +388,35 @@ mod tests {
 
     fn track(seq: u64, publish_ms: u64) -> Input {
         Input::Track(TrackState {
-            stamps: Stamps { seq, capture_ns: 1, recv_ns: 1, publish_ns: publish_ms * MS },
+            stamps: Stamps {
+                seq,
+                capture_ns: 1,
+                recv_ns: 1,
+                publish_ns: publish_ms * MS,
+            },
             ..Default::default()
         })
     }
 
     fn vehicle(publish_ms: u64) -> Input {
-        Input::Vehicle(VehicleState { publish_ns: publish_ms * MS, ..Default::default() })
+        Input::Vehicle(VehicleState {
+            publish_ns: publish_ms * MS,
+            ..Default::default()
+        })
     }
 
     /// Keys: a track state by when the live stage took it (`taken_ms`), a vehicle by its publish time.
     fn order(file: Vec<(Input, u64)>) -> Vec<String> {
-        let vehicles = file.iter().filter(|(i, _)| matches!(i, Input::Vehicle(_))).count() as u64;
+        let vehicles = file
+            .iter()
+            .filter(|(i, _)| matches!(i, Input::Vehicle(_)))
+            .count() as u64;
         let keyed = file.into_iter().map(|(input, taken_ms)| Keyed {
-            key: if input.driver_seq().is_some() { taken_ms * MS } else { input.publish_ns() },
+            key: if input.driver_seq().is_some() {
+                taken_ms * MS
+            } else {
+                input.publish_ns()
+            },
             input,
         });
         Ordered::new(keyed, vehicles)
@@ -387,14 +431,25 @@ mod tests {
     fn vehicle_states_written_after_a_track_state_but_published_before_it_was_taken_go_first() {
         // The recorder's turn wrote track 1 before vehicle 12 although control took track 1
         // at 13 ms, after vehicle 12 was published.
-        let file = vec![(vehicle(5), 0), (track(1, 11), 13), (vehicle(12), 0), (vehicle(20), 0), (track(2, 44), 45), (vehicle(46), 0)];
+        let file = vec![
+            (vehicle(5), 0),
+            (track(1, 11), 13),
+            (vehicle(12), 0),
+            (vehicle(20), 0),
+            (track(2, 44), 45),
+            (vehicle(46), 0),
+        ];
         assert_eq!(order(file), ["v5", "v12", "t1", "v20", "t2", "v46"]);
     }
 
     #[test]
     fn without_vehicle_states_inputs_go_in_file_order_at_once() {
         let file = vec![(track(1, 10), 11), (track(2, 20), 21)];
-        let mut it = Ordered::new(file.into_iter().map(|(input, t)| Keyed { key: t * MS, input }), 0);
+        let mut it = Ordered::new(
+            file.into_iter()
+                .map(|(input, t)| Keyed { key: t * MS, input }),
+            0,
+        );
         // Released before the source is exhausted: nothing is held back needlessly.
         assert_eq!(it.next().and_then(|k| k.input.driver_seq()), Some(1));
         assert_eq!(it.next().and_then(|k| k.input.driver_seq()), Some(2));
@@ -411,12 +466,23 @@ mod tests {
         assert_eq!(got.len(), 22);
         assert_eq!(got[0], "v10");
         assert_eq!(got[21], "v700");
-        assert!(got[1..21].iter().enumerate().all(|(i, s)| *s == format!("t{}", i + 1)), "{got:?}");
+        assert!(
+            got[1..21]
+                .iter()
+                .enumerate()
+                .all(|(i, s)| *s == format!("t{}", i + 1)),
+            "{got:?}"
+        );
     }
 
     #[test]
     fn keys_that_run_backwards_keep_file_order_within_a_stream() {
-        let file = vec![(track(1, 10), 30), (track(2, 20), 25), (vehicle(26), 0), (vehicle(24), 0)];
+        let file = vec![
+            (track(1, 10), 30),
+            (track(2, 20), 25),
+            (vehicle(26), 0),
+            (vehicle(24), 0),
+        ];
         assert_eq!(order(file), ["v26", "v24", "t1", "t2"]);
     }
 }

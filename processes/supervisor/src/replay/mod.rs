@@ -18,7 +18,9 @@ mod inputs;
 use crate::launch::{stage_binary, Stage};
 use anyhow::bail;
 use hubtrack_runtime::config::ConfigArgs;
-use hubtrack_runtime::ipc::{open_node, FramePublisher, IpcError, MsgPublisher, MsgSubscriber, DOMAIN_ENV};
+use hubtrack_runtime::ipc::{
+    open_node, FramePublisher, IpcError, MsgPublisher, MsgSubscriber, DOMAIN_ENV,
+};
 use hubtrack_types::services::{DETECTIONS, SETPOINTS, STATUS, TRACK, VEHICLE};
 use hubtrack_types::{Detection, FrameSourceKind, Setpoint, StageStatus, TrackState, VehicleState};
 use inputs::{FirstStage, Input, Keyed, Ordered, Reader};
@@ -73,9 +75,14 @@ fn chosen_stages(into: &[String]) -> anyhow::Result<Vec<&'static str>> {
             bail!("--into {s}: replay can feed {REPLAYABLE:?}");
         }
     }
-    let idx: Vec<usize> = (0..REPLAYABLE.len()).filter(|i| into.iter().any(|s| s == REPLAYABLE[*i])).collect();
+    let idx: Vec<usize> = (0..REPLAYABLE.len())
+        .filter(|i| into.iter().any(|s| s == REPLAYABLE[*i]))
+        .collect();
     if idx.windows(2).any(|w| w[1] != w[0] + 1) {
-        bail!("--into {}: the stages must follow each other in the pipeline (detect, track, control)", into.join(","));
+        bail!(
+            "--into {}: the stages must follow each other in the pipeline (detect, track, control)",
+            into.join(",")
+        );
     }
     Ok(idx.into_iter().map(|i| REPLAYABLE[i]).collect())
 }
@@ -134,7 +141,9 @@ impl InputPublishers {
             Input::Frame(mut h, pixels) => {
                 let publisher = match &self.frames {
                     Some(p) => p,
-                    None => self.frames.insert(FramePublisher::new(&self.node, pixels.len())?),
+                    None => self
+                        .frames
+                        .insert(FramePublisher::new(&self.node, pixels.len())?),
                 };
                 h.source = FrameSourceKind::Replay;
                 publisher.publish_with(h, |buf, _| {
@@ -145,7 +154,9 @@ impl InputPublishers {
             Input::Detection(d) => {
                 let p = match &self.detections {
                     Some(p) => p,
-                    None => self.detections.insert(MsgPublisher::new(&self.node, &DETECTIONS)?),
+                    None => self
+                        .detections
+                        .insert(MsgPublisher::new(&self.node, &DETECTIONS)?),
                 };
                 p.publish(d)?;
             }
@@ -201,7 +212,9 @@ fn start_stages(
         }
         a
     };
-    for (name, a) in std::iter::once(("recorder", rec_args)).chain(stages.iter().map(|s| (*s, with_mode(s)))) {
+    for (name, a) in
+        std::iter::once(("recorder", rec_args)).chain(stages.iter().map(|s| (*s, with_mode(s))))
+    {
         let stage = Stage::spawn(name, &stage_binary(name)?, &a, false, 0, true)?;
         let pid = stage.pid();
         processes.push(stage);
@@ -212,7 +225,8 @@ fn start_stages(
                     break 'wait;
                 }
             }
-            if t0.elapsed() > START_TIMEOUT || processes.last_mut().and_then(|p| p.poll()).is_some() {
+            if t0.elapsed() > START_TIMEOUT || processes.last_mut().and_then(|p| p.poll()).is_some()
+            {
                 for p in processes.iter_mut().rev() {
                     p.stop(Duration::from_secs(3));
                 }
@@ -235,7 +249,10 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     };
     let last = *stages.last().expect("at least one stage");
     let output = args.output.clone().unwrap_or_else(|| {
-        let stem = args.file.file_stem().map_or("recording".into(), |s| s.to_string_lossy().into_owned());
+        let stem = args
+            .file
+            .file_stem()
+            .map_or("recording".into(), |s| s.to_string_lossy().into_owned());
         args.file.with_file_name(format!("{stem}.replay.mcap"))
     });
     // One pass first: what the live first stage took and when, and whether there is anything to feed.
@@ -259,7 +276,12 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     std::env::set_var(DOMAIN_ENV, format!("replay-{}", std::process::id()));
     let node = open_node("replay")?;
     let heartbeats = MsgSubscriber::<StageStatus>::new(&node, &STATUS, 64)?;
-    let mut processes = start_stages(&heartbeats, &stages, &crate::forwarded(&args.config), &output)?;
+    let mut processes = start_stages(
+        &heartbeats,
+        &stages,
+        &crate::forwarded(&args.config),
+        &output,
+    )?;
 
     let outputs = match last {
         "detect" => LastOutputs::Detections(MsgSubscriber::new(&node, &DETECTIONS, 64)?),
@@ -267,9 +289,19 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
         _ => LastOutputs::Setpoints(MsgSubscriber::new(&node, &SETPOINTS, 64)?),
     };
     let vehicle = MsgPublisher::<VehicleState>::new(&node, &VEHICLE)?;
-    let mut publishers = InputPublishers { node, frames: None, detections: None, tracks: None, vehicle };
-    let mut pace = Pace { active: args.paced, origin: None };
-    let (mut sent, mut answered, mut lost, mut vehicles, mut not_taken) = (0u64, 0u64, 0u64, 0u64, 0u64);
+    let mut publishers = InputPublishers {
+        node,
+        frames: None,
+        detections: None,
+        tracks: None,
+        vehicle,
+    };
+    let mut pace = Pace {
+        active: args.paced,
+        origin: None,
+    };
+    let (mut sent, mut answered, mut lost, mut vehicles, mut not_taken) =
+        (0u64, 0u64, 0u64, 0u64, 0u64);
     let t_start = Instant::now();
     {
         // Inputs the live stage skipped are left out (unless --all-inputs, or nothing says
@@ -334,13 +366,23 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
         );
     }
     if let Some(why) = &reader.stopped {
-        println!("note: {} is cut or damaged; replayed what was intact (reading stopped: {why})", args.file.display());
+        println!(
+            "note: {} is cut or damaged; replayed what was intact (reading stopped: {why})",
+            args.file.display()
+        );
     }
     if reader.undecodable > 0 {
-        println!("note: {} messages could not be decoded and were skipped", reader.undecodable);
+        println!(
+            "note: {} messages could not be decoded and were skipped",
+            reader.undecodable
+        );
     }
     if sent == 0 {
-        bail!("{} holds no readable {} to replay", args.file.display(), first.drivers());
+        bail!(
+            "{} holds no readable {} to replay",
+            args.file.display(),
+            first.drivers()
+        );
     }
     println!("new outputs recorded to {}", output.display());
     if args.compare {
@@ -359,10 +401,18 @@ mod tests {
 
     #[test]
     fn stages_come_in_pipeline_order_and_must_follow_each_other() {
-        assert_eq!(chosen_stages(&into("control,track")).unwrap(), ["track", "control"]);
-        assert_eq!(chosen_stages(&into("detect,track,control")).unwrap(), ["detect", "track", "control"]);
+        assert_eq!(
+            chosen_stages(&into("control,track")).unwrap(),
+            ["track", "control"]
+        );
+        assert_eq!(
+            chosen_stages(&into("detect,track,control")).unwrap(),
+            ["detect", "track", "control"]
+        );
         assert_eq!(chosen_stages(&into("control")).unwrap(), ["control"]);
-        let e = chosen_stages(&into("detect,control")).unwrap_err().to_string();
+        let e = chosen_stages(&into("detect,control"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("follow each other"), "{e}");
         let e = chosen_stages(&into("recorder")).unwrap_err().to_string();
         assert!(e.contains("--into recorder"), "{e}");
