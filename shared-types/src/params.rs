@@ -102,6 +102,92 @@ impl<'a> Check<'a> {
     }
 }
 
+/// A number a range check can read: every integer and float type a parameter uses.
+pub trait RangeValue: Copy {
+    /// The value as `f64` (exact for every integer a parameter holds).
+    fn range_value(self) -> f64;
+}
+
+macro_rules! range_value_as_f64 {
+    ($($t:ty),*) => {
+        $(impl RangeValue for $t {
+            fn range_value(self) -> f64 {
+                self as f64
+            }
+        })*
+    };
+}
+range_value_as_f64!(f64, f32, u8, u16, u32, u64, usize, i8, i16, i32, i64);
+
+/// Declares a parameter section once: each field with its doc, type, default and allowed range.
+///
+/// ```
+/// hubtrack_types::params! {
+///     /// Edge detection.
+///     pub struct EdgeParams {
+///         /// Upper Canny threshold.
+///         pub canny_high: f64 = 200.0, closed(1.0, 1000.0);
+///         /// Number of bins.
+///         pub bins: u32 = 12, closed(1, 64);
+///         /// Off when false (no range).
+///         pub enabled: bool = true;
+///     }
+/// }
+/// let p = EdgeParams::default();
+/// assert_eq!(p.bins, 12);
+/// assert!(p.check_ranges("detect.edges").is_ok());
+/// let bad = EdgeParams { canny_high: 0.5, ..p };
+/// assert_eq!(bad.check_ranges("detect.edges").unwrap_err().key, "detect.edges.canny_high");
+/// ```
+///
+/// The struct gets `Debug, Clone, PartialEq, Serialize, Deserialize` (unknown keys denied,
+/// missing keys defaulted), a [`Default`] with the declared values and `check_ranges(section)`,
+/// which checks each declared range with the [`Check`] of the same name (`closed`, `open`,
+/// `open_closed`, `zero_or_closed`). Constraints between fields and nested sections stay in the
+/// section's own `validate`, which calls `check_ranges` first.
+#[macro_export]
+macro_rules! params {
+    (
+        $(#[$smeta:meta])*
+        $vis:vis struct $name:ident {
+            $(
+                $(#[$fmeta:meta])*
+                $fvis:vis $field:ident : $ty:ty = $default:expr $(, $check:ident ( $lo:expr, $hi:expr ))? ;
+            )*
+        }
+    ) => {
+        $(#[$smeta])*
+        #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+        #[serde(deny_unknown_fields, default)]
+        $vis struct $name {
+            $( $(#[$fmeta])* $fvis $field: $ty, )*
+        }
+
+        impl Default for $name {
+            fn default() -> Self {
+                $name { $( $field: $default, )* }
+            }
+        }
+
+        impl $name {
+            /// Checks every declared range; errors name `section.key` and the allowed range.
+            pub fn check_ranges(&self, section: &str) -> Result<(), $crate::params::ParamError> {
+                #[allow(unused_variables)]
+                let check = $crate::params::Check::new(section);
+                $($(
+                    check.$check(
+                        stringify!($field),
+                        $crate::params::RangeValue::range_value(self.$field),
+                        $crate::params::RangeValue::range_value($lo),
+                        $crate::params::RangeValue::range_value($hi),
+                    )?;
+                )?)*
+                Ok(())
+            }
+        }
+    };
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
