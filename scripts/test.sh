@@ -1,9 +1,14 @@
 #!/usr/bin/env bash
-# The README's test command: installs what is missing, builds everything, runs all tests
-# (Rust unit tests, then the multi-process integration tests in tests/ with independent readers).
+# The README's test command: installs what is missing, checks formatting and lints, builds
+# everything, runs all tests (Rust unit tests, then the multi-process integration tests in tests/
+# with independent readers). Fails on an unformatted file and on any clippy warning.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+echo "[test] formatting (cargo fmt --check)"
+cargo fmt --all --check
+echo "[test] lints (cargo clippy, warnings are errors)"
+cargo clippy --release --workspace --all-targets -- -D warnings
 echo "[test] building (release)"
 cargo build --release --workspace --all-targets
 echo "[test] Rust unit tests"

@@ -11,15 +11,15 @@
 # not used.
 # Training: `scripts/train-hubnet.py` (JAX on the CPU, in its own virtual environment under
 # target/; 20 epochs). About 5 minutes of rendering and 17 of training on 2 cores; the held-out
-# score is printed every 3 epochs (session 24: the peak within one cell of the hub in 97.6 %).
+# score is printed every 3 epochs (measured: the peak within one cell of the hub in 97.6 %).
 #
 # The still photos' heatmap (`detect.default.still_models`, libs/detect/models/hubnet-still.onnx):
 #   scripts/train-hubnet.sh still [OUT.onnx] [-- train-hubnet.py options]
 # The same data plus seeds 107, 108 with 3,000 photo-like views each (`--photo-like`: 12–250 m,
 # from below and above, relative yaw to ±70°, the hub anywhere in the frame, shrubland, wind
 # farms) and 750 negatives, 109 held out and scored on its own. About 10 minutes of rendering and
-# 25–38 of training (session 27: held out 98.4 % on seed 102, 90.1 % on the photo-like views of
-# 109, where the video model gets 97.6 % and 66.9 %). Session 35 added close photo-like views
+# 25–38 of training (measured: held out 98.4 % on seed 102, 90.1 % on the photo-like views of
+# 109, where the video model gets 97.6 % and 66.9 %). Close photo-like views are included
 # (`--photo-close`, 5–12 m: seeds 107, 108 with 1,500 each, 109 with 400 held out).
 # Then `scripts/train-ranker.sh still`.
 # Usage: scripts/train-hubnet.sh [OUT.onnx] [-- train-hubnet.py options]
@@ -46,7 +46,7 @@
 # and 113 (800 frames per class, 1,200 from 4–8 m with `--close-in`, 15 flights) and 112 held
 # out; crops 8 m wide at the hub's distance around the hub, the hub and the distance jittered
 # (frames within 3.5–46 m; 24 epochs of 20,000 crops). About 25 minutes of rendering and 10–13
-# of training on 2 cores (session 26: held out, mean error 4.0° at 3.5–8 m, 3.4° at 8–15 m,
+# of training on 2 cores (measured: held out, mean error 4.0° at 3.5–8 m, 3.4° at 8–15 m,
 # 2.3–2.6° at 15–46 m).
 #
 # The close-range yaw network (`detect.default.hub_yaw_close`, libs/detect/models/hubyaw-close.onnx):
@@ -54,7 +54,7 @@
 # The same network and window trained on the frames within 3.5–14 m only: the yaw network's
 # seeds 111 and 113 plus seeds 114 and 115 with 4,000 hover views each (`--close-in`, 4–8 m,
 # where the approach ends) and 1,000 negatives; 112 held out (24 epochs of 20,000 crops). About
-# 5 minutes of rendering and 11 of training on 2 cores (session 28: held out, mean error 3.3° at
+# 5 minutes of rendering and 11 of training on 2 cores (measured: held out, mean error 3.3° at
 # 3.5–8 m and 8–15 m, where the whole-range model gets 4.0° and 3.4°; a 12 m window 3.9°, a
 # 16 m window 5.8° after 8 epochs: close in, the view is cropped by the frame and the spinner
 # shrinks).
@@ -81,7 +81,7 @@ case "$model" in still | crop-still) pyramid=gauss; stills=(--stills) ;; esac
 data=target/hubnet-data/$pyramid
 venv=target/hubnet-venv
 bin=target/release/hubtrack
-[ -x "$bin" ] || cargo build --release -p hubtrack
+[ -x "$bin" ] || cargo build --release -p hubtrack-lab -p hubtrack-supervisor
 if [ ! -x "$venv/bin/python" ]; then
   echo "[train-hubnet] creating $venv (jax, optax, onnx, pillow)" >&2
   python3 -m venv "$venv"
@@ -146,7 +146,7 @@ if [ "$model" = still ]; then
   for seed in 107 108 109; do
     render "$data/p$seed" --seed "$seed" --per-class 0 --flights 0 --photo-like 3000
   done
-  # Close photo-like views (5–12 m, session 35): inspection photos next to the hub.
+  # Close photo-like views (5–12 m): inspection photos next to the hub.
   for seed in 107 108; do
     render "$data/q$seed" --seed "$seed" --per-class 0 --flights 0 --photo-close 1500
   done

@@ -12,7 +12,7 @@
 # 500; flights 4000). A flight seed covers seeds seed..seed+9, so these stay clear of the
 # README's flights (2026, 7, 100, 500). About 8 minutes on 2 cores.
 #
-# `still` fits the still photos' ranking (`detect.default.still_ranker`, session 27) instead:
+# `still` fits the still photos' ranking (`detect.default.still_ranker`) instead:
 # every frame detected with the still photos' heatmap (`still_models_for_frames`), and photo-like
 # views of seeds 11-14 (500 each, detected as stills) among the training frames, 300 of seed
 # 2026 held out; the section printed is [detect.default.still_ranker.weights]. About 15 minutes.
@@ -22,7 +22,7 @@
 # Run it again after retraining the heatmap (scripts/train-hubnet.sh): the `hub_heat` weight
 # belongs to the model it was fitted with.
 # To adopt the result, copy the numbers into `FeatureWeights::default()` (`::still()`) in
-# libs/detect/src/params.rs, rebuild, and run scripts/gen-config-sections.py.
+# libs/detect/src/params.rs and rebuild.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 still=false
@@ -32,9 +32,9 @@ shift || true
 [ "${1:-}" = "--" ] && shift
 mkdir -p "$out"
 bin=${HUBTRACK_BIN:-target/release/hubtrack}
-[ -x "$bin" ] || cargo build --release -p hubtrack
+[ -x "$bin" ] || cargo build --release -p hubtrack-lab -p hubtrack-supervisor
 # Every frame also once without the learned heatmap's feature: the network has seen renders
-# only, and on real photos it is weaker (session 24: photos 43 % hits fitted without this, 60 %
+# only, and on real photos it is weaker (measured: photos 43 % hits fitted without this, 60 %
 # with it, at about the same synthetic hits).
 robust=(--also-without hub_heat)
 # First pass with the rules' ranking, so that the data does not depend on the weights built in.
@@ -75,7 +75,7 @@ if $still; then
   echo "[train-ranker] held-out photo-like views, seed 2026" >&2
   "$bin" eval "${rules[@]}" --synthetic 0 --photo-like 300 --seed 2026 --no-photos --candidates "$out/holdout-photo2026.jsonl" >/dev/null
   holdout+=(--holdout "$out/holdout-photo2026.jsonl")
-  # The first fit's flights ran at the threshold of the time (session 27: -0.5).
+  # The first fit's flights ran at the threshold of the time (measured: -0.5).
   fitted+=(--set detect.default.still_ranker.min_score=-0.5)
 fi
 echo "[train-ranker] held-out flights, seed 4000" >&2

@@ -71,7 +71,7 @@ def test_detect_stage_processes_every_frame_with_stamps_and_overlay(detect_run):
 
 
 def test_detections_follow_renderer_truth(detect_run):
-    # An expected failure (below 80 %) until the learned ranking of session 19: 50 of 59 since.
+    # The learned ranking finds 50 of 59.
     _, _, t = detect_run
     hits, dets, _ = detection_hits(t)
     print(f"[detections_follow_renderer_truth] {hits} of {len(dets)} detections on the truth")

@@ -15,6 +15,8 @@
 //! (`CLOCK_REALTIME`, epoch ns) is used only for MCAP `log_time` and carried in
 //! [`FrameHeader::capture_realtime_ns`].
 
+#![warn(missing_docs)]
+
 pub mod messages;
 pub mod params;
 pub mod services;

@@ -12,8 +12,11 @@
 //! gap is visible to any MCAP tool; `log_time` is the wall-clock receive time (epoch ns) and
 //! `publish_time` the wall-clock time the publishing stage sent it.
 
+#![warn(missing_docs)]
+
 pub mod annotations;
 pub mod channels;
+pub mod config;
 pub mod flight;
 pub mod latency;
 pub mod raw_image;

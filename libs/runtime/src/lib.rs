@@ -1,9 +1,13 @@
 //! What every hubtrack process shares, so stage `main`s stay thin:
-//! - [`config`]: the one config file, parsed strictly and validated with errors naming the key;
+//! - [`config`]: the config file and `--set` overrides, read section by section, strictly, with
+//!   errors naming the file and the key;
+//! - [`stage`]: what every stage process does before its loop;
 //! - [`ipc`]: iceoryx2 node, publishers and subscribers for the services in `hubtrack_types::services`;
 //! - [`logging`]: structured logs on stderr (the supervisor prefixes them with the stage name);
 //! - [`shutdown`]: SIGINT/SIGTERM as a flag the stage loop checks;
 //! - [`status`]: the periodic [`hubtrack_types::StageStatus`] heartbeat of a stage.
+
+#![warn(missing_docs)]
 
 pub mod config;
 pub mod ipc;
@@ -12,7 +16,7 @@ pub mod shutdown;
 pub mod stage;
 pub mod status;
 
-pub use config::{Config, ConfigError};
+pub use config::{ConfigArgs, ConfigError, Sections};
 
 /// Ends a stage process: on error, logs `error: <cause chain>` (one line, no backtrace dump) and
 /// exits with status 1, so the supervisor and the operator see why.

@@ -3,12 +3,12 @@
 
 use anyhow::Context;
 use clap::Parser;
+use hubtrack_capture::config::{CaptureSections, Pace};
 use hubtrack_capture::pacing::Pacer;
 use hubtrack_capture::sink::ShmSink;
 use hubtrack_capture::{open_source, Step};
-use hubtrack_runtime::config::{ConfigArgs, Pace};
 use hubtrack_runtime::ipc::{cleanup_dead_nodes, FramePublisher};
-use hubtrack_runtime::stage::Stage;
+use hubtrack_runtime::stage::{Stage, StageArgs};
 use std::time::{Duration, Instant};
 
 /// How often capture removes resources of dead subscribers, so a restarted stage finds its port.
@@ -21,7 +21,7 @@ const DEAD_NODE_CLEANUP_INTERVAL: Duration = Duration::from_secs(1);
 )]
 struct Args {
     #[command(flatten)]
-    config: ConfigArgs,
+    stage: StageArgs,
 }
 
 fn main() {
@@ -30,12 +30,15 @@ fn main() {
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let Stage {
+    let Some(Stage {
         config,
         shutdown,
         node,
         mut status,
-    } = Stage::start("capture", &args.config)?;
+    }) = Stage::<CaptureSections>::start("capture", &args.stage)?
+    else {
+        return Ok(());
+    };
     let cfg = &config.capture;
     let mut source = open_source(cfg)?;
     log::info!("source: {}", source.describe());

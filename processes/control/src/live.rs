@@ -1,12 +1,13 @@
 //! Live control: the MAVLink link to the autopilot, the vehicle state derived from it, and the
 //! setpoints sent over it on every track state and repeated on wall-clock timers.
 
+use crate::config::{ClockSource, ControlConfig};
 use crate::setpoint::{may_command, Controller, TRACK_BUFFER};
+use crate::ControlStage;
 use anyhow::Context;
 use hubtrack_mavlink::{
     companion_heartbeat, velocity_setpoint, Endpoint, Link, MavHeader, VehicleMonitor,
 };
-use hubtrack_runtime::config::{ClockSource, ControlConfig};
 use hubtrack_runtime::ipc::{MsgPublisher, MsgSubscriber};
 use hubtrack_runtime::stage::Stage;
 use hubtrack_runtime::status::StatusReporter;
@@ -23,7 +24,7 @@ const LINK_POLL: Duration = Duration::from_millis(2);
 const STATS_LOG_INTERVAL_NS: u64 = 10_000_000_000;
 
 /// Runs live control until SIGINT/SIGTERM.
-pub fn run(stage: Stage) -> anyhow::Result<()> {
+pub fn run(stage: ControlStage) -> anyhow::Result<()> {
     let mut controller = Controller::new(&stage)?;
     let Stage {
         config,

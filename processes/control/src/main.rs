@@ -11,13 +11,14 @@
 //! from the recording on the vehicle service, and the same approach and sending rule run on them
 //! in recorded time (see [`replay`]).
 
+mod config;
 mod live;
 mod replay;
 mod setpoint;
 
 use clap::Parser;
-use hubtrack_runtime::config::ConfigArgs;
-use hubtrack_runtime::stage::Stage;
+use config::ControlSections;
+use hubtrack_runtime::stage::{Stage, StageArgs};
 
 #[derive(Parser)]
 #[command(
@@ -26,12 +27,15 @@ use hubtrack_runtime::stage::Stage;
 )]
 struct Args {
     #[command(flatten)]
-    config: ConfigArgs,
+    stage: StageArgs,
     /// Replay mode (used by `hubtrack replay`): no MAVLink link; vehicle states are read from the
     /// vehicle service, and the time of each step is its track state's capture time.
     #[arg(long)]
     replay: bool,
 }
+
+/// The control stage as started: its sections of the config, node and heartbeat.
+type ControlStage = Stage<ControlSections>;
 
 fn main() {
     hubtrack_runtime::exit_with(run());
@@ -39,7 +43,9 @@ fn main() {
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let stage = Stage::start("control", &args.config)?;
+    let Some(stage) = Stage::<ControlSections>::start("control", &args.stage)? else {
+        return Ok(());
+    };
     if args.replay {
         replay::run(stage)
     } else {

@@ -8,6 +8,7 @@
 //! nothing goes stale on wall-clock timers: replay may run slower or faster than the recording.
 
 use crate::setpoint::{may_command, Controller, TRACK_BUFFER};
+use crate::ControlStage;
 use hubtrack_mavlink::{aged_state, follows_setpoints};
 use hubtrack_runtime::ipc::MsgSubscriber;
 use hubtrack_runtime::stage::Stage;
@@ -23,7 +24,7 @@ const INPUT_WAIT: Duration = Duration::from_millis(50);
 const VEHICLE_BUFFER: usize = 16;
 
 /// Runs replayed control until SIGINT/SIGTERM.
-pub fn run(stage: Stage) -> anyhow::Result<()> {
+pub fn run(stage: ControlStage) -> anyhow::Result<()> {
     let mut controller = Controller::new(&stage)?;
     let Stage {
         config,

@@ -1,9 +1,9 @@
 //! What live and replayed control share: one approach step per track state, the rule for
 //! sending a setpoint, and publishing it.
 
+use crate::ControlStage;
 use hubtrack_approach::{Approach, ApproachInput};
 use hubtrack_runtime::ipc::MsgPublisher;
-use hubtrack_runtime::stage::Stage;
 use hubtrack_runtime::status::StatusReporter;
 use hubtrack_types::services::SETPOINTS;
 use hubtrack_types::time::monotonic_ns;
@@ -20,7 +20,7 @@ pub struct Controller {
 
 impl Controller {
     /// The approach configured in `[control.approach]`, publishing on the setpoints service.
-    pub fn new(stage: &Stage) -> anyhow::Result<Controller> {
+    pub fn new(stage: &ControlStage) -> anyhow::Result<Controller> {
         let approach = Approach::new(stage.config.control.approach.clone())
             .map_err(|e| anyhow::anyhow!("{e}"))?;
         Ok(Controller {

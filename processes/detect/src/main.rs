@@ -5,9 +5,8 @@
 
 use clap::Parser;
 use hubtrack_detect::{Detector, Hints, ImageView};
-use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_runtime::ipc::{FrameSubscriber, MsgPublisher, MsgSubscriber};
-use hubtrack_runtime::stage::Stage;
+use hubtrack_runtime::stage::{Stage, StageArgs};
 use hubtrack_types::services::{DETECTIONS, OVERLAY, TRACK, VEHICLE};
 use hubtrack_types::time::monotonic_ns;
 use hubtrack_types::{
@@ -29,7 +28,12 @@ const MAX_ATTITUDE_AGE_NS: u64 = 200_000_000;
 )]
 struct Args {
     #[command(flatten)]
-    config: ConfigArgs,
+    stage: StageArgs,
+}
+
+hubtrack_runtime::sections! {
+    /// What the detect stage reads.
+    struct DetectSections { detect: hubtrack_detect::params::DetectConfig }
 }
 
 fn main() {
@@ -38,12 +42,15 @@ fn main() {
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let Stage {
+    let Some(Stage {
         config,
         shutdown,
         node,
         mut status,
-    } = Stage::start("detect", &args.config)?;
+    }) = Stage::<DetectSections>::start("detect", &args.stage)?
+    else {
+        return Ok(());
+    };
     let mut detector = Detector::new(config.detect.clone())?;
     log::info!("mode {:?}", config.detect.mode);
 

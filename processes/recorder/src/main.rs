@@ -9,11 +9,11 @@
 
 use anyhow::Context;
 use clap::Parser;
+use hubtrack_record::config::{Compression, RecorderConfig};
 use hubtrack_record::writer::{ChannelKind, RecorderStats};
 use hubtrack_record::{Recording, RecordingOptions};
-use hubtrack_runtime::config::{Compression, ConfigArgs, RecorderConfig};
 use hubtrack_runtime::ipc::{FrameSubscriber, MsgSubscriber};
-use hubtrack_runtime::stage::Stage;
+use hubtrack_runtime::stage::{Stage, StageArgs};
 use hubtrack_runtime::status::StatusReporter;
 use hubtrack_types::services::{DETECTIONS, OVERLAY, SETPOINTS, STATUS, TRACK, VEHICLE};
 use hubtrack_types::time::{monotonic_ns, realtime_ns};
@@ -38,10 +38,10 @@ const STATS_INTERVAL: Duration = Duration::from_secs(1);
 )]
 struct Args {
     #[command(flatten)]
-    config: ConfigArgs,
-    /// Output MCAP file.
-    #[arg(long, short = 'o', value_name = "PATH.mcap")]
-    output: PathBuf,
+    stage: StageArgs,
+    /// Output MCAP file (required unless only checking or printing the config).
+    #[arg(long, short = 'o', value_name = "PATH.mcap", required_unless_present_any = ["check_config", "print_config"])]
+    output: Option<PathBuf>,
 }
 
 /// What the reader hands the writer.
@@ -78,22 +78,31 @@ enum JsonMsg {
     Recorder(RecorderStats),
 }
 
+hubtrack_runtime::sections! {
+    /// What the recorder stage reads.
+    struct RecorderSections { recorder: RecorderConfig }
+}
+
 fn main() {
     hubtrack_runtime::exit_with(run());
 }
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let Stage {
+    let Some(Stage {
         config,
         shutdown,
         node,
         mut status,
-    } = Stage::start("recorder", &args.config)?;
+    }) = Stage::<RecorderSections>::start("recorder", &args.stage)?
+    else {
+        return Ok(());
+    };
+    let output = args.output.context("--output is required")?;
     let cfg = config.recorder.clone();
 
-    let recording = Recording::create(&args.output, &options(&cfg))?;
-    log::info!("recording to {}", args.output.display());
+    let recording = Recording::create(&output, &options(&cfg))?;
+    log::info!("recording to {}", output.display());
 
     // Polled, not woken by each frame: the camera's notification goes to detect alone (see
     // `FrameSubscriber::polling`); the buffer holds many sleeps' worth of frames.
@@ -250,7 +259,7 @@ fn run() -> anyhow::Result<()> {
         }
     }
 
-    log::info!("stopping: finishing {}", args.output.display());
+    log::info!("stopping: finishing {}", output.display());
     // Final reader counts go into the file's last `/recorder` message.
     let _ = queue_tx.send(Item::Json {
         kind: ChannelKind::Recorder,

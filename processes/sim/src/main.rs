@@ -21,9 +21,8 @@ use hubtrack_capture::synthetic::frame_truth;
 use hubtrack_capture::{FrameInfo, FrameSink};
 use hubtrack_mavlink::{Endpoint, Link, MavHeader, MavMessage};
 use hubtrack_render::Renderer;
-use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_runtime::ipc::{FramePublisher, MsgPublisher, MsgSubscriber};
-use hubtrack_runtime::stage::Stage;
+use hubtrack_runtime::stage::{Stage, StageArgs};
 use hubtrack_sim::{
     camera_pose, geometry, render_camera, Autopilot, FlightRecorder, Multicopter, Scenario,
     SimPace, Wind,
@@ -46,10 +45,32 @@ const LOCKSTEP_POLL: Duration = Duration::from_millis(1);
 )]
 struct Args {
     #[command(flatten)]
-    config: ConfigArgs,
+    stage: StageArgs,
     /// Write the flight's outcome as one JSON object to this file.
     #[arg(long, value_name = "FILE")]
     outcome: Option<PathBuf>,
+}
+
+/// What the simulator stage reads: `[sim]`.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+struct SimSections {
+    sim: hubtrack_sim::SimConfig,
+}
+
+impl hubtrack_runtime::Sections for SimSections {
+    fn validate(&self) -> Result<(), hubtrack_runtime::config::ParamError> {
+        self.sim.validate()?;
+        self.sim
+            .link
+            .parse::<hubtrack_mavlink::Endpoint>()
+            .map(|_| ())
+            .map_err(|e| hubtrack_runtime::config::ParamError {
+                key: "sim.link".into(),
+                value: format!("{:?}", self.sim.link),
+                allowed: e.to_string(),
+            })
+    }
 }
 
 fn main() {
@@ -58,12 +79,15 @@ fn main() {
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let Stage {
+    let Some(Stage {
         config,
         shutdown,
         node,
         mut status,
-    } = Stage::start("sim", &args.config)?;
+    }) = Stage::<SimSections>::start("sim", &args.stage)?
+    else {
+        return Ok(());
+    };
     let cfg = &config.sim;
     let scenario = Scenario::from_seed(cfg.seed, cfg);
     let camera = render_camera(&cfg.camera);

@@ -9,7 +9,7 @@
 
 use crate::launch::{signal, stage_binary, Stage};
 use anyhow::bail;
-use hubtrack_runtime::config::{Config, ConfigArgs, RestartPolicy};
+use hubtrack_runtime::config::{ConfigArgs, RestartPolicy, RunConfig};
 use hubtrack_runtime::ipc::{open_node, MsgPublisher, MsgSubscriber};
 use hubtrack_runtime::shutdown::Shutdown;
 use hubtrack_types::services::{STATUS, SUPERVISOR};
@@ -67,7 +67,7 @@ pub fn segment_path(record: &Path, n: u32) -> PathBuf {
 }
 
 struct Supervisor {
-    config: Config,
+    config: RunConfig,
     config_args: ConfigArgs,
     record: PathBuf,
     outcome: Option<PathBuf>,
@@ -77,8 +77,8 @@ struct Supervisor {
 
 /// How to run the pipeline once.
 pub struct RunOptions {
-    /// The validated configuration (file + overrides).
-    pub config: Config,
+    /// The validated `[run]` section (file + overrides).
+    pub config: RunConfig,
     /// The same, as forwarded to the stages.
     pub config_args: ConfigArgs,
     /// Recording file (used when the recorder is among the stages).
@@ -102,7 +102,7 @@ pub struct RunReport {
 
 impl Supervisor {
     fn args_for(&self, s: &Supervised) -> Vec<String> {
-        let mut args = crate::forwarded(&self.config_args);
+        let mut args = self.config_args.to_args();
         if s.name == "recorder" {
             args.push("--output".into());
             args.push(segment_path(&self.record, s.segment).display().to_string());
@@ -117,14 +117,14 @@ impl Supervisor {
     fn start(&mut self, i: usize) -> anyhow::Result<()> {
         let args = self.args_for(&self.stages[i]);
         let s = &mut self.stages[i];
-        let nice = self.config.run.nice_of(s.name);
+        let nice = self.config.nice_of(s.name);
         let stage = Stage::spawn(
             s.name,
             &s.binary,
             &args,
             self.stage_stdout_to_stderr,
             nice,
-            self.config.run.stop_with_supervisor,
+            self.config.stop_with_supervisor,
         )?;
         log::info!("started {} (pid {}, nice {nice})", s.name, stage.pid());
         s.process = Some(stage);
@@ -136,7 +136,7 @@ impl Supervisor {
 
     /// A stage ended (by itself, or killed for hanging): decide on a restart.
     fn ended(&mut self, i: usize, code: i32, reason: String, failure: bool) {
-        let restart = self.config.run.restart.clone();
+        let restart = self.config.restart.clone();
         let s = &mut self.stages[i];
         s.process = None;
         s.last_exit = code;
@@ -212,14 +212,36 @@ impl Supervisor {
     }
 }
 
+/// `hubtrack run`'s options.
+#[derive(clap::Args)]
+pub struct RunArgs {
+    #[command(flatten)]
+    /// Config file and overrides, passed on to every stage.
+    pub config: ConfigArgs,
+    /// Recording file (default: a timestamped file in [run].record_dir, printed at start).
+    #[arg(long, value_name = "PATH.mcap")]
+    pub record: Option<PathBuf>,
+    /// Stop after this many seconds (default: run until Ctrl-C / SIGTERM).
+    #[arg(long, value_name = "SECONDS")]
+    pub duration: Option<f64>,
+}
+
 /// `hubtrack run`: runs the pipeline until the duration ends, a signal arrives, or the source
 /// (camera or simulated flight) ends.
-pub fn run(args: crate::RunArgs) -> anyhow::Result<()> {
-    let config = args.config.load()?;
+pub fn run(args: RunArgs) -> anyhow::Result<()> {
+    let stages = args
+        .config
+        .load::<hubtrack_runtime::config::RunSections>()?
+        .run
+        .stages;
+    // Every stage checks its own sections before anything starts, so a bad key stops the run
+    // here rather than in a crash loop of one stage.
+    let config =
+        crate::config_check::check(&args.config, crate::config_check::Scope::Stages(&stages))?;
     let record = args
         .record
         .clone()
-        .unwrap_or_else(|| config.run.record_dir.join(crate::timestamped_name()));
+        .unwrap_or_else(|| config.record_dir.join(crate::summary::timestamped_name()));
     let report = supervise(RunOptions {
         config,
         config_args: args.config.clone(),
@@ -253,14 +275,14 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
     let names: Vec<&'static str> = PIPELINE_ORDER
         .iter()
         .copied()
-        .filter(|s| config.run.stages.iter().any(|c| c == s))
+        .filter(|s| config.stages.iter().any(|c| c == s))
         .collect();
     let mut stages = Vec::new();
     for name in &names {
         stages.push(Supervised {
             name,
             binary: stage_binary(name)?,
-            policy: config.run.restart.policy_of(name),
+            policy: config.restart.policy_of(name),
             process: None,
             state: StageState::Stopped,
             restart_times: VecDeque::new(),
@@ -292,8 +314,8 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
         stage_stdout_to_stderr: !interactive,
         stages,
     };
-    let startup = Duration::from_millis(config.run.startup_timeout_ms);
-    let liveness = Duration::from_millis(config.run.restart.liveness_timeout_ms);
+    let startup = Duration::from_millis(config.startup_timeout_ms);
+    let liveness = Duration::from_millis(config.restart.liveness_timeout_ms);
 
     // Start in order, each after the previous one's first heartbeat: its ports exist then, so
     // nothing published later is missed (the recorder sees frame 0). A stage that dies or stays
@@ -397,7 +419,7 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
     let elapsed = started.elapsed();
     let failure = failure.filter(|f| !f.is_empty());
 
-    let timeout = Duration::from_millis(config.run.stop_timeout_ms);
+    let timeout = Duration::from_millis(config.stop_timeout_ms);
     for s in sup.stages.iter_mut().rev() {
         if let Some(p) = s.process.as_mut() {
             let st = p.stop(timeout);
@@ -422,7 +444,7 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
         None => Vec::new(),
     };
     if interactive {
-        crate::print_summary(elapsed, &last_status, &segments);
+        crate::summary::print_summary(elapsed, &last_status, &segments);
         for s in &sup.stages {
             if s.restarts > 0 || s.state == StageState::Failed {
                 println!(

@@ -2,9 +2,8 @@
 //! using the newest vehicle state to predict the hub's motion through turns.
 
 use clap::Parser;
-use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_runtime::ipc::{MsgPublisher, MsgSubscriber};
-use hubtrack_runtime::stage::Stage;
+use hubtrack_runtime::stage::{Stage, StageArgs};
 use hubtrack_track::Tracker;
 use hubtrack_types::services::{DETECTIONS, TRACK, VEHICLE};
 use hubtrack_types::time::monotonic_ns;
@@ -23,7 +22,12 @@ const DETECTION_BUFFER: usize = 16;
 )]
 struct Args {
     #[command(flatten)]
-    config: ConfigArgs,
+    stage: StageArgs,
+}
+
+hubtrack_runtime::sections! {
+    /// What the track stage reads.
+    struct TrackSections { track: hubtrack_track::params::TrackConfig }
 }
 
 fn main() {
@@ -32,12 +36,15 @@ fn main() {
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let Stage {
+    let Some(Stage {
         config,
         shutdown,
         node,
         mut status,
-    } = Stage::start("track", &args.config)?;
+    }) = Stage::<TrackSections>::start("track", &args.stage)?
+    else {
+        return Ok(());
+    };
     let mut tracker = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
 
     let detections = MsgSubscriber::<Detection>::new(&node, &DETECTIONS, DETECTION_BUFFER)?;

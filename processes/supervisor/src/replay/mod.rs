@@ -44,6 +44,7 @@ const STOP_TIMEOUT: Duration = Duration::from_secs(10);
 #[derive(clap::Args)]
 pub struct ReplayArgs {
     #[command(flatten)]
+    /// Config file and overrides, passed on to the replayed stages.
     pub config: ConfigArgs,
     /// The recording to replay.
     pub file: PathBuf,
@@ -241,7 +242,10 @@ fn start_stages(
 /// Runs the command.
 pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     let stages = chosen_stages(&args.into)?;
-    args.config.load()?; // fail early on a bad config
+    // Fail early on a bad config: every stage replayed (and the recorder) checks its sections.
+    let mut checked: Vec<String> = stages.iter().map(|s| s.to_string()).collect();
+    checked.push("recorder".into());
+    crate::config_check::check(&args.config, crate::config_check::Scope::Stages(&checked))?;
     let first = match stages[0] {
         "detect" => FirstStage::Detect,
         "track" => FirstStage::Track,
@@ -276,12 +280,7 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     std::env::set_var(DOMAIN_ENV, format!("replay-{}", std::process::id()));
     let node = open_node("replay")?;
     let heartbeats = MsgSubscriber::<StageStatus>::new(&node, &STATUS, 64)?;
-    let mut processes = start_stages(
-        &heartbeats,
-        &stages,
-        &crate::forwarded(&args.config),
-        &output,
-    )?;
+    let mut processes = start_stages(&heartbeats, &stages, &args.config.to_args(), &output)?;
 
     let outputs = match last {
         "detect" => LastOutputs::Detections(MsgSubscriber::new(&node, &DETECTIONS, 64)?),

@@ -2,9 +2,9 @@
 //! negotiation ([`check_granted`]) and conversion ([`crate::convert`]) logic is unit-tested and the
 //! device I/O is exercised through its error paths (missing device).
 
+use crate::config::{V4lConfig, V4lFormat};
 use crate::convert::yuyv_to_bgr;
 use crate::{CaptureError, FrameInfo, FrameSink, FrameSource, Step};
-use hubtrack_runtime::config::{V4lConfig, V4lFormat};
 use hubtrack_types::time::monotonic_ns;
 use hubtrack_types::{FrameSourceKind, FrameTruth, PixelFormat};
 use opencv::core::{Mat, Vector};

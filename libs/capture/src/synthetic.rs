@@ -3,9 +3,9 @@
 //! Simulated time is `frame_index / fps`, not the wall clock, so a seed and a frame index always
 //! give the same image (replayable, testable), whatever the pacing.
 
+use crate::config::{SyntheticCamera, SyntheticConfig};
 use crate::{CaptureError, FrameInfo, FrameSink, FrameSource, Step};
 use hubtrack_render::{Camera, CameraPose, Renderer, Scene, Truth};
-use hubtrack_runtime::config::{SyntheticCamera, SyntheticConfig};
 use hubtrack_types::{FrameSourceKind, FrameTruth, PixelFormat};
 use std::f64::consts::TAU;
 

@@ -1,10 +1,11 @@
 //! `hubtrack bench frames`: the frames hop measured across real processes, against a copying
 //! baseline. A command that prints a table, not a timed test: compare the columns of one run.
 
-use crate::launch::{stage_binary, Stage};
+use crate::config::LabConfig;
 use anyhow::Context;
+use hubtrack_capture::config::{SyntheticCamera, SyntheticConfig};
 use hubtrack_capture::synthetic::SyntheticSource;
-use hubtrack_runtime::config::{Config, SyntheticCamera};
+use hubtrack_supervisor::launch::{stage_binary, Stage};
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::os::unix::net::UnixStream;
@@ -54,7 +55,7 @@ pub fn frames(args: FramesBenchArgs) -> anyhow::Result<()> {
         "usb" => SyntheticCamera::Usb,
         other => anyhow::bail!("--camera {other}: expected gopro or usb"),
     };
-    let mut config = Config::default();
+    let mut config = LabConfig::default();
     config.capture.synthetic.camera = camera;
     config.capture.fps = args.fps;
 
@@ -426,7 +427,7 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
     let run_pid = run.id();
     // The copying baseline's frame (sent after the run: see below).
     let mut source = SyntheticSource::new(
-        &hubtrack_runtime::config::SyntheticConfig {
+        &SyntheticConfig {
             camera: if camera == "usb" {
                 SyntheticCamera::Usb
             } else {

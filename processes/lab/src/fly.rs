@@ -6,12 +6,12 @@
 //! that a seed flies the same flight every time and twenty flights take minutes. The outcome of
 //! each flight comes from the simulator's ground truth.
 
-use crate::supervise::{supervise, RunOptions};
 use anyhow::{bail, Context};
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_runtime::ipc::DOMAIN_ENV;
 use hubtrack_runtime::shutdown::Shutdown;
 use hubtrack_sim::Outcome;
+use hubtrack_supervisor::supervise::{supervise, RunOptions};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -52,7 +52,7 @@ struct FlightLine<'a> {
 /// Runs the flights and prints the table (or JSON lines).
 pub fn run(args: FlyArgs) -> anyhow::Result<()> {
     // Fail on a bad config before starting anything.
-    args.config.load()?;
+    crate::config::load(&args.config)?;
     let shutdown = Shutdown::install()?;
     let dir = tempdir()?;
     let mut outcomes = Vec::new();
@@ -121,13 +121,13 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             config: args.config.config.clone(),
             overrides,
         };
-        let config = config_args.load()?;
+        let config = crate::config::load(&config_args)?;
         let outcome_path = dir.join(format!("outcome-{seed}.json"));
         let wall_limit = Duration::from_secs_f64(
             config.sim.max_time_s * if args.realtime { 1.2 } else { 4.0 } + WALL_MARGIN_S,
         );
         let report = supervise(RunOptions {
-            config,
+            config: config.run.clone(),
             config_args,
             record: record.clone().unwrap_or_else(|| dir.join("unused.mcap")),
             duration: Some(wall_limit),

@@ -43,7 +43,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         "--fps must be a positive number, got {}",
         args.fps
     );
-    let config = args.config.load()?;
+    let config = crate::config::load(&args.config)?;
     let mut det = detector(&config.detect, args.mode.map(Into::into))?;
     let mut tracker = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
     // As in the live pipeline, the tracker's newest state focuses the detector on the next frame.

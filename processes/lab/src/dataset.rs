@@ -68,7 +68,7 @@ pub struct DatasetArgs {
 
 /// Writes the set.
 pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
-    let config = a.config.load()?;
+    let config = crate::config::load(&a.config)?;
     let mut det = crate::detect_cmd::detector(&config.detect, None)?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let labels_path = a.out.join("labels.jsonl");

@@ -2,12 +2,12 @@
 //! offline (the stages' library code, no processes), the project's tracker and the thesis's
 //! filter side by side.
 
+use crate::config::LabConfig;
 use crate::score::point_segment_distance;
 use anyhow::Context;
 use hubtrack_detect::{Detector, Hints, ImageView};
 use hubtrack_render::dataset::{flight, FLIGHT_FPS};
 use hubtrack_render::{Camera, Renderer};
-use hubtrack_runtime::config::Config;
 use hubtrack_track::{BaselineTracker, Tracker};
 use hubtrack_types::{Detection, PixelFormat, TrackMode, TrackState, VehicleState};
 
@@ -172,7 +172,7 @@ pub struct Outputs<'a> {
 /// Runs `flights` flights of `frames` frames and prints the tables, writing the optional
 /// per-frame outputs on the way.
 pub fn run(
-    config: &Config,
+    config: &LabConfig,
     flights: u64,
     frames: u64,
     seed: u64,

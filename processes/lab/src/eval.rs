@@ -77,7 +77,7 @@ pub struct EvalArgs {
 
 /// Runs the command.
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
-    let config = args.config.load()?;
+    let config = crate::config::load(&args.config)?;
     if let Some(dir) = &args.misses {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         std::fs::write(dir.join("misses.jsonl"), "")

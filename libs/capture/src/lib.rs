@@ -6,6 +6,9 @@
 //! converts into it. Sources: [`v4l_source`] (camera), [`video`] (file), [`images`] (stills),
 //! [`synthetic`] (renderer).
 
+#![warn(missing_docs)]
+
+pub mod config;
 pub mod convert;
 pub mod images;
 pub mod pacing;
@@ -14,7 +17,7 @@ pub mod synthetic;
 pub mod v4l_source;
 pub mod video;
 
-use hubtrack_runtime::config::{CaptureConfig, SourceKind};
+use config::{CaptureConfig, SourceKind};
 use hubtrack_types::{FrameSourceKind, FrameTruth, PixelFormat};
 use std::path::PathBuf;
 

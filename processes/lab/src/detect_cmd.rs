@@ -129,7 +129,7 @@ pub fn detector(config: &DetectConfig, mode: Option<Mode>) -> anyhow::Result<Det
 
 /// Runs the command.
 pub fn run(args: DetectArgs) -> anyhow::Result<()> {
-    let config = args.config.load()?;
+    let config = crate::config::load(&args.config)?;
     let mut det = detector(&config.detect, args.mode.map(Into::into))?;
     if let Some(dir) = &args.annotate {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;

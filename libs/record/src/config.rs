@@ -1,0 +1,45 @@
+//! `[recorder]`: how the recorder stage writes the MCAP file.
+
+use hubtrack_types::params;
+use serde::{Deserialize, Serialize};
+
+/// MCAP chunk compression.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Compression {
+    /// No compression (fastest, largest).
+    None,
+    /// LZ4 (fast; the default).
+    Lz4,
+    /// Zstandard (smaller, slower).
+    Zstd,
+}
+
+params! {
+    /// `[recorder]`.
+    pub struct RecorderConfig {
+        /// Chunk compression.
+        pub compression: Compression = Compression::Lz4;
+        /// Target chunk size, KiB. A chunk is also closed at every flush.
+        pub chunk_size_kib: u64 = 4096, closed(16, 1 << 20);
+        /// Frames buffered between the shared-memory reader and the disk writer; when full,
+        /// further frames are dropped and counted (the camera never waits for the disk).
+        pub queue_frames: usize = 16, closed(1, 1024);
+        /// Close the current chunk and flush to the OS at least this often, ms: after a
+        /// `kill -9` everything older than this is readable.
+        pub flush_interval_ms: u64 = 200, closed(10, 60_000);
+        /// Record the pixels of every frame (false: only the frame headers).
+        pub record_frames: bool = true;
+        /// Free space the recorder leaves on the recording's file system, MiB (0: no limit).
+        /// Below it, frame pixels are no longer written (headers and results still are) so that
+        /// the file can always be finished; above twice the limit, pixels are written again.
+        pub min_free_mib: u64 = 512, closed(0, 1 << 24);
+    }
+}
+
+impl RecorderConfig {
+    /// Checks every value; errors name the key under `recorder`.
+    pub fn validate(&self) -> Result<(), hubtrack_types::params::ParamError> {
+        self.check_ranges("recorder")
+    }
+}
