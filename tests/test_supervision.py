@@ -106,7 +106,10 @@ def test_crash_looping_stage_is_given_up_and_others_keep_running(runner, tmp_pat
     for name in ("hubtrack-capture", "hubtrack-recorder"):
         (stage_dir / name).symlink_to(BIN / name)
     fake = stage_dir / "hubtrack-detect"
-    fake.write_text("#!/bin/sh\necho 'simulated crash' >&2\nexit 3\n")
+    # A stage whose config is fine (`hubtrack run` asks every stage to check it before starting
+    # any) but that crashes as soon as it runs.
+    fake.write_text("#!/bin/sh\ncase \"$*\" in *-config*) exit 0;; esac\n"
+                    "echo 'simulated crash' >&2\nexit 3\n")
     fake.chmod(0o755)
     runner.env["HUBTRACK_STAGE_DIR"] = str(stage_dir)
     rec = tmp_path / "loop.mcap"

@@ -176,7 +176,7 @@ fn iceoryx2_hop(args: &FramesBenchArgs, camera: SyntheticCamera) -> anyhow::Resu
         )?);
         std::thread::sleep(Duration::from_millis(300));
     }
-    let exe = std::env::current_exe()?;
+    let exe = flight_binary()?;
     let mut tap = Command::new(&exe)
         .args(["tap", "--duration", &format!("{}", args.seconds + 1.0)])
         .stdout(Stdio::piped())
@@ -368,7 +368,7 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
     let dir = std::env::temp_dir().join(&domain);
     std::fs::create_dir_all(&dir)?;
     let rec = dir.join("pipeline.mcap");
-    let exe = std::env::current_exe()?;
+    let exe = flight_binary()?;
     let taskset = ["/usr/bin/taskset", "/bin/taskset"]
         .into_iter()
         .find(|p| Path::new(p).exists());
@@ -528,4 +528,11 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
     let _ = std::fs::remove_file(&rec);
     let _ = std::fs::remove_dir(&dir);
     Ok(())
+}
+
+/// The flight command `hubtrack` beside this binary: the benchmarks drive it as an operator would.
+fn flight_binary() -> anyhow::Result<std::path::PathBuf> {
+    let exe = std::env::current_exe()?.with_file_name("hubtrack");
+    anyhow::ensure!(exe.is_file(), "{} not found beside hubtrack-lab", exe.display());
+    Ok(exe)
 }

@@ -5,10 +5,14 @@ use std::io::{BufRead, BufReader, Write};
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// Poll period while waiting for a stage to exit.
 const EXIT_POLL: Duration = Duration::from_millis(20);
+/// Longest wait for an ended stage's last stderr lines.
+const STDERR_DRAIN: Duration = Duration::from_millis(200);
 
 /// Environment variable naming the folder of the stage binaries (default: next to `hubtrack`).
 pub const STAGE_DIR_ENV: &str = "HUBTRACK_STAGE_DIR";
@@ -48,6 +52,17 @@ pub struct Stage {
     pub started_ns: u64,
     /// Exit status once it ended.
     pub exited: Option<ExitStatus>,
+    /// The last `error: ...` line the stage printed.
+    stderr: Arc<StderrTail>,
+}
+
+/// What a stage's stderr said last, kept by the thread that forwards it.
+#[derive(Default)]
+struct StderrTail {
+    /// The message of the last `error: ...` line.
+    last_error: Mutex<Option<String>>,
+    /// Set when the stream closed (the process ended).
+    closed: AtomicBool,
 }
 
 impl Stage {
@@ -106,15 +121,32 @@ impl Stage {
                 binary.display()
             )
         })?;
-        forward(name, child.stdout.take().expect("piped"), stdout_to_stderr);
-        forward(name, child.stderr.take().expect("piped"), true);
+        let stderr = Arc::new(StderrTail::default());
+        forward(name, child.stdout.take().expect("piped"), stdout_to_stderr, None);
+        forward(
+            name,
+            child.stderr.take().expect("piped"),
+            true,
+            Some(stderr.clone()),
+        );
         Ok(Stage {
             name: name.into(),
             child,
             started: Instant::now(),
             started_ns: hubtrack_types::time::monotonic_ns(),
             exited: None,
+            stderr,
         })
+    }
+
+    /// The message of the last `error: ...` line the stage printed, once it has ended (waits up
+    /// to [`STDERR_DRAIN`] for its stderr to be read to the end).
+    pub fn last_error(&self) -> Option<String> {
+        let deadline = Instant::now() + STDERR_DRAIN;
+        while !self.stderr.closed.load(Ordering::Acquire) && Instant::now() < deadline {
+            std::thread::sleep(EXIT_POLL / 4);
+        }
+        self.stderr.last_error.lock().ok()?.clone()
     }
 
     /// Process id.
@@ -177,16 +209,29 @@ pub fn signal(pid: u32, sig: i32) {
     }
 }
 
-fn forward(name: &str, stream: impl std::io::Read + Send + 'static, to_stderr: bool) {
+fn forward(
+    name: &str,
+    stream: impl std::io::Read + Send + 'static,
+    to_stderr: bool,
+    tail: Option<Arc<StderrTail>>,
+) {
     let prefix = format!("[{name}] ");
     std::thread::spawn(move || {
         for line in BufReader::new(stream).lines() {
             let Ok(line) = line else { break };
+            if let (Some(tail), Some(message)) = (&tail, line.strip_prefix("error: ")) {
+                if let Ok(mut last) = tail.last_error.lock() {
+                    *last = Some(message.to_string());
+                }
+            }
             if to_stderr {
                 let _ = writeln!(std::io::stderr().lock(), "{prefix}{line}");
             } else {
                 let _ = writeln!(std::io::stdout().lock(), "{prefix}{line}");
             }
+        }
+        if let Some(tail) = tail {
+            tail.closed.store(true, Ordering::Release);
         }
     });
 }

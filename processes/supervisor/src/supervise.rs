@@ -28,6 +28,8 @@ use std::time::{Duration, Instant};
 /// The simulator starts last: its first frame finds the whole pipeline ready (in lockstep it
 /// would otherwise wait for stages still starting), and it stops first.
 pub const PIPELINE_ORDER: &[&str] = &["recorder", "capture", "detect", "track", "control", "sim"];
+/// The stages that publish frames: a run whose frame source is given up on ends.
+const FRAME_SOURCES: &[&str] = &["capture", "sim"];
 /// Supervisor loop period (bounds restart and liveness reaction time).
 const TICK: Duration = Duration::from_millis(20);
 /// How often the supervisor publishes its status.
@@ -369,7 +371,7 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
                 if let Some(st) = p.poll() {
                     let code = exit_code(st);
                     let clean = st.success();
-                    if clean && (s.name == "capture" || s.name == "sim") {
+                    if clean && FRAME_SOURCES.contains(&s.name) {
                         // The source ended (end of file, max_frames, flight over): the run is complete.
                         log::info!("{} finished: ending the run", s.name);
                         s.process = None;
@@ -377,7 +379,20 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
                         failure = Some(String::new());
                         break;
                     }
-                    sup.ended(i, code, format!("exit {st}"), !clean);
+                    let reason = match p.last_error() {
+                        Some(e) => format!("{st}: {e}"),
+                        None => st.to_string(),
+                    };
+                    sup.ended(i, code, reason, !clean);
+                    let s = &sup.stages[i];
+                    if s.state == StageState::Failed && FRAME_SOURCES.contains(&s.name) {
+                        // Without frames nothing else can work: say why and end the run.
+                        failure = Some(format!(
+                            "the frame source {} was given up on ({}); ending the run",
+                            s.name, s.last_reason
+                        ));
+                        break;
+                    }
                     continue;
                 }
                 // Liveness: running stages must keep heart-beating (a SIGSTOPped or deadlocked
