@@ -533,6 +533,10 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
 /// The flight command `hubtrack` beside this binary: the benchmarks drive it as an operator would.
 fn flight_binary() -> anyhow::Result<std::path::PathBuf> {
     let exe = std::env::current_exe()?.with_file_name("hubtrack");
-    anyhow::ensure!(exe.is_file(), "{} not found beside hubtrack-lab", exe.display());
+    anyhow::ensure!(
+        exe.is_file(),
+        "{} not found beside hubtrack-lab",
+        exe.display()
+    );
     Ok(exe)
 }

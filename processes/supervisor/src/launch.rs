@@ -122,7 +122,12 @@ impl Stage {
             )
         })?;
         let stderr = Arc::new(StderrTail::default());
-        forward(name, child.stdout.take().expect("piped"), stdout_to_stderr, None);
+        forward(
+            name,
+            child.stdout.take().expect("piped"),
+            stdout_to_stderr,
+            None,
+        );
         forward(
             name,
             child.stderr.take().expect("piped"),
