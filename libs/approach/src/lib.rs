@@ -100,6 +100,40 @@ struct Command {
     yaw_rate: f64,
 }
 
+/// What a usable track state says about the three tasks (see `Approach::cues`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Cues {
+    /// Normalised image error of the hub, + right of centre (T1).
+    ex: f64,
+    /// Normalised image error of the hub, + below centre (T1).
+    ey: f64,
+    /// The relative yaw to act on, degrees (T2).
+    yaw: Option<f64>,
+    /// The distance to act on, m (T3).
+    dist: Option<f64>,
+    /// The track's own distance while the remembered hub bounds it (see `bounded_distance`).
+    remembered: Option<f64>,
+    /// Distance minus the target, m.
+    derr: Option<f64>,
+    /// A valid distance in this very track state: forward motion is allowed.
+    forward_ok: bool,
+    /// All three errors within their inner tolerances.
+    at_target: bool,
+}
+
+/// The sideways target of one step: T2 steering or the probe.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Lateral {
+    /// Sideways speed target, m/s.
+    vy_t: f64,
+    /// The probe sweeps.
+    probing: bool,
+    /// How long the yaw or the distance has been missing, s.
+    missing_s: f64,
+    /// How far to either side the probe sweeps, m.
+    probe_span_m: f64,
+}
+
 /// Sticky abort state.
 #[derive(Debug, Clone, PartialEq)]
 struct AbortState {
@@ -583,22 +617,55 @@ impl Approach {
         t: &TrackState,
         vehicle: Option<&VehicleState>,
     ) -> (ApproachTask, Command, String) {
-        let c = self.config.clone();
         if self.unusable_since_ns.take().is_some() {
-            // Re-acquired: a fresh track, a fresh search budget.
-            self.reset_tasks();
-            self.search_turned_deg = 0.0;
-            self.search_exhausted = false;
-            self.backoff_m = 0.0;
-            // ... which may be something else: the remembered hub bounds its distance.
-            if self
-                .hub_fix
-                .is_some_and(|f| secs(f.at_ns, now) <= c.reacquire_memory_s)
-            {
-                self.reacquired_ns = Some(now);
-            }
+            self.restart_after_loss(now);
+        }
+        let cues = self.cues(now, t, vehicle);
+        self.update_hysteresis(&cues);
+        self.update_done(now, &cues);
+        if self.done {
+            return self.hold_station(dt, &cues);
         }
 
+        // --- targets of each axis ---
+        let vz_t = self.t1_climb_target(&cues);
+        let lateral = self.lateral_target(now, &cues);
+        let (vx_t, backoff_spent) = self.forward_target(&cues);
+        // --- rate limits ---
+        let cmd = self.rate_limited(dt, &cues, [vx_t, lateral.vy_t, vz_t], lateral.probing);
+
+        let (task, reason) = if self.t1_active {
+            (
+                ApproachTask::CentreHub,
+                t1_reason(cues.ex, cues.ey, &self.config),
+            )
+        } else if self.t2_active {
+            (ApproachTask::ReduceYaw, self.t2_reason(&cues, &lateral))
+        } else {
+            let reason = self.t3_reason(now, t, &cues, &lateral, backoff_spent);
+            (ApproachTask::Approach, reason)
+        };
+        (task, cmd, reason)
+    }
+
+    /// A usable track again after a loss: a fresh track, a fresh search budget; and the
+    /// remembered hub bounds its distance, since it may be something else.
+    fn restart_after_loss(&mut self, now: u64) {
+        self.reset_tasks();
+        self.search_turned_deg = 0.0;
+        self.search_exhausted = false;
+        self.backoff_m = 0.0;
+        if self
+            .hub_fix
+            .is_some_and(|f| secs(f.at_ns, now) <= self.config.reacquire_memory_s)
+        {
+            self.reacquired_ns = Some(now);
+        }
+    }
+
+    /// What a usable track state says about the three tasks: the image errors, the yaw and
+    /// distance to act on (feeding the filters and the turbine-heading estimate with it).
+    fn cues(&mut self, now: u64, t: &TrackState, vehicle: Option<&VehicleState>) -> Cues {
         // Normalised image errors (checked non-zero size and finite position in check_inputs).
         let (hw, hh) = (
             f64::from(t.image_width) / 2.0,
@@ -612,104 +679,131 @@ impl Approach {
         self.update_filters(t);
         let yaw = self.heading_yaw(t, vehicle, new_track_state).or(self.yaw_f);
         let (dist, remembered) = self.bounded_distance(now, t, vehicle);
+        let c = &self.config;
         // The distance reads at the target again: a fresh backing-off allowance.
         if dist.is_some_and(|d| d >= c.target_distance_m - c.distance_tolerance_outer_m) {
             self.t3_backoff_m = 0.0;
         }
+        let derr = dist.map(|d| d - c.target_distance_m);
+        let at_target = ex.abs() <= c.box_inner_x
+            && ey.abs() <= c.box_inner_y
+            && yaw.is_some_and(|y| y.abs() <= c.yaw_tolerance_deg)
+            && derr.is_some_and(|e| e.abs() <= c.distance_tolerance_m);
+        Cues {
+            ex,
+            ey,
+            yaw,
+            dist,
+            remembered,
+            derr,
+            forward_ok: t.distance_valid && dist.is_some(),
+            at_target,
+        }
+    }
 
-        // Hysteresis: unmet above the outer threshold, met below the inner one, else unchanged.
+    /// Hysteresis of T1, T2 and T3: unmet above the outer threshold, met below the inner one,
+    /// else unchanged.
+    fn update_hysteresis(&mut self, cues: &Cues) {
+        let c = &self.config;
+        let (ex, ey) = (cues.ex, cues.ey);
         if ex.abs() > c.box_x || ey.abs() > c.box_y {
             self.t1_active = true;
         } else if ex.abs() <= c.box_inner_x && ey.abs() <= c.box_inner_y {
             self.t1_active = false;
         }
-        match yaw {
+        match cues.yaw {
             Some(y) if y.abs() > c.yaw_tolerance_outer_deg => self.t2_active = true,
             Some(y) if y.abs() <= c.yaw_tolerance_deg => self.t2_active = false,
             Some(_) => {}
             // Unknown yaw cannot count as met.
             None => self.t2_active = true,
         }
-        let derr = dist.map(|d| d - c.target_distance_m);
-        match derr {
+        match cues.derr {
             Some(e) if e.abs() > c.distance_tolerance_outer_m => self.t3_active = true,
             Some(e) if e.abs() <= c.distance_tolerance_m => self.t3_active = false,
             Some(_) => {}
             None => self.t3_active = true,
         }
-        let any_active = self.t1_active || self.t2_active || self.t3_active;
+    }
 
-        // Done: entered after all inner tolerances held for done_hold_s, left only when a
-        // hysteresis flag trips at its outer threshold.
-        let at_target = ex.abs() <= c.box_inner_x
-            && ey.abs() <= c.box_inner_y
-            && yaw.is_some_and(|y| y.abs() <= c.yaw_tolerance_deg)
-            && derr.is_some_and(|e| e.abs() <= c.distance_tolerance_m);
+    /// Done: entered after all inner tolerances held for done_hold_s, left only when a
+    /// hysteresis flag trips at its outer threshold.
+    fn update_done(&mut self, now: u64, cues: &Cues) {
+        let any_active = self.t1_active || self.t2_active || self.t3_active;
         if self.done && any_active {
             self.done = false;
             self.at_target_since_ns = None;
         }
         if !self.done {
-            if at_target && !any_active {
+            if cues.at_target && !any_active {
                 let since = *self.at_target_since_ns.get_or_insert(now);
-                if secs(since, now) >= c.done_hold_s {
+                if secs(since, now) >= self.config.done_hold_s {
                     self.done = true;
                 }
             } else {
                 self.at_target_since_ns = None;
             }
         }
-        if self.done {
-            let reason = format!(
-                "done: {:.2} m, yaw {:.1} deg, hub {:+.2} {:+.2}",
-                dist.unwrap_or(f64::NAN),
-                yaw.unwrap_or(f64::NAN),
-                ex,
-                ey
-            );
-            // Hover, but hold the station sideways and at the distance: at 5 m a gust that
-            // pushes the vehicle 1 m aside turns into ~11° of relative yaw, and one that pushes
-            // it back takes it out of 5 ± 0.5 m, which zero velocity would leave until an outer
-            // threshold trips. T2's lateral law and a gentle distance law run (slowly, through
-            // the rate limit); the image errors are noisier than the drift and wait for their
-            // outer thresholds. No forward motion without a distance, as everywhere.
-            let vy_t = yaw.map_or(0.0, |y| {
-                let lateral_m = dist.unwrap_or(c.nominal_distance_m) * y.to_radians().sin();
-                limit_abs(-c.done_lateral_gain_per_s * lateral_m, c.max_lateral_m_s)
-            });
-            let vx_t = dist.map_or(0.0, |d| {
-                limit(
-                    c.done_distance_gain_per_s * (d - c.target_distance_m),
-                    -c.max_backward_m_s,
-                    c.max_forward_m_s,
-                )
-            });
-            let vy = slew(self.cmd.vy, vy_t, c.accel_xy_m_s2, dt);
-            let vx = slew(self.cmd.vx, vx_t, c.accel_xy_m_s2, dt);
-            return (
-                ApproachTask::Done,
-                Command {
-                    vx,
-                    vy,
-                    ..Command::default()
-                },
-                reason,
-            );
-        }
+    }
 
-        // --- targets of each axis ---
-        // T1 vertical: always on.
-        let vz_t = limit_abs(
-            c.climb_gain_m_s * deadband(ey, c.deadband_y),
-            c.max_vertical_m_s,
+    /// The Done command: hover, holding the station sideways and at the distance.
+    fn hold_station(&self, dt: f64, cues: &Cues) -> (ApproachTask, Command, String) {
+        let c = &self.config;
+        let (yaw, dist) = (cues.yaw, cues.dist);
+        let reason = format!(
+            "done: {:.2} m, yaw {:.1} deg, hub {:+.2} {:+.2}",
+            dist.unwrap_or(f64::NAN),
+            yaw.unwrap_or(f64::NAN),
+            cues.ex,
+            cues.ey
         );
+        // Hover, but hold the station sideways and at the distance: at 5 m a gust that
+        // pushes the vehicle 1 m aside turns into ~11° of relative yaw, and one that pushes
+        // it back takes it out of 5 ± 0.5 m, which zero velocity would leave until an outer
+        // threshold trips. T2's lateral law and a gentle distance law run (slowly, through
+        // the rate limit); the image errors are noisier than the drift and wait for their
+        // outer thresholds. No forward motion without a distance, as everywhere.
+        let vy_t = yaw.map_or(0.0, |y| {
+            let lateral_m = dist.unwrap_or(c.nominal_distance_m) * y.to_radians().sin();
+            limit_abs(-c.done_lateral_gain_per_s * lateral_m, c.max_lateral_m_s)
+        });
+        let vx_t = dist.map_or(0.0, |d| {
+            limit(
+                c.done_distance_gain_per_s * (d - c.target_distance_m),
+                -c.max_backward_m_s,
+                c.max_forward_m_s,
+            )
+        });
+        let vy = slew(self.cmd.vy, vy_t, c.accel_xy_m_s2, dt);
+        let vx = slew(self.cmd.vx, vx_t, c.accel_xy_m_s2, dt);
+        (
+            ApproachTask::Done,
+            Command {
+                vx,
+                vy,
+                ..Command::default()
+            },
+            reason,
+        )
+    }
 
-        // T2 lateral: on in T2 and T3 (keeps the yaw small during the approach), off in T1.
-        // Without a yaw (T2) or a distance (T3: no forward motion) for long, probe sideways: both
-        // cues come from the tower, which from some spots hides behind a blade pointing down,
-        // and a few metres aside the view changes. T2 steering on a known yaw goes first.
-        let forward_ok = t.distance_valid && dist.is_some();
-        let missing_s = if yaw.is_some() && forward_ok {
+    /// T1 vertical: always on.
+    fn t1_climb_target(&self, cues: &Cues) -> f64 {
+        let c = &self.config;
+        limit_abs(
+            c.climb_gain_m_s * deadband(cues.ey, c.deadband_y),
+            c.max_vertical_m_s,
+        )
+    }
+
+    /// T2 lateral: on in T2 and T3 (keeps the yaw small during the approach), off in T1.
+    /// Without a yaw (T2) or a distance (T3: no forward motion) for long, probe sideways: both
+    /// cues come from the tower, which from some spots hides behind a blade pointing down,
+    /// and a few metres aside the view changes. T2 steering on a known yaw goes first.
+    fn lateral_target(&mut self, now: u64, cues: &Cues) -> Lateral {
+        let c = &self.config;
+        let (yaw, dist) = (cues.yaw, cues.dist);
+        let missing_s = if yaw.is_some() && cues.forward_ok {
             self.cue_missing_since_ns = None;
             self.probe_offset_m = 0.0;
             0.0
@@ -737,14 +831,24 @@ impl Approach {
             }
             _ => 0.0,
         };
+        Lateral {
+            vy_t,
+            probing,
+            missing_s,
+            probe_span_m,
+        }
+    }
 
-        // T3 forward/back, proportional, capped by the margin to min_distance.
+    /// T3 forward/back, proportional, capped by the margin to min_distance; and whether the
+    /// backing-off allowance is spent.
+    fn forward_target(&self, cues: &Cues) -> (f64, bool) {
+        let c = &self.config;
         let t3_law = |d: f64| {
             let v = c.forward_gain_per_s * (d - c.target_distance_m);
             let cap = c.slowdown_gain_per_s * (d - c.min_distance_m);
             limit(v.min(cap), -c.max_backward_m_s, c.max_forward_m_s)
         };
-        let vx_t = match dist {
+        let vx_t = match cues.dist {
             Some(d) if !self.t1_active && !self.t2_active => t3_law(d),
             // Backing away from a hub that is too close is allowed in every task.
             Some(d) if d < c.target_distance_m - c.distance_tolerance_outer_m => t3_law(d).min(0.0),
@@ -755,12 +859,18 @@ impl Approach {
         let backoff_spent = self.t3_backoff_m >= c.max_backoff_m;
         let vx_t = if backoff_spent { vx_t.max(0.0) } else { vx_t };
         // Never forward without a valid distance in this very track state.
-        let vx_t = if forward_ok { vx_t } else { vx_t.min(0.0) };
+        let vx_t = if cues.forward_ok { vx_t } else { vx_t.min(0.0) };
+        (vx_t, backoff_spent)
+    }
 
-        // --- rate limits ---
+    /// The command from the targets `[vx, vy, vz]` through the rate limits (counting the
+    /// backing off and the probe's sideways travel), with T1's yaw rate for that sideways speed.
+    fn rate_limited(&mut self, dt: f64, cues: &Cues, target: [f64; 3], probing: bool) -> Command {
+        let c = &self.config;
+        let [vx_t, vy_t, vz_t] = target;
         let a_xy = c.accel_xy_m_s2;
         let vx = slew_forward(self.cmd.vx, vx_t, a_xy, c.brake_x_m_s2, dt);
-        let vx = if forward_ok { vx } else { vx.min(0.0) };
+        let vx = if cues.forward_ok { vx } else { vx.min(0.0) };
         if vx < 0.0 && vx_t < 0.0 {
             self.t3_backoff_m += -vx * dt;
         }
@@ -769,69 +879,81 @@ impl Approach {
             self.probe_offset_m += vy * dt;
         }
         let vz = slew(self.cmd.vz, vz_t, c.accel_z_m_s2, dt);
+        Command {
+            vx,
+            vy,
+            vz,
+            yaw_rate: self.t1_yaw_rate(dt, cues, vy),
+        }
+    }
 
-        // T1 yaw: proportional to the image error plus the yaw rate that the commanded sideways
-        // motion needs to keep the hub centred (moving left, the hub drifts right: turn right).
-        let ff = match dist {
+    /// T1 yaw: proportional to the image error plus the yaw rate that the commanded sideways
+    /// motion `vy` needs to keep the hub centred (moving left, the hub drifts right: turn
+    /// right), through its rate limit.
+    fn t1_yaw_rate(&self, dt: f64, cues: &Cues, vy: f64) -> f64 {
+        let c = &self.config;
+        let ff = match cues.dist {
             Some(d) => -c.arc_feedforward * vy / d.max(c.min_distance_m),
             None => 0.0,
         };
         let max_r = c.max_yaw_rate_deg_s.to_radians();
         let r_t = limit_abs(
-            c.yaw_gain_deg_s.to_radians() * deadband(ex, c.deadband_x) + ff,
+            c.yaw_gain_deg_s.to_radians() * deadband(cues.ex, c.deadband_x) + ff,
             max_r,
         );
-        let yaw_rate = slew(self.cmd.yaw_rate, r_t, c.yaw_accel_deg_s2.to_radians(), dt);
+        slew(self.cmd.yaw_rate, r_t, c.yaw_accel_deg_s2.to_radians(), dt)
+    }
 
-        let cmd = Command {
-            vx,
-            vy,
-            vz,
-            yaw_rate,
-        };
-        let (task, reason) = if self.t1_active {
-            (ApproachTask::CentreHub, t1_reason(ex, ey, &c))
-        } else if self.t2_active {
-            let reason = match yaw {
-                Some(y) => {
-                    let d = dist.unwrap_or(c.nominal_distance_m);
-                    format!(
-                        "T2: yaw {y:.1} deg, {:.1} m off axis (tol {:.1})",
-                        d * y.to_radians().sin(),
-                        c.yaw_tolerance_deg
-                    )
-                }
-                None if probing => format!(
-                    "T2: no valid yaw for {missing_s:.0} s, probing sideways {:+.1}/{:.1} m",
-                    self.probe_offset_m, probe_span_m
-                ),
-                None => "T2: no valid yaw, holding position".into(),
-            };
-            (ApproachTask::ReduceYaw, reason)
-        } else {
-            let reason = match (dist, t.distance_valid) {
-                (Some(d), true) if !self.t3_active && at_target => format!(
-                    "T3: at {d:.2} m, settling {:.1}/{:.1} s",
-                    self.at_target_since_ns.map_or(0.0, |s| secs(s, now)),
-                    c.done_hold_s
-                ),
-                (Some(d), true) if backoff_spent => format!(
-                    "T3: still {d:.1} m after backing {:.1} m: no further back",
-                    self.t3_backoff_m
-                ),
-                (Some(d), true) if remembered.is_some() => {
-                    format!("T3: {d:.1} m to the remembered hub (track {:.1} m)", remembered.unwrap_or(d))
-                }
-                (Some(d), true) => format!("T3: {d:.1} m to hub, target {:.1} m", c.target_distance_m),
-                _ if probing => format!(
-                    "T3: no valid distance for {missing_s:.0} s, not moving forward, probing sideways {:+.1}/{:.1} m",
-                    self.probe_offset_m, probe_span_m
-                ),
-                _ => "T3: no valid distance, not moving forward".into(),
-            };
-            (ApproachTask::Approach, reason)
-        };
-        (task, cmd, reason)
+    /// Why T2 is active.
+    fn t2_reason(&self, cues: &Cues, lateral: &Lateral) -> String {
+        let c = &self.config;
+        match cues.yaw {
+            Some(y) => {
+                let d = cues.dist.unwrap_or(c.nominal_distance_m);
+                format!(
+                    "T2: yaw {y:.1} deg, {:.1} m off axis (tol {:.1})",
+                    d * y.to_radians().sin(),
+                    c.yaw_tolerance_deg
+                )
+            }
+            None if lateral.probing => format!(
+                "T2: no valid yaw for {:.0} s, probing sideways {:+.1}/{:.1} m",
+                lateral.missing_s, self.probe_offset_m, lateral.probe_span_m
+            ),
+            None => "T2: no valid yaw, holding position".into(),
+        }
+    }
+
+    /// Why T3 is active (or how it settles before Done).
+    fn t3_reason(
+        &self,
+        now: u64,
+        t: &TrackState,
+        cues: &Cues,
+        lateral: &Lateral,
+        backoff_spent: bool,
+    ) -> String {
+        let c = &self.config;
+        match (cues.dist, t.distance_valid) {
+            (Some(d), true) if !self.t3_active && cues.at_target => format!(
+                "T3: at {d:.2} m, settling {:.1}/{:.1} s",
+                self.at_target_since_ns.map_or(0.0, |s| secs(s, now)),
+                c.done_hold_s
+            ),
+            (Some(d), true) if backoff_spent => format!(
+                "T3: still {d:.1} m after backing {:.1} m: no further back",
+                self.t3_backoff_m
+            ),
+            (Some(d), true) if cues.remembered.is_some() => {
+                format!("T3: {d:.1} m to the remembered hub (track {:.1} m)", cues.remembered.unwrap_or(d))
+            }
+            (Some(d), true) => format!("T3: {d:.1} m to hub, target {:.1} m", c.target_distance_m),
+            _ if lateral.probing => format!(
+                "T3: no valid distance for {:.0} s, not moving forward, probing sideways {:+.1}/{:.1} m",
+                lateral.missing_s, self.probe_offset_m, lateral.probe_span_m
+            ),
+            _ => "T3: no valid distance, not moving forward".into(),
+        }
     }
 
     /// The filtered distance to act on, and the track's own reading when it is not that:

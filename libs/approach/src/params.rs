@@ -1,8 +1,9 @@
 //! Configuration of the approach controller (`[control.approach]` in `config/hubtrack.toml`).
 //!
-//! Plain serde data: the struct is `#[serde(deny_unknown_fields, default)]`, so keys left out take
-//! the defaults below and a misspelt key is an error. [`ApproachConfig::validate`] checks every
-//! number against its allowed range and names the offending key by its full dotted path
+//! Plain serde data, declared once with [`hubtrack_types::params!`] (every field with its doc,
+//! default and allowed range): keys left out take the defaults below and a misspelt key is an
+//! error. [`ApproachConfig::validate`] checks every number against its allowed range (and the
+//! inner/outer pairs against each other) and names the offending key by its full dotted path
 //! (`control.approach.max_forward_m_s`).
 //!
 //! Image errors are in *normalised* image coordinates: `ex = (hub_x - w/2) / (w/2)`,
@@ -13,321 +14,251 @@
 //! The defaults suit a ~2 kg quadrotor that starts 25-40 m from the hub and should stop 5 m in
 //! front of it within about two minutes.
 
-use serde::{Deserialize, Serialize};
-
 use hubtrack_types::params::Check;
 pub use hubtrack_types::params::ParamError;
 
-/// `[control.approach]`: the T1/T2/T3 approach controller (thesis section 7.1, algorithm 2).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ApproachConfig {
-    // ---- targets and tolerances ----
-    /// Distance from the camera to the hub at which the approach stops, m. Range [1, 100];
-    /// default 5 (thesis section 7.1).
-    pub target_distance_m: f64,
-    /// Distance tolerance counted as "at target", m: T3 is satisfied and Done may begin once the
-    /// filtered distance is within this of the target. Range (0, 10]; default 0.3.
-    pub distance_tolerance_m: f64,
-    /// Distance error that restarts T3 (and leaves Done), m; larger than `distance_tolerance_m`
-    /// so the task does not chatter. Range (0, 20]; default 0.5.
-    pub distance_tolerance_outer_m: f64,
-    /// Closest allowed distance to the hub, m: the forward speed cap falls to zero here, and
-    /// closer than `target_distance_m - distance_tolerance_outer_m` the vehicle backs away in
-    /// every task. Range (0, target_distance_m); default 3.
-    pub min_distance_m: f64,
-    /// Backing away from a hub that reads too close stops after this much backward travel
-    /// (commanded speed × time) without the distance reaching the target: a distance that does
-    /// not grow while the vehicle backs away is no measurement of it. In a simulated flight the
-    /// distance restarted at 3 m with the hub 37 m away, the detector kept finding a circle of
-    /// the size that expects, and the vehicle backed away to 57 m. The allowance restarts when
-    /// the distance reads at the target or a new track starts. Range (0, 1000]; default 6 (a
-    /// reading at `min_distance_m` needs 2 m).
-    pub max_backoff_m: f64,
-    /// Relative yaw counted as "in front of the rotor", degrees: T2 is satisfied and Done may
-    /// begin below it. Range (0, 45]; default 3.
-    pub yaw_tolerance_deg: f64,
-    /// Relative yaw that restarts T2 (and leaves Done), degrees; larger than `yaw_tolerance_deg`.
-    /// Range (0, 90); default 5.
-    pub yaw_tolerance_outer_deg: f64,
-    /// Horizontal half-size of the target box, normalised image units (1 = image edge): T1
-    /// starts when the hub is further than this from the centre. Range (0, 1]; default 0.15 (wide
-    /// enough that the pitch of a vehicle accelerating forward does not trip it).
-    pub box_x: f64,
-    /// Vertical half-size of the target box, normalised image units (1 = image edge): T1 starts
-    /// when the hub is further than this above or below the centre. Range (0, 1]; default 0.18.
-    pub box_y: f64,
-    /// Horizontal half-size of the inner box, normalised image units: T1 is satisfied (and Done
-    /// may begin) once the hub is back inside it. Range (0, box_x); default 0.07.
-    pub box_inner_x: f64,
-    /// Vertical half-size of the inner box, normalised image units: T1 is satisfied (and Done
-    /// may begin) once the hub is back inside it. Range (0, box_y); default 0.08.
-    pub box_inner_y: f64,
-    /// Horizontal deadband of the yaw correction, normalised image units: no yaw rate is
-    /// commanded for smaller errors (detector jitter). Range [0, box_inner_x); default 0.02.
-    pub deadband_x: f64,
-    /// Vertical deadband of the climb correction, normalised image units: no vertical speed is
-    /// commanded for smaller errors. Range [0, box_inner_y); default 0.03.
-    pub deadband_y: f64,
-    /// Time all three tasks must be within their inner tolerances before Done, s. Range
-    /// [0, 60]; default 1.5.
-    pub done_hold_s: f64,
-
-    // ---- gains ----
-    /// T1 yaw-rate gain, deg/s per normalised unit of horizontal error (beyond the deadband).
-    /// Range (0, 1000]; default 40 (hub at the image edge: 40 deg/s before the rate limit).
-    pub yaw_gain_deg_s: f64,
-    /// T1 vertical-speed gain, m/s per normalised unit of vertical error (beyond the deadband).
-    /// It must outpace the apparent vertical drift of an off-centre hub while closing in, which
-    /// grows as the distance shrinks. Range (0, 100]; default 2.
-    pub climb_gain_m_s: f64,
-    /// T2 lateral-speed gain, m/s per metre of lateral offset from the rotor axis
-    /// (distance x sin(relative yaw)), i.e. 1/s. Range (0, 10]; default 0.15.
-    pub lateral_gain_per_s: f64,
-    /// In Done, the lateral gain that holds the station sideways against drift, m/s per metre
-    /// off the rotor axis (the image errors are noisier than the drift and wait for their
-    /// outer thresholds). 0 = hover without correction. Range [0, 10]; default 0.8.
-    pub done_lateral_gain_per_s: f64,
-    /// In Done, the gain that holds the distance against drift, m/s per metre of distance error
-    /// (0 = hover, and only the outer threshold `distance_tolerance_outer_m` restarts T3). At
-    /// 5 m the filtered distance is good to a few centimetres, and a gust that pushes the
-    /// vehicle back is otherwise left until it is 0.5 m out: `fly` seed 492 reported done at
-    /// 5.07 m and ended 3 s later at 5.58 m, a failure. Range [0, 10]; default 0.3 (T3's own
-    /// gain).
-    pub done_distance_gain_per_s: f64,
-    /// T3 forward-speed gain, m/s per metre of distance error, i.e. 1/s. Range (0, 10];
-    /// default 0.3.
-    pub forward_gain_per_s: f64,
-    /// Forward speed cap per metre of margin to `min_distance_m`, 1/s: the forward speed never
-    /// exceeds this x (distance - min_distance_m), so the vehicle slows down as it closes in.
-    /// Range (0, 10]; default 0.5.
-    pub slowdown_gain_per_s: f64,
-    /// Fraction of the yaw rate that keeps the hub centred while T2 moves sideways
-    /// (-vy / distance) added ahead of the image error, dimensionless: 1 flies a clean arc round
-    /// the hub, 0 leaves it to the T1 feedback. Range [0, 1]; default 1.
-    pub arc_feedforward: f64,
-    /// No valid yaw (T2) or no valid distance (T3, which then cannot move forward) for this
-    /// long, s, starts a sideways probe: both come from the tower (hub–tower gap, tower width),
-    /// which from one spot can stay hidden, e.g. behind a blade pointing down, and a few metres
-    /// aside the view changes. Range [0, 600]; default 8.
-    pub yaw_probe_after_s: f64,
-    /// Sideways speed of the probe, m/s. Range (0, 10]; default 0.5.
-    pub yaw_probe_speed_m_s: f64,
-    /// The probe sweeps to either side of where it started by this angle seen from the hub,
-    /// degrees (0: no probe, hold): distance × tan(angle), 6 m at 35 m, 0.9 m at 5 m.
-    /// Range [0, 45]; default 10.
-    pub yaw_probe_span_deg: f64,
-    /// Distance used for the T2 lateral offset while no valid distance estimate exists, m.
-    /// Range (0, 1000]; default 20.
-    pub nominal_distance_m: f64,
-
-    // ---- limits ----
-    /// Largest forward speed, m/s. Range (0, 10]; default 1.5.
-    pub max_forward_m_s: f64,
-    /// Largest backward speed (backing away from the hub), m/s. Range [0, 10]; default 1.
-    pub max_backward_m_s: f64,
-    /// Largest sideways speed, m/s. Range (0, 10]; default 1.5.
-    pub max_lateral_m_s: f64,
-    /// Largest climb or descent speed, m/s. Range (0, 5]; default 1.
-    pub max_vertical_m_s: f64,
-    /// Largest yaw rate, deg/s. Range (0, 180]; default 20.
-    pub max_yaw_rate_deg_s: f64,
-    /// Largest change of the forward and sideways speed commands, m/s per second (m/s²), per
-    /// axis. A multicopter tilts about atan(a / g) to accelerate, and the fixed camera tilts
-    /// with it: 1 m/s² pitches ~6° and moves the hub ~0.16 of the half-height in the image,
-    /// out of the default box, so the default keeps the pitch near 3°. Range (0, 20];
-    /// default 0.5.
-    pub accel_xy_m_s2: f64,
-    /// Largest decrease of a forward speed command, m/s per second (m/s²): slowing down
-    /// toward the rotor may be quicker than speeding up (the pitch-up it costs is brief, and
-    /// the hub is nearer than thought when the distance drops at once). At 1.5 m/s the
-    /// stopping distance is 2.25 m at 0.5 m/s² and 1.1 m at 1. Range [accel_xy_m_s2, 20];
-    /// default 1.
-    pub brake_x_m_s2: f64,
-    /// Largest change of the vertical speed command, m/s per second (m/s²). Range (0, 20];
-    /// default 1.
-    pub accel_z_m_s2: f64,
-    /// Largest change of the yaw-rate command, deg/s per second (deg/s²). Range (0, 1000];
-    /// default 40.
-    pub yaw_accel_deg_s2: f64,
-    /// Longest time step the rate limits and filters accept between two calls, s: a longer gap
-    /// (a stall) counts as this long, so commands never jump. Range (0, 5]; default 0.5.
-    pub max_dt_s: f64,
-
-    // ---- filters ----
-    /// Time constant of the first-order low-pass filter on the relative yaw used by T2, s
-    /// (0 = unfiltered). Range [0, 60]; default 0.5.
-    pub yaw_filter_s: f64,
-    /// Time constant of the first-order low-pass filter on the distance used by T3, s
-    /// (0 = unfiltered). Range [0, 60]; default 0.5.
-    pub distance_filter_s: f64,
-    /// Only the part of the relative yaw beyond this many of the tracker's standard deviations
-    /// is acted on (the yaw is shrunk toward 0 by `k·yaw_std_deg` before filtering), so T2 does
-    /// not chase noise at long range, where the hub–tower gap is a few pixels. Range [0, 5];
-    /// default 1.
-    pub yaw_significance_sigmas: f64,
-    /// Time constant of the estimate of the turbine's facing heading, s; 0 disables it. The
-    /// rotor does not turn during an approach, so every yaw measurement plus the autopilot's
-    /// heading toward the hub is a measurement of one constant, the heading that faces the
-    /// rotor; averaging it over this long (a running mean at first) and subtracting the current
-    /// heading toward the hub gives a relative yaw far less noisy than one frame's hub–tower
-    /// gap, and it follows the vehicle's own motion at once. Range [0, 600]; default 10.
-    pub turbine_heading_filter_s: f64,
-    /// A track lost closer than this to the hub is searched for by backing away (at
-    /// `search_backoff_m_s`, until this distance) instead of by rotating, m. Range [0, 100];
-    /// default 10 (0 = always rotate).
-    pub close_range_m: f64,
-    /// Backing-away speed of the close-range search, m/s. Range (0, 2]; default 0.3.
-    pub search_backoff_m_s: f64,
-    /// Each yaw measurement moves the turbine-heading estimate by at most this much error,
-    /// degrees (outliers have bounded influence). Range (0, 90]; default 10.
-    pub turbine_heading_clip_deg: f64,
-    /// Closer to the hub than this, m, a yaw measurement more than `turbine_heading_clip_deg`
-    /// from an established turbine-heading estimate is dropped instead of clipped (0 = always
-    /// clip). Close in, the tower often stands behind the blade pointing down and the band
-    /// taken for it gives a steady wrong yaw, while the estimate carries every farther
-    /// measurement; clipped, such a run still pulls it ~1° a second at 5 m (`fly` seed 78:
-    /// +28° measured for +4°, T2 then flew the vehicle to −18°). Range [0, 100]; default 10.
-    pub turbine_heading_close_m: f64,
-    /// Closer to the hub than this, m, an established turbine-heading estimate takes no more
-    /// yaw measurements at all: it holds what the farther views gave (0 = never hold). Close
-    /// in the tower stands behind a blade or the spinner, the band taken for it is often a
-    /// blade root, and one such frame at 7 m weighs as much as ten at 25 m (`fly` seed 224:
-    /// +9.9° measured at 7.8 m for −1.7°, T2 then moved the vehicle to −6°). Range [0, 100];
-    /// default 0.
-    pub turbine_heading_hold_m: f64,
-    /// How long the hub's position, fixed from the last confirmed track (autopilot position plus
-    /// distance along the bearing), bounds the distance of a track that follows a loss, s
-    /// (0 = no bound). A track re-acquired after a loss can be something else: lost at 3.5 m,
-    /// `fly` seed 176 (with `turbine_heading_hold_m` 10) re-acquired a blade tip 200 px aside
-    /// that read 22 m, and T3 flew into the rotor. Until the new track's distance agrees with the remembered hub (within
-    /// `reacquire_margin_m`) or `reacquire_check_s` has passed, the controller takes the
-    /// smaller of the two. Range [0, 3600]; default 60.
-    pub reacquire_memory_s: f64,
-    /// Longest the remembered hub bounds a re-acquired track's distance, s. Range [0, 600];
-    /// default 15.
-    pub reacquire_check_s: f64,
-    /// A re-acquired track's distance within this of the remembered hub's, m, plus
-    /// `reacquire_margin_frac` of it, agrees with it. Range [0, 100]; default 2.
-    pub reacquire_margin_m: f64,
-    /// The part of the margin that grows with the remembered distance (its own error).
-    /// Range [0, 1]; default 0.2.
-    pub reacquire_margin_frac: f64,
-    /// Yaw measurements needed before the turbine-heading estimate replaces the filtered
-    /// tracker yaw. Range [1, 10000]; default 15.
-    pub turbine_heading_min_samples: u32,
-    /// Weight of the learned yaw network's turbine heading in the one the approach flies on,
-    /// range [0, 1] (0 = the geometric cues' alone, 1 = the network's alone). The network's
-    /// trusted readings (the track's `net_yaw_deg`, from `track.yaw.net_fallback_min_distance_m`
-    /// out) build a second turbine-heading estimate, equally weighted and forgotten like the
-    /// first; once both hold `turbine_heading_min_samples`, the approach flies on their
-    /// weighted mean. The two fail in different places: the geometric estimate when the tower
-    /// hides behind the blade pointing down or the spinner for the last 20 m and only far,
-    /// noisy views set it, the network by a bias per scene (~3° at 8–15 m). Default 0.7:
-    /// `fly` seeds 161–560 393 of 400 against 388 at 0.5 and 381 at 0 (the geometric
-    /// estimate alone); seeds 1–20 20 of 20 against 18 at 0.5; at 0.3, 282 against 284 at 0.5
-    /// of the 294 seeds of 261–560 flown both ways; at 0.85 (session 32) 393 again, but 18 of
-    /// the 20 blocks of 20 reach 19 (0.7: 19) and |final yaw| p90 3.09° (0.7: 2.93°).
-    pub net_heading_weight: f64,
-
-    // ---- track loss, search and abort ----
-    /// Oldest usable track, s: with more time since the last accepted detection (plus the age
-    /// of the track state itself) the controller holds instead of moving. Range (0, 60];
-    /// default 0.5.
-    pub max_track_age_s: f64,
-    /// Time without a usable track after which the vehicle searches by rotating, s (the
-    /// tracker's `search_requested` starts the search at once). Range [0, 3600]; default 5.
-    pub search_after_s: f64,
-    /// Yaw rate of the search rotation, deg/s, towards the side where the hub was last seen.
-    /// Range (0, max_yaw_rate_deg_s]; default 10.
-    pub search_yaw_rate_deg_s: f64,
-    /// Total rotation of one search, degrees; afterwards the vehicle holds until a track
-    /// returns (0 = never search). Range [0, 3600]; default 360.
-    pub search_max_turn_deg: f64,
-    /// Time the inputs must be good (link up, finite numbers, time running forward) before an
-    /// abort clears by itself, s. Range [0, 3600]; default 2.
-    pub abort_recover_s: f64,
-}
-
-impl Default for ApproachConfig {
-    fn default() -> Self {
-        ApproachConfig {
-            target_distance_m: 5.0,
-            distance_tolerance_m: 0.3,
-            distance_tolerance_outer_m: 0.5,
-            min_distance_m: 3.0,
-            max_backoff_m: 6.0,
-            yaw_tolerance_deg: 3.0,
-            yaw_tolerance_outer_deg: 5.0,
-            box_x: 0.15,
-            box_y: 0.18,
-            box_inner_x: 0.07,
-            box_inner_y: 0.08,
-            deadband_x: 0.02,
-            deadband_y: 0.03,
-            done_hold_s: 1.5,
-            yaw_gain_deg_s: 40.0,
-            climb_gain_m_s: 2.0,
-            lateral_gain_per_s: 0.15,
-            done_lateral_gain_per_s: 0.8,
-            done_distance_gain_per_s: 0.3,
-            forward_gain_per_s: 0.3,
-            slowdown_gain_per_s: 0.5,
-            arc_feedforward: 1.0,
-            yaw_probe_after_s: 8.0,
-            yaw_probe_speed_m_s: 0.5,
-            yaw_probe_span_deg: 10.0,
-            nominal_distance_m: 20.0,
-            max_forward_m_s: 1.5,
-            max_backward_m_s: 1.0,
-            max_lateral_m_s: 1.5,
-            max_vertical_m_s: 1.0,
-            max_yaw_rate_deg_s: 20.0,
-            accel_xy_m_s2: 0.5,
-            brake_x_m_s2: 1.0,
-            accel_z_m_s2: 1.0,
-            yaw_accel_deg_s2: 40.0,
-            max_dt_s: 0.5,
-            yaw_filter_s: 0.5,
-            yaw_significance_sigmas: 1.0,
-            turbine_heading_filter_s: 10.0,
-            close_range_m: 10.0,
-            search_backoff_m_s: 0.3,
-            turbine_heading_clip_deg: 10.0,
-            turbine_heading_close_m: 10.0,
-            turbine_heading_hold_m: 0.0,
-            turbine_heading_min_samples: 15,
-            net_heading_weight: 0.7,
-            reacquire_memory_s: 60.0,
-            reacquire_check_s: 15.0,
-            reacquire_margin_m: 2.0,
-            reacquire_margin_frac: 0.2,
-            distance_filter_s: 0.5,
-            max_track_age_s: 1.0,
-            search_after_s: 5.0,
-            search_yaw_rate_deg_s: 10.0,
-            search_max_turn_deg: 360.0,
-            abort_recover_s: 2.0,
-        }
-    }
-}
-
 /// Upper bound for times, s.
 const MAX_TIME_S: f64 = 3600.0;
+
+hubtrack_types::params! {
+    /// `[control.approach]`: the T1/T2/T3 approach controller (thesis section 7.1, algorithm 2).
+    pub struct ApproachConfig {
+        // ---- targets and tolerances ----
+        /// Distance from the camera to the hub at which the approach stops, m. Range [1, 100];
+        /// default 5 (thesis section 7.1).
+        pub target_distance_m: f64 = 5.0, closed(1.0, 100.0);
+        /// Distance tolerance counted as "at target", m: T3 is satisfied and Done may begin once
+        /// the filtered distance is within this of the target. Range (0, 10]; default 0.3.
+        pub distance_tolerance_m: f64 = 0.3, open_closed(0.0, 10.0);
+        /// Distance error that restarts T3 (and leaves Done), m; larger than `distance_tolerance_m`
+        /// so the task does not chatter. Range (0, 20]; default 0.5.
+        pub distance_tolerance_outer_m: f64 = 0.5, open_closed(0.0, 20.0);
+        /// Closest allowed distance to the hub, m: the forward speed cap falls to zero here, and
+        /// closer than `target_distance_m - distance_tolerance_outer_m` the vehicle backs away in
+        /// every task. Range (0, target_distance_m); default 3.
+        pub min_distance_m: f64 = 3.0;
+        /// Backing away from a hub that reads too close stops after this much backward travel
+        /// (commanded speed × time) without the distance reaching the target: a distance that does
+        /// not grow while the vehicle backs away is no measurement of it. In a simulated flight the
+        /// distance restarted at 3 m with the hub 37 m away, the detector kept finding a circle of
+        /// the size that expects, and the vehicle backed away to 57 m. The allowance restarts when
+        /// the distance reads at the target or a new track starts. Range (0, 1000]; default 6 (a
+        /// reading at `min_distance_m` needs 2 m).
+        pub max_backoff_m: f64 = 6.0, open_closed(0.0, 1000.0);
+        /// Relative yaw counted as "in front of the rotor", degrees: T2 is satisfied and Done may
+        /// begin below it. Range (0, 45]; default 3.
+        pub yaw_tolerance_deg: f64 = 3.0, open_closed(0.0, 45.0);
+        /// Relative yaw that restarts T2 (and leaves Done), degrees; larger than
+        /// `yaw_tolerance_deg`. Range (0, 90); default 5.
+        pub yaw_tolerance_outer_deg: f64 = 5.0, open(0.0, 90.0);
+        /// Horizontal half-size of the target box, normalised image units (1 = image edge): T1
+        /// starts when the hub is further than this from the centre. Range (0, 1]; default 0.15
+        /// (wide enough that the pitch of a vehicle accelerating forward does not trip it).
+        pub box_x: f64 = 0.15, open_closed(0.0, 1.0);
+        /// Vertical half-size of the target box, normalised image units (1 = image edge): T1 starts
+        /// when the hub is further than this above or below the centre. Range (0, 1]; default 0.18.
+        pub box_y: f64 = 0.18, open_closed(0.0, 1.0);
+        /// Horizontal half-size of the inner box, normalised image units: T1 is satisfied (and Done
+        /// may begin) once the hub is back inside it. Range (0, box_x); default 0.07.
+        pub box_inner_x: f64 = 0.07;
+        /// Vertical half-size of the inner box, normalised image units: T1 is satisfied (and Done
+        /// may begin) once the hub is back inside it. Range (0, box_y); default 0.08.
+        pub box_inner_y: f64 = 0.08;
+        /// Horizontal deadband of the yaw correction, normalised image units: no yaw rate is
+        /// commanded for smaller errors (detector jitter). Range [0, box_inner_x); default 0.02.
+        pub deadband_x: f64 = 0.02, closed(0.0, 1.0);
+        /// Vertical deadband of the climb correction, normalised image units: no vertical speed is
+        /// commanded for smaller errors. Range [0, box_inner_y); default 0.03.
+        pub deadband_y: f64 = 0.03, closed(0.0, 1.0);
+        /// Time all three tasks must be within their inner tolerances before Done, s. Range
+        /// [0, 60]; default 1.5.
+        pub done_hold_s: f64 = 1.5, closed(0.0, 60.0);
+
+        // ---- gains ----
+        /// T1 yaw-rate gain, deg/s per normalised unit of horizontal error (beyond the deadband).
+        /// Range (0, 1000]; default 40 (hub at the image edge: 40 deg/s before the rate limit).
+        pub yaw_gain_deg_s: f64 = 40.0, open_closed(0.0, 1000.0);
+        /// T1 vertical-speed gain, m/s per normalised unit of vertical error (beyond the deadband).
+        /// It must outpace the apparent vertical drift of an off-centre hub while closing in, which
+        /// grows as the distance shrinks. Range (0, 100]; default 2.
+        pub climb_gain_m_s: f64 = 2.0, open_closed(0.0, 100.0);
+        /// T2 lateral-speed gain, m/s per metre of lateral offset from the rotor axis
+        /// (distance x sin(relative yaw)), i.e. 1/s. Range (0, 10]; default 0.15.
+        pub lateral_gain_per_s: f64 = 0.15, open_closed(0.0, 10.0);
+        /// In Done, the lateral gain that holds the station sideways against drift, m/s per metre
+        /// off the rotor axis (the image errors are noisier than the drift and wait for their
+        /// outer thresholds). 0 = hover without correction. Range [0, 10]; default 0.8.
+        pub done_lateral_gain_per_s: f64 = 0.8, closed(0.0, 10.0);
+        /// In Done, the gain that holds the distance against drift, m/s per metre of distance error
+        /// (0 = hover, and only the outer threshold `distance_tolerance_outer_m` restarts T3). At
+        /// 5 m the filtered distance is good to a few centimetres, and a gust that pushes the
+        /// vehicle back is otherwise left until it is 0.5 m out: `fly` seed 492 reported done at
+        /// 5.07 m and ended 3 s later at 5.58 m, a failure. Range [0, 10]; default 0.3 (T3's own
+        /// gain).
+        pub done_distance_gain_per_s: f64 = 0.3, closed(0.0, 10.0);
+        /// T3 forward-speed gain, m/s per metre of distance error, i.e. 1/s. Range (0, 10];
+        /// default 0.3.
+        pub forward_gain_per_s: f64 = 0.3, open_closed(0.0, 10.0);
+        /// Forward speed cap per metre of margin to `min_distance_m`, 1/s: the forward speed never
+        /// exceeds this x (distance - min_distance_m), so the vehicle slows down as it closes in.
+        /// Range (0, 10]; default 0.5.
+        pub slowdown_gain_per_s: f64 = 0.5, open_closed(0.0, 10.0);
+        /// Fraction of the yaw rate that keeps the hub centred while T2 moves sideways (-vy /
+        /// distance) added ahead of the image error, dimensionless: 1 flies a clean arc round the
+        /// hub, 0 leaves it to the T1 feedback. Range [0, 1]; default 1.
+        pub arc_feedforward: f64 = 1.0, closed(0.0, 1.0);
+        /// No valid yaw (T2) or no valid distance (T3, which then cannot move forward) for this
+        /// long, s, starts a sideways probe: both come from the tower (hub–tower gap, tower width),
+        /// which from one spot can stay hidden, e.g. behind a blade pointing down, and a few metres
+        /// aside the view changes. Range [0, 600]; default 8.
+        pub yaw_probe_after_s: f64 = 8.0, closed(0.0, 600.0);
+        /// Sideways speed of the probe, m/s. Range (0, 10]; default 0.5.
+        pub yaw_probe_speed_m_s: f64 = 0.5, open_closed(0.0, 10.0);
+        /// The probe sweeps to either side of where it started by this angle seen from the hub,
+        /// degrees (0: no probe, hold): distance × tan(angle), 6 m at 35 m, 0.9 m at 5 m.
+        /// Range [0, 45]; default 10.
+        pub yaw_probe_span_deg: f64 = 10.0, closed(0.0, 45.0);
+        /// Distance used for the T2 lateral offset while no valid distance estimate exists, m.
+        /// Range (0, 1000]; default 20.
+        pub nominal_distance_m: f64 = 20.0, open_closed(0.0, 1000.0);
+
+        // ---- limits ----
+        /// Largest forward speed, m/s. Range (0, 10]; default 1.5.
+        pub max_forward_m_s: f64 = 1.5, open_closed(0.0, 10.0);
+        /// Largest backward speed (backing away from the hub), m/s. Range [0, 10]; default 1.
+        pub max_backward_m_s: f64 = 1.0, closed(0.0, 10.0);
+        /// Largest sideways speed, m/s. Range (0, 10]; default 1.5.
+        pub max_lateral_m_s: f64 = 1.5, open_closed(0.0, 10.0);
+        /// Largest climb or descent speed, m/s. Range (0, 5]; default 1.
+        pub max_vertical_m_s: f64 = 1.0, open_closed(0.0, 5.0);
+        /// Largest yaw rate, deg/s. Range (0, 180]; default 20.
+        pub max_yaw_rate_deg_s: f64 = 20.0, open_closed(0.0, 180.0);
+        /// Largest change of the forward and sideways speed commands, m/s per second (m/s²), per
+        /// axis. A multicopter tilts about atan(a / g) to accelerate, and the fixed camera tilts
+        /// with it: 1 m/s² pitches ~6° and moves the hub ~0.16 of the half-height in the image,
+        /// out of the default box, so the default keeps the pitch near 3°. Range (0, 20];
+        /// default 0.5.
+        pub accel_xy_m_s2: f64 = 0.5, open_closed(0.0, 20.0);
+        /// Largest decrease of a forward speed command, m/s per second (m/s²): slowing down
+        /// toward the rotor may be quicker than speeding up (the pitch-up it costs is brief, and
+        /// the hub is nearer than thought when the distance drops at once). At 1.5 m/s the
+        /// stopping distance is 2.25 m at 0.5 m/s² and 1.1 m at 1. Range [accel_xy_m_s2, 20];
+        /// default 1.
+        pub brake_x_m_s2: f64 = 1.0;
+        /// Largest change of the vertical speed command, m/s per second (m/s²). Range (0, 20];
+        /// default 1.
+        pub accel_z_m_s2: f64 = 1.0, open_closed(0.0, 20.0);
+        /// Largest change of the yaw-rate command, deg/s per second (deg/s²). Range (0, 1000];
+        /// default 40.
+        pub yaw_accel_deg_s2: f64 = 40.0, open_closed(0.0, 1000.0);
+        /// Longest time step the rate limits and filters accept between two calls, s: a longer gap
+        /// (a stall) counts as this long, so commands never jump. Range (0, 5]; default 0.5.
+        pub max_dt_s: f64 = 0.5, open_closed(0.0, 5.0);
+
+        // ---- filters ----
+        /// Time constant of the first-order low-pass filter on the relative yaw used by T2, s
+        /// (0 = unfiltered). Range [0, 60]; default 0.5.
+        pub yaw_filter_s: f64 = 0.5, closed(0.0, 60.0);
+        /// Time constant of the first-order low-pass filter on the distance used by T3, s
+        /// (0 = unfiltered). Range [0, 60]; default 0.5.
+        pub distance_filter_s: f64 = 0.5, closed(0.0, 60.0);
+        /// Only the part of the relative yaw beyond this many of the tracker's standard deviations
+        /// is acted on (the yaw is shrunk toward 0 by `k·yaw_std_deg` before filtering), so T2 does
+        /// not chase noise at long range, where the hub–tower gap is a few pixels. Range [0, 5];
+        /// default 1.
+        pub yaw_significance_sigmas: f64 = 1.0, closed(0.0, 5.0);
+        /// Time constant of the estimate of the turbine's facing heading, s; 0 disables it. The
+        /// rotor does not turn during an approach, so every yaw measurement plus the autopilot's
+        /// heading toward the hub is a measurement of one constant, the heading that faces the
+        /// rotor; averaging it over this long (a running mean at first) and subtracting the current
+        /// heading toward the hub gives a relative yaw far less noisy than one frame's hub–tower
+        /// gap, and it follows the vehicle's own motion at once. Range [0, 600]; default 10.
+        pub turbine_heading_filter_s: f64 = 10.0, closed(0.0, 600.0);
+        /// A track lost closer than this to the hub is searched for by backing away (at
+        /// `search_backoff_m_s`, until this distance) instead of by rotating, m. Range [0, 100];
+        /// default 10 (0 = always rotate).
+        pub close_range_m: f64 = 10.0, closed(0.0, 100.0);
+        /// Backing-away speed of the close-range search, m/s. Range (0, 2]; default 0.3.
+        pub search_backoff_m_s: f64 = 0.3, open_closed(0.0, 2.0);
+        /// Each yaw measurement moves the turbine-heading estimate by at most this much error,
+        /// degrees (outliers have bounded influence). Range (0, 90]; default 10.
+        pub turbine_heading_clip_deg: f64 = 10.0, open_closed(0.0, 90.0);
+        /// Closer to the hub than this, m, a yaw measurement more than `turbine_heading_clip_deg`
+        /// from an established turbine-heading estimate is dropped instead of clipped (0 = always
+        /// clip). Close in, the tower often stands behind the blade pointing down and the band
+        /// taken for it gives a steady wrong yaw, while the estimate carries every farther
+        /// measurement; clipped, such a run still pulls it ~1° a second at 5 m (`fly` seed 78:
+        /// +28° measured for +4°, T2 then flew the vehicle to −18°). Range [0, 100]; default 10.
+        pub turbine_heading_close_m: f64 = 10.0, closed(0.0, 100.0);
+        /// Closer to the hub than this, m, an established turbine-heading estimate takes no more
+        /// yaw measurements at all: it holds what the farther views gave (0 = never hold). Close
+        /// in the tower stands behind a blade or the spinner, the band taken for it is often a
+        /// blade root, and one such frame at 7 m weighs as much as ten at 25 m (`fly` seed 224:
+        /// +9.9° measured at 7.8 m for −1.7°, T2 then moved the vehicle to −6°). Range [0, 100];
+        /// default 0.
+        pub turbine_heading_hold_m: f64 = 0.0, closed(0.0, 100.0);
+        /// How long the hub's position, fixed from the last confirmed track (autopilot position
+        /// plus distance along the bearing), bounds the distance of a track that follows a loss, s
+        /// (0 = no bound). A track re-acquired after a loss can be something else: lost at 3.5 m,
+        /// `fly` seed 176 (with `turbine_heading_hold_m` 10) re-acquired a blade tip 200 px aside
+        /// that read 22 m, and T3 flew into the rotor. Until the new track's distance agrees with
+        /// the remembered hub (within `reacquire_margin_m`) or `reacquire_check_s` has passed, the
+        /// controller takes the smaller of the two. Range [0, 3600]; default 60.
+        pub reacquire_memory_s: f64 = 60.0, closed(0.0, MAX_TIME_S);
+        /// Longest the remembered hub bounds a re-acquired track's distance, s. Range [0, 600];
+        /// default 15.
+        pub reacquire_check_s: f64 = 15.0, closed(0.0, 600.0);
+        /// A re-acquired track's distance within this of the remembered hub's, m, plus
+        /// `reacquire_margin_frac` of it, agrees with it. Range [0, 100]; default 2.
+        pub reacquire_margin_m: f64 = 2.0, closed(0.0, 100.0);
+        /// The part of the margin that grows with the remembered distance (its own error).
+        /// Range [0, 1]; default 0.2.
+        pub reacquire_margin_frac: f64 = 0.2, closed(0.0, 1.0);
+        /// Yaw measurements needed before the turbine-heading estimate replaces the filtered
+        /// tracker yaw. Range [1, 10000]; default 15.
+        pub turbine_heading_min_samples: u32 = 15, closed(1, 10_000);
+        /// Weight of the learned yaw network's turbine heading in the one the approach flies on,
+        /// range [0, 1] (0 = the geometric cues' alone, 1 = the network's alone). The network's
+        /// trusted readings (the track's `net_yaw_deg`, from
+        /// `track.yaw.net_fallback_min_distance_m` out) build a second turbine-heading estimate,
+        /// equally weighted and forgotten like the first; once both hold
+        /// `turbine_heading_min_samples`, the approach flies on their weighted mean. The two fail
+        /// in different places: the geometric estimate when the tower hides behind the blade
+        /// pointing down or the spinner for the last 20 m and only far, noisy views set it, the
+        /// network by a bias per scene (~3° at 8–15 m). Default 0.7: `fly` seeds 161–560 393 of 400
+        /// against 388 at 0.5 and 381 at 0 (the geometric estimate alone); seeds 1–20 20 of 20
+        /// against 18 at 0.5; at 0.3, 282 against 284 at 0.5 of the 294 seeds of 261–560 flown both
+        /// ways; at 0.85 393 again, but 18 of the 20 blocks of 20 reach 19 (0.7: 19) and |final
+        /// yaw| p90 3.09° (0.7: 2.93°).
+        pub net_heading_weight: f64 = 0.7, closed(0.0, 1.0);
+
+        // ---- track loss, search and abort ----
+        /// Oldest usable track, s: with more time since the last accepted detection (plus the age
+        /// of the track state itself) the controller holds instead of moving. Range (0, 60];
+        /// default 0.5.
+        pub max_track_age_s: f64 = 1.0, open_closed(0.0, 60.0);
+        /// Time without a usable track after which the vehicle searches by rotating, s (the
+        /// tracker's `search_requested` starts the search at once). Range [0, 3600]; default 5.
+        pub search_after_s: f64 = 5.0, closed(0.0, MAX_TIME_S);
+        /// Yaw rate of the search rotation, deg/s, towards the side where the hub was last seen.
+        /// Range (0, max_yaw_rate_deg_s]; default 10.
+        pub search_yaw_rate_deg_s: f64 = 10.0;
+        /// Total rotation of one search, degrees; afterwards the vehicle holds until a track
+        /// returns (0 = never search). Range [0, 3600]; default 360.
+        pub search_max_turn_deg: f64 = 360.0, closed(0.0, 3600.0);
+        /// Time the inputs must be good (link up, finite numbers, time running forward) before an
+        /// abort clears by itself, s. Range [0, 3600]; default 2.
+        pub abort_recover_s: f64 = 2.0, closed(0.0, MAX_TIME_S);
+    }
+}
 
 impl ApproachConfig {
     /// Checks every value against its allowed range (and the inner/outer pairs against each
     /// other); the error names the first bad key as `control.approach.<key>`.
     pub fn validate(&self) -> Result<(), ParamError> {
-        let c = Check::new("control.approach");
-        c.closed("target_distance_m", self.target_distance_m, 1.0, 100.0)?;
-        c.open_closed("distance_tolerance_m", self.distance_tolerance_m, 0.0, 10.0)?;
-        c.open_closed(
-            "distance_tolerance_outer_m",
-            self.distance_tolerance_outer_m,
-            0.0,
-            20.0,
-        )?;
+        let section = "control.approach";
+        self.check_ranges(section)?;
+        let c = Check::new(section);
         // The outer threshold must lie outside the inner one, or the hysteresis would chatter.
         c.less(
             "distance_tolerance_m",
@@ -341,141 +272,33 @@ impl ApproachConfig {
             0.0,
             self.target_distance_m,
         )?;
-        c.open_closed("max_backoff_m", self.max_backoff_m, 0.0, 1000.0)?;
-        c.open_closed("yaw_tolerance_deg", self.yaw_tolerance_deg, 0.0, 45.0)?;
-        c.open(
-            "yaw_tolerance_outer_deg",
-            self.yaw_tolerance_outer_deg,
-            0.0,
-            90.0,
-        )?;
         c.less(
             "yaw_tolerance_deg",
             self.yaw_tolerance_deg,
             "yaw_tolerance_outer_deg",
             self.yaw_tolerance_outer_deg,
         )?;
-        c.open_closed("box_x", self.box_x, 0.0, 1.0)?;
-        c.open_closed("box_y", self.box_y, 0.0, 1.0)?;
         c.open("box_inner_x", self.box_inner_x, 0.0, self.box_x)?;
         c.open("box_inner_y", self.box_inner_y, 0.0, self.box_y)?;
         // A deadband as wide as the inner box would let the hub rest outside it forever.
-        c.closed("deadband_x", self.deadband_x, 0.0, 1.0)?;
         c.less(
             "deadband_x",
             self.deadband_x,
             "box_inner_x",
             self.box_inner_x,
         )?;
-        c.closed("deadband_y", self.deadband_y, 0.0, 1.0)?;
         c.less(
             "deadband_y",
             self.deadband_y,
             "box_inner_y",
             self.box_inner_y,
         )?;
-        c.closed("done_hold_s", self.done_hold_s, 0.0, 60.0)?;
-
-        c.open_closed("yaw_gain_deg_s", self.yaw_gain_deg_s, 0.0, 1000.0)?;
-        c.open_closed("climb_gain_m_s", self.climb_gain_m_s, 0.0, 100.0)?;
-        c.open_closed("lateral_gain_per_s", self.lateral_gain_per_s, 0.0, 10.0)?;
-        c.closed(
-            "done_lateral_gain_per_s",
-            self.done_lateral_gain_per_s,
-            0.0,
-            10.0,
-        )?;
-        c.closed(
-            "done_distance_gain_per_s",
-            self.done_distance_gain_per_s,
-            0.0,
-            10.0,
-        )?;
-        c.open_closed("forward_gain_per_s", self.forward_gain_per_s, 0.0, 10.0)?;
-        c.open_closed("slowdown_gain_per_s", self.slowdown_gain_per_s, 0.0, 10.0)?;
-        c.closed("arc_feedforward", self.arc_feedforward, 0.0, 1.0)?;
-        c.closed("yaw_probe_after_s", self.yaw_probe_after_s, 0.0, 600.0)?;
-        c.open_closed("yaw_probe_speed_m_s", self.yaw_probe_speed_m_s, 0.0, 10.0)?;
-        c.closed("yaw_probe_span_deg", self.yaw_probe_span_deg, 0.0, 45.0)?;
-        c.open_closed("nominal_distance_m", self.nominal_distance_m, 0.0, 1000.0)?;
-
-        c.open_closed("max_forward_m_s", self.max_forward_m_s, 0.0, 10.0)?;
-        c.closed("max_backward_m_s", self.max_backward_m_s, 0.0, 10.0)?;
-        c.open_closed("max_lateral_m_s", self.max_lateral_m_s, 0.0, 10.0)?;
-        c.open_closed("max_vertical_m_s", self.max_vertical_m_s, 0.0, 5.0)?;
-        c.open_closed("max_yaw_rate_deg_s", self.max_yaw_rate_deg_s, 0.0, 180.0)?;
-        c.open_closed("accel_xy_m_s2", self.accel_xy_m_s2, 0.0, 20.0)?;
         c.closed("brake_x_m_s2", self.brake_x_m_s2, self.accel_xy_m_s2, 20.0)?;
-        c.open_closed("accel_z_m_s2", self.accel_z_m_s2, 0.0, 20.0)?;
-        c.open_closed("yaw_accel_deg_s2", self.yaw_accel_deg_s2, 0.0, 1000.0)?;
-        c.open_closed("max_dt_s", self.max_dt_s, 0.0, 5.0)?;
-
-        c.closed("yaw_filter_s", self.yaw_filter_s, 0.0, 60.0)?;
-        c.closed(
-            "yaw_significance_sigmas",
-            self.yaw_significance_sigmas,
-            0.0,
-            5.0,
-        )?;
-        c.closed(
-            "turbine_heading_filter_s",
-            self.turbine_heading_filter_s,
-            0.0,
-            600.0,
-        )?;
-        c.closed("close_range_m", self.close_range_m, 0.0, 100.0)?;
-        c.open_closed("search_backoff_m_s", self.search_backoff_m_s, 0.0, 2.0)?;
-        c.open_closed(
-            "turbine_heading_clip_deg",
-            self.turbine_heading_clip_deg,
-            0.0,
-            90.0,
-        )?;
-        c.closed(
-            "turbine_heading_close_m",
-            self.turbine_heading_close_m,
-            0.0,
-            100.0,
-        )?;
-        c.closed(
-            "turbine_heading_hold_m",
-            self.turbine_heading_hold_m,
-            0.0,
-            100.0,
-        )?;
-        c.count(
-            "turbine_heading_min_samples",
-            self.turbine_heading_min_samples,
-            1,
-            10_000,
-        )?;
-        c.closed("net_heading_weight", self.net_heading_weight, 0.0, 1.0)?;
-        c.closed(
-            "reacquire_memory_s",
-            self.reacquire_memory_s,
-            0.0,
-            MAX_TIME_S,
-        )?;
-        c.closed("reacquire_check_s", self.reacquire_check_s, 0.0, 600.0)?;
-        c.closed("reacquire_margin_m", self.reacquire_margin_m, 0.0, 100.0)?;
-        c.closed(
-            "reacquire_margin_frac",
-            self.reacquire_margin_frac,
-            0.0,
-            1.0,
-        )?;
-        c.closed("distance_filter_s", self.distance_filter_s, 0.0, 60.0)?;
-
-        c.open_closed("max_track_age_s", self.max_track_age_s, 0.0, 60.0)?;
-        c.closed("search_after_s", self.search_after_s, 0.0, MAX_TIME_S)?;
         c.open_closed(
             "search_yaw_rate_deg_s",
             self.search_yaw_rate_deg_s,
             0.0,
             self.max_yaw_rate_deg_s,
-        )?;
-        c.closed("search_max_turn_deg", self.search_max_turn_deg, 0.0, 3600.0)?;
-        c.closed("abort_recover_s", self.abort_recover_s, 0.0, MAX_TIME_S)?;
-        Ok(())
+        )
     }
 }

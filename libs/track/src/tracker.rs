@@ -56,6 +56,25 @@ struct Candidate {
     t_ns: u64,
 }
 
+/// A detection's size-based distances after their consistency checks (see
+/// `Core::size_distances` and `Core::check_parallax`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct SizeDistances {
+    /// Depth of the tower axis from the band's width; `None` when absent or dropped.
+    tower: Option<Estimate>,
+    /// Hub distance from the spinner circle; `None` when absent or dropped.
+    spinner: Option<Estimate>,
+    /// The spinner distance before any check (the gap's fallback depth).
+    spinner_seen: Option<Estimate>,
+    /// The tower band was dropped.
+    tower_rejected: bool,
+    /// The spinner or the parallax disputed the tower band.
+    tower_disputed: bool,
+    /// The band's width over the width the tower has at the spinner's distance, when the band
+    /// was dropped for its width (see `gap_max_width_ratio`).
+    rejected_width_ratio: Option<f64>,
+}
+
 /// The shared implementation.
 #[derive(Debug, Clone)]
 struct Core {
@@ -544,107 +563,135 @@ impl Core {
     /// Yaw and distance measurements of an accepted detection into their filters.
     /// `innovation_px`: the hub's distance from the track's prediction.
     fn filtered_estimates(&mut self, det: &Detection, t: u64, innovation_px: f64) {
-        let s = self.scale();
-        let f = self.camera().f_px;
-        let (dc, yc) = (self.cfg.distance.clone(), self.cfg.yaw.clone());
-        let offset = yc.hub_tower_offset_m;
-        let max_yaw = yc.max_abs_deg.to_radians();
+        let mut sizes = self.size_distances(det);
+        let parallax = self.check_parallax(det, t, &mut sizes);
+        let (cues, net) = self.yaw_cues(det, &sizes, innovation_px);
+        self.update_yaw(t, &cues, net);
+        self.update_distance(t, &sizes, parallax);
+    }
 
-        let spinner = if det.circle_found && 2.0 * det.circle[2] >= dc.min_size_px * s {
+    /// Distance of the hub from the spinner circle's size, when it is large enough.
+    fn spinner_distance(&self, det: &Detection) -> Option<Estimate> {
+        let dc = &self.cfg.distance;
+        let s = self.scale();
+        if det.circle_found && 2.0 * det.circle[2] >= dc.min_size_px * s {
             distance_from_spinner(
-                f,
+                self.camera().f_px,
                 dc.spinner_diameter_m,
                 det.circle[2],
                 dc.spinner_radius_std_px * s,
             )
         } else {
             None
-        };
+        }
+    }
+
+    /// The tower depth and the spinner distance of a detection, checked against each other.
+    fn size_distances(&self, det: &Detection) -> SizeDistances {
+        let dc = &self.cfg.distance;
+        let offset = self.cfg.yaw.hub_tower_offset_m;
+        let spinner = self.spinner_distance(det);
         // A tower whose width disagrees with the spinner's size is a wrong band (a blade beside
         // the tower, tower and blade together): it gives neither distance nor yaw. Which of the
         // two is wrong? The one farther from the filtered distance; without one, both.
-        let mut tower = self.tower_depth(det);
-        let spinner_seen = spinner;
-        let mut spinner = spinner;
-        let mut tower_rejected = false;
-        let mut tower_disputed = false;
-        // The band's width over the width the tower has at the spinner's distance, when the
-        // band was dropped for its width (see `gap_max_width_ratio`).
-        let mut rejected_width_ratio = None;
-        if let (Some(td), Some(sp)) = (tower, spinner) {
-            let tower_hub = td.value - offset;
-            let chi2 =
-                (tower_hub - sp.value).powi(2) / (td.std.powi(2) + sp.std.powi(2)).max(1e-12);
-            if chi2 > dc.consistency_chi2 {
-                tower_disputed = true;
-                match self.distance.estimate() {
-                    Some(prior)
-                        if (sp.value - prior.value).abs() < (tower_hub - prior.value).abs() =>
-                    {
-                        tower = None
-                    }
-                    Some(_) => spinner = None,
-                    None => (tower, spinner) = (None, None),
-                }
-                tower_rejected = tower.is_none();
-                if tower_rejected {
-                    let psi = self.yaw.estimate().map_or(0.0, |e| e.value);
-                    let expected_px = f * dc.tower_diameter_m / (sp.value + offset * psi.cos());
-                    rejected_width_ratio = Some(det.tower_width_px / expected_px);
-                }
-                log::debug!(
-                    "tower {tower_hub:.1} m and spinner {:.1} m disagree (chi2 {chi2:.0}): kept {}",
-                    sp.value,
-                    match (tower, spinner) {
-                        (Some(_), _) => "tower",
-                        (_, Some(_)) => "spinner",
-                        _ => "neither",
-                    }
-                );
-            }
+        let mut sizes = SizeDistances {
+            tower: self.tower_depth(det),
+            spinner,
+            spinner_seen: spinner,
+            tower_rejected: false,
+            tower_disputed: false,
+            rejected_width_ratio: None,
+        };
+        let (Some(td), Some(sp)) = (sizes.tower, sizes.spinner) else {
+            return sizes;
+        };
+        let tower_hub = td.value - offset;
+        let chi2 = (tower_hub - sp.value).powi(2) / (td.std.powi(2) + sp.std.powi(2)).max(1e-12);
+        if chi2 <= dc.consistency_chi2 {
+            return sizes;
         }
-
-        // Motion parallax: a size-free distance. A tower or spinner distance it contradicts is
-        // dropped, the tower's gap with it (see `[track.parallax]`).
-        let parallax = self.parallax_distance(det, t);
-        if let Some(p) = parallax {
-            let disagrees = |m: Estimate| {
-                (m.value - p.value).powi(2) / (m.var() + p.var()).max(1e-12)
-                    > self.cfg.parallax.consistency_chi2
-            };
-            if tower.is_some_and(|td| {
-                disagrees(Estimate {
-                    value: td.value - offset,
-                    std: td.std,
-                })
-            }) {
-                log::debug!(
-                    "tower {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped",
-                    tower.map_or(0.0, |td| td.value - offset),
-                    p.value,
-                    p.std
-                );
-                tower = None;
-                tower_disputed = true;
-                tower_rejected = true;
-                rejected_width_ratio = None;
+        sizes.tower_disputed = true;
+        match self.distance.estimate() {
+            Some(prior) if (sp.value - prior.value).abs() < (tower_hub - prior.value).abs() => {
+                sizes.tower = None
             }
-            if spinner.is_some_and(disagrees) {
-                log::debug!(
-                    "spinner {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped",
-                    spinner.map_or(0.0, |sp| sp.value),
-                    p.value,
-                    p.std
-                );
-                spinner = None;
-            }
+            Some(_) => sizes.spinner = None,
+            None => (sizes.tower, sizes.spinner) = (None, None),
         }
+        sizes.tower_rejected = sizes.tower.is_none();
+        if sizes.tower_rejected {
+            let psi = self.yaw.estimate().map_or(0.0, |e| e.value);
+            let expected_px =
+                self.camera().f_px * dc.tower_diameter_m / (sp.value + offset * psi.cos());
+            sizes.rejected_width_ratio = Some(det.tower_width_px / expected_px);
+        }
+        log::debug!(
+            "tower {tower_hub:.1} m and spinner {:.1} m disagree (chi2 {chi2:.0}): kept {}",
+            sp.value,
+            match (sizes.tower, sizes.spinner) {
+                (Some(_), _) => "tower",
+                (_, Some(_)) => "spinner",
+                _ => "neither",
+            }
+        );
+        sizes
+    }
 
-        // Yaw. The gap needs the depth of the tower axis: this frame's tower width, else the
-        // filtered hub distance plus the overhang.
-        let yaw_prior = self.yaw.estimate();
-        let tower_depth = tower.or_else(|| {
-            let d = self.distance.estimate().or(spinner_seen)?;
+    /// Motion parallax: a size-free distance. A tower or spinner distance it contradicts is
+    /// dropped from `sizes`, the tower's gap with it (see `[track.parallax]`).
+    fn check_parallax(
+        &mut self,
+        det: &Detection,
+        t: u64,
+        sizes: &mut SizeDistances,
+    ) -> Option<Estimate> {
+        let offset = self.cfg.yaw.hub_tower_offset_m;
+        let p = self.parallax_distance(det, t)?;
+        let disagrees = |m: Estimate| {
+            (m.value - p.value).powi(2) / (m.var() + p.var()).max(1e-12)
+                > self.cfg.parallax.consistency_chi2
+        };
+        if sizes.tower.is_some_and(|td| {
+            disagrees(Estimate {
+                value: td.value - offset,
+                std: td.std,
+            })
+        }) {
+            log::debug!(
+                "tower {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped",
+                sizes.tower.map_or(0.0, |td| td.value - offset),
+                p.value,
+                p.std
+            );
+            sizes.tower = None;
+            sizes.tower_disputed = true;
+            sizes.tower_rejected = true;
+            sizes.rejected_width_ratio = None;
+        }
+        if sizes.spinner.is_some_and(disagrees) {
+            log::debug!(
+                "spinner {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped",
+                sizes.spinner.map_or(0.0, |sp| sp.value),
+                p.value,
+                p.std
+            );
+            sizes.spinner = None;
+        }
+        Some(p)
+    }
+
+    /// Yaw from the hub–tower gap. The gap needs the depth of the tower axis: this frame's
+    /// tower width, else the filtered hub distance plus the overhang.
+    fn gap_yaw(
+        &self,
+        det: &Detection,
+        sizes: &SizeDistances,
+        yaw_prior: Option<Estimate>,
+    ) -> Option<Estimate> {
+        let yc = &self.cfg.yaw;
+        let offset = yc.hub_tower_offset_m;
+        let tower_depth = sizes.tower.or_else(|| {
+            let d = self.distance.estimate().or(sizes.spinner_seen)?;
             let psi = yaw_prior.map_or(0.0, |e| e.value);
             Some(Estimate {
                 value: d.value + offset * psi.cos(),
@@ -652,74 +699,131 @@ impl Core {
             })
         });
         let band_undisputed = if yc.gap_from_disputed_tower {
-            !tower_rejected
+            !sizes.tower_rejected
         } else {
-            !tower_disputed
+            !sizes.tower_disputed
         };
         let band_on_tower = band_undisputed
-            || rejected_width_ratio
+            || sizes
+                .rejected_width_ratio
                 .is_some_and(|r| r <= yc.gap_max_width_ratio && r * yc.gap_max_width_ratio >= 1.0);
-        let gap = if det.tower_found && det.detected && band_on_tower {
-            // How well the hub end of the gap is known depends on how the hub was found.
-            let gap_std = if det.circle_found {
-                yc.gap_std_spinner_px
-            } else {
-                yc.gap_std_lines_px
-            };
-            tower_depth.and_then(|td| {
-                yaw_from_gap(det.hub_tower_gap_px, gap_std * s, td, f, offset, max_yaw)
-            })
+        if !(det.tower_found && det.detected && band_on_tower) {
+            return None;
+        }
+        // How well the hub end of the gap is known depends on how the hub was found.
+        let gap_std = if det.circle_found {
+            yc.gap_std_spinner_px
         } else {
-            None
+            yc.gap_std_lines_px
         };
-        // The nacelle's far end: a yaw the tower hidden behind a blade cannot fake (see
-        // `use_nacelle`); a gap contradicting it is that blade.
-        // The nacelle end is measured from the detected hub, whose error it takes whole (see
-        // `nacelle_gate_px`).
+        let (s, f) = (self.scale(), self.camera().f_px);
+        tower_depth.and_then(|td| {
+            yaw_from_gap(
+                det.hub_tower_gap_px,
+                gap_std * s,
+                td,
+                f,
+                offset,
+                yc.max_abs_deg.to_radians(),
+            )
+        })
+    }
+
+    /// Yaw from the nacelle's far end: a yaw the tower hidden behind a blade cannot fake (see
+    /// `use_nacelle`). The end is measured from the detected hub, whose error it takes whole
+    /// (see `nacelle_gate_px`); `spinner` is this frame's checked spinner distance.
+    fn nacelle_yaw(
+        &self,
+        det: &Detection,
+        spinner: Option<Estimate>,
+        innovation_px: f64,
+    ) -> Option<Estimate> {
+        let yc = &self.cfg.yaw;
+        let (s, f) = (self.scale(), self.camera().f_px);
         let hub_settled = yc.nacelle_gate_px <= 0.0 || innovation_px <= yc.nacelle_gate_px * s;
         let on_spinner = det.circle_found || !yc.nacelle_needs_spinner;
-        let nacelle =
-            if yc.use_nacelle && det.detected && det.nacelle_found && hub_settled && on_spinner {
-                self.distance
-                    .estimate()
-                    .or(spinner)
-                    .filter(|d| d.value >= yc.nacelle_min_distance_m)
-                    .and_then(|d| {
-                        // Only an end well beyond the head-on front corners (see `nacelle_min_excess_sigma`).
-                        let hub_std = if det.circle_found {
-                            yc.gap_std_spinner_px
-                        } else {
-                            yc.gap_std_lines_px
-                        };
-                        let excess = nacelle_excess_sigma(
-                            det.nacelle_end_dx_px,
-                            yc.nacelle_std_px.hypot(hub_std) * s,
-                            d,
-                            f,
-                            yc.nacelle_front_m,
-                            yc.nacelle_half_width_m,
-                        );
-                        if excess < yc.nacelle_min_excess_sigma {
-                            return None;
-                        }
-                        let e = yaw_from_nacelle(
-                            det.nacelle_end_dx_px,
-                            yc.nacelle_std_px * s,
-                            d,
-                            f,
-                            yc.nacelle_rear_m,
-                            yc.nacelle_half_width_m,
-                            max_yaw,
-                        )?;
-                        // Near zero yaw the side is a toss-up (see `nacelle_min_abs_deg`).
-                        (e.value.abs() >= yc.nacelle_min_abs_deg.to_radians()).then(|| Estimate {
-                            value: e.value,
-                            std: e.std.max(yc.nacelle_min_std_deg.to_radians()),
-                        })
-                    })
-            } else {
-                None
-            };
+        if !(yc.use_nacelle && det.detected && det.nacelle_found && hub_settled && on_spinner) {
+            return None;
+        }
+        let d = self
+            .distance
+            .estimate()
+            .or(spinner)
+            .filter(|d| d.value >= yc.nacelle_min_distance_m)?;
+        // Only an end well beyond the head-on front corners (see `nacelle_min_excess_sigma`).
+        let hub_std = if det.circle_found {
+            yc.gap_std_spinner_px
+        } else {
+            yc.gap_std_lines_px
+        };
+        let excess = nacelle_excess_sigma(
+            det.nacelle_end_dx_px,
+            yc.nacelle_std_px.hypot(hub_std) * s,
+            d,
+            f,
+            yc.nacelle_front_m,
+            yc.nacelle_half_width_m,
+        );
+        if excess < yc.nacelle_min_excess_sigma {
+            return None;
+        }
+        let e = yaw_from_nacelle(
+            det.nacelle_end_dx_px,
+            yc.nacelle_std_px * s,
+            d,
+            f,
+            yc.nacelle_rear_m,
+            yc.nacelle_half_width_m,
+            yc.max_abs_deg.to_radians(),
+        )?;
+        // Near zero yaw the side is a toss-up (see `nacelle_min_abs_deg`).
+        (e.value.abs() >= yc.nacelle_min_abs_deg.to_radians()).then(|| Estimate {
+            value: e.value,
+            std: e.std.max(yc.nacelle_min_std_deg.to_radians()),
+        })
+    }
+
+    /// The learned yaw network's reading (see `use_net`), radians, with its spread floored.
+    fn net_yaw_reading(&self, det: &Detection) -> Option<Estimate> {
+        let yc = &self.cfg.yaw;
+        (yc.use_net && det.detected && det.yaw_net_valid && det.yaw_net_deg.is_finite())
+            .then_some(det.yaw_net_std_deg)
+            .filter(|s| s.is_finite() && *s <= yc.net_max_std_deg)
+            .map(|s| Estimate {
+                value: det.yaw_net_deg.to_radians(),
+                std: s.max(yc.net_min_std_deg).to_radians(),
+            })
+    }
+
+    /// |yaw| from the blade skew (see `use_blade_skew`).
+    fn blade_skew(&self, det: &Detection) -> Option<Estimate> {
+        let yc = &self.cfg.yaw;
+        let n = (det.blade_count as usize).min(det.blade_angles_deg.len());
+        if !(yc.use_blade_skew && n >= yc.min_blades as usize) {
+            return None;
+        }
+        blade_skew_yaw(
+            &det.blade_angles_deg[..n],
+            yc.rotor_blades,
+            yc.blade_angle_std_deg.to_radians(),
+            yc.max_abs_deg.to_radians(),
+            yc.blade_fit_chi2,
+        )
+    }
+
+    /// The geometric yaw measurements of a detection (gap, nacelle, signed blade skew) that
+    /// survive each other's and the network's vetoes, and the network's reading.
+    fn yaw_cues(
+        &self,
+        det: &Detection,
+        sizes: &SizeDistances,
+        innovation_px: f64,
+    ) -> (Vec<Estimate>, Option<Estimate>) {
+        let yc = &self.cfg.yaw;
+        let yaw_prior = self.yaw.estimate();
+        let gap = self.gap_yaw(det, sizes, yaw_prior);
+        // A gap contradicting the nacelle is the blade the tower hides behind.
+        let nacelle = self.nacelle_yaw(det, sizes.spinner, innovation_px);
         let gap = match (gap, nacelle) {
             (Some(g), Some(n))
                 if (g.value - n.value).powi(2) / (g.var() + n.var()) > yc.gate_chi2 =>
@@ -728,15 +832,8 @@ impl Core {
             }
             (g, _) => g,
         };
-        // The learned yaw network's reading (see `use_net`); with `net_vetoes_gap` a gap or
-        // nacelle yaw it contradicts is dropped.
-        let net = (yc.use_net && det.detected && det.yaw_net_valid && det.yaw_net_deg.is_finite())
-            .then_some(det.yaw_net_std_deg)
-            .filter(|s| s.is_finite() && *s <= yc.net_max_std_deg)
-            .map(|s| Estimate {
-                value: det.yaw_net_deg.to_radians(),
-                std: s.max(yc.net_min_std_deg).to_radians(),
-            });
+        // With `net_vetoes_gap` a gap or nacelle yaw the network contradicts is dropped.
+        let net = self.net_yaw_reading(det);
         let contradicts = |m: Option<Estimate>| match (m, net) {
             (Some(m), Some(n)) => {
                 yc.net_vetoes_gap
@@ -746,19 +843,8 @@ impl Core {
         };
         let gap = if contradicts(gap) { None } else { gap };
         let nacelle = if contradicts(nacelle) { None } else { nacelle };
-        let n = (det.blade_count as usize).min(det.blade_angles_deg.len());
-        let blade = if yc.use_blade_skew && n >= yc.min_blades as usize {
-            blade_skew_yaw(
-                &det.blade_angles_deg[..n],
-                yc.rotor_blades,
-                yc.blade_angle_std_deg.to_radians(),
-                max_yaw,
-                yc.blade_fit_chi2,
-            )
-        } else {
-            None
-        };
         // The blade skew gives |ψ|; its sign comes from the gap (and the filtered yaw).
+        let blade = self.blade_skew(det);
         let sign_ref = fuse(
             &[gap, nacelle, yaw_prior]
                 .into_iter()
@@ -787,6 +873,14 @@ impl Core {
             .into_iter()
             .flatten()
             .collect::<Vec<_>>();
+        (cues, net)
+    }
+
+    /// The yaw filter from this frame's geometric `cues` and network reading `net` (fused with
+    /// `net_fuse`); with no measurement to fuse, the network's fallback (see
+    /// `net_fallback_after_s`).
+    fn update_yaw(&mut self, t: u64, cues: &[Estimate], net: Option<Estimate>) {
+        let yc = &self.cfg.yaw;
         // The readings the fallback trusts: from `net_fallback_min_distance_m` out (closer, the
         // network's error grows past the approach's yaw tolerance).
         let net_trusted = net.filter(|_| {
@@ -817,45 +911,54 @@ impl Core {
                 self.net_fallback = false;
             }
         } else if yc.net_fallback_after_s > 0.0 && net.is_some() {
-            // No geometric cue for `net_fallback_after_s` (since the first frame, if never):
-            // once the network's filtered reading stands `net_fallback_min_deg` from the stale
-            // yaw, it restarts the yaw and carries it, every trusted reading fused, until a cue
-            // returns.
-            let cue_age_s = self
-                .yaw_cue_ns
-                .or(self.first_ns)
-                .map_or(0.0, |c| dt_s(t, c));
-            if self.net_fallback {
-                if let Some(n) = net_trusted {
-                    self.yaw.update(n, yc.gate_chi2, yc.jump_accept_count, t);
-                }
-            } else if let Some(reference) = self
-                .net_yaw
-                .estimate()
-                .filter(|_| cue_age_s >= yc.net_fallback_after_s)
-            {
-                let far = self.yaw.estimate().is_none_or(|y| {
-                    (reference.value - y.value).abs() >= yc.net_fallback_min_deg.to_radians()
-                });
-                if far {
-                    let std = reference.std.max(yc.net_min_std_deg.to_radians());
-                    self.yaw.update(
-                        Estimate {
-                            value: reference.value,
-                            std,
-                        },
-                        yc.gate_chi2,
-                        1,
-                        t,
-                    );
-                    self.net_fallback = true;
-                }
+            self.net_fallback_update(t, net_trusted);
+        }
+    }
+
+    /// No geometric cue for `net_fallback_after_s` (since the first frame, if never): once the
+    /// network's filtered reading stands `net_fallback_min_deg` from the stale yaw, it restarts
+    /// the yaw and carries it, every trusted reading fused, until a cue returns.
+    fn net_fallback_update(&mut self, t: u64, net_trusted: Option<Estimate>) {
+        let yc = &self.cfg.yaw;
+        let cue_age_s = self
+            .yaw_cue_ns
+            .or(self.first_ns)
+            .map_or(0.0, |c| dt_s(t, c));
+        if self.net_fallback {
+            if let Some(n) = net_trusted {
+                self.yaw.update(n, yc.gate_chi2, yc.jump_accept_count, t);
+            }
+        } else if let Some(reference) = self
+            .net_yaw
+            .estimate()
+            .filter(|_| cue_age_s >= yc.net_fallback_after_s)
+        {
+            let far = self.yaw.estimate().is_none_or(|y| {
+                (reference.value - y.value).abs() >= yc.net_fallback_min_deg.to_radians()
+            });
+            if far {
+                let std = reference.std.max(yc.net_min_std_deg.to_radians());
+                self.yaw.update(
+                    Estimate {
+                        value: reference.value,
+                        std,
+                    },
+                    yc.gate_chi2,
+                    1,
+                    t,
+                );
+                self.net_fallback = true;
             }
         }
+    }
 
-        // Distance of the hub: tower depth minus the overhang, and the spinner.
+    /// The distance filter from this frame's hub distances: tower depth minus the overhang
+    /// (with the updated yaw), the spinner, and the parallax.
+    fn update_distance(&mut self, t: u64, sizes: &SizeDistances, parallax: Option<Estimate>) {
+        let dc = &self.cfg.distance;
+        let offset = self.cfg.yaw.hub_tower_offset_m;
         let yaw_now = self.yaw.estimate();
-        let tower_hub = tower.and_then(|td| {
+        let tower_hub = sizes.tower.and_then(|td| {
             let (psi, sig) = yaw_now.map_or((0.0, 0.0), |e| (e.value, e.std));
             let value = td.value - offset * psi.cos();
             (value > 0.0).then(|| Estimate {
@@ -863,35 +966,36 @@ impl Core {
                 std: td.std.hypot(offset * psi.sin() * sig),
             })
         });
-        if let Some(m) = fuse(
-            &[tower_hub, spinner, parallax]
+        let Some(m) = fuse(
+            &[tower_hub, sizes.spinner, parallax]
                 .into_iter()
                 .flatten()
                 .collect::<Vec<_>>(),
-        ) {
-            // No jumps close in (see `distance.jump_min_distance_m`): only gated updates, while
-            // the filter has accepted a reading within `jump_lockout_max_s`.
-            let recent = dc.jump_lockout_max_s <= 0.0
-                || self
-                    .distance
-                    .last_accept_ns
-                    .is_some_and(|a| dt_s(t, a) <= dc.jump_lockout_max_s);
-            let close = recent
-                && self
-                    .distance
-                    .estimate()
-                    .is_some_and(|d| d.value < dc.jump_min_distance_m);
-            self.distance.update(
-                m,
-                dc.gate_chi2,
-                if close {
-                    u32::MAX
-                } else {
-                    dc.jump_accept_count
-                },
-                t,
-            );
-        }
+        ) else {
+            return;
+        };
+        // No jumps close in (see `distance.jump_min_distance_m`): only gated updates, while
+        // the filter has accepted a reading within `jump_lockout_max_s`.
+        let recent = dc.jump_lockout_max_s <= 0.0
+            || self
+                .distance
+                .last_accept_ns
+                .is_some_and(|a| dt_s(t, a) <= dc.jump_lockout_max_s);
+        let close = recent
+            && self
+                .distance
+                .estimate()
+                .is_some_and(|d| d.value < dc.jump_min_distance_m);
+        self.distance.update(
+            m,
+            dc.gate_chi2,
+            if close {
+                u32::MAX
+            } else {
+                dc.jump_accept_count
+            },
+            t,
+        );
     }
 
     fn mode(&self, t_ns: u64) -> TrackMode {

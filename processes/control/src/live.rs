@@ -1,19 +1,24 @@
 //! Live control: the MAVLink link to the autopilot, the vehicle state derived from it, and the
 //! setpoints sent over it on every track state and repeated on wall-clock timers.
+//!
+//! When to send what is the [`CommandGate`]'s decision; this loop only feeds it the events with
+//! their wall-clock time and performs its actions.
 
 use crate::config::{ClockSource, ControlConfig};
-use crate::setpoint::{may_command, Controller, TRACK_BUFFER};
+use crate::setpoint::{Controller, TRACK_BUFFER};
 use crate::ControlStage;
 use anyhow::Context;
+use hubtrack_control_stage::gate::{Action, AutopilotView, CommandGate, GateTiming};
 use hubtrack_mavlink::{
-    companion_heartbeat, velocity_setpoint, Endpoint, Link, MavHeader, VehicleMonitor,
+    companion_heartbeat, follows_setpoints, velocity_setpoint, Endpoint, Link, MavHeader,
+    MavMessage, SetpointFrame, VehicleMonitor,
 };
 use hubtrack_runtime::ipc::{MsgPublisher, MsgSubscriber};
 use hubtrack_runtime::stage::Stage;
 use hubtrack_runtime::status::StatusReporter;
 use hubtrack_types::services::{CLOCK, TRACK, VEHICLE};
 use hubtrack_types::time::monotonic_ns;
-use hubtrack_types::{ApproachTask, Setpoint, SimClock, Text64, TrackState};
+use hubtrack_types::{Setpoint, SimClock, TrackState};
 use std::time::Duration;
 
 /// Longest the loop sleeps waiting for a track state before polling the MAVLink link again: a
@@ -22,6 +27,86 @@ use std::time::Duration;
 const LINK_POLL: Duration = Duration::from_millis(2);
 /// How often link counters are logged when they changed.
 const STATS_LOG_INTERVAL_NS: u64 = 10_000_000_000;
+
+/// The sending side of the link: numbers every message and stamps setpoints.
+struct Sender {
+    link: Link,
+    header: MavHeader,
+    frame: SetpointFrame,
+}
+
+impl Sender {
+    /// Sends one message, numbering it; a failure is logged and counted, never fatal.
+    fn send(&mut self, msg: &MavMessage, status: &mut StatusReporter) -> bool {
+        self.header.sequence = self.header.sequence.wrapping_add(1);
+        match self.link.send(self.header, msg) {
+            Ok(()) => true,
+            Err(e) => {
+                log::warn!("send: {e}");
+                status.error(&e.to_string());
+                false
+            }
+        }
+    }
+
+    /// Sends `setpoint` to `target` stamped `uptime_ms`; returns whether it went out.
+    fn send_setpoint(
+        &mut self,
+        setpoint: &Setpoint,
+        target: (u8, u8),
+        uptime_ms: u32,
+        status: &mut StatusReporter,
+    ) -> bool {
+        let v = [
+            setpoint.vx_m_s as f32,
+            setpoint.vy_m_s as f32,
+            setpoint.vz_m_s as f32,
+        ];
+        let msg = velocity_setpoint(
+            target,
+            uptime_ms,
+            self.frame,
+            v,
+            setpoint.yaw_rate_rad_s as f32,
+        );
+        self.send(&msg, status)
+    }
+
+    /// Performs one action of the gate and tells it whether a setpoint went out; returns that.
+    fn perform(
+        &mut self,
+        action: Action,
+        gate: &mut CommandGate,
+        controller: &Controller,
+        uptime_ms: u32,
+        status: &mut StatusReporter,
+    ) -> anyhow::Result<bool> {
+        match action {
+            Action::SendHeartbeat => {
+                self.send(&companion_heartbeat(), status);
+                Ok(false)
+            }
+            Action::SendSetpoint { setpoint, target } => {
+                let sent = self.send_setpoint(&setpoint, target, uptime_ms, status);
+                if sent {
+                    gate.on_sent();
+                }
+                Ok(sent)
+            }
+            Action::ReportStale {
+                quiet,
+                silent_for_ns,
+            } => {
+                log::warn!(
+                    "inputs stale: no track state for {} ms; sending nothing, the autopilot's guided timeout will stop the vehicle",
+                    silent_for_ns / 1_000_000
+                );
+                controller.publish(quiet, status)?;
+                Ok(false)
+            }
+        }
+    }
+}
 
 /// Runs live control until SIGINT/SIGTERM.
 pub fn run(stage: ControlStage) -> anyhow::Result<()> {
@@ -34,7 +119,7 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
     } = stage;
     let cfg = &config.control;
     let endpoint: Endpoint = cfg.link.parse().context("control.link")?;
-    let mut link = Link::open(&endpoint)
+    let link = Link::open(&endpoint)
         .with_context(|| format!("cannot open the autopilot link {endpoint}"))?;
     match link.local_addr() {
         Some(local) => log::info!(
@@ -48,6 +133,15 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
             cfg.component_id
         ),
     }
+    let mut sender = Sender {
+        link,
+        header: MavHeader {
+            system_id: cfg.system_id.into(),
+            component_id: cfg.component_id,
+            sequence: 0,
+        },
+        frame: cfg.setpoint_frame,
+    };
 
     let tracks = MsgSubscriber::<TrackState>::new(&node, &TRACK, TRACK_BUFFER)?;
     let clock = match cfg.clock {
@@ -62,36 +156,32 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
         ms_to_ns(cfg.vehicle_timeout_ms),
     );
     let started_ns = monotonic_ns();
-    let mut header = MavHeader {
-        system_id: cfg.system_id.into(),
-        component_id: cfg.component_id,
-        sequence: 0,
-    };
-    let heartbeat_period_ns = (1e9 / cfg.heartbeat_hz) as u64;
-    let resend_period_ns = (1e9 / cfg.setpoint_rate_hz) as u64;
-    let input_timeout_ns = ms_to_ns(cfg.input_timeout_ms);
-    let mut next_heartbeat_ns = 0;
+    // Heartbeat, resending and staleness run on the wall clock, whatever `control.clock` says.
+    let mut gate = CommandGate::new(GateTiming::from_rates(
+        cfg.heartbeat_hz,
+        cfg.setpoint_rate_hz,
+        cfg.input_timeout_ms,
+    ));
+    // Not heard from yet.
+    let mut autopilot = AutopilotView::default();
     let mut sim_now_ns = 0u64;
-    // The newest command and when (wall clock) its track arrived and it was last sent.
-    let mut last: Option<(Setpoint, u64)> = None;
-    let mut last_sent_ns = 0u64;
-    let mut stale_reported = false;
     let mut last_stats_log_ns = started_ns;
-    let mut last_stats = link.stats();
+    let mut last_stats = sender.link.stats();
 
     while !shutdown.requested() {
         status.tick();
         let wall_ns = monotonic_ns();
         let uptime_ms = ((wall_ns - started_ns) / 1_000_000) as u32;
 
-        // Our heartbeat, so ArduPilot (and a GCS) sees the companion.
-        if wall_ns >= next_heartbeat_ns {
-            send(&mut link, &mut header, &companion_heartbeat(), &mut status);
-            next_heartbeat_ns = wall_ns + heartbeat_period_ns;
+        // Our heartbeat when due, so ArduPilot (and a GCS) sees the companion; between track
+        // states the newest command repeated while it is fresh, silence once it is stale
+        // (judged on the autopilot as the previous turn left it).
+        for action in gate.on_tick(wall_ns, autopilot) {
+            sender.perform(action, &mut gate, &controller, uptime_ms, &mut status)?;
         }
 
         // Autopilot → vehicle state (without blocking: the wait is on the track service below).
-        let received = match link.recv(Duration::ZERO) {
+        let received = match sender.link.recv(Duration::ZERO) {
             Ok(msgs) => msgs,
             Err(e) => {
                 log::error!("link {endpoint}: {e}");
@@ -129,71 +219,27 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
             v.publish_ns = monotonic_ns();
             vehicle_out.publish(v)?;
         }
+        autopilot = AutopilotView {
+            target: monitor.target(),
+            follows_setpoints: follows_setpoints(&vehicle),
+        };
 
-        // Track → approach → setpoint.
+        // Track → approach → setpoint, sent at once if the gate allows.
         tracks.wait(LINK_POLL);
         while let Some(track) = tracks.receive()? {
             let recv_ns = monotonic_ns();
             status.status.inputs += 1;
             let setpoint = controller.step(&track, &vehicle, recv_ns);
-            last = Some((setpoint, recv_ns));
-            stale_reported = false;
-            let sent = command(
-                &mut link,
-                &mut header,
-                &monitor,
-                now_ns,
-                cfg,
-                uptime_ms,
-                &setpoint,
-                &mut status,
-            );
-            if sent {
-                last_sent_ns = recv_ns;
-            }
+            let sent = match gate.on_track(setpoint, recv_ns, autopilot) {
+                Some(action) => {
+                    sender.perform(action, &mut gate, &controller, uptime_ms, &mut status)?
+                }
+                None => false,
+            };
             controller.publish(Setpoint { sent, ..setpoint }, &mut status)?;
         }
 
-        // Between track states: repeat the newest command at the configured rate while it is
-        // fresh; once stale, go silent (and say so once).
-        if let Some((setpoint, track_wall_ns)) = last {
-            let now_wall = monotonic_ns();
-            if now_wall.saturating_sub(track_wall_ns) > input_timeout_ns {
-                if !stale_reported {
-                    log::warn!(
-                        "inputs stale: no track state for {} ms; sending nothing, the autopilot's guided timeout will stop the vehicle",
-                        (now_wall - track_wall_ns) / 1_000_000
-                    );
-                    let quiet = Setpoint {
-                        task: ApproachTask::Hold,
-                        sent: false,
-                        vx_m_s: 0.0,
-                        vy_m_s: 0.0,
-                        vz_m_s: 0.0,
-                        yaw_rate_rad_s: 0.0,
-                        reason: Text64::new("inputs stale: silent"),
-                        ..setpoint
-                    };
-                    controller.publish(quiet, &mut status)?;
-                    stale_reported = true;
-                }
-            } else if now_wall.saturating_sub(last_sent_ns) >= resend_period_ns
-                && command(
-                    &mut link,
-                    &mut header,
-                    &monitor,
-                    now_ns,
-                    cfg,
-                    uptime_ms,
-                    &setpoint,
-                    &mut status,
-                )
-            {
-                last_sent_ns = now_wall;
-            }
-        }
-
-        let stats = link.stats();
+        let stats = sender.link.stats();
         if stats != last_stats && wall_ns.saturating_sub(last_stats_log_ns) >= STATS_LOG_INTERVAL_NS
         {
             log::info!(
@@ -206,62 +252,10 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
         }
     }
     status.publish_now();
-    let s = link.stats();
+    let s = sender.link.stats();
     log::info!(
         "stopped: {} setpoints published; link {} frames in, {} out, {} garbage bytes, {} CRC errors, {} unknown",
         status.status.outputs, s.frames_in, s.frames_out, s.garbage_bytes, s.crc_errors, s.unknown_ids
     );
     Ok(())
-}
-
-/// Sends `setpoint` to the autopilot if it may be commanded ([`may_command`] with the
-/// monitor's view at `now_ns`); returns whether it was sent.
-#[allow(clippy::too_many_arguments)]
-fn command(
-    link: &mut Link,
-    header: &mut MavHeader,
-    monitor: &VehicleMonitor,
-    now_ns: u64,
-    cfg: &ControlConfig,
-    uptime_ms: u32,
-    setpoint: &Setpoint,
-    status: &mut StatusReporter,
-) -> bool {
-    let Some(target) = monitor.target() else {
-        return false;
-    };
-    if !may_command(setpoint.task, monitor.guided_and_armed(now_ns)) {
-        return false;
-    }
-    let v = [
-        setpoint.vx_m_s as f32,
-        setpoint.vy_m_s as f32,
-        setpoint.vz_m_s as f32,
-    ];
-    let msg = velocity_setpoint(
-        target,
-        uptime_ms,
-        cfg.setpoint_frame,
-        v,
-        setpoint.yaw_rate_rad_s as f32,
-    );
-    send(link, header, &msg, status)
-}
-
-/// Sends one message, numbering it; a failure is logged and counted, never fatal.
-fn send(
-    link: &mut Link,
-    header: &mut MavHeader,
-    msg: &hubtrack_mavlink::MavMessage,
-    status: &mut StatusReporter,
-) -> bool {
-    header.sequence = header.sequence.wrapping_add(1);
-    match link.send(*header, msg) {
-        Ok(()) => true,
-        Err(e) => {
-            log::warn!("send: {e}");
-            status.error(&e.to_string());
-            false
-        }
-    }
 }

@@ -5,7 +5,8 @@
 //! in GUIDED and heard from, and only while the track is fresh. When the inputs go stale it sends
 //! nothing at all, so ArduPilot's own guided-mode timeout stops the vehicle. Every setpoint (sent
 //! or not) is published with its task and reason; the autopilot's HEARTBEAT, ATTITUDE and
-//! position are published as `VehicleState` for detect (roll) and track (ego-motion).
+//! position are published as `VehicleState` for detect (roll) and track (ego-motion). When to
+//! send what is decided by the command gate of the library part ([`hubtrack_control_stage::gate`]).
 //!
 //! With `--replay` (started by `hubtrack replay`) there is no autopilot: the vehicle states come
 //! from the recording on the vehicle service, and the same approach and sending rule run on them

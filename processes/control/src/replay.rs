@@ -7,8 +7,9 @@
 //! at the track's capture time ([`aged_state`]), not on the wall clock. Nothing is resent and
 //! nothing goes stale on wall-clock timers: replay may run slower or faster than the recording.
 
-use crate::setpoint::{may_command, Controller, TRACK_BUFFER};
+use crate::setpoint::{Controller, TRACK_BUFFER};
 use crate::ControlStage;
+use hubtrack_control_stage::may_command;
 use hubtrack_mavlink::{aged_state, follows_setpoints};
 use hubtrack_runtime::ipc::MsgSubscriber;
 use hubtrack_runtime::stage::Stage;

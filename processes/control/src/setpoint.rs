@@ -1,5 +1,5 @@
-//! What live and replayed control share: one approach step per track state, the rule for
-//! sending a setpoint, and publishing it.
+//! What live and replayed control share: one approach step per track state, and publishing
+//! the setpoint.
 
 use crate::ControlStage;
 use hubtrack_approach::{Approach, ApproachInput};
@@ -7,7 +7,7 @@ use hubtrack_runtime::ipc::MsgPublisher;
 use hubtrack_runtime::status::StatusReporter;
 use hubtrack_types::services::SETPOINTS;
 use hubtrack_types::time::monotonic_ns;
-use hubtrack_types::{ApproachTask, Setpoint, Stamps, Text64, TrackState, VehicleState};
+use hubtrack_types::{Setpoint, Stamps, Text64, TrackState, VehicleState};
 
 /// Track states buffered between loop turns (every one is used, in order).
 pub const TRACK_BUFFER: usize = 16;
@@ -68,25 +68,5 @@ impl Controller {
         self.out.publish(setpoint)?;
         status.status.outputs += 1;
         Ok(())
-    }
-}
-
-/// Whether a setpoint of `task` may go to the autopilot: only while the vehicle follows
-/// setpoints (link up, armed, GUIDED: [`hubtrack_mavlink::follows_setpoints`]), and never in
-/// Abort (bad data: send nothing, the autopilot's guided timeout stops the vehicle).
-pub fn may_command(task: ApproachTask, vehicle_follows: bool) -> bool {
-    vehicle_follows && task != ApproachTask::Abort
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn abort_is_never_sent_and_nothing_goes_to_a_vehicle_that_does_not_follow() {
-        assert!(may_command(ApproachTask::Approach, true));
-        assert!(may_command(ApproachTask::Hold, true));
-        assert!(!may_command(ApproachTask::Abort, true));
-        assert!(!may_command(ApproachTask::Approach, false));
     }
 }
