@@ -3,7 +3,7 @@
 //! Two pipelines share one [`Detector`]:
 //! * [`params::Mode::Thesis`]: a faithful reimplementation of the thesis's Hough-line
 //!   recognition (section 6.1.5), the reference;
-//! * [`params::Mode::Default`]: the project's robust pipeline (see `robust.rs`).
+//! * [`params::Mode::Default`]: the project's robust pipeline (see `robust/mod.rs`, one module per step).
 //!
 //! Both wrap the caller's pixels in an OpenCV header without copying, convert to grey, pyrDown
 //! to a working size of 200–500 px, find edges and Hough segments there, and do all geometry on
@@ -186,7 +186,7 @@ pub(crate) struct Scratch {
     pub segments: Vec<Segment>,
     pub hist: Vec<u32>,
     pub edge_points: Vec<spinner::EdgePoint>,
-    /// The edge points of the whole working image (see `robust::EdgePointCache`).
+    /// The edge points of the whole working image (see `robust::spinner_search::EdgePointCache`).
     pub all_edge_points: Vec<spinner::EdgePoint>,
     pub hough: hough::OrientedHough,
 }

@@ -158,7 +158,7 @@ impl Default for ThesisParams {
     }
 }
 
-/// Parameters of the default (robust) pipeline; see `robust.rs` for the steps.
+/// Parameters of the default (robust) pipeline; see `robust/mod.rs` for the steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DefaultParams {
