@@ -11,7 +11,6 @@ use super::blades::{
     Blade,
 };
 use super::context::SceneCtx;
-use super::refine::one_sided_axis;
 use super::tower::tower_lines;
 use super::ROTOR_BLADES;
 
@@ -162,11 +161,7 @@ pub(super) fn evaluate(sc: &SceneCtx<'_>, c: P2, spinner: Option<[f64; 3]>) -> C
         if rotor_geometry_ok(p, &blades) {
             conf += p.conf_geometry;
         }
-        let band = |b: &Blade| {
-            b.axis.is_some()
-                || is_paired(segs, b, c)
-                || (p.paired_by_partner && one_sided_axis(sc, b, c).is_some())
-        };
+        let band = |b: &Blade| b.axis.is_some() || is_paired(segs, b, c);
         if blades.iter().filter(|b| band(b)).count() >= 2 {
             conf += p.conf_paired;
         }

@@ -59,7 +59,7 @@ pub(super) fn around_candidates(
             }
         };
         log::trace!("spinner search at {:?}: {:?}", cand.centre, circles);
-        if let Some(mut spun) = spinner_candidate(sc, cand, cands, &circles, expected_r) {
+        if let Some(mut spun) = spinner_candidate(sc, cand, cands, &circles) {
             // A circle of the size the tracker's distance expects is the spinner with more
             // certainty than blade lines meeting somewhere near it: at close range under an
             // overcast sky the lines of two blades met at the tower top, 0.15 h below the
@@ -140,9 +140,8 @@ fn spinner_candidate(
     cand: &Candidate,
     others: &[Candidate],
     circles: &[[f64; 4]],
-    expected_r: Option<f64>,
 ) -> Option<Candidate> {
-    let SceneCtx { p, h, hints, .. } = *sc;
+    let SceneCtx { p, h, .. } = *sc;
     let with_blades = circles
         .iter()
         .filter(|k| geometry::dist([k[0], k[1]], cand.centre) <= p.spinner_max_offset_frac * h)
@@ -165,17 +164,6 @@ fn spinner_candidate(
                 log::trace!("circle {:?} keeps {:.0} % of the blade support: not this rotor's spinner", c.spinner, 100.0 * kept);
             }
             kept >= p.spinner_min_kept_support
-        })
-        .filter(|(c, _)| {
-            // Small circles have the kept-support test above; their blade axes, a pixel or two
-            // off each, do not place the meeting point to a fraction of their radius.
-            let Some(k) = c.spinner.filter(|k| p.spinner_max_convergence_radii > 0.0 && k[2] > p.spinner_kept_support_max_radius_px) else { return true };
-            let Some(off) = axes_meet_offset(sc, c) else { return true };
-            let ok = off <= p.spinner_max_convergence_radii * k[2] + p.spinner_convergence_tol_px;
-            if !ok {
-                log::trace!("circle {k:?}: its blades meet {off:.1} px from its centre ({:.2} radii): not a spinner", off / k[2]);
-            }
-            ok
         });
     let mut with_blades: Vec<(Candidate, f64)> = with_blades.collect();
     // What the learned ranker sees of each circle: its rim, and where its blades' axes meet.
@@ -189,23 +177,11 @@ fn spinner_candidate(
                 axes_meet_offset(sc, c).map_or(0.0, |off| (off / k[2]).min(2.0));
         }
     }
-    // Circles are best covered first. A near tie goes to the size the tracker's distance
-    // expects, or without one to the predicted hub: the rim alone does not tell them apart.
-    let tie = p.spinner_tie_ratio * with_blades.first()?.1;
-    let off = |c: &Candidate| match (expected_r, hints.predicted_hub_px, c.spinner) {
-        (Some(e), _, Some(k)) if e > 0.0 => (k[2] / e).ln().abs(),
-        (_, Some(q), _) => geometry::dist(c.centre, q),
-        _ => 0.0,
-    };
-    let pick = (0..with_blades.len())
-        .filter(|&i| p.spinner_tie_ratio < 1.0 && with_blades[i].1 >= tie)
-        .min_by(|&i, &j| {
-            off(&with_blades[i].0)
-                .total_cmp(&off(&with_blades[j].0))
-                .then(i.cmp(&j))
-        })
-        .unwrap_or(0);
-    let (first, first_cov) = with_blades.remove(pick);
+    // Circles are best covered first.
+    if with_blades.is_empty() {
+        return None;
+    }
+    let (first, first_cov) = with_blades.remove(0);
     let inner = first.spinner?;
     // A circle round the best-covered one is the spinner's silhouette round a ring on its
     // face, if its rim is about as well covered; a less covered one is drawn by blade edges

@@ -648,53 +648,6 @@ fn spinner_circle_accepted_only_near_the_candidate_with_blades_at_its_rim() {
 }
 
 #[test]
-fn a_circle_beside_the_point_where_the_blade_axes_meet_is_no_spinner() {
-    let hub = [240.0, 120.0];
-    let r = 20.0;
-    // Three blades seen by both edges (their axes meet at the hub), starting at the rim.
-    let mut segs: Vec<Segment> = Vec::new();
-    for a in [0.0, 120.0, 240.0] {
-        segs.extend(blade_edges(hub, a, r, 100.0, 7.0, 3.0));
-    }
-    let hints = Hints {
-        roll_rad: Some(0.0),
-        ..Hints::default()
-    };
-    // A round patch 1.2 radii beside the hub with a better covered rim than the spinner's
-    // (the nacelle's front corner between two blade roots in a rendered flight).
-    let beside = [hub[0] + 1.2 * r * 0.6, hub[1] + 1.2 * r * 0.8, r, 0.9];
-    let spinner = [hub[0], hub[1], r, 0.6];
-    let run = |p: &DefaultParams| {
-        let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
-            Ok(vec![beside, spinner])
-        };
-        recognise_at(p, &segs, &hints, &mut circles, Expected::default())
-        .unwrap()
-    };
-    let off = DefaultParams {
-        spinner_max_convergence_radii: 0.0,
-        ..rules()
-    };
-    let f = run(&off);
-    assert!(
-        f.circle
-            .is_some_and(|k| geometry::dist([k[0], k[1]], [beside[0], beside[1]]) < 1e-9),
-        "without the rule the better rim wins: {f:?}"
-    );
-    let on = DefaultParams {
-        spinner_max_convergence_radii: 1.0,
-        ..off.clone()
-    };
-    let f = run(&on);
-    assert!(f.detected && geometry::dist(f.hub, hub) < 1.0, "{f:?}");
-    assert!(
-        f.circle
-            .is_some_and(|k| geometry::dist([k[0], k[1]], hub) < 1e-9),
-        "{f:?}"
-    );
-}
-
-#[test]
 fn an_enclosing_circle_replaces_the_best_covered_one_only_with_a_rim_as_well_covered() {
     let p = DefaultParams::default();
     let hub = [240.0, 120.0];
@@ -741,84 +694,47 @@ fn an_enclosing_circle_replaces_the_best_covered_one_only_with_a_rim_as_well_cov
 }
 
 #[test]
-fn a_near_tie_between_spinner_circles_goes_to_the_expected_size_else_to_the_prediction() {
-    // Off by default (see the parameter); the value it was measured with.
-    let p = DefaultParams {
-        spinner_tie_ratio: 0.8,
-        ..DefaultParams::default()
-    };
+fn the_best_covered_spinner_circle_with_blades_wins_whatever_the_tracker_expects() {
+    let p = DefaultParams::default();
     let hub = [240.0, 120.0];
     let mut segs: Vec<Segment> = Vec::new();
     for a in [20.0, 140.0, 260.0] {
         segs.extend(blade_edges(hub, a, 30.0, 100.0, 6.0, 2.0));
     }
-    // The spinner and a slightly better covered circle beside it (the nacelle's corner
-    // between two blade roots), both with blades at their rim.
+    // The spinner and a circle beside it (the nacelle's corner between two blade roots),
+    // both with blades at their rim.
     let spinner = [hub[0], hub[1], 28.0];
     let beside = [hub[0] + 10.0, hub[1] + 4.0, 20.0];
-    let circle_with =
-        |p: &DefaultParams, beside_cov: f64, predicted: Option<P2>, expected_r: Option<f64>| {
-            let hints = Hints {
-                roll_rad: Some(0.0),
-                predicted_hub_px: predicted,
-                ..Hints::default()
-            };
-            let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
-                let mut v = vec![
-                    [spinner[0], spinner[1], spinner[2], 0.30],
-                    [beside[0], beside[1], beside[2], beside_cov],
-                ];
-                v.sort_by(|a, b| b[3].total_cmp(&a[3]));
-                Ok(v)
-            };
-            let expected = Expected {
-                spinner_radius: expected_r,
-                ..Expected::default()
-            };
-            recognise_at(p, &segs, &hints, &mut circles, expected)
-                .unwrap()
-                .circle
-        };
     let circle = |beside_cov: f64, predicted: Option<P2>, expected_r: Option<f64>| {
-        circle_with(&p, beside_cov, predicted, expected_r)
+        let hints = Hints {
+            roll_rad: Some(0.0),
+            predicted_hub_px: predicted,
+            ..Hints::default()
+        };
+        let mut circles = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
+            let mut v = vec![
+                [spinner[0], spinner[1], spinner[2], 0.30],
+                [beside[0], beside[1], beside[2], beside_cov],
+            ];
+            v.sort_by(|a, b| b[3].total_cmp(&a[3]));
+            Ok(v)
+        };
+        let expected = Expected {
+            spinner_radius: expected_r,
+            ..Expected::default()
+        };
+        recognise_at(&p, &segs, &hints, &mut circles, expected)
+            .unwrap()
+            .circle
     };
-    let tie = p.spinner_tie_ratio;
-    let (close_call, clear_win) = (0.30 / tie - 0.02, 0.30 / tie + 0.02);
     let (at_spinner, at_beside) = ([hub[0] + 2.0, hub[1] - 3.0], [beside[0] - 1.0, beside[1]]);
+    assert_eq!(circle(0.33, None, None), Some(beside));
     assert_eq!(
-        circle(close_call, None, None),
+        circle(0.33, Some(at_spinner), Some(27.0)),
         Some(beside),
-        "with no tracker the best covered circle"
+        "neither the prediction nor the expected size outweighs a better rim"
     );
-    assert_eq!(
-        circle(close_call, Some(at_spinner), None),
-        Some(spinner),
-        "a near tie goes to the prediction"
-    );
-    assert_eq!(
-        circle(close_call, Some(at_beside), Some(27.0)),
-        Some(spinner),
-        "... or to the expected size"
-    );
-    assert_eq!(
-        circle(close_call, Some(at_spinner), Some(21.0)),
-        Some(beside),
-        "the size before the prediction"
-    );
-    assert_eq!(
-        circle(clear_win, Some(at_spinner), Some(27.0)),
-        Some(beside),
-        "a clearly better rim wins anyway"
-    );
-    let off = DefaultParams {
-        spinner_tie_ratio: 1.0,
-        ..p.clone()
-    };
-    assert_eq!(
-        circle_with(&off, close_call, Some(at_spinner), Some(27.0)),
-        Some(beside),
-        "the rule off: the best covered"
-    );
+    assert_eq!(circle(0.27, Some(at_beside), Some(21.0)), Some(spinner));
 }
 
 #[test]

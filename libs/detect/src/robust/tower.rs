@@ -4,7 +4,7 @@
 
 use crate::blade::Gradients;
 use crate::geometry::{self, Segment, P2};
-use crate::tower::{fit_tower, fit_tower_one_edge, scan_tower_edges, GradPlane};
+use crate::tower::{fit_tower, scan_tower_edges, GradPlane};
 use crate::Found;
 
 use super::context::{Expected, SceneCtx};
@@ -65,8 +65,8 @@ pub(super) fn axis_along_a_ray(axis: &Segment, hub: P2, rays: &[f64], tol: f64) 
 
 /// The tower of candidate `b` from both edges (see `tower.rs`), and the row of its top
 /// (working px). Seeds are the Hough tower lines, longest first; without a fit from them (and
-/// for a detected hub only) the gradient is scanned for edges below the hub. `tower_width`:
-/// the width expected from a tracker's distance; with it one edge alone places the tower.
+/// for a detected hub only) the gradient is scanned for edges below the hub. `expected`: the
+/// width a tracker's distance and the spinner's size allow the tower band.
 fn measure_tower(
     sc: &SceneCtx<'_>,
     b: &Candidate,
@@ -155,28 +155,6 @@ fn measure_tower(
             .filter_map(|s| fit_tower(p, g, s, window))
             .find(|f| !is_blade(f))
     };
-    // Only one edge in sight (the other behind a blade pointing down): with the width expected
-    // from the tracker's distance, that edge places the axis on the hub's side of it (the
-    // blade hangs from the hub; without one a lone edge may be the tower's near or far one).
-    // Tried last, only at close range (farther out the lone edge was as often the blade's:
-    // rendered flights, 15–25 m), and only with edges more upright than a blade's beside the
-    // tower, most upright first.
-    let one = |seeds: &[Segment]| {
-        let e = tower_width.filter(|_| {
-            blade_down && hub_distance_m.is_some_and(|d| d <= p.tower_one_edge_max_distance_m)
-        })?;
-        let tilt = |s: &Segment| geometry::roll_compensated_tilt_deg(s, roll_deg).abs();
-        let mut upright: Vec<&Segment> = seeds
-            .iter()
-            .take(TOWER_SEEDS)
-            .filter(|s| tilt(s) <= p.tower_one_edge_max_tilt_deg)
-            .collect();
-        upright.sort_by(|x, y| tilt(x).total_cmp(&tilt(y)));
-        upright
-            .into_iter()
-            .filter_map(|s| fit_tower_one_edge(g, s, e, b.centre[0]))
-            .find(|f| !is_blade(f))
-    };
     // Seeds: the tower lines in a window grown with the spinner (at close range the tower
     // top and edges lie beyond the fixed one).
     let mut hough: Vec<Segment> = tower_lines(sc, b.centre, spinner_r)
@@ -210,10 +188,7 @@ fn measure_tower(
     .filter(|s| geometry::roll_compensated_tilt_deg(s, roll_deg).abs() <= p.tower_max_tilt_deg)
     .collect::<Vec<_>>();
     log::trace!("tower scan from row {top:.0}: seeds {scanned:?}");
-    both(&scanned)
-        .map(|fit| (fit, top))
-        .or_else(|| one(&hough).map(|fit| (fit, hough_top)))
-        .or_else(|| one(&scanned).map(|fit| (fit, top)))
+    both(&scanned).map(|fit| (fit, top))
 }
 
 /// The chosen hub `b`'s tower into `found`. With the gradient `grad`, measured from both edges
@@ -233,12 +208,7 @@ pub(super) fn report_tower(
                 let row = top_y + p.tower_width_below_top_frac * h;
                 found.tower_top = fit.axis.x_at_y(top_y).map(|x| [x, top_y]);
                 found.tower_axis = Some(fit.axis);
-                // A width that was assumed is no measurement of the distance.
-                found.tower_width = if fit.one_edge {
-                    None
-                } else {
-                    fit.width_at(row).map(|wd| (wd, row))
-                };
+                found.tower_width = fit.width_at(row).map(|wd| (wd, row));
             }
             if found.detected {
                 found.nacelle_end_dx = expected
