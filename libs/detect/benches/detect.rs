@@ -73,9 +73,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c
     };
     // The `+t` row passes the tracker's prediction too (the true hub, for frames showing one),
-    // as the detect stage does between acquisition and a loss: the hub crop then stays off
-    // (`default.hub_crop_when_tracking`) and the close spinner search only runs when nothing
-    // else is found.
+    // as the detect stage does between acquisition and a loss: the hub crop then stays off and
+    // the close spinner search only runs when nothing else is found.
     let default = DetectConfig {
         mode: Mode::Default,
         ..DetectConfig::default()

@@ -3,7 +3,7 @@
 //! Two pipelines share one [`Detector`]:
 //! * [`params::Mode::Thesis`]: a faithful reimplementation of the thesis's Hough-line
 //!   recognition (section 6.1.5), the reference;
-//! * [`params::Mode::Default`]: the project's robust pipeline (see `robust.rs`).
+//! * [`params::Mode::Default`]: the project's robust pipeline (see `robust/mod.rs`, one module per step).
 //!
 //! Both wrap the caller's pixels in an OpenCV header without copying, convert to grey, pyrDown
 //! to a working size of 200–500 px, find edges and Hough segments there, and do all geometry on
@@ -186,7 +186,7 @@ pub(crate) struct Scratch {
     pub segments: Vec<Segment>,
     pub hist: Vec<u32>,
     pub edge_points: Vec<spinner::EdgePoint>,
-    /// The edge points of the whole working image (see `robust::EdgePointCache`).
+    /// The edge points of the whole working image (see `robust::spinner_search::EdgePointCache`).
     pub all_edge_points: Vec<spinner::EdgePoint>,
     pub hough: hough::OrientedHough,
 }
@@ -449,9 +449,7 @@ fn verify_heat_peak(
 /// The yaw network's reading around a detected hub (working px, `small` the working level,
 /// `focal_small` its focal length), seen from the tracker's distance, else the spinner circle's
 /// (the dome's silhouette, d = R·√(1 + (f/r)²), as the tracker's `distance_from_spinner`);
-/// `None` without a hub, without a distance or outside `hub_yaw_min/max_distance_m`. It reads
-/// the hub before the full-resolution spinner refinement, which moves it by a fraction of a
-/// working pixel.
+/// `None` without a hub, without a distance or outside `hub_yaw_min/max_distance_m`.
 fn read_yaw(
     config: &DetectConfig,
     net: &mut heat::HubYawNet,
@@ -780,7 +778,9 @@ impl Detector {
             .filter(|_| self.config.mode == Mode::Default)
         {
             let t = Instant::now();
-            if hints.predicted_hub_px.is_none() || self.config.default.hub_crop_when_tracking {
+            // Not while tracking: the hub–tower gap and nacelle cues and the approach's centring
+            // work from the blades' crossing.
+            if hints.predicted_hub_px.is_none() {
                 place_hub_by_crop(&self.config.default, net, small, &mut found)?;
             }
             if let (None, Some(heat)) = (hints.predicted_hub_px, heatmap.as_ref()) {
@@ -821,9 +821,6 @@ impl Detector {
             }
             None => None,
         };
-        if self.config.mode == Mode::Default {
-            self.refine_spinner(&mut found, image, k);
-        }
         let mut out = self.to_output(&found, k, image.width, image.height);
         if let Some(r) = yaw_reading {
             out.detection.yaw_net_valid = true;
@@ -833,35 +830,6 @@ impl Detector {
         out.detection.timings.pyramid_us = pyramid_us;
         out.detection.timings.total_us = us_since(t0);
         Ok(out)
-    }
-
-    /// The chosen spinner circle refined on the full-resolution image (see
-    /// `spinner_refine_rays`), and the hub with it when the hub is the circle's centre.
-    fn refine_spinner(&self, found: &mut Found, image: &ImageView<'_>, k: f64) {
-        let p = &self.config.default;
-        let (Some(c), true) = (found.circle, found.detected && p.spinner_refine_rays > 0) else {
-            return;
-        };
-        let plane = image::full_grey(image);
-        let rf = spinner::Refinement {
-            rays: p.spinner_refine_rays as usize,
-            band: p.spinner_refine_band,
-            band_max_px: p.spinner_refine_band_max_px,
-            inlier_px: p.spinner_refine_inlier_px,
-            min_inliers: p.spinner_refine_min_inliers,
-            max_change: p.spinner_refine_max_change,
-        };
-        let Some(r) = spinner::refine_circle(&plane, [c[0] * k, c[1] * k, c[2] * k], &rf) else {
-            return;
-        };
-        let refined = [r[0] / k, r[1] / k, r[2] / k];
-        if geometry::dist(found.hub, [c[0], c[1]]) < 1e-9 {
-            // The nacelle's end was measured from the old hub.
-            let dx = refined[0] - found.hub[0];
-            found.nacelle_end_dx = found.nacelle_end_dx.map(|d| d - dx);
-            found.hub = [refined[0], refined[1]];
-        }
-        found.circle = Some(refined);
     }
 
     /// The tower's width just under the nacelle seen from `hub_distance_m` in front of the hub,

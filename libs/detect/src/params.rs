@@ -158,7 +158,7 @@ impl Default for ThesisParams {
     }
 }
 
-/// Parameters of the default (robust) pipeline; see `robust.rs` for the steps.
+/// Parameters of the default (robust) pipeline; see `robust/mod.rs` for the steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DefaultParams {
@@ -301,19 +301,6 @@ pub struct DefaultParams {
     /// the distance read 64–71 m and the tracker's width window then kept the true band out
     /// (`fly` seed 335). 0 = off. Range 0 or [1, 10].
     pub tower_width_spinner_tol: f64,
-    /// With a blade pointing down and a tracker's distance, one tower edge (the other hidden
-    /// behind the blade) places the tower at the expected width on the hub's side of it, tried
-    /// after every two-edge band. Only edges within this of vertical after roll qualify,
-    /// degrees: the edges of a blade beside the tower lean more. Range [0, 45].
-    pub tower_one_edge_max_tilt_deg: f64,
-    /// ... and only within this distance from the hub (the tracker's), metres; 0 (default) =
-    /// never. Farther out the lone edge was as often a blade's as the tower's (rendered flights,
-    /// 15–25 m: 12 of 16 one-edge towers wrong; 4–8 m: none of 7), and even at 5 m, when the
-    /// spinner covers the tower top and the blade pointing down covers the tower, the blade's
-    /// own edge passes the rule: its gap is persistently wrong, so the yaw filter accepts it as
-    /// a jump. Simulated flights, 20 seeds: 10 m gave 10 successes with 6 final yaws of 5–11°,
-    /// 0 gave 12 with 3. Range [0, 1000].
-    pub tower_one_edge_max_distance_m: f64,
     /// When the Hough lines give no tower (HoughLinesP's walk along a jagged, slightly tilted
     /// edge drops the short piece with its votes, so an edge in plain view can go missing), the
     /// horizontal gradient below a detected hub is scanned for near-vertical edges: from this
@@ -354,15 +341,6 @@ pub struct DefaultParams {
     /// Confidence added when at least two blades show both edges (a blade is a band with two
     /// edges on either side of its axis; field borders, wires and horizons give single lines).
     pub conf_paired: f64,
-    /// A blade seen by one edge counts as showing both when its partner edge is found in the
-    /// gradient image (`blade_partner_*`), as the hub refinement does. Off: on the development
-    /// photos it finds 4 more hubs (41.5 → 49.1 % hits: two blades and a tower at 0.70 pass
-    /// 0.75) and `hubtrack fly` seeds 161–240 are unchanged (74 of 80 against 73), but
-    /// synthetic hits drop ~1 point (field strips and roads are bands too) and the rendered
-    /// sequences lock onto clutter: `eval --sequence` seeds 2026 / 7 / 100 / 500 filtered RMS
-    /// 1.16 / 3.06 / 1.66 / 1.79 → 1.16 / 5.74 / 2.32 / 2.01 %, false locks 0 / 2 / 1 / 0 →
-    /// 0 / 3 / 1 / 1.
-    pub paired_by_partner: bool,
     /// Confidence removed per blade beyond three (clutter: textured ground, lattice masts).
     pub conf_extra_blade_penalty: f64,
     /// With `ranker.ranking = "rules"`: `detected` requires at least this confidence.
@@ -543,18 +521,6 @@ pub struct DefaultParams {
     /// inner one's; a circle drawn by blade edges crossing near the spinner is covered less.
     /// 0 = always the outer one.
     pub spinner_nest_min_coverage_ratio: f64,
-    /// Of the spinner circles with blades at their rim whose rim coverage is at least this
-    /// fraction of the best covered one's, the one nearest the size the tracker's distance
-    /// expects is taken (with no distance, the one nearest the tracker's predicted hub; with
-    /// neither, the best covered): seen obliquely, the nacelle's front corner between two blade
-    /// roots makes a circle as well covered as the spinner's (a rendered flight at 18 m, 20°
-    /// yaw: rim 0.34 against 0.30, 110 px beside the spinner), and which came first changed
-    /// from frame to frame. 1 = the best covered one always: the rule is off by default. At 0.8
-    /// it took `eval --sequence` seeds 2026 / 7 / 100 / 500 from 1.59 / 4.74 / 1.58 / 1.76 % to
-    /// 1.16 / 3.82 / 1.48 / 1.86 % filtered RMS, but simulated flights 1–160 from 149 to 146
-    /// successes, and in one the size expected from a wrong 3 m distance kept choosing a wrong
-    /// large circle, so T3 backed away from 37 to 57 m (the size feeds back into the distance).
-    pub spinner_tie_ratio: f64,
     /// A small circle is a spinner only if, measured from its centre, the strongest blade-line
     /// candidate within `spinner_max_offset_frac` keeps at least this fraction of its blade
     /// support (blade length) in the same directions: the blades radiate from the spinner,
@@ -566,25 +532,6 @@ pub struct DefaultParams {
     /// 65.5 % (far 67.5 → 70 %); applied to all radii 59.5 %. Candidates with fewer than two
     /// blades (the tracker's predicted hub at close range) are not checked ...
     pub spinner_min_kept_support: f64,
-    /// A circle is a spinner only if the axes of its blades meet within this many radii of its
-    /// centre (plus `spinner_convergence_tol_px`): the blades are mounted on the hub behind
-    /// the spinner, so in any view where the spinner is seen their axes meet inside its
-    /// outline. A round patch of sky or ground between two blade roots, whose rim the blade
-    /// edges draw, is centred beside the point where the blades meet (a photo at 11 % of the
-    /// height off; the nacelle's front corner beside the spinner in rendered flights). Only
-    /// blade axes are used (an edge pair the blade holds an edge of, or the partner edge found:
-    /// one edge is half a chord, about a spinner radius at the root, off), and only circles
-    /// larger than `spinner_kept_support_max_radius_px` are tested (smaller ones have the
-    /// kept-support test; their axes do not place the meeting point to a fraction of the
-    /// radius). 0 = off (the default): at 1 synthetic hits 65.7 → 67.2 % (far 70.5 → 73.5 %),
-    /// false positives 6.2 → 4.2 %, photos 37.7 → 39.6 % (at 0.7 64.8 %: oblique spinners sit
-    /// off the centre of the blade-root plane), but with the two session-18 rules on, `hubtrack
-    /// fly` seeds 161–240 succeeded 71 times against 73 without it (75 for session 17's build):
-    /// removing a wrong circle at 30–40 m let another wrong candidate through at acquisition.
-    pub spinner_max_convergence_radii: f64,
-    /// Slack of `spinner_max_convergence_radii` in working px (a blade seen by one edge whose
-    /// partner is not found puts the meeting point half a chord off).
-    pub spinner_convergence_tol_px: f64,
     /// ... nor circles larger than this, working px (8 px: the modelled spinner from ~30 m
     /// with the wide-angle lens): a spinner a few pixels across is any round blob, a larger
     /// one shows its own outline.
@@ -592,17 +539,6 @@ pub struct DefaultParams {
     /// Spinner step: a circle whose inner 70 % holds more Canny edge pixels than this per px² is
     /// clutter (textured ground, a tower with blades and horizon), not the smooth spinner.
     pub spinner_max_interior_density: f64,
-    /// Spinner refinement: rays cast from the chosen spinner circle's centre on the
-    /// full-resolution image, along which the rim is found to a fraction of a pixel before a
-    /// robust circle fit (0 = off). The circle vote works on whole pixels of the pyramid's
-    /// Canny edges: at 25–30 m (a spinner ~20 px across at 960 px) its centre was 3–6 px off in
-    /// rendered flights, and each pixel of the hub–tower gap is ~1° of relative yaw there.
-    /// Off by default: at 48 the hub got closer to the truth (synthetic median error 0.73 →
-    /// 0.63 % of the height, rendered-flight RMS better in 3 of 4 sequences) but the relative
-    /// yaw's tails grew and `hubtrack fly` seeds 161–560 ended 365 against 371 successes
-    /// (session 22); the nacelle window and gap weights were set with the old centres. Range 0
-    /// or [8, 720]; default 0.
-    pub spinner_refine_rays: u32,
     /// Still photos only (`hubtrack detect`, `hubtrack eval` on photos; never the detect
     /// stage, which keeps its frame budget): detect also one pyramid level finer and keep the
     /// more confident detection. Real development photos: 39.6 → 49.1 % hits (far 0 → 1 of
@@ -627,22 +563,6 @@ pub struct DefaultParams {
     /// Hubs of the two views at most this far apart are one hub (averaged), fraction of the
     /// image height. Range [0, 0.5].
     pub still_mirror_agree_frac: f64,
-    /// The rim is searched within band·r of the circle along each ray (at most
-    /// `spinner_refine_band_max_px`). Range (0, 0.9]; default 0.35.
-    pub spinner_refine_band: f64,
-    /// ... and within this many full-resolution px: the vote's error is a few pyramid pixels
-    /// whatever the size, and a wider search on a large spinner reaches the blade roots, the
-    /// nacelle and the shading inside. Range (0, 1000]; default 6.
-    pub spinner_refine_band_max_px: f64,
-    /// Rim points within this of the refined circle are kept, full-resolution px (at least; a
-    /// wider robust spread of the residuals widens it). Range (0, 20]; default 1.
-    pub spinner_refine_inlier_px: f64,
-    /// Smallest fraction of the rays whose rim point fits the refined circle (blade roots and
-    /// the nacelle behind break up to half the rim). Range (0, 1]; default 0.4.
-    pub spinner_refine_min_inliers: f64,
-    /// Largest move of the centre, and change of the radius, by the refinement, fraction of
-    /// the radius; beyond it the vote's circle stays. Range (0, 1]; default 0.3.
-    pub spinner_refine_max_change: f64,
     /// Spinner step: with a circle of radius r, blade lines and axes may end up to this many r
     /// from its centre (blades start at the spinner rim).
     pub spinner_reach_radii: f64,
@@ -789,12 +709,6 @@ pub struct DefaultParams {
     /// 88.8 / 87.3 %; never keeping the circle (`hub_crop_keep_spinner` false) 88.5 / 87.7 %.
     /// Range [0, 10]; 10 = never (the rule off).
     pub hub_crop_spinner_escape_radii: f64,
-    /// ... and also while tracking (the tracker gives a predicted hub). Off by default: the
-    /// hub–tower gap and nacelle yaw cues and the approach's centring were all tuned on the
-    /// blades' crossing, and `hubtrack fly` seeds 161–560 with the crop in tracking too gave
-    /// fewer successes (see the README, "Learned hub crop"); stills and the frames before
-    /// acquisition use it.
-    pub hub_crop_when_tracking: bool,
     /// Networks' verdict when the lines found nothing: without a tracker's prediction, a frame
     /// with no detection whose heatmap (`hub_heat`) peaks at least this probably, and whose
     /// crop network (`hub_crop`) then places a hub at least `heat_verify_crop_min` probably
@@ -1184,8 +1098,6 @@ impl Default for DefaultParams {
             tower_width_min_radii: 0.5,
             tower_width_max_radii: 1.6,
             tower_width_spinner_tol: 1.5,
-            tower_one_edge_max_tilt_deg: 4.0,
-            tower_one_edge_max_distance_m: 0.0,
             tower_scan_start_frac: 0.06,
             tower_scan_start_radii: 1.2,
             tower_scan_min_salience: 3.0,
@@ -1200,7 +1112,6 @@ impl Default for DefaultParams {
             conf_tower: 0.25,
             conf_geometry: 0.15,
             conf_paired: 0.1,
-            paired_by_partner: false,
             conf_extra_blade_penalty: 0.1,
             min_confidence: 0.75,
             tower_width_below_top_frac: 0.05,
@@ -1255,21 +1166,12 @@ impl Default for DefaultParams {
             spinner_peaks: 12,
             spinner_hint_min_coverage: 0.25,
             spinner_nest_min_coverage_ratio: 0.8,
-            spinner_tie_ratio: 1.0,
             spinner_min_kept_support: 0.7,
-            spinner_max_convergence_radii: 0.0,
-            spinner_convergence_tol_px: 2.0,
             spinner_kept_support_max_radius_px: 8.0,
             spinner_max_interior_density: 0.1,
-            spinner_refine_rays: 0,
             still_finer_level: true,
             still_mirror: StillMirror::Either,
             still_mirror_agree_frac: 0.06,
-            spinner_refine_band: 0.35,
-            spinner_refine_band_max_px: 6.0,
-            spinner_refine_inlier_px: 1.0,
-            spinner_refine_min_inliers: 0.4,
-            spinner_refine_max_change: 0.3,
             spinner_reach_radii: 2.0,
             conf_spinner: 0.2,
             close_spinner_radius_frac: 0.12,
@@ -1297,7 +1199,6 @@ impl Default for DefaultParams {
             hub_crop_min_shift_frac: 0.02,
             hub_crop_keep_spinner: true,
             hub_crop_spinner_escape_radii: 0.0,
-            hub_crop_when_tracking: false,
             heat_verify_min: 0.5,
             heat_verify_crop_min: 0.5,
             heat_verify_end_frac: 0.06,
@@ -1583,18 +1484,6 @@ impl DefaultParams {
             self.tower_width_spinner_tol,
             1.0,
             10.0,
-        )?;
-        c.closed(
-            "tower_one_edge_max_tilt_deg",
-            self.tower_one_edge_max_tilt_deg,
-            0.0,
-            45.0,
-        )?;
-        c.closed(
-            "tower_one_edge_max_distance_m",
-            self.tower_one_edge_max_distance_m,
-            0.0,
-            1000.0,
         )?;
         c.closed(
             "tower_scan_start_frac",
@@ -1886,7 +1775,6 @@ impl DefaultParams {
             0.0,
             10.0,
         )?;
-        c.closed("spinner_tie_ratio", self.spinner_tie_ratio, 0.0, 1.0)?;
         c.closed(
             "close_spinner_min_coverage",
             self.close_spinner_min_coverage,
@@ -2002,18 +1890,6 @@ impl DefaultParams {
             14.0,
         )?;
         c.closed(
-            "spinner_max_convergence_radii",
-            self.spinner_max_convergence_radii,
-            0.0,
-            100.0,
-        )?;
-        c.closed(
-            "spinner_convergence_tol_px",
-            self.spinner_convergence_tol_px,
-            0.0,
-            100.0,
-        )?;
-        c.closed(
             "spinner_min_kept_support",
             self.spinner_min_kept_support,
             0.0,
@@ -2028,34 +1904,6 @@ impl DefaultParams {
         c.closed(
             "spinner_max_interior_density",
             self.spinner_max_interior_density,
-            0.0,
-            1.0,
-        )?;
-        if self.spinner_refine_rays != 0 {
-            c.count("spinner_refine_rays", self.spinner_refine_rays, 8, 720)?;
-        }
-        c.open_closed("spinner_refine_band", self.spinner_refine_band, 0.0, 0.9)?;
-        c.open_closed(
-            "spinner_refine_band_max_px",
-            self.spinner_refine_band_max_px,
-            0.0,
-            1000.0,
-        )?;
-        c.open_closed(
-            "spinner_refine_inlier_px",
-            self.spinner_refine_inlier_px,
-            0.0,
-            20.0,
-        )?;
-        c.open_closed(
-            "spinner_refine_min_inliers",
-            self.spinner_refine_min_inliers,
-            0.0,
-            1.0,
-        )?;
-        c.open_closed(
-            "spinner_refine_max_change",
-            self.spinner_refine_max_change,
             0.0,
             1.0,
         )?;

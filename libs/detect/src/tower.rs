@@ -64,9 +64,6 @@ pub(crate) struct TowerFit {
     pub edges: [Segment; 2],
     /// The midline, from the top row of the fit down.
     pub axis: Segment,
-    /// Only one edge was seen; the other is placed at the expected width, so the width is no
-    /// measurement (see [`fit_tower_one_edge`]).
-    pub one_edge: bool,
 }
 
 impl TowerFit {
@@ -250,7 +247,6 @@ fn fit_tower_here(
     let fit = TowerFit {
         edges: [left, right],
         axis,
-        one_edge: false,
     };
     // A blade pointing down is a band too, but narrows toward its tip; the tower does not.
     // It widens downward by its own taper only (its rows are at about the same depth).
@@ -344,53 +340,6 @@ pub(crate) fn scan_tower_edges(
             Segment::new([x, y0 as f64], [x + d, y1 as f64])
         })
         .collect()
-}
-
-/// The tower from one edge and its expected width (working px): for a tower whose other edge
-/// hides behind a blade pointing down, which at close range covers the tower's near half. The
-/// tower lies on the side of `seed` toward `hub_x` (the blade that hides it hangs from the
-/// hub). `None` when the edge cannot be fitted.
-pub(crate) fn fit_tower_one_edge(
-    g: &GradPlane<'_>,
-    seed: &Segment,
-    width: f64,
-    hub_x: f64,
-) -> Option<TowerFit> {
-    let h = g.height as f64;
-    let top = seed.a[1].min(seed.b[1]).max(0.0);
-    let seed_bottom = seed.a[1].max(seed.b[1]);
-    let rows: Vec<i64> = (top.ceil() as i64..g.height as i64 - 1).collect();
-    let x0 = |y: i64| seed.x_at_y(y as f64);
-    let sum: f64 = rows
-        .iter()
-        .filter(|&&y| (y as f64) <= seed_bottom)
-        .filter_map(|&y| Some(g.at(x0(y)?.round() as i64, y)))
-        .sum();
-    // `width > 0.0` is false for NaN too.
-    if sum == 0.0 || width.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-        return None;
-    }
-    let edge = fit_edge(g, &rows, x0, sum.signum())?;
-    let side = if hub_x >= seed.x_at_y(top)? {
-        1.0
-    } else {
-        -1.0
-    };
-    let shift = |s: &Segment, dx: f64| Segment::new([s.a[0] + dx, s.a[1]], [s.b[0] + dx, s.b[1]]);
-    let other = shift(&edge, side * width);
-    let (left, right) = if side > 0.0 {
-        (edge, other)
-    } else {
-        (other, edge)
-    };
-    let bottom = h - 1.0;
-    let mid = |y: f64| Some((left.x_at_y(y)? + right.x_at_y(y)?) / 2.0);
-    let axis = Segment::new([mid(top)?, top], [mid(bottom)?, bottom]);
-    Some(TowerFit {
-        edges: [left, right],
-        axis,
-        one_edge: true,
-    })
 }
 
 /// The best partner edge of one gradient sign: mean response along its path, signed offsets
@@ -991,42 +940,6 @@ mod tests {
         };
         assert!(fit_tower(&p, &g, &seed, ANY_WIDTH).is_some());
         assert!(fit_tower(&p, &g, &seed, (12.0, 27.0)).is_none());
-    }
-
-    #[test]
-    fn one_edge_and_the_expected_width_place_the_axis_toward_the_hub() {
-        // Tower x 80..100, its right half hidden behind a blade of the same shade (no edge).
-        let (w, h) = (200, 160);
-        let img: Vec<u8> = (0..w * h)
-            .map(|i| {
-                if (i % w) as f64 + 0.5 > 80.0 && (i % w) < 140 {
-                    200
-                } else {
-                    40
-                }
-            })
-            .collect();
-        let gx = sobel_x(&img, w, h);
-        let g = GradPlane {
-            data: &gx,
-            width: w,
-            height: h,
-        };
-        let seed = Segment::new([80.0, 20.0], [80.0, 120.0]);
-        let fit = fit_tower_one_edge(&g, &seed, 20.0, 120.0).expect("edge fitted");
-        assert!(fit.one_edge);
-        assert!(
-            (fit.axis.x_at_y(60.0).unwrap() - 90.0).abs() < 1.0,
-            "{:?}",
-            fit.axis
-        );
-        // With the hub on the other side the tower is placed there.
-        let fit = fit_tower_one_edge(&g, &seed, 20.0, 40.0).unwrap();
-        assert!(
-            (fit.axis.x_at_y(60.0).unwrap() - 70.0).abs() < 1.0,
-            "{:?}",
-            fit.axis
-        );
     }
 
     #[test]
