@@ -74,6 +74,25 @@ pub struct Hints {
 pub const MAX_HINT_AGE_NS: u64 = 500_000_000;
 
 impl Hints {
+    /// The hints for one frame, as every consumer builds them (the detect stage, the offline
+    /// tools, the benchmarks): the tracker's newest state, if any ([`Hints::from_track`]), and
+    /// the camera roll the vehicle reported for the frame's time, if any.
+    pub fn for_frame(
+        last_track: Option<&TrackState>,
+        width: u32,
+        height: u32,
+        capture_ns: u64,
+        roll_rad: Option<f64>,
+    ) -> Hints {
+        let from_track = last_track.map_or_else(Hints::default, |t| {
+            Hints::from_track(t, width, height, capture_ns)
+        });
+        Hints {
+            roll_rad,
+            ..from_track
+        }
+    }
+
     /// Hints from a tracker's newest state for a frame of `width × height` captured at
     /// `capture_ns`: the hub predicted to the frame's time and the filtered distance, when the
     /// track is live, of the same frame size, not from the future and at most

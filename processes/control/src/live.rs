@@ -4,7 +4,7 @@
 //! When to send what is the [`CommandGate`]'s decision; this loop only feeds it the events with
 //! their wall-clock time and performs its actions.
 
-use crate::config::{ClockSource, ControlConfig};
+use crate::config::ClockSource;
 use crate::setpoint::{Controller, TRACK_BUFFER};
 use crate::ControlStage;
 use anyhow::Context;

@@ -90,10 +90,14 @@ fn run() -> anyhow::Result<()> {
                 v.attitude_valid && header.capture_ns.abs_diff(v.recv_ns) < MAX_ATTITUDE_AGE_NS
             })
             .map(|v| v.roll_rad);
-        let hints = last_track.as_ref().map_or_else(Hints::default, |t| {
-            Hints::from_track(t, header.width, header.height, header.capture_ns)
-        });
-        let output = match detector.detect(&image, &Hints { roll_rad, ..hints }) {
+        let hints = Hints::for_frame(
+            last_track.as_ref(),
+            header.width,
+            header.height,
+            header.capture_ns,
+            roll_rad,
+        );
+        let output = match detector.detect(&image, &hints) {
             Ok(o) => o,
             Err(e) => {
                 log::error!("frame {}: {e}", header.seq);

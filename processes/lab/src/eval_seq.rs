@@ -235,13 +235,13 @@ pub fn run(
                 data: &pixels,
             };
             let capture_ns = (i as f64 / FLIGHT_FPS * 1e9).round() as u64;
-            let hints = last.as_ref().map_or_else(Hints::default, |t| {
-                Hints::from_track(t, cam.width, cam.height, capture_ns)
-            });
-            let hints = Hints {
-                roll_rad: Some(fr.pose.roll_deg.to_radians()),
-                ..hints
-            };
+            let hints = Hints::for_frame(
+                last.as_ref(),
+                cam.width,
+                cam.height,
+                capture_ns,
+                Some(fr.pose.roll_deg.to_radians()),
+            );
             let output = detector.detect(&view, &hints)?;
             if outputs.misses.is_some() && !fr.dropout {
                 write_sequence_miss(

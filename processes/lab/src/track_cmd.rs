@@ -54,9 +54,9 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         let (detection, error) = match read_image(&path) {
             Ok(mat) => {
                 let view = view_of(&mat)?;
-                let hints = last.as_ref().map_or_else(Hints::default, |t| {
-                    Hints::from_track(t, view.width, view.height, capture_ns)
-                });
+                // No IMU with a folder of images: no roll.
+                let hints =
+                    Hints::for_frame(last.as_ref(), view.width, view.height, capture_ns, None);
                 let mut d = det.detect(&view, &hints)?.detection;
                 d.stamps.seq = i as u64;
                 d.stamps.capture_ns = capture_ns;
