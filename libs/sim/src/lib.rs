@@ -46,10 +46,6 @@
 //! * **Wind**: air velocity (where the air goes), NED, m/s.
 
 #![warn(missing_docs)]
-// `!(x <= y)` is used on purpose: it is also true for NaN, which must count as a failure.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-// Per-axis loops over small fixed arrays read clearer with indices.
-#![allow(clippy::needless_range_loop)]
 
 pub mod autopilot;
 pub mod math;

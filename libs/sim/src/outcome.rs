@@ -169,28 +169,28 @@ impl FlightRecorder {
         let c = &self.cfg;
         let mut why = Vec::new();
         let derr = geo.distance_m - c.target_distance_m;
-        if !(derr.abs() <= c.distance_tolerance_m) {
+        if !at_most(derr.abs(), c.distance_tolerance_m) {
             why.push(format!(
                 "final distance {:.2} m is not within {} ± {} m",
                 geo.distance_m, c.target_distance_m, c.distance_tolerance_m
             ));
         }
-        if !(geo.relative_yaw_deg.abs() <= c.yaw_tolerance_deg) {
+        if !at_most(geo.relative_yaw_deg.abs(), c.yaw_tolerance_deg) {
             why.push(format!(
                 "final relative yaw {:.1}° exceeds ±{}°",
                 geo.relative_yaw_deg, c.yaw_tolerance_deg
             ));
         }
-        if !(final_speed < c.hover_speed_m_s) {
+        if !below(final_speed, c.hover_speed_m_s) {
             why.push(format!(
                 "not hovering: speed {final_speed:.2} m/s (limit {} m/s)",
                 c.hover_speed_m_s
             ));
         }
-        if !(t_s <= self.max_time_s) {
+        if !at_most(t_s, self.max_time_s) {
             why.push(format!("took {t_s:.1} s (limit {} s)", self.max_time_s));
         }
-        if !(rec.min_rotor_plane_m >= c.min_rotor_plane_m) {
+        if !at_most(c.min_rotor_plane_m, rec.min_rotor_plane_m) {
             why.push(format!(
                 "came within {:.2} m of the rotor plane (minimum {} m)",
                 rec.min_rotor_plane_m, c.min_rotor_plane_m
@@ -219,6 +219,16 @@ impl FlightRecorder {
     }
 }
 
+/// `a <= b`; false when either is NaN, so a NaN measure fails the check it is in.
+fn at_most(a: f64, b: f64) -> bool {
+    a <= b
+}
+
+/// `a < b`; false when either is NaN, so a NaN measure fails the check it is in.
+fn below(a: f64, b: f64) -> bool {
+    a < b
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -226,6 +236,15 @@ mod tests {
     use crate::scenario::{geometry, Scenario};
     use crate::vehicle::VelocityCommand;
     use crate::wind::Wind;
+
+    #[test]
+    fn a_nan_measure_fails_every_check() {
+        assert!(at_most(1.0, 1.0) && below(0.5, 1.0));
+        assert!(!below(1.0, 1.0));
+        for (a, b) in [(f64::NAN, 1.0), (1.0, f64::NAN)] {
+            assert!(!at_most(a, b) && !below(a, b));
+        }
+    }
 
     fn calm() -> Wind {
         Wind::new(

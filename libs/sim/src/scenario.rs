@@ -452,8 +452,8 @@ mod tests {
             assert!((back[i] - p[i]).abs() < 1e-9);
         }
         let hub = s.world_to_ned(s.scene.hub_world());
-        for i in 0..3 {
-            assert!((hub[i] - s.hub_ned[i]).abs() < 1e-9);
+        for (a, b) in hub.iter().zip(s.hub_ned) {
+            assert!((a - b).abs() < 1e-9);
         }
         // The nose of the spinner is along the rotor axis heading.
         let nose = s.world_to_ned(s.scene.nose_world());

@@ -143,8 +143,8 @@ impl Multicopter {
 
         // The integrator learns the wind force with a lag: gusts are only partly rejected.
         let k_d = 1.0 - (-dt / c.disturbance_tc_s).exp();
-        for i in 0..2 {
-            self.disturbance_est[i] += (disturbance[i] - self.disturbance_est[i]) * k_d;
+        for (est, d) in self.disturbance_est.iter_mut().zip(disturbance) {
+            *est += (d - *est) * k_d;
         }
 
         // Horizontal thrust acceleration demand: the controller's acceleration, plus the
