@@ -27,8 +27,6 @@
 //! sign: the foreshortening is symmetric). [`blade_skew_yaw`] fits both by least squares in the
 //! measured angles and returns |ψ| with its Cramér–Rao standard deviation.
 
-use std::f64::consts::{PI, TAU};
-
 /// A scalar estimate with its standard deviation (same unit as the value).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Estimate {
@@ -249,139 +247,6 @@ pub fn apparent_blade_angle(theta: f64, psi: f64) -> f64 {
     (theta.sin() * psi.cos()).atan2(theta.cos())
 }
 
-/// Grid points over [0, max] for the initial search of the blade-skew yaw.
-const BLADE_GRID_STEPS: usize = 180;
-/// Golden-section iterations refining the grid minimum (bracket shrinks by 0.618 each).
-const BLADE_REFINE_ITERS: usize = 60;
-/// Gauss–Newton iterations for the rotor angle θ₀ at a given yaw.
-const BLADE_THETA_ITERS: usize = 4;
-
-/// Least-squares fit of the rotor angle at a fixed yaw; returns (θ₀, Σ residual²).
-fn fit_theta0(alphas: &[f64], n_blades: f64, psi: f64) -> (f64, f64) {
-    let c = psi.cos();
-    let spacing = TAU / n_blades;
-    // Start: circular mean of the un-foreshortened angles, folded by the blade symmetry.
-    let (mut sx, mut sy) = (0.0, 0.0);
-    for &a in alphas {
-        let th = (a.sin() / c).atan2(a.cos());
-        sx += (n_blades * th).cos();
-        sy += (n_blades * th).sin();
-    }
-    let mut theta0 = sy.atan2(sx) / n_blades;
-    let residuals = |theta0: f64| -> Vec<(f64, f64)> {
-        alphas
-            .iter()
-            .map(|&a| {
-                let th = (a.sin() / c).atan2(a.cos());
-                let k = ((th - theta0) / spacing).round();
-                let t = theta0 + k * spacing;
-                let r = crate::camera::wrap_pi(a - apparent_blade_angle(t, psi));
-                let dadt = c / (t.cos().powi(2) + (t.sin() * c).powi(2));
-                (r, dadt)
-            })
-            .collect()
-    };
-    for _ in 0..BLADE_THETA_ITERS {
-        let rs = residuals(theta0);
-        let (num, den) = rs
-            .iter()
-            .fold((0.0, 0.0), |(n, d), (r, j)| (n + r * j, d + j * j));
-        if den > 0.0 {
-            theta0 += num / den;
-        }
-    }
-    let cost = residuals(theta0).iter().map(|(r, _)| r * r).sum();
-    (theta0, cost)
-}
-
-/// Magnitude of the relative yaw from the detected blade angles (degrees, 0 = up, clockwise).
-///
-/// Fits θ₀ and |ψ| ∈ [0, `max_abs_rad`] by least squares on the angles (grid search, golden
-/// section, Gauss–Newton for θ₀). Returns `None` with fewer than 2 angles, more than `n_blades`,
-/// or when the fit residual exceeds `fit_chi2` per remaining degree of freedom (with
-/// `angle_std_rad` per angle) — e.g. a false blade line.
-///
-/// The std is the Cramér–Rao bound `σ_α·sqrt([(JᵀJ)⁻¹]_ψψ)` for the two parameters (θ₀, ψ). Near
-/// ψ = 0 the angles change only with ψ² (a blade at 45° moves by ≈ ψ²/4), so the bound is
-/// evaluated at no less than the resolvable yaw `ψ_res = 2·sqrt(σ_α)`: below it the method cannot
-/// tell ψ from 0 and reports a correspondingly large std.
-pub fn blade_skew_yaw(
-    angles_deg: &[f64],
-    n_blades: u32,
-    angle_std_rad: f64,
-    max_abs_rad: f64,
-    fit_chi2: f64,
-) -> Option<Estimate> {
-    let n = angles_deg.len();
-    if n < 2 || n > n_blades as usize || angles_deg.iter().any(|a| !a.is_finite()) {
-        return None;
-    }
-    let nb = f64::from(n_blades);
-    let alphas: Vec<f64> = angles_deg.iter().map(|a| a.to_radians()).collect();
-    let cost = |psi: f64| fit_theta0(&alphas, nb, psi).1;
-
-    // Grid search, then golden-section refinement around the best grid point.
-    let step = max_abs_rad / BLADE_GRID_STEPS as f64;
-    let best_k = (0..=BLADE_GRID_STEPS)
-        .map(|k| (k, cost(k as f64 * step)))
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(k, _)| k)?;
-    let (mut lo, mut hi) = (
-        (best_k as f64 - 1.0).max(0.0) * step,
-        (best_k as f64 + 1.0).min(BLADE_GRID_STEPS as f64) * step,
-    );
-    let g = (5f64.sqrt() - 1.0) / 2.0;
-    let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
-    let (mut f1, mut f2) = (cost(x1), cost(x2));
-    for _ in 0..BLADE_REFINE_ITERS {
-        if f1 <= f2 {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - g * (hi - lo);
-            f1 = cost(x1);
-        } else {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + g * (hi - lo);
-            f2 = cost(x2);
-        }
-    }
-    let psi = 0.5 * (lo + hi);
-    let (theta0, rss) = fit_theta0(&alphas, nb, psi);
-
-    // Fit quality: chi-square per remaining degree of freedom.
-    let dof = n.saturating_sub(2);
-    let chi2 = rss / (angle_std_rad * angle_std_rad);
-    if dof > 0 && chi2 / dof as f64 > fit_chi2 {
-        return None;
-    }
-
-    // Cramér–Rao std at max(ψ, ψ_res).
-    let psi_res = 2.0 * angle_std_rad.sqrt();
-    let psi_eval = psi.max(psi_res).min(max_abs_rad);
-    let c = psi_eval.cos();
-    let spacing = TAU / nb;
-    let (mut a11, mut a12, mut a22) = (0.0, 0.0, 0.0);
-    for &a in &alphas {
-        let th = (a.sin() / psi.cos()).atan2(a.cos());
-        let t = theta0 + ((th - theta0) / spacing).round() * spacing;
-        let den = t.cos().powi(2) + (t.sin() * c).powi(2);
-        let j_theta = c / den;
-        let j_psi = -psi_eval.sin() * t.sin() * t.cos() / den;
-        a11 += j_theta * j_theta;
-        a12 += j_theta * j_psi;
-        a22 += j_psi * j_psi;
-    }
-    let det = a11 * a22 - a12 * a12;
-    let var_psi = if det > 0.0 { a11 / det } else { f64::INFINITY };
-    let std = angle_std_rad * var_psi.sqrt();
-    // Never claim more than the whole range is known.
-    let std = if std.is_finite() { std } else { PI };
-    Some(Estimate { value: psi, std })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -502,17 +367,6 @@ mod tests {
         }
     }
 
-    fn blades(theta0_deg: f64, psi_deg: f64) -> Vec<f64> {
-        (0..3)
-            .map(|k| {
-                let t = (theta0_deg + 120.0 * k as f64).to_radians();
-                apparent_blade_angle(t, psi_deg.to_radians())
-                    .to_degrees()
-                    .rem_euclid(360.0)
-            })
-            .collect()
-    }
-
     #[test]
     fn nacelle_excess_over_the_head_on_front_corners() {
         // Hand case: f = 1000 px, half width 1.7 m, front face 1.2 m behind the hub, 30 m:
@@ -581,51 +435,5 @@ mod tests {
         )
         .unwrap();
         assert!(wide.std > e.std);
-    }
-
-    #[test]
-    fn blade_skew_recovers_30_degrees() {
-        let max = 85f64.to_radians();
-        let s = 2f64.to_radians();
-        for &theta0 in &[0.0, 17.0, 45.0, 90.0, 200.0] {
-            let a = blades(theta0, 30.0);
-            let e = blade_skew_yaw(&a, 3, s, max, 10.83).unwrap();
-            assert!(
-                (e.value.to_degrees() - 30.0).abs() < 0.05,
-                "θ0 {theta0}: {}",
-                e.value.to_degrees()
-            );
-            assert!(
-                e.std > 0.0 && e.std.to_degrees() < 30.0,
-                "std {}",
-                e.std.to_degrees()
-            );
-            // The sign of ψ is invisible: −30° gives the same magnitude.
-            let e = blade_skew_yaw(&blades(theta0, -30.0), 3, s, max, 10.83).unwrap();
-            assert!((e.value.to_degrees() - 30.0).abs() < 0.05);
-        }
-        // Facing the rotor: ψ ≈ 0 with a large std (weakly observable).
-        let e = blade_skew_yaw(&blades(10.0, 0.0), 3, s, max, 10.83).unwrap();
-        assert!(e.value.to_degrees() < 1.0);
-        assert!(e.std.to_degrees() > 5.0);
-        // Larger yaw is better observable.
-        let e30 = blade_skew_yaw(&blades(10.0, 30.0), 3, s, max, 10.83).unwrap();
-        let e60 = blade_skew_yaw(&blades(10.0, 60.0), 3, s, max, 10.83).unwrap();
-        assert!((e60.value.to_degrees() - 60.0).abs() < 0.05);
-        assert!(e60.std < e30.std);
-    }
-
-    #[test]
-    fn blade_skew_rejects_inconsistent_blades() {
-        // Three lines 30° apart cannot be a foreshortened 120° star.
-        assert!(blade_skew_yaw(
-            &[0.0, 30.0, 60.0],
-            3,
-            2f64.to_radians(),
-            85f64.to_radians(),
-            10.83
-        )
-        .is_none());
-        assert!(blade_skew_yaw(&[0.0], 3, 0.03, 1.4, 10.83).is_none());
     }
 }

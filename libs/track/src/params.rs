@@ -313,7 +313,7 @@ hubtrack_types::params! {
 }
 
 hubtrack_types::params! {
-    /// `[track.yaw]`: relative yaw from the hub–tower gap and the blade skew, fused and filtered.
+    /// `[track.yaw]`: relative yaw from the hub–tower gap and the nacelle, fused and filtered.
     pub struct YawConfig {
         /// L: horizontal offset from the tower axis to the rotor centre along the rotor axis, m
         /// (eq. 7.14). Default 4.2 (modelled turbine; the thesis assumed 5 m hub-to-tower-top).
@@ -327,15 +327,6 @@ hubtrack_types::params! {
         /// px wide) from the hub at 15–25 m (~7 px here), heavy-tailed. 5 px, as tuned in flights
         /// before the split; higher values slowed the yaw at long range (all hubs from lines).
         pub gap_std_lines_px: f64 = 5.0, open_closed(0.0, MAX_PX);
-        /// Standard deviation of each detected blade angle, degrees.
-        pub blade_angle_std_deg: f64 = 2.0, open_closed(0.0, 90.0);
-        /// Number of blades of the rotor (equally spaced).
-        pub rotor_blades: u32 = 3, closed(2, hubtrack_types::MAX_BLADES as u32);
-        /// Also estimate |yaw| from the blade skew (apparent blade angles). Off by default: near
-        /// yaw 0 the foreshortening is below the angle noise and the magnitude estimate is biased
-        /// away from zero (about +10° in simulated approaches at 20–40 m), which drives T2 the
-        /// wrong way; the hub–tower gap alone is unbiased.
-        pub use_blade_skew: bool = false;
         /// Also estimate the yaw from the nacelle's far end beside the spinner (the detector's
         /// `nacelle_end_dx_px`), and drop a hub–tower gap beyond the yaw gate (`gate_chi2`) from
         /// it: with a blade pointing down the tower hides behind that blade and its gap takes
@@ -407,8 +398,9 @@ hubtrack_types::params! {
         pub nacelle_min_excess_sigma: f64 = 0.0, closed(0.0, 10.0);
         /// Also use the relative yaw the detector's learned yaw network read (`yaw_net_deg`,
         /// `detect.default.hub_yaw`), with its spread as the standard deviation: to veto the gaps
-        /// and nacelle yaws that contradict it (`net_vetoes_gap`) and, with `net_fuse`, as one more
-        /// measurement.
+        /// and nacelle yaws that contradict it (`net_vetoes_gap`), and as the yaw where no
+        /// geometric cue is left (`net_fallback_after_s`). It is not fused with the cues: its error
+        /// is a bias per scene more than noise per frame.
         pub use_net: bool = true;
         /// Least standard deviation of a network yaw, degrees: its errors from frame to frame of
         /// one flight are correlated (the same scene, the same bias), so its own spread overstates
@@ -421,14 +413,6 @@ hubtrack_types::params! {
         /// dropped: the network still reads where a blade pointing down in front of the tower
         /// makes the gap take either sign.
         pub net_vetoes_gap: bool = true;
-        /// Fuse the network's yaw into the yaw filter (with the gap, nacelle and blades); false
-        /// (default): it only vetoes (`net_vetoes_gap`). Its error is a bias per scene more than
-        /// noise per frame (3.5–8 m: 4.4° mean at training), and fused it set the final yaw close
-        /// in: `fly` seeds 161–184 and 261–284 with the first model fused at its own spread, 4 of
-        /// 13 flights ended 5.1–5.4° off (median |final yaw| 3.5°); the final model fused with a
-        /// floor of 5° (`net_min_std_deg`) gave 91 of 100 of seeds 161–210 and 261–310 against 98
-        /// of 102 vetoing only.
-        pub net_fuse: bool = false;
         /// Let the network correct a stale yaw, seconds (0 = never, the default): once no hub–tower
         /// gap, nacelle or blade-skew yaw has been fused for this long and the network's filtered
         /// reading stands `net_fallback_min_deg` from the yaw, it restarts the yaw there and every
@@ -456,12 +440,6 @@ hubtrack_types::params! {
         /// 15 m; readings from farther out are carried in by the ego-motion prediction, their
         /// spread growing with time. Range [0, 100].
         pub net_fallback_min_distance_m: f64 = 8.0, closed(0.0, MAX_SIZE_M);
-        /// Fewest detected blades for a blade-skew estimate (2 fits exactly, 3 or more also checks
-        /// the fit).
-        pub min_blades: u32 = 3;
-        /// Chi-square threshold (per degree of freedom left after the fit) on the blade-angle fit
-        /// residual; a worse fit is not used. Default 10.83.
-        pub blade_fit_chi2: f64 = 10.83, open_closed(0.0, MAX_CHI2);
         /// Largest relative yaw the estimators report, degrees (asin and the blade fit are
         /// clipped).
         pub max_abs_deg: f64 = 85.0, open(0.0, 90.0);
@@ -484,14 +462,6 @@ hubtrack_types::params! {
         /// against 107 of 120, median |final yaw| 1.36° against 1.28°); the final yaws are limited
         /// by the turbine-heading estimate far out more than by these gaps. Range [1, 3].
         pub gap_max_width_ratio: f64 = 1.0, closed(1.0, 3.0);
-        /// A tower band whose width the spinner disputes (`distance.consistency_chi2`) still gives
-        /// the hub–tower gap when the filtered distance sided with the band (the spinner was the
-        /// one dropped). Off by default: when the two disagree one of them is wrong, and a wrong
-        /// band is most often the blade pointing down merged with the tower, whose axis is not the
-        /// tower's; once the filtered distance has drifted toward such bands it keeps siding with
-        /// them (`fly` seed 119: one band 1.7× too wide, kept at 13.7 m, gave +17.7° ± 3.3° for
-        /// −1.8°, made the yaw valid at +16° and T2 flew the vehicle to −12°).
-        pub gap_from_disputed_tower: bool = false;
         /// The yaw filter restarts on a persistent jump only while the filtered distance is at
         /// least this, m (0 = at any distance). The relative yaw cannot jump: the ego-motion
         /// prediction carries it through the vehicle's own motion, so a persistent jump means
@@ -548,10 +518,9 @@ impl ModeConfig {
 }
 
 impl YawConfig {
-    /// [`YawConfig::check_ranges`], then `min_blades` in `[2, rotor_blades]`.
+    /// [`YawConfig::check_ranges`].
     pub fn validate(&self, section: &str) -> Result<(), ParamError> {
-        self.check_ranges(section)?;
-        Check::new(section).count("min_blades", self.min_blades, 2, self.rotor_blades)
+        self.check_ranges(section)
     }
 }
 
@@ -584,10 +553,6 @@ mod tests {
         let mut c = TrackConfig::default();
         c.camera.hfov_deg = f64::NAN;
         assert_eq!(c.validate().unwrap_err().key, "track.camera.hfov_deg");
-
-        let mut c = TrackConfig::default();
-        c.yaw.min_blades = 4;
-        assert_eq!(c.validate().unwrap_err().key, "track.yaw.min_blades");
 
         let mut c = TrackConfig::default();
         c.gating.jump_accept_count = 0;

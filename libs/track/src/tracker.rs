@@ -9,8 +9,8 @@ use crate::camera::{
     CameraPose, Pinhole,
 };
 use crate::estimate::{
-    blade_skew_yaw, distance_from_spinner, distance_from_tower_width, fuse, nacelle_excess_sigma,
-    yaw_from_gap, yaw_from_nacelle, Estimate,
+    distance_from_spinner, distance_from_tower_width, fuse, nacelle_excess_sigma, yaw_from_gap,
+    yaw_from_nacelle, Estimate,
 };
 use crate::filter::{CvModel, HubFilter, ScalarFilter};
 use crate::parallax::{ParallaxRanger, Sighting};
@@ -698,11 +698,10 @@ impl Core {
                 std: d.std,
             })
         });
-        let band_undisputed = if yc.gap_from_disputed_tower {
-            !sizes.tower_rejected
-        } else {
-            !sizes.tower_disputed
-        };
+        // A band the spinner disputes gives no gap even when the filtered distance sides with it:
+        // one of the two is wrong, and a wrong band is most often the blade pointing down merged
+        // with the tower, whose axis is not the tower's.
+        let band_undisputed = !sizes.tower_disputed;
         let band_on_tower = band_undisputed
             || sizes
                 .rejected_width_ratio
@@ -795,23 +794,7 @@ impl Core {
             })
     }
 
-    /// |yaw| from the blade skew (see `use_blade_skew`).
-    fn blade_skew(&self, det: &Detection) -> Option<Estimate> {
-        let yc = &self.cfg.yaw;
-        let n = (det.blade_count as usize).min(det.blade_angles_deg.len());
-        if !(yc.use_blade_skew && n >= yc.min_blades as usize) {
-            return None;
-        }
-        blade_skew_yaw(
-            &det.blade_angles_deg[..n],
-            yc.rotor_blades,
-            yc.blade_angle_std_deg.to_radians(),
-            yc.max_abs_deg.to_radians(),
-            yc.blade_fit_chi2,
-        )
-    }
-
-    /// The geometric yaw measurements of a detection (gap, nacelle, signed blade skew) that
+    /// The geometric yaw measurements of a detection (gap, nacelle) that
     /// survive each other's and the network's vetoes, and the network's reading.
     fn yaw_cues(
         &self,
@@ -844,40 +827,25 @@ impl Core {
         let gap = if contradicts(gap) { None } else { gap };
         let nacelle = if contradicts(nacelle) { None } else { nacelle };
         // The blade skew gives |ψ|; its sign comes from the gap (and the filtered yaw).
-        let blade = self.blade_skew(det);
-        let sign_ref = fuse(
-            &[gap, nacelle, yaw_prior]
-                .into_iter()
-                .flatten()
-                .collect::<Vec<_>>(),
-        );
-        let blade_signed = blade.zip(sign_ref).map(|(b, r)| Estimate {
-            value: b.value.copysign(r.value),
-            std: b.std,
-        });
         let show = |e: Option<Estimate>| {
             e.map_or("-".to_string(), |e| {
                 format!("{:+.1}±{:.1}°", e.value.to_degrees(), e.std.to_degrees())
             })
         };
         log::debug!(
-            "yaw, frame {}: gap {} nacelle {} blades {} network {} prior {}",
+            "yaw, frame {}: gap {} nacelle {} network {} prior {}",
             det.stamps.seq,
             show(gap),
             show(nacelle),
-            show(blade_signed),
             show(net),
             show(yaw_prior)
         );
-        let cues = [gap, nacelle, blade_signed]
-            .into_iter()
-            .flatten()
-            .collect::<Vec<_>>();
+        let cues = [gap, nacelle].into_iter().flatten().collect::<Vec<_>>();
         (cues, net)
     }
 
-    /// The yaw filter from this frame's geometric `cues` and network reading `net` (fused with
-    /// `net_fuse`); with no measurement to fuse, the network's fallback (see
+    /// The yaw filter from this frame's geometric `cues` and network reading `net`; with no
+    /// measurement to fuse, the network's fallback (see
     /// `net_fallback_after_s`).
     fn update_yaw(&mut self, t: u64, cues: &[Estimate], net: Option<Estimate>) {
         let yc = &self.cfg.yaw;
@@ -894,8 +862,9 @@ impl Core {
             self.net_yaw
                 .update(n, yc.gate_chi2, yc.jump_accept_count, t);
         }
-        let net_fused = net.filter(|_| yc.net_fuse);
-        if let Some(m) = fuse(&cues.iter().copied().chain(net_fused).collect::<Vec<_>>()) {
+        // The network's reading only vetoes (above): its error is a bias per scene more than noise
+        // per frame, and fused it would set the final yaw close in.
+        if let Some(m) = fuse(cues) {
             // No jumps close in (see `jump_min_distance_m`): only gated updates.
             let close = self
                 .distance
