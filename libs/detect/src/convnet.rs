@@ -252,6 +252,8 @@ mod x86 {
     /// overlaps the one before when `P` does not divide it (recomputing pixels is cheaper
     /// than narrow tiles); rows narrower than a tile go a pixel at a time.
     #[inline(always)]
+    // The AVX2 kernel's loop state, passed loose so that every piece stays in a register once
+    // inlined into the `target_feature` function; a struct would gain nothing here.
     #[allow(clippy::too_many_arguments)]
     unsafe fn row_tiles<const M: usize, const P: usize>(
         l: &Layer,
@@ -283,6 +285,7 @@ mod x86 {
 
     /// Output pixels `ox .. ox + P` of row `oy`, channels `oc0 .. oc0 + 8·M`.
     #[inline(always)]
+    // As `row_tiles`: the innermost AVX2 kernel, its arguments kept in registers.
     #[allow(clippy::too_many_arguments)]
     unsafe fn tile<const M: usize, const P: usize>(
         l: &Layer,

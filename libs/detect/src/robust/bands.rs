@@ -101,7 +101,13 @@ pub(super) fn pair_edges(f: &FrameCtx<'_>, segs: &[Segment], usable: &[bool]) ->
 }
 
 /// The axis ends short of `c` (not passing through it), within reach, and its line passes near `c`.
-pub(super) fn axis_points_at(p: &DefaultParams, a: &BandAxis, c: P2, h: f64, spinner_r: f64) -> bool {
+pub(super) fn axis_points_at(
+    p: &DefaultParams,
+    a: &BandAxis,
+    c: P2,
+    h: f64,
+    spinner_r: f64,
+) -> bool {
     let t = a.axis.project_t(c);
     if t > p.candidate_inside_frac && t < 1.0 - p.candidate_inside_frac {
         return false;

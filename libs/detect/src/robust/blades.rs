@@ -45,8 +45,7 @@ pub(super) fn support_lines(sc: &SceneCtx<'_>, c: P2, spinner_r: f64) -> Vec<usi
             if t > p.candidate_inside_frac && t < 1.0 - p.candidate_inside_frac {
                 return false;
             }
-            s.line_distance(c) <= (tol0 + tan * d_end).max(spinner_r)
-                && !continues_beyond(sc, i, c)
+            s.line_distance(c) <= (tol0 + tan * d_end).max(spinner_r) && !continues_beyond(sc, i, c)
         })
         .collect()
 }
@@ -111,7 +110,12 @@ pub(super) fn continues_beyond(sc: &SceneCtx<'_>, i: usize, c: P2) -> bool {
 
 /// Group support lines by direction away from `c` into blades, merging groups closer than
 /// `blade_min_separation_deg` (both edges of a wide blade near the root).
-pub(super) fn group_blades(p: &DefaultParams, segs: &[Segment], lines: &[usize], c: P2) -> Vec<Blade> {
+pub(super) fn group_blades(
+    p: &DefaultParams,
+    segs: &[Segment],
+    lines: &[usize],
+    c: P2,
+) -> Vec<Blade> {
     let angles: Vec<f64> = lines.iter().map(|&i| segs[i].angle_away_from(c)).collect();
     let mut blades: Vec<Blade> = geometry::group_by_angle(&angles, p.blade_group_tol_deg)
         .into_iter()

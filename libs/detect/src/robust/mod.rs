@@ -56,9 +56,9 @@ mod refine;
 mod report;
 mod spinner;
 mod spinner_search;
-mod tower;
 #[cfg(test)]
 mod tests;
+mod tower;
 
 use std::time::Instant;
 
@@ -113,14 +113,19 @@ pub(crate) fn run(
             (
                 c,
                 scope.spawn(move || {
-                    search_circles(&frame, img, c, expected.spinner_radius, &mut Vec::new(), None)
+                    search_circles(
+                        &frame,
+                        img,
+                        c,
+                        expected.spinner_radius,
+                        &mut Vec::new(),
+                        None,
+                    )
                 }),
             )
         });
         let t = Instant::now();
-        hough.run(
-            img.edges, img.dx, img.dy, img.width, img.height, &settings, segments,
-        );
+        hough.run(img, &settings, segments);
         let hough_us = us_since(t);
 
         let t = Instant::now();
@@ -220,7 +225,12 @@ pub(crate) fn recognise(
             .heat
             .map_or(0.0, |m| m.near(c[0] / w, c[1] / h, p.hub_heat_radius_cells))
     };
-    let mut best = ranking::pick(p, cands.into_iter().chain(extra), &heat_at, &mut found.candidates);
+    let mut best = ranking::pick(
+        p,
+        cands.into_iter().chain(extra),
+        &heat_at,
+        &mut found.candidates,
+    );
     spinner::close_range(&sc, search, &heat_at, &mut best, &mut found.candidates)?;
     report::report(&sc, best, grad, &expected, &mut found);
     Ok(found)

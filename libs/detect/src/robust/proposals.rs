@@ -21,7 +21,10 @@ pub(super) fn centres(sc: &SceneCtx<'_>, heat: Option<&Heatmap>) -> Vec<P2> {
     let axis_props = axis_proposals(&f, sc.axes);
     log::trace!(
         "axes {:?} axis proposals {:?}",
-        sc.axes.iter().map(|a| (a.axis, a.width)).collect::<Vec<_>>(),
+        sc.axes
+            .iter()
+            .map(|a| (a.axis, a.width))
+            .collect::<Vec<_>>(),
         axis_props
     );
     props.extend(axis_props);

@@ -69,10 +69,7 @@ fn refine(sc: &SceneCtx<'_>, blades: &[Blade], centre: P2) -> Option<P2> {
     }
     let mut lines: Vec<(Segment, f64)> = Vec::new();
     for bl in blades.iter().take(ROTOR_BLADES) {
-        if let Some(axis) = bl
-            .axis
-            .or_else(|| one_sided_axis(sc, bl, centre))
-        {
+        if let Some(axis) = bl.axis.or_else(|| one_sided_axis(sc, bl, centre)) {
             lines.push((axis, 1.0));
             continue;
         }

@@ -23,7 +23,13 @@ pub(super) fn report(
     } = *sc;
     let mut kinds: Vec<LineKind> = usable
         .iter()
-        .map(|&u| if u { LineKind::Other } else { LineKind::Rejected })
+        .map(|&u| {
+            if u {
+                LineKind::Other
+            } else {
+                LineKind::Rejected
+            }
+        })
         .collect();
     if let Some(b) = best {
         found.circle = b.spinner;

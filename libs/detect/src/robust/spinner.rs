@@ -146,22 +146,44 @@ fn spinner_candidate(
         .iter()
         .filter(|k| geometry::dist([k[0], k[1]], cand.centre) <= p.spinner_max_offset_frac * h)
         .map(|k| (evaluate(sc, [k[0], k[1]], Some([k[0], k[1], k[2]])), k[3]))
-        .inspect(|(c, cov)| log::trace!("circle {:?} (rim {cov:.2}): conf {:.2} blades {:?}", c.spinner, c.confidence, c.blades.iter().map(|b| (b.angle_deg.round(), b.weight.round())).collect::<Vec<_>>()))
+        .inspect(|(c, cov)| {
+            log::trace!(
+                "circle {:?} (rim {cov:.2}): conf {:.2} blades {:?}",
+                c.spinner,
+                c.confidence,
+                c.blades
+                    .iter()
+                    .map(|b| (b.angle_deg.round(), b.weight.round()))
+                    .collect::<Vec<_>>()
+            )
+        })
         .filter(|(c, _)| c.blades.len() >= 2)
         .filter(|(c, _)| {
             // Measured against the strongest blade candidate near the circle (not only the one
             // searched around: a weaker candidate between the blades finds the same circle).
-            let Some(k) = c.spinner.filter(|k| k[2] <= p.spinner_kept_support_max_radius_px) else { return true };
+            let Some(k) = c
+                .spinner
+                .filter(|k| k[2] <= p.spinner_kept_support_max_radius_px)
+            else {
+                return true;
+            };
             let centre = [k[0], k[1]];
             let strongest = others
                 .iter()
                 .chain(std::iter::once(cand))
-                .filter(|o| o.blades.len() >= 2 && geometry::dist(o.centre, centre) <= p.spinner_max_offset_frac * h)
+                .filter(|o| {
+                    o.blades.len() >= 2
+                        && geometry::dist(o.centre, centre) <= p.spinner_max_offset_frac * h
+                })
                 .max_by(|a, b| a.support.total_cmp(&b.support))
                 .unwrap_or(cand);
             let kept = kept_support(p, strongest, c);
             if kept < p.spinner_min_kept_support {
-                log::trace!("circle {:?} keeps {:.0} % of the blade support: not this rotor's spinner", c.spinner, 100.0 * kept);
+                log::trace!(
+                    "circle {:?} keeps {:.0} % of the blade support: not this rotor's spinner",
+                    c.spinner,
+                    100.0 * kept
+                );
             }
             kept >= p.spinner_min_kept_support
         });

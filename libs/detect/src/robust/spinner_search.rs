@@ -145,7 +145,11 @@ pub(super) fn search_circles(
 }
 
 /// The Canny edge pixels of the box `[x0, y0, x1, y1)` with their unit gradient directions.
-pub(super) fn edge_points(img: &EdgeImage<'_>, [x0, y0, x1, y1]: [i32; 4], pts: &mut Vec<EdgePoint>) {
+pub(super) fn edge_points(
+    img: &EdgeImage<'_>,
+    [x0, y0, x1, y1]: [i32; 4],
+    pts: &mut Vec<EdgePoint>,
+) {
     pts.clear();
     for y in y0..y1 {
         let row = y as usize * img.width;
@@ -170,7 +174,11 @@ pub(super) fn edge_points(img: &EdgeImage<'_>, [x0, y0, x1, y1]: [i32; 4], pts: 
 
 /// The points of `all` (in row order) inside the box `[x0, y0, x1, y1)`, in the same order:
 /// what [`edge_points`] collects for that box.
-pub(super) fn select_points(all: &[EdgePoint], [x0, y0, x1, y1]: [i32; 4], pts: &mut Vec<EdgePoint>) {
+pub(super) fn select_points(
+    all: &[EdgePoint],
+    [x0, y0, x1, y1]: [i32; 4],
+    pts: &mut Vec<EdgePoint>,
+) {
     pts.clear();
     let (x0, y0, x1, y1) = (x0 as f64, y0 as f64, x1 as f64, y1 as f64);
     let a = all.partition_point(|e| e.p[1] < y0);

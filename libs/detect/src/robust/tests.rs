@@ -152,10 +152,16 @@ fn finds_hub_with_horizon_through_it() {
     // Horizon split by the tower: two long pieces ending at the tower.
     segs.push(Segment::new([0.0, 125.0], [196.0, 125.0]));
     segs.push(Segment::new([204.0, 125.0], [479.0, 125.0]));
-    let f = recognise_at(&p, &segs, &Hints {
+    let f = recognise_at(
+        &p,
+        &segs,
+        &Hints {
             roll_rad: Some(0.0),
             ..Hints::default()
-        }, &mut no_circles, Expected::default())
+        },
+        &mut no_circles,
+        Expected::default(),
+    )
     .unwrap();
     assert!(f.detected, "{f:?}");
     assert!(geometry::dist(f.hub, hub) < 3.0, "{:?}", f.hub);
@@ -171,10 +177,16 @@ fn fourth_blade_pointing_down_the_tower_is_the_tower() {
     // tower lines' "blade" pointing down, and the second leans more than a tower line may.
     segs.push(ray(hub, 187.5, 8.0, 60.0));
     segs.push(ray(hub, 188.5, 8.0, 60.0));
-    let f = recognise_at(&p, &segs, &Hints {
+    let f = recognise_at(
+        &p,
+        &segs,
+        &Hints {
             roll_rad: Some(0.0),
             ..Hints::default()
-        }, &mut no_circles, Expected::default())
+        },
+        &mut no_circles,
+        Expected::default(),
+    )
     .unwrap();
     assert!(f.detected, "{f:?}");
     assert!(geometry::dist(f.hub, hub) < 3.0, "{:?}", f.hub);
@@ -290,13 +302,11 @@ fn two_blades_up_with_the_third_hidden_by_the_tower_count_as_a_rotor() {
         roll_rad: Some(0.0),
         ..Hints::default()
     };
-    let f = recognise_at(&p, &segs, &hints, &mut no_circles, Expected::default())
-    .unwrap();
+    let f = recognise_at(&p, &segs, &hints, &mut no_circles, Expected::default()).unwrap();
     assert!(f.detected && geometry::dist(f.hub, hub) < 3.0, "{f:?}");
     let with_rule = f.confidence;
     p.hidden_blade_tol_deg = 0.0;
-    let f = recognise_at(&p, &segs, &hints, &mut no_circles, Expected::default())
-    .unwrap();
+    let f = recognise_at(&p, &segs, &hints, &mut no_circles, Expected::default()).unwrap();
     assert!(f.confidence < with_rule, "{} vs {with_rule}", f.confidence);
 }
 
@@ -315,8 +325,7 @@ fn the_learned_ranking_takes_the_rotor_over_longer_single_lines_meeting_elsewher
     };
     let p = DefaultParams::default();
     assert_eq!(p.ranker.ranking, Ranking::Learned);
-    let f = recognise_at(&p, &segs, &hints, &mut no_circles, Expected::default())
-    .unwrap();
+    let f = recognise_at(&p, &segs, &hints, &mut no_circles, Expected::default()).unwrap();
     assert!(f.detected && geometry::dist(f.hub, hub) < 3.0, "{f:?}");
     assert!(
         f.candidates
@@ -354,8 +363,7 @@ fn two_blades_nearly_opposite_are_one_line_through_the_candidate() {
         blade_max_separation_deg: 180.0,
         ..rules()
     };
-    let f = recognise_at(&off, &segs, &hints, &mut no_circles, Expected::default())
-    .unwrap();
+    let f = recognise_at(&off, &segs, &hints, &mut no_circles, Expected::default()).unwrap();
     assert!(
         f.detected,
         "without the rule the three lines pass for a rotor: {f:?}"
@@ -365,15 +373,20 @@ fn two_blades_nearly_opposite_are_one_line_through_the_candidate() {
         blade_max_separation_deg: 180.0,
         ..DefaultParams::default()
     };
-    let f = recognise_at(&learned, &segs, &hints, &mut no_circles, Expected::default())
+    let f = recognise_at(
+        &learned,
+        &segs,
+        &hints,
+        &mut no_circles,
+        Expected::default(),
+    )
     .unwrap();
     assert!(!f.detected, "{f:?}");
     let on = DefaultParams {
         blade_max_separation_deg: 170.0,
         ..off.clone()
     };
-    let f = recognise_at(&on, &segs, &hints, &mut no_circles, Expected::default())
-    .unwrap();
+    let f = recognise_at(&on, &segs, &hints, &mut no_circles, Expected::default()).unwrap();
     assert!(!f.detected, "{f:?}");
     // A rotor seen at 60° yaw (blades 0°, 120°, 240° on the rotor plane, horizontal
     // components halved): 139° apart at most, all kept.
@@ -387,8 +400,7 @@ fn two_blades_nearly_opposite_are_one_line_through_the_candidate() {
         segs.push(ray(c, seen(a) - 3.0, 6.0, 70.0));
         segs.push(ray(c, seen(a) + 3.0, 6.0, 70.0));
     }
-    let f = recognise_at(&on, &segs, &hints, &mut no_circles, Expected::default())
-    .unwrap();
+    let f = recognise_at(&on, &segs, &hints, &mut no_circles, Expected::default()).unwrap();
     assert!(
         f.detected && geometry::dist(f.hub, c) < 3.0 && f.blade_angles.len() == 3,
         "{f:?}"
@@ -407,7 +419,13 @@ fn parallel_lines_alone_are_no_turbine() {
             )
         })
         .collect();
-    let f = recognise_at(&p, &segs, &Hints::default(), &mut no_circles, Expected::default())
+    let f = recognise_at(
+        &p,
+        &segs,
+        &Hints::default(),
+        &mut no_circles,
+        Expected::default(),
+    )
     .unwrap();
     assert!(!f.detected);
 }
@@ -501,10 +519,16 @@ fn close_range_hub_from_blade_axes_not_edge_crossings() {
     for a in [40.0, 160.0, 280.0] {
         segs.extend(blade_edges(hub, a, 55.0, 120.0, 18.0, 9.0));
     }
-    let f = recognise_at(&p, &segs, &Hints {
+    let f = recognise_at(
+        &p,
+        &segs,
+        &Hints {
             roll_rad: Some(0.0),
             ..Hints::default()
-        }, &mut no_circles, Expected::default())
+        },
+        &mut no_circles,
+        Expected::default(),
+    )
     .unwrap();
     assert!(f.detected, "{f:?}");
     assert!(geometry::dist(f.hub, hub) < 2.0, "{:?}", f.hub);
@@ -565,9 +589,23 @@ fn a_spinner_rim_partly_seen_is_enough_at_the_expected_size() {
         height: h,
     };
     assert!(p.spinner_hint_min_coverage < 0.3 && 0.3 < p.spinner_min_coverage);
-    let blind = search_circles(&frame(&p, w as f64, h as f64), &img, c, None, &mut Vec::new(), None);
+    let blind = search_circles(
+        &frame(&p, w as f64, h as f64),
+        &img,
+        c,
+        None,
+        &mut Vec::new(),
+        None,
+    );
     assert!(blind.is_empty(), "{blind:?}");
-    let hinted = search_circles(&frame(&p, w as f64, h as f64), &img, c, Some(r), &mut Vec::new(), None);
+    let hinted = search_circles(
+        &frame(&p, w as f64, h as f64),
+        &img,
+        c,
+        Some(r),
+        &mut Vec::new(),
+        None,
+    );
     let k = hinted.first().expect("found with the expected radius");
     assert!(
         geometry::dist([k[0], k[1]], c) < 2.0 && (k[2] - r).abs() < 2.0,
@@ -583,7 +621,14 @@ fn a_spinner_rim_partly_seen_is_enough_at_the_expected_size() {
     assert!(!boxed.is_empty() && boxed.len() < all.len());
     assert_eq!(boxed, selected);
     assert_eq!(
-        search_circles(&frame(&p, w as f64, h as f64), &img, c, Some(r), &mut Vec::new(), Some(&all)),
+        search_circles(
+            &frame(&p, w as f64, h as f64),
+            &img,
+            c,
+            Some(r),
+            &mut Vec::new(),
+            Some(&all)
+        ),
         hinted
     );
 }
@@ -605,8 +650,7 @@ fn spinner_circle_accepted_only_near_the_candidate_with_blades_at_its_rim() {
     let mut at_hub = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
         Ok(vec![[hub[0] + 0.5, hub[1] - 0.5, 30.0, 1.0]])
     };
-    let f = recognise_at(&p, &segs, &hints, &mut at_hub, Expected::default())
-    .unwrap();
+    let f = recognise_at(&p, &segs, &hints, &mut at_hub, Expected::default()).unwrap();
     assert!(f.detected && f.circle.is_some(), "{f:?}");
     assert!(
         geometry::dist(f.hub, [hub[0] + 0.5, hub[1] - 0.5]) < 1e-9,
@@ -617,8 +661,7 @@ fn spinner_circle_accepted_only_near_the_candidate_with_blades_at_its_rim() {
     let mut far_away = |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
         Ok(vec![[400.0, 240.0, 30.0, 1.0]])
     };
-    let g = recognise_at(&p, &segs, &hints, &mut far_away, Expected::default())
-    .unwrap();
+    let g = recognise_at(&p, &segs, &hints, &mut far_away, Expected::default()).unwrap();
     assert!(g.circle.is_none(), "{g:?}");
     // The circle at the size the tracker's distance expects counts for more; at another
     // size it counts as before.
@@ -630,8 +673,7 @@ fn spinner_circle_accepted_only_near_the_candidate_with_blades_at_its_rim() {
             spinner_radius: Some(r_expected),
             ..Expected::default()
         };
-        let f =
-            recognise_at(&p, &segs, &hints, &mut at_hub, expected).unwrap();
+        let f = recognise_at(&p, &segs, &hints, &mut at_hub, expected).unwrap();
         assert!(f.circle.is_some(), "{f:?}");
         f.confidence
     };
@@ -676,8 +718,8 @@ fn an_enclosing_circle_replaces_the_best_covered_one_only_with_a_rim_as_well_cov
             ])
         };
         recognise_at(&p, &segs, &hints, &mut circles, Expected::default())
-        .unwrap()
-        .circle
+            .unwrap()
+            .circle
     };
     let ratio = p.spinner_nest_min_coverage_ratio;
     assert!(ratio > 0.0 && ratio < 1.0);
@@ -751,8 +793,7 @@ fn close_spinner_is_searched_anywhere_when_nothing_else_is_found() {
         roll_rad: Some(0.0),
         ..Hints::default()
     };
-    let f = recognise_at(&p, &segs, &hints, &mut no_circles, Expected::default())
-    .unwrap();
+    let f = recognise_at(&p, &segs, &hints, &mut no_circles, Expected::default()).unwrap();
     assert!(!f.detected, "{f:?}");
     let mut close = |q: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> {
         Ok(if q == CircleQuery::Close {
@@ -761,8 +802,7 @@ fn close_spinner_is_searched_anywhere_when_nothing_else_is_found() {
             vec![]
         })
     };
-    let g = recognise_at(&p, &segs, &hints, &mut close, Expected::default())
-    .unwrap();
+    let g = recognise_at(&p, &segs, &hints, &mut close, Expected::default()).unwrap();
     assert!(
         g.detected && g.circle.is_some() && geometry::dist(g.hub, hub) < 1e-9,
         "{g:?}"
@@ -792,8 +832,7 @@ fn close_spinners_are_candidates_in_every_frame_without_a_tracker_when_always() 
             }
             Ok(vec![])
         };
-        let f = recognise_at(p, &segs, hints, &mut close, Expected::default())
-        .unwrap();
+        let f = recognise_at(p, &segs, hints, &mut close, Expected::default()).unwrap();
         (f, asked.get())
     };
     let always = DefaultParams::default();
