@@ -6,8 +6,8 @@
 //! On those shapes (8–96 channels, 1–96 px sides) OpenCV 4.6's dnn module reaches about a
 //! quarter of the FMA units' throughput; here each layer is a direct convolution over a
 //! zero-padded channels-last image, in register tiles of 6 or 12 output pixels × 16 or 8
-//! output channels, the input broadcast and the weights loaded once per tile (session 34: the
-//! hub heatmap network 0.93 → 0.40 ms a frame). The sums run in another order than OpenCV's, so
+//! output channels, the input broadcast and the weights loaded once per tile (the hub heatmap
+//! network takes ~0.4 ms a frame here against ~0.9 ms in the dnn module). The sums run in another order than OpenCV's, so
 //! outputs differ from the dnn module's by float rounding (~1e-5 of the logits; tested).
 //! Elsewhere (other CPUs, other layer types) [`ConvNet::from_onnx`] gives `None` and the dnn
 //! module runs the model.
@@ -252,6 +252,8 @@ mod x86 {
     /// overlaps the one before when `P` does not divide it (recomputing pixels is cheaper
     /// than narrow tiles); rows narrower than a tile go a pixel at a time.
     #[inline(always)]
+    // The AVX2 kernel's loop state, passed loose so that every piece stays in a register once
+    // inlined into the `target_feature` function; a struct would gain nothing here.
     #[allow(clippy::too_many_arguments)]
     unsafe fn row_tiles<const M: usize, const P: usize>(
         l: &Layer,
@@ -283,6 +285,7 @@ mod x86 {
 
     /// Output pixels `ox .. ox + P` of row `oy`, channels `oc0 .. oc0 + 8·M`.
     #[inline(always)]
+    // As `row_tiles`: the innermost AVX2 kernel, its arguments kept in registers.
     #[allow(clippy::too_many_arguments)]
     unsafe fn tile<const M: usize, const P: usize>(
         l: &Layer,

@@ -33,7 +33,7 @@ pub const NET_STRIDE: i32 = 8;
 /// `1×1×128×192` grey scaled to [0, 1], output `1×1×16×24` logits).
 const MODEL: &[u8] = include_bytes!("../models/hubnet.onnx");
 /// The still photos' model (`detect.default.still_models`): the same network trained with
-/// photo-like rendered views too (`scripts/train-hubnet.sh`, session 27).
+/// photo-like rendered views too (`scripts/train-hubnet.sh`).
 const STILL_MODEL: &[u8] = include_bytes!("../models/hubnet-still.onnx");
 
 /// The network input of one working pyramid level: grey, resized to `NET_WIDTH`×`NET_HEIGHT`.
@@ -123,7 +123,7 @@ pub const CROP_FRAC: f64 = 0.3;
 /// [0, 1], output `1×1×16×16` logits).
 const CROP_MODEL: &[u8] = include_bytes!("../models/hubcrop.onnx");
 /// The still photos' crop model (`detect.default.still_models`): the same network trained with
-/// photo-like rendered views too (`scripts/train-hubnet.sh crop-still`, session 29), where a
+/// photo-like rendered views too (`scripts/train-hubnet.sh crop-still`), where a
 /// nacelle seen from above points at the hub like a fourth blade.
 const STILL_CROP_MODEL: &[u8] = include_bytes!("../models/hubcrop-still.onnx");
 

@@ -18,6 +18,21 @@
 
 use crate::geometry::Segment;
 
+/// A Canny edge image and its Sobel gradients, row-major, `width`·`height` each (working px).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct EdgeImage<'a> {
+    /// Non-zero on edge pixels.
+    pub edges: &'a [u8],
+    /// Horizontal gradient.
+    pub dx: &'a [i16],
+    /// Vertical gradient.
+    pub dy: &'a [i16],
+    /// Width, px.
+    pub width: usize,
+    /// Height, px.
+    pub height: usize,
+}
+
 /// Fixed-point fraction bits of the line walk.
 const SHIFT: u32 = 16;
 /// Fixed-point fraction bits of a vote's rho: enough that integer votes fall in the same bins
@@ -66,21 +81,18 @@ pub(crate) struct OrientedHough {
 }
 
 impl OrientedHough {
-    /// Segments among the non-zero pixels of `edges` (`width`·`height`, row-major), whose
-    /// gradients are `dx`, `dy` (same layout), written to `out` (cleared first) in the order
-    /// found. Buffers shorter than `width`·`height`, or sides beyond u16 (working images are at
-    /// most a few hundred px), give no segments.
-    #[allow(clippy::too_many_arguments)]
-    pub fn run(
-        &mut self,
-        edges: &[u8],
-        dx: &[i16],
-        dy: &[i16],
-        width: usize,
-        height: usize,
-        s: &HoughSettings,
-        out: &mut Vec<Segment>,
-    ) {
+    /// Segments among the non-zero pixels of `img.edges`, whose gradients are `img.dx`,
+    /// `img.dy`, written to `out` (cleared first) in the order found. Buffers shorter than
+    /// `width`·`height`, or sides beyond u16 (working images are at most a few hundred px), give
+    /// no segments.
+    pub fn run(&mut self, img: &EdgeImage<'_>, s: &HoughSettings, out: &mut Vec<Segment>) {
+        let EdgeImage {
+            edges,
+            dx,
+            dy,
+            width,
+            height,
+        } = *img;
         out.clear();
         let n = width * height;
         if width == 0
@@ -350,6 +362,16 @@ fn normal_angle(gx: i16, gy: i16) -> f64 {
 mod tests {
     use super::*;
 
+    fn view<'a>(e: &'a [u8], gx: &'a [i16], gy: &'a [i16], w: usize, h: usize) -> EdgeImage<'a> {
+        EdgeImage {
+            edges: e,
+            dx: gx,
+            dy: gy,
+            width: w,
+            height: h,
+        }
+    }
+
     #[test]
     fn integer_votes_fall_in_the_bins_of_exact_arithmetic() {
         // Every pixel of a 480x270 working image (and of an odd-sized one, whose centre is a
@@ -465,7 +487,7 @@ mod tests {
         for tol in [10.0, 90.0] {
             let mut hough = OrientedHough::default();
             let mut out = Vec::new();
-            hough.run(&e, &gx, &gy, 200, 150, &settings(tol), &mut out);
+            hough.run(&view(&e, &gx, &gy, 200, 150), &settings(tol), &mut out);
             for (a, b) in lines {
                 // Covered by segments on it (the walk may split a digital line in pieces, as
                 // HoughLinesP does; the geometry merges collinear pieces).
@@ -490,9 +512,9 @@ mod tests {
         let (e, gx, gy) = scene(200, 150, &[([20.0, 75.0], [180.0, 75.0])], 0);
         let (gx, gy) = (gy, gx);
         let mut out = Vec::new();
-        OrientedHough::default().run(&e, &gx, &gy, 200, 150, &settings(10.0), &mut out);
+        OrientedHough::default().run(&view(&e, &gx, &gy, 200, 150), &settings(10.0), &mut out);
         assert!(out.is_empty(), "{out:?}");
-        OrientedHough::default().run(&e, &gx, &gy, 200, 150, &settings(90.0), &mut out);
+        OrientedHough::default().run(&view(&e, &gx, &gy, 200, 150), &settings(90.0), &mut out);
         assert_eq!(out.len(), 1, "{out:?}");
     }
 
@@ -506,8 +528,8 @@ mod tests {
         );
         let (mut a, mut b) = (Vec::new(), Vec::new());
         let mut hough = OrientedHough::default();
-        hough.run(&e, &gx, &gy, 160, 120, &settings(10.0), &mut a);
-        hough.run(&e, &gx, &gy, 160, 120, &settings(10.0), &mut b);
+        hough.run(&view(&e, &gx, &gy, 160, 120), &settings(10.0), &mut a);
+        hough.run(&view(&e, &gx, &gy, 160, 120), &settings(10.0), &mut b);
         assert_eq!(a, b);
     }
 }

@@ -575,8 +575,8 @@ fn write_row(out: &mut [u8], sum: &[f32]) {
     }
 }
 
-/// Copy a grey Mat's pixels into a row-major `Vec` (tests and debugging only).
-#[allow(dead_code)]
+/// Copy a grey Mat's pixels into a row-major `Vec` (tests only).
+#[cfg(test)]
 pub(crate) fn mat_to_vec(m: &Mat) -> Result<Vec<u8>, DetectError> {
     let mut out = Vec::with_capacity((m.rows() * m.cols()) as usize);
     for r in 0..m.rows() {

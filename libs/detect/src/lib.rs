@@ -1287,7 +1287,7 @@ mod tests {
     /// The still photos' crop network places the hub of photo-like views (from above, the
     /// nacelle pointing at the hub like a fourth blade; `dataset::photo_case`) from candidates
     /// 5 % of the height off in four directions more often than the video frames' network, which
-    /// has seen approach views only (session 29, seed 2026: 59 of 96 against 42).
+    /// has seen approach views only (seed 2026: 59 of 96 against 42).
     #[test]
     fn the_still_crop_network_places_the_hub_of_photo_like_views() {
         use hubtrack_render::dataset::{photo_case, photo_lenses};

@@ -645,8 +645,6 @@ mod tests {
             .all(|f| crate::geometry::dist([f[0], f[1]], c) > 2.0));
     }
 
-    /// A disc on a background, a blade of the disc's shade leaving it, and a coarse circle a
-    /// few pixels off: the refinement finds the rim to a fraction of a pixel.
     #[test]
     fn kasa_fit_is_exact_on_a_circle() {
         let pts: Vec<P2> = (0..12)

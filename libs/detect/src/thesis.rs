@@ -28,16 +28,7 @@ pub(crate) fn run(
     let edge_count = core::count_non_zero(&s.edges)? as u32;
     let edges_us = us_since(t);
     let t = Instant::now();
-    hough_segments(
-        &s.edges,
-        &mut s.lines,
-        &mut s.segments,
-        p.hough_rho_px,
-        p.hough_theta_deg,
-        p.hough_threshold,
-        p.hough_min_length_px,
-        p.hough_max_gap_px,
-    )?;
+    hough_segments(p, &s.edges, &mut s.lines, &mut s.segments)?;
     let hough_us = us_since(t);
     let t = Instant::now();
     let roll_deg = hints.roll_rad.unwrap_or(0.0).to_degrees();
@@ -278,27 +269,23 @@ pub(crate) fn recognise(
     found
 }
 
-/// Run HoughLinesP on `edges` into `out` (working px).
-#[allow(clippy::too_many_arguments)]
+/// Run HoughLinesP with the thesis's settings on `edges` into `out` (working px), through the
+/// OpenCV buffer `lines`.
 fn hough_segments(
+    p: &ThesisParams,
     edges: &Mat,
     lines: &mut Vector<Vec4i>,
     out: &mut Vec<Segment>,
-    rho: f64,
-    theta_deg: f64,
-    threshold: i32,
-    min_len: f64,
-    max_gap: f64,
 ) -> Result<(), DetectError> {
     lines.clear();
     imgproc::hough_lines_p(
         edges,
         lines,
-        rho,
-        theta_deg.to_radians(),
-        threshold.max(1),
-        min_len,
-        max_gap,
+        p.hough_rho_px,
+        p.hough_theta_deg.to_radians(),
+        p.hough_threshold.max(1),
+        p.hough_min_length_px,
+        p.hough_max_gap_px,
     )?;
     out.clear();
     out.extend(

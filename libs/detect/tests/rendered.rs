@@ -258,7 +258,7 @@ fn a_band_along_a_tilted_blade_is_no_tower() {
 /// is never lost or made less confident. (Its gain is on cluttered real photos, measured by
 /// `hubtrack eval`; on these clean renders both levels see the turbine to ~120 m and neither at
 /// 160 m.) The still photos' own heatmap and ranking (`still_models`) are off here; on, they
-/// find every hub found without them (since session 35's still heatmap also the one at 160 m).
+/// find every hub found without them, the one at 160 m too.
 #[test]
 fn stills_are_also_detected_one_level_finer() {
     let cam = Camera::gopro_hero3();
@@ -334,8 +334,8 @@ fn stills_are_also_detected_one_level_finer() {
 /// views of the evaluation seed 2026 (5–12 m, the hub's visible axis up to a third of the
 /// frame long; scored as `hubtrack eval` does, within 3 % of the height of the blade-axis
 /// point to nose segment) both views together hit more hubs than the photo alone: averaged
-/// no fewer, and clearly more with either view's detection standing. (`hubtrack eval --photo-close 300`,
-/// session 36: 62.0 → 66.0 % averaging, 72.0 % either.)
+/// no fewer, and clearly more with either view's detection standing (`hubtrack eval
+/// --photo-close 300` shows the same on 300 views).
 #[test]
 fn stills_are_also_detected_in_their_mirror_image() {
     use hubtrack_detect::geometry::Segment;
@@ -389,7 +389,7 @@ fn stills_are_also_detected_in_their_mirror_image() {
     assert!(seen >= 30, "only {seen} of 40 close views show the hub");
     let [off, average, either] = hits;
     eprintln!("close photo-like views with the hub: {seen}; hits: photo alone {off}, averaged {average}, either {either}");
-    // Session 36: 26, 27, 33 of 40.
+    // The current models hit 26, 27 and 33 of the 40 views.
     assert!(
         average >= off && either >= average && either >= off + 4,
         "hits of {seen}: photo alone {off}, averaged {average}, either {either}"
@@ -615,7 +615,7 @@ fn the_yaw_network_reads_the_relative_yaw_of_unseen_views() {
 /// The close-range yaw model (`detect.default.hub_yaw_close`) reads the hover views where the
 /// approach ends (4–8 m, evaluation seed 2026, never trained on) within a few degrees, and
 /// better than the whole-range model on the same views: the final yaw is judged there
-/// (session 28, held out at training: mean error 3.3° at 3.5–8 m against 4.0°).
+/// (held out at training: mean error 3.3° at 3.5–8 m against 4.0°).
 #[test]
 fn the_close_range_yaw_network_reads_the_hover_views() {
     use hubtrack_detect::heat::HubYawNet;

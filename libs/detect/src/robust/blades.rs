@@ -14,8 +14,11 @@ const SUPPORT_ANGLE_DEG: f64 = 12.0;
 /// A blade around a candidate: member lines, mean direction, total length.
 #[derive(Debug, Clone)]
 pub(super) struct Blade {
+    /// Indices of its lines among the scene's.
     pub lines: Vec<usize>,
+    /// Mean direction away from the candidate, degrees clockwise from up (length-weighted).
     pub angle_deg: f64,
+    /// Summed length of its lines, px.
     pub weight: f64,
     /// The longest band axis among the blade's paired edges.
     pub axis: Option<Segment>,

@@ -51,7 +51,7 @@ impl Optics {
 /// The working image and what every step reads about it: the parameters, the image's size
 /// (working px) and the caller's hints (in working px).
 #[derive(Clone, Copy)]
-pub(crate) struct FrameCtx<'a> {
+pub(super) struct FrameCtx<'a> {
     /// The default pipeline's parameters.
     pub p: &'a DefaultParams,
     /// Width of the working image, px.
@@ -64,12 +64,12 @@ pub(crate) struct FrameCtx<'a> {
 
 /// A blade seen by one edge: its axis from the partner edge in the gradient image, when found
 /// (`crate::blade`); the arguments are the edge and the hub candidate.
-pub(crate) type PartnerAxis<'a> = dyn Fn(&Segment, P2) -> Option<Segment> + 'a;
+pub(super) type PartnerAxis<'a> = dyn Fn(&Segment, P2) -> Option<Segment> + 'a;
 
 /// The frame once its lines are classified (steps 2–4 and 8): what the steps around each hub
 /// candidate read.
 #[derive(Clone, Copy)]
-pub(crate) struct SceneCtx<'a> {
+pub(super) struct SceneCtx<'a> {
     /// The default pipeline's parameters.
     pub p: &'a DefaultParams,
     /// Width of the working image, px.

@@ -14,14 +14,7 @@ use crate::{DetectError, Scratch};
 /// images is at most 4·255·2 = 2040.
 const GRAD_BINS: usize = 2048;
 
-/// The Canny edge image and its Sobel gradients, row-major (working px).
-pub(super) struct EdgeImage<'a> {
-    pub edges: &'a [u8],
-    pub dx: &'a [i16],
-    pub dy: &'a [i16],
-    pub width: usize,
-    pub height: usize,
-}
+pub(super) use crate::hough::EdgeImage;
 
 impl<'a> EdgeImage<'a> {
     /// The Canny `edges` and the gradients `dx`, `dy` step 1 made ([`canny`]).

@@ -69,10 +69,10 @@ use crate::geometry::{Segment, P2};
 use crate::params::DefaultParams;
 use crate::{us_since, DetectError, Found, Hints, Scratch};
 
-pub(crate) use context::{Expected, FrameCtx, Optics};
+pub(crate) use context::{Expected, Optics};
 pub(crate) use evaluate::passes_through;
 
-use context::SceneCtx;
+use context::{FrameCtx, SceneCtx};
 use edges::EdgeImage;
 use evaluate::Candidate;
 use spinner_search::{search_circles, CircleFinder, EdgePointCache, Spinners};
@@ -125,9 +125,7 @@ pub(crate) fn run(
             )
         });
         let t = Instant::now();
-        hough.run(
-            img.edges, img.dx, img.dy, img.width, img.height, &settings, segments,
-        );
+        hough.run(img, &settings, segments);
         let hough_us = us_since(t);
 
         let t = Instant::now();
@@ -171,7 +169,7 @@ pub(crate) fn run(
 /// blades seen by one edge are searched ([`crate::blade`]); without it the tower axis is the
 /// mean of the tower lines. `expected`: the sizes a tracker's distance lets the detector
 /// expect, and the learned heatmap.
-pub(crate) fn recognise(
+fn recognise(
     frame: &FrameCtx<'_>,
     segs: &[Segment],
     search: &mut CircleFinder<'_>,

@@ -19,7 +19,7 @@ const SPINNER_REUSE_OF_OFFSET: f64 = 0.5;
 
 /// Where a spinner circle search looks.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum CircleQuery {
+pub(super) enum CircleQuery {
     /// Around a hub candidate ([`search_circles`]).
     Around(P2),
     /// Anywhere in the image, for close-range spinners only ([`search_close_circles`]).
@@ -27,7 +27,7 @@ pub(crate) enum CircleQuery {
 }
 
 /// A spinner circle search: circles `[x, y, r, rim coverage]` (working px, best covered first).
-pub(crate) type CircleFinder<'a> =
+pub(super) type CircleFinder<'a> =
     dyn FnMut(CircleQuery) -> Result<Vec<[f64; 4]>, DetectError> + 'a;
 
 /// The edge points of the whole working image, collected at most once per frame.
