@@ -33,9 +33,13 @@ def test_whole_file_check_names_the_key_of_any_stage(runner, tmp_path):
                             ("detcet.mode=thesis", "detcet")]:
         res = runner.run("hubtrack", "config", "--set", override, timeout=60)
         assert res.returncode == 1 and named in res.stderr, (override, res.stderr)
-    # detect and track must use the same lens and turbine.
-    res = runner.run("hubtrack", "config", "--set", "track.distance.tower_diameter_m=3.0", timeout=60)
-    assert res.returncode == 1 and "detect.camera.tower_top_diameter_m" in res.stderr, res.stderr
+    # The lens and the turbine have one home, which detect and track both read.
+    for override, named in [("camera.hfov_deg=500", "camera.hfov_deg"),
+                            ("turbine.hub_overhang_m=0", "turbine.hub_overhang_m"),
+                            ("track.distance.tower_diameter_m=3.0", "track.distance.tower_diameter_m"),
+                            ("detect.camera.hfov_deg=90", "detect.camera")]:
+        res = runner.run("hubtrack", "config", "--set", override, timeout=60)
+        assert res.returncode == 1 and named in res.stderr, (override, res.stderr)
 
 
 def test_printed_config_has_every_section_and_reads_back(runner, tmp_path):
@@ -43,7 +47,9 @@ def test_printed_config_has_every_section_and_reads_back(runner, tmp_path):
     assert res.returncode == 0, res.stderr
     import tomllib
     printed = tomllib.loads(res.stdout)
-    assert set(printed) == {"run", "capture", "recorder", "detect", "track", "control", "sim"}
+    assert set(printed) == {"run", "camera", "turbine", "capture", "recorder", "detect", "track",
+                            "control", "sim"}
+    assert printed["turbine"]["hub_overhang_m"] == 4.2 and "camera" not in printed["detect"]
     assert printed["detect"]["default"]["canny_low_ratio"] == 0.5
     full = tmp_path / "full.toml"
     full.write_text(res.stdout)

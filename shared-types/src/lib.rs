@@ -20,6 +20,7 @@
 pub mod messages;
 pub mod params;
 pub mod services;
+pub mod setup;
 pub mod time;
 
 pub use messages::*;

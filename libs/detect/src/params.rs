@@ -28,7 +28,10 @@ hubtrack_types::params! {
     pub struct DetectConfig {
         /// Pipeline to run.
         pub mode: Mode = Mode::Default;
-        /// Camera and turbine dimensions for distance and yaw.
+        /// Camera and turbine dimensions for distance and yaw: not keys of `[detect]` but the
+        /// top-level `[camera]` and `[turbine]` sections, which track reads too
+        /// ([`DetectConfig::with_setup`]).
+        #[serde(skip)]
         pub camera: CameraParams = CameraParams::default();
         /// Parameters of the thesis pipeline.
         pub thesis: ThesisParams = ThesisParams::default();
@@ -38,6 +41,20 @@ hubtrack_types::params! {
 }
 
 impl DetectConfig {
+    /// This configuration with the lens and turbine of `[camera]` and `[turbine]`.
+    pub fn with_setup(self, camera: &CameraSetup, turbine: &TurbineSetup) -> DetectConfig {
+        DetectConfig {
+            camera: CameraParams {
+                hfov_deg: camera.hfov_deg,
+                focal_length_per_width: camera.focal_length_per_width,
+                tower_top_diameter_m: turbine.tower_top_diameter_m,
+                hub_tower_gap_m: turbine.hub_overhang_m,
+                spinner_diameter_m: turbine.spinner_diameter_m,
+            },
+            ..self
+        }
+    }
+
     /// Check every parameter's range; the error names the first offending key.
     pub fn validate(&self) -> Result<(), ParamError> {
         self.camera.check_ranges("detect.camera")?;
@@ -46,9 +63,7 @@ impl DetectConfig {
     }
 }
 
-/// The GoPro HERO3+ wide lens's centre focal length per image width (833.9 px at 1920).
-#[allow(clippy::approx_constant)] // 0.4343 is the lens, not log10(e)
-const GOPRO_FOCAL_LENGTH_PER_WIDTH: f64 = 0.4343;
+use hubtrack_types::setup::{CameraSetup, TurbineSetup, GOPRO_FOCAL_LENGTH_PER_WIDTH};
 
 hubtrack_types::params! {
     /// Camera optics and known turbine dimensions used for distance and yaw estimates.
@@ -61,8 +76,7 @@ hubtrack_types::params! {
         /// with strong barrel distortion has a much longer centre focal length than the pinhole
         /// value from its edge FOV: the GoPro HERO3+ wide (the thesis camera, as the renderer
         /// models it) has 833.9 px at 1920 wide (0.4343) vs 577 px (0.3004) from 118°, which would
-        /// make every distance ~31 % short. Default 0.4343; 0 = use `hfov_deg`. Must equal
-        /// `track.camera.focal_length_per_width` (checked at load).
+        /// make every distance ~31 % short. Default 0.4343; 0 = use `hfov_deg`.
         pub focal_length_per_width: f64 = GOPRO_FOCAL_LENGTH_PER_WIDTH, zero_or_closed(0.05, 10.0);
         /// Tower diameter at the top, metres (2.2 m on the thesis's ~1.5 MW turbines); the distance
         /// estimate divides it by the measured tower width.
@@ -71,8 +85,7 @@ hubtrack_types::params! {
         /// yaw estimate (thesis eq. 7.14) divides the image gap by it.
         pub hub_tower_gap_m: f64 = 4.2, closed(0.1, 50.0);
         /// Spinner (nose cone) diameter at the blade roots, metres (3.2 m on the modelled turbine):
-        /// with the tracker's distance it gives the spinner radius to search for. Must equal
-        /// `track.distance.spinner_diameter_m` (checked at load).
+        /// with the tracker's distance it gives the spinner radius to search for.
         pub spinner_diameter_m: f64 = 3.2, closed(0.1, 30.0);
     }
 }

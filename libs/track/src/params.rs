@@ -59,8 +59,7 @@ hubtrack_types::params! {
 }
 
 /// Centre focal length of the GoPro HERO3+ wide lens divided by the image width (833.9 / 1920).
-#[allow(clippy::approx_constant)] // 0.4343 is the GoPro lens, not log10(e)
-pub const GOPRO_FOCAL_PER_WIDTH: f64 = 0.4343;
+pub const GOPRO_FOCAL_PER_WIDTH: f64 = hubtrack_types::setup::GOPRO_FOCAL_LENGTH_PER_WIDTH;
 
 hubtrack_types::params! {
     /// `[track.camera]`: the pinhole camera model.
@@ -68,14 +67,19 @@ hubtrack_types::params! {
         /// Horizontal field of view, degrees. The focal length in px is
         /// `f = (image_width / 2) / tan(hfov / 2)` with the width of each frame. Default 118 (GoPro
         /// HERO3+ wide, thesis table C.1).
+        /// From the top-level `[camera]` section (`hfov_deg`), not a key of its own: see
+        /// [`TrackConfig::with_setup`].
+        #[serde(skip)]
         pub hfov_deg: f64 = 118.0, open(0.0, 180.0);
         /// Focal length divided by the image width (dimensionless), overriding `hfov_deg` when > 0.
         /// For a lens with barrel distortion the pinhole focal length at the image centre differs
         /// from the one implied by the edge FOV: the GoPro HERO3+ wide lens (the thesis camera, as
         /// modelled by the renderer) has f = 833.9 px at 1920 px wide (0.4343), while 118° as a
         /// pinhole gives 576.8 px (0.3004) and would make every distance ~31 % short. Default
-        /// 0.4343 (the GoPro); 0 = use `hfov_deg`. Must equal
-        /// `detect.camera.focal_length_per_width`.
+        /// 0.4343 (the GoPro); 0 = use `hfov_deg`.
+        /// From the top-level `[camera]` section (`focal_length_per_width`), not a key of its own: see
+        /// [`TrackConfig::with_setup`].
+        #[serde(skip)]
         pub focal_length_per_width: f64 = GOPRO_FOCAL_PER_WIDTH, closed(0.0, MAX_PX);
         /// Camera mount pitch relative to the body x axis, degrees, positive up. Default 0 (camera
         /// looks along the body's nose).
@@ -218,11 +222,17 @@ hubtrack_types::params! {
     pub struct DistanceConfig {
         /// Real tower diameter where the detector measures its width (just under the nacelle), m.
         /// Default 2.2 (tower top of the modelled turbine; the thesis assumed 2 m).
+        /// From the top-level `[turbine]` section (`tower_top_diameter_m`), not a key of its own: see
+        /// [`TrackConfig::with_setup`].
+        #[serde(skip)]
         pub tower_diameter_m: f64 = 2.2, open_closed(0.0, MAX_SIZE_M);
         /// Standard deviation of the measured tower width, px at the reference width (the thesis:
         /// one pixel moved the estimate from 35 m to 40 m).
         pub tower_width_std_px: f64 = 1.0, open_closed(0.0, MAX_PX);
         /// Real spinner (nose cone) diameter at the blade roots, m. Default 3.2.
+        /// From the top-level `[turbine]` section (`spinner_diameter_m`), not a key of its own: see
+        /// [`TrackConfig::with_setup`].
+        #[serde(skip)]
         pub spinner_diameter_m: f64 = 3.2, open_closed(0.0, MAX_SIZE_M);
         /// Standard deviation of the detected spinner radius, px at the reference width.
         pub spinner_radius_std_px: f64 = 1.0, open_closed(0.0, MAX_PX);
@@ -317,6 +327,9 @@ hubtrack_types::params! {
     pub struct YawConfig {
         /// L: horizontal offset from the tower axis to the rotor centre along the rotor axis, m
         /// (eq. 7.14). Default 4.2 (modelled turbine; the thesis assumed 5 m hub-to-tower-top).
+        /// From the top-level `[turbine]` section (`hub_overhang_m`), not a key of its own: see
+        /// [`TrackConfig::with_setup`].
+        #[serde(skip)]
         pub hub_tower_offset_m: f64 = 4.2, open_closed(0.0, MAX_SIZE_M);
         /// Standard deviation of the hub–tower gap when the hub comes from the spinner circle, px
         /// at the reference width, (0, 1e4]. Measured in rendered flights (960 px wide): the circle
@@ -514,6 +527,22 @@ impl ModeConfig {
             self.lost_after_s,
             MAX_TIME_S,
         )
+    }
+}
+
+impl TrackConfig {
+    /// This configuration with the lens and turbine of `[camera]` and `[turbine]`.
+    pub fn with_setup(
+        mut self,
+        camera: &hubtrack_types::setup::CameraSetup,
+        turbine: &hubtrack_types::setup::TurbineSetup,
+    ) -> TrackConfig {
+        self.camera.hfov_deg = camera.hfov_deg;
+        self.camera.focal_length_per_width = camera.focal_length_per_width;
+        self.distance.tower_diameter_m = turbine.tower_top_diameter_m;
+        self.distance.spinner_diameter_m = turbine.spinner_diameter_m;
+        self.yaw.hub_tower_offset_m = turbine.hub_overhang_m;
+        self
     }
 }
 

@@ -33,7 +33,11 @@ struct Args {
 
 hubtrack_runtime::sections! {
     /// What the detect stage reads.
-    struct DetectSections { detect: hubtrack_detect::params::DetectConfig }
+    struct DetectSections {
+        camera: hubtrack_types::setup::CameraSetup,
+        turbine: hubtrack_types::setup::TurbineSetup,
+        detect: hubtrack_detect::params::DetectConfig,
+    }
 }
 
 fn main() {
@@ -51,8 +55,9 @@ fn run() -> anyhow::Result<()> {
     else {
         return Ok(());
     };
-    let mut detector = Detector::new(config.detect.clone())?;
     log::info!("mode {:?}", config.detect.mode);
+    let detect = config.detect.with_setup(&config.camera, &config.turbine);
+    let mut detector = Detector::new(detect)?;
 
     let mut frames = FrameSubscriber::new(&node, 1)?;
     let vehicle = MsgSubscriber::<VehicleState>::polling(&node, &VEHICLE, 4)?;

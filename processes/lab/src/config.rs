@@ -3,6 +3,7 @@
 //! checked against the defaults.
 
 use hubtrack_runtime::config::{ConfigArgs, ParamError, RunConfig, Sections};
+use hubtrack_types::setup::{CameraSetup, TurbineSetup};
 use serde::{Deserialize, Serialize};
 
 /// Every section of a config file.
@@ -11,6 +12,10 @@ use serde::{Deserialize, Serialize};
 pub struct LabConfig {
     /// `[run]`.
     pub run: RunConfig,
+    /// `[camera]`.
+    pub camera: CameraSetup,
+    /// `[turbine]`.
+    pub turbine: TurbineSetup,
     /// `[capture]`.
     pub capture: hubtrack_capture::config::CaptureConfig,
     /// `[recorder]`.
@@ -28,6 +33,8 @@ pub struct LabConfig {
 impl Sections for LabConfig {
     fn validate(&self) -> Result<(), ParamError> {
         self.run.validate()?;
+        self.camera.validate()?;
+        self.turbine.validate()?;
         self.capture.validate()?;
         self.recorder.validate()?;
         self.detect.validate()?;
@@ -37,11 +44,12 @@ impl Sections for LabConfig {
 }
 
 /// Reads every section from `args` (file and overrides).
-/// Reads every section from `args` (file and overrides), with the keys detect and track share
-/// checked as `hubtrack config` checks them.
+/// Reads every section from `args` (file and overrides); detect and track get the lens and
+/// turbine of `[camera]` and `[turbine]`, as their stages do.
 pub fn load(args: &ConfigArgs) -> anyhow::Result<LabConfig> {
-    let config = args.load::<LabConfig>()?;
-    hubtrack_supervisor::config_check::check_shared_keys(&toml::Table::try_from(&config)?)?;
+    let mut config = args.load::<LabConfig>()?;
+    config.detect = config.detect.with_setup(&config.camera, &config.turbine);
+    config.track = config.track.with_setup(&config.camera, &config.turbine);
     Ok(config)
 }
 

@@ -27,7 +27,11 @@ struct Args {
 
 hubtrack_runtime::sections! {
     /// What the track stage reads.
-    struct TrackSections { track: hubtrack_track::params::TrackConfig }
+    struct TrackSections {
+        camera: hubtrack_types::setup::CameraSetup,
+        turbine: hubtrack_types::setup::TurbineSetup,
+        track: hubtrack_track::params::TrackConfig,
+    }
 }
 
 fn main() {
@@ -45,7 +49,8 @@ fn run() -> anyhow::Result<()> {
     else {
         return Ok(());
     };
-    let mut tracker = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let track = config.track.with_setup(&config.camera, &config.turbine);
+    let mut tracker = Tracker::new(track).map_err(|e| anyhow::anyhow!("{e}"))?;
 
     let detections = MsgSubscriber::<Detection>::new(&node, &DETECTIONS, DETECTION_BUFFER)?;
     let vehicle = MsgSubscriber::<VehicleState>::polling(&node, &VEHICLE, 4)?;

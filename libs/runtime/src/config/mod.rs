@@ -23,9 +23,10 @@ pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
 /// Longest value quoted back in an error message, characters.
 const MAX_QUOTED_CHARS: usize = 120;
 
-/// The top-level sections a config file may have: `[run]` and one per stage.
+/// The top-level sections a config file may have: `[run]`, the `[camera]` and `[turbine]` that
+/// detect and track share, and one per stage.
 pub const KNOWN_SECTIONS: &[&str] = &[
-    "run", "capture", "recorder", "detect", "track", "control", "sim",
+    "run", "camera", "turbine", "capture", "recorder", "detect", "track", "control", "sim",
 ];
 
 /// Why a config could not be used.
