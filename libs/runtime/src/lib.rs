@@ -18,6 +18,17 @@ pub mod status;
 
 pub use config::{ConfigArgs, ConfigError, Sections};
 
+/// Starts a command-line tool (not a stage): logging on stderr as `name`, and a closed pipe
+/// (`hubtrack detect ... | head`) ends the process quietly, as Unix tools do. Call it first in
+/// `main`, before any thread exists.
+pub fn start_tool(name: &'static str) {
+    // SAFETY: resetting a signal disposition at start, before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+    logging::init(name);
+}
+
 /// Ends a stage process: on error, logs `error: <cause chain>` (one line, no backtrace dump) and
 /// exits with status 1, so the supervisor and the operator see why.
 pub fn exit_with<E: std::fmt::Display>(result: Result<(), E>) {

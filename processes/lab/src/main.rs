@@ -84,12 +84,7 @@ struct RenderArgs {
 }
 
 fn main() {
-    // Die quietly on a closed pipe (`hubtrack detect ... | head`), as Unix tools do.
-    // SAFETY: resetting a signal disposition at start, before any thread exists.
-    unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
-    }
-    hubtrack_runtime::logging::init("hubtrack");
+    hubtrack_runtime::start_tool("hubtrack");
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Detect(a) => detect_cmd::run(a),

@@ -85,12 +85,7 @@ enum Command {
 }
 
 fn main() {
-    // Die quietly on a closed pipe (`hubtrack status --json | head`), as Unix tools do.
-    // SAFETY: resetting a signal disposition at start, before any thread exists.
-    unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
-    }
-    hubtrack_runtime::logging::init("hubtrack");
+    hubtrack_runtime::start_tool("hubtrack");
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(a) => supervise::run(a),
@@ -126,6 +121,10 @@ fn hand_over_to_lab(args: &[OsString]) -> anyhow::Result<()> {
             lab.display()
         );
     }
-    let err = std::process::Command::new(&lab).args(args).exec();
+    // Named `hubtrack` in its own usage and errors, as the operator typed it.
+    let err = std::process::Command::new(&lab)
+        .arg0("hubtrack")
+        .args(args)
+        .exec();
     Err(anyhow::anyhow!("cannot start {}: {err}", lab.display()))
 }
