@@ -234,8 +234,7 @@ hubtrack_types::params! {
 
         // ---- track loss, search and abort ----
         /// Oldest usable track, s: with more time since the last accepted detection (plus the age
-        /// of the track state itself) the controller holds instead of moving. Range (0, 60];
-        /// default 0.5.
+        /// of the track state itself) the controller holds instead of moving.
         pub max_track_age_s: f64 = 1.0, open_closed(0.0, 60.0);
         /// Time without a usable track after which the vehicle searches by rotating, s (the
         /// tracker's `search_requested` starts the search at once). Range [0, 3600]; default 5.
