@@ -55,3 +55,24 @@ def test_printed_config_has_every_section_and_reads_back(runner, tmp_path):
     full.write_text(res.stdout)
     res = runner.run("hubtrack", "config", "--config", full, timeout=60)
     assert res.returncode == 0, res.stderr
+
+
+def test_bad_numbers_and_unreadable_inputs_are_refused(runner, tmp_path):
+    for args in (["run", "--duration", "nan"], ["run", "--duration", "inf"], ["run", "--duration", "1e300"],
+                 ["echo", "status", "--duration", "nan"], ["status", "--listen", "inf"],
+                 ["bench", "frames", "--seconds", "nan"]):
+        res = runner.run("hubtrack", *args, timeout=30)
+        assert res.returncode == 2 and "outside (0, 10000000] s" in res.stderr, (args, res.stderr)
+    bad = tmp_path / "a.jpg"
+    bad.write_bytes(b"not an image")
+    res = runner.run("hubtrack", "detect", bad, tmp_path / "missing.png", timeout=60)
+    assert res.returncode == 1 and "none of the 2 input(s) could be read" in res.stderr, res.stderr
+    assert len(res.stdout.strip().splitlines()) == 2, res.stdout
+    # A photo detected with any roll hint: the hint is dropped, never the detector.
+    from conftest import SHARED_DATA
+    import pytest
+    photos = sorted((SHARED_DATA / "real-dev" / "images").glob("*.jpg")) if SHARED_DATA.exists() else []
+    if not photos:
+        pytest.skip(f"no photos under {SHARED_DATA}: ../shared/data is absent")
+    res = runner.run("hubtrack", "detect", "--hint-roll=90", photos[0], timeout=60)
+    assert res.returncode == 0 and '"error"' not in res.stdout, res.stdout + res.stderr

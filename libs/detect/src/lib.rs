@@ -72,8 +72,28 @@ pub struct Hints {
 
 /// A tracker's state is used as a hint only when it is at most this much older than the frame.
 pub const MAX_HINT_AGE_NS: u64 = 500_000_000;
+/// A roll hint beyond this is not used: the rules assume a roughly level camera (the search for
+/// the horizon's roll covers small rolls without a hint), and a vehicle rolled further is not
+/// approaching anything.
+pub const MAX_HINT_ROLL_DEG: f64 = 45.0;
 
 impl Hints {
+    /// The hints as the detector uses them: a roll that is not finite or beyond
+    /// [`MAX_HINT_ROLL_DEG`], a predicted hub that is not finite and a distance that is not
+    /// finite and positive are dropped (they come from other processes and the autopilot, and a
+    /// bad one must cost a hint, never the detector).
+    pub fn sanitized(&self) -> Hints {
+        Hints {
+            roll_rad: self
+                .roll_rad
+                .filter(|r| r.is_finite() && r.abs() <= MAX_HINT_ROLL_DEG.to_radians()),
+            predicted_hub_px: self
+                .predicted_hub_px
+                .filter(|p| p.iter().all(|v| v.is_finite())),
+            hub_distance_m: self.hub_distance_m.filter(|d| d.is_finite() && *d > 0.0),
+        }
+    }
+
     /// The hints for one frame, as every consumer builds them (the detect stage, the offline
     /// tools, the benchmarks): the tracker's newest state, if any ([`Hints::from_track`]), and
     /// the camera roll the vehicle reported for the frame's time, if any.
@@ -577,7 +597,7 @@ impl Detector {
     pub fn detect(&mut self, image: &ImageView<'_>, hints: &Hints) -> Result<Output, DetectError> {
         image::check_view(image)?;
         let levels = self.levels_for(image);
-        self.detect_at(image, hints, levels, false)
+        self.detect_at(image, &hints.sanitized(), levels, false)
     }
 
     /// Detect the hub in a still photo (`hubtrack detect`, `hubtrack eval` on photos): as
@@ -592,6 +612,7 @@ impl Detector {
         image: &ImageView<'_>,
         hints: &Hints,
     ) -> Result<Output, DetectError> {
+        let hints = &hints.sanitized();
         let seen = self.detect_still_levels(image, hints)?;
         let how = self.config.default.still_mirror;
         if self.config.mode != Mode::Default || how == StillMirror::Off {

@@ -260,6 +260,9 @@ fn fit_tower_here(
     (taper >= p.tower_min_width_ratio && taper <= max_taper).then_some(fit)
 }
 
+/// Largest tilt from the image vertical the tower scan searches, degrees.
+const MAX_SCAN_TILT_DEG: f64 = 60.0;
+
 /// Tower edges straight from the gradient, for when the Hough transform has none: near a
 /// jagged, slightly tilted edge its walk along the accumulator direction leaves the edge
 /// within a few tens of pixels, the short piece is dropped with its votes, and a tower edge
@@ -283,7 +286,14 @@ pub(crate) fn scan_tower_edges(
         return Vec::new();
     }
     let n = (y1 - y0) as f64;
-    let max_drift = (max_tilt_deg.to_radians().tan() * n).round() as i64;
+    // The drift range grows with tan(tilt): bounded, so that no tilt (a roll hint added to it)
+    // can ask for an unbounded accumulator.
+    let max_drift = (max_tilt_deg
+        .clamp(0.0, MAX_SCAN_TILT_DEG)
+        .to_radians()
+        .tan()
+        * n)
+        .round() as i64;
     let x_lo = (hub_x - max_dx).floor().max(0.0) as i64;
     let x_hi = (hub_x + max_dx).ceil().min(g.width as f64 - 1.0) as i64;
     let (nx, nd) = (

@@ -98,6 +98,33 @@ fn front_view_hub_found_by_both_modes() {
     }
 }
 
+/// Hints come from other processes and the autopilot: no roll (a vehicle on its side, NaN,
+/// infinity), predicted hub or distance may cost more than the hint itself.
+#[test]
+fn any_hint_is_survived() {
+    let (mut r, mut buf) = gopro_renderer();
+    let pose = CameraPose::front(20.0);
+    for mode in [Mode::Thesis, Mode::Default] {
+        for roll_deg in [85.0, 90.0, 179.0, -120.0, f64::NAN, f64::INFINITY] {
+            let config = DetectConfig {
+                mode,
+                ..DetectConfig::default()
+            };
+            let hints = Hints {
+                roll_rad: Some(roll_deg.to_radians()),
+                predicted_hub_px: Some([f64::NAN, 1e300]),
+                hub_distance_m: Some(-3.0),
+            };
+            let (d, _) = render_and_detect(&mut r, &mut buf, &sunlit_sea(), &pose, config, &hints);
+            assert!(
+                d.roll_used_deg.abs() <= 45.0,
+                "{mode:?} roll {roll_deg}: used {}",
+                d.roll_used_deg
+            );
+        }
+    }
+}
+
 #[test]
 fn yaw_sign_follows_project_convention() {
     // Camera on the turbine's own left (viewer's right, lateral > 0): positive relative yaw.

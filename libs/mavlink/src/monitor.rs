@@ -165,6 +165,17 @@ fn is_vehicle_type(t: MavType) -> bool {
     )
 }
 
+/// An ATTITUDE whose angles are finite and within ±π (MAVLink's range) and whose rates are
+/// finite; anything else is a corrupt or hostile frame and is not used.
+fn attitude_is_plausible(a: &ATTITUDE_DATA) -> bool {
+    let angles = [a.roll, a.pitch, a.yaw];
+    let rates = [a.rollspeed, a.pitchspeed, a.yawspeed];
+    angles
+        .iter()
+        .all(|v| v.is_finite() && v.abs() <= std::f32::consts::PI + 1e-3)
+        && rates.iter().all(|v| v.is_finite())
+}
+
 /// A HEARTBEAT from a vehicle's autopilot (not a GCS, companion or peripheral).
 fn is_autopilot(hb: &HEARTBEAT_DATA) -> bool {
     hb.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID && is_vehicle_type(hb.mavtype)
@@ -257,7 +268,12 @@ impl VehicleMonitor {
             MavMessage::HEARTBEAT(hb) => self.heartbeat(now_ns, hb, &mut events),
             MavMessage::ATTITUDE(a) => {
                 self.observe_time(a.time_boot_ms, &mut events);
-                self.attitude = Some((now_ns, a.clone()));
+                if attitude_is_plausible(a) {
+                    self.attitude = Some((now_ns, a.clone()));
+                } else {
+                    // Validated where it enters: detect and track act on these angles.
+                    self.ignored += 1;
+                }
             }
             MavMessage::LOCAL_POSITION_NED(p) => {
                 self.observe_time(p.time_boot_ms, &mut events);
@@ -787,6 +803,31 @@ mod tests {
             "pre-reboot position dropped"
         );
         assert_eq!(s.roll_rad, f64::from(0.3f32));
+    }
+
+    #[test]
+    fn an_implausible_attitude_is_not_used() {
+        let mut m = monitor();
+        m.handle(0, &ap(), &autopilot_heartbeat(true, COPTER_MODE_GUIDED));
+        m.handle(MS, &ap(), &attitude(1_000, 0.1, 0.0, 0.0));
+        for (roll, pitch, yaw) in [
+            (f32::NAN, 0.0, 0.0),
+            (0.0, f32::INFINITY, 0.0),
+            (4.0, 0.0, 0.0),
+            (0.0, 0.0, -1e30),
+        ] {
+            let before = m.ignored_messages();
+            m.handle(2 * MS, &ap(), &attitude(1_010, roll, pitch, yaw));
+            assert_eq!(m.ignored_messages(), before + 1, "{roll} {pitch} {yaw}");
+            assert_eq!(
+                m.state(2 * MS).roll_rad,
+                f64::from(0.1f32),
+                "the last good attitude stays"
+            );
+        }
+        // A real roll of 86° is an attitude, if not one to approach in.
+        m.handle(3 * MS, &ap(), &attitude(1_020, 1.5, 0.0, 0.0));
+        assert_eq!(m.state(3 * MS).roll_rad, f64::from(1.5f32));
     }
 
     #[test]

@@ -1,4 +1,5 @@
 //! What every hubtrack process shares, so stage `main`s stay thin:
+//! - [`cli`]: command-line value parsers the tools share;
 //! - [`config`]: the config file and `--set` overrides, read section by section, strictly, with
 //!   errors naming the file and the key;
 //! - [`stage`]: what every stage process does before its loop;
@@ -9,6 +10,7 @@
 
 #![warn(missing_docs)]
 
+pub mod cli;
 pub mod config;
 pub mod ipc;
 pub mod logging;

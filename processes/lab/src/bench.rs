@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 #[derive(clap::Args)]
 pub struct FramesBenchArgs {
     /// Seconds per measurement.
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = 20.0, value_parser = hubtrack_runtime::cli::seconds)]
     pub seconds: f64,
     /// Frame rate.
     #[arg(long, default_value_t = 30.0)]
@@ -293,7 +293,7 @@ const SYNTHETIC_CAMERA_NICE: i32 = 10;
 #[derive(clap::Args)]
 pub struct PipelineBenchArgs {
     /// Seconds per configuration.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = hubtrack_runtime::cli::seconds)]
     pub seconds: f64,
     /// Only the 1920x1080 at 30 fps configuration (skip 640x480 at 60 fps).
     #[arg(long)]

@@ -135,12 +135,23 @@ pub fn run(args: DetectArgs) -> anyhow::Result<()> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
     let hints = args.hints();
+    let (mut done, mut failed) = (0usize, 0usize);
     for path in expand(&args.paths) {
         let line = match detect_one(&mut det, &path, args.annotate.as_deref(), &hints) {
-            Ok(v) => v,
-            Err(e) => json!({"path": path, "error": format!("{e:#}")}),
+            Ok(v) => {
+                done += 1;
+                v
+            }
+            Err(e) => {
+                failed += 1;
+                json!({"path": path, "error": format!("{e:#}")})
+            }
         };
         println!("{line}");
+    }
+    // Each failure is on its own line above; a run in which nothing could be read is an error.
+    if done == 0 && failed > 0 {
+        anyhow::bail!("none of the {failed} input(s) could be read");
     }
     Ok(())
 }

@@ -46,7 +46,7 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// How long to listen for heartbeats to measure rates, seconds.
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, default_value_t = 1.0, value_parser = hubtrack_runtime::cli::seconds)]
         listen: f64,
     },
     /// Subscribe to the frames service and print one JSON line per frame received.

@@ -224,7 +224,7 @@ pub struct RunArgs {
     #[arg(long, value_name = "PATH.mcap")]
     pub record: Option<PathBuf>,
     /// Stop after this many seconds (default: run until Ctrl-C / SIGTERM).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", value_parser = hubtrack_runtime::cli::seconds)]
     pub duration: Option<f64>,
 }
 

@@ -20,7 +20,7 @@ pub struct TapArgs {
     #[arg(long)]
     pub count: Option<u64>,
     /// Stop after this many seconds.
-    #[arg(long)]
+    #[arg(long, value_parser = hubtrack_runtime::cli::seconds)]
     pub duration: Option<f64>,
     /// Take only the newest frame each time (like the detector) instead of every frame in order.
     #[arg(long)]
@@ -36,7 +36,7 @@ pub struct EchoArgs {
     #[arg(long)]
     pub count: Option<u64>,
     /// Stop after this many seconds.
-    #[arg(long)]
+    #[arg(long, value_parser = hubtrack_runtime::cli::seconds)]
     pub duration: Option<f64>,
 }
 
