@@ -130,7 +130,11 @@ def test_track_follows_truth(runner, tmp_path):
     rel = sorted(abs(a - b) / b for a, b in dist)
     # Shown with `pytest -s`, to compare builds over several runs.
     print(f"[track_follows_truth] median filtered error {errs[len(errs) // 2]:.4f} of height, median distance error {rel[len(rel) // 2]:.3f}")
-    assert rel[len(rel) // 2] <= 0.15, f"median distance error {rel[len(rel) // 2]:.3f}"
+    # Live pacing varies the median distance error from run to run as it varies the hub error:
+    # 0.09-0.16 over 8 runs (the same spread before and after the crate restructuring), so 0.15
+    # failed one run in four with unchanged code. 0.2 still tells a distance from the tower and
+    # spinner from a wrong one; the accuracy itself is measured offline (`hubtrack eval --sequence`).
+    assert rel[len(rel) // 2] <= 0.2, f"median distance error {rel[len(rel) // 2]:.3f}"
 
 
 def test_latency_rejects_bad_files(runner, tmp_path):
