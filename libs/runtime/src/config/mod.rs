@@ -266,18 +266,9 @@ impl ConfigArgs {
     }
 }
 
-/// The `[run]` section alone, for processes that read nothing else.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, serde::Deserialize)]
-#[serde(default)]
-pub struct RunSections {
-    /// `[run]`.
-    pub run: RunConfig,
-}
-
-impl Sections for RunSections {
-    fn validate(&self) -> Result<(), ParamError> {
-        self.run.validate()
-    }
+crate::sections! {
+    /// The `[run]` section alone, for processes that read nothing else.
+    pub struct RunSections { run: RunConfig }
 }
 
 #[cfg(test)]
