@@ -100,6 +100,19 @@ impl<'a> Check<'a> {
             ))
         }
     }
+
+    /// `lo <= hi` for two fields of the section.
+    pub fn less_eq(&self, key_lo: &str, lo: f64, key_hi: &str, hi: f64) -> Result<(), ParamError> {
+        if lo <= hi {
+            Ok(())
+        } else {
+            Err(self.err(
+                key_lo,
+                lo.to_string(),
+                format!("at most {}.{key_hi} = {hi}", self.prefix),
+            ))
+        }
+    }
 }
 
 /// A number a range check can read: every integer and float type a parameter uses.

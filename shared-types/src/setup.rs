@@ -1,9 +1,15 @@
 //! What the operator knows about the camera and the turbine, in one place: every stage that turns
-//! pixels into metres or degrees (detect, track) reads these two sections, so they cannot
-//! disagree.
+//! pixels into metres or degrees (detect, track, the simulator) reads these two sections, so they
+//! cannot disagree.
+//!
+//! The camera is a calibration file (`camera.calibration`, ROS `camera_info` YAML, see
+//! `config/cameras/`) or, without one, a distortion-free lens of the given focal length. The
+//! turbine is a profile file (`turbine.profile`, see `config/turbines/`) whose keys fill this
+//! section; keys set explicitly (`--set turbine.hub_overhang_m=…`) win over the profile's.
 
 use crate::params;
-use crate::params::ParamError;
+use crate::params::{Check, ParamError};
+pub use hubtrack_camera::{CalibrationError, CameraModel, Distortion, SizeMismatch};
 
 /// The GoPro HERO3+ wide lens's centre focal length per image width (833.9 px at 1920), the
 /// thesis camera.
@@ -11,27 +17,46 @@ use crate::params::ParamError;
 pub const GOPRO_FOCAL_LENGTH_PER_WIDTH: f64 = 0.4343;
 
 params! {
-    /// `[camera]`: the lens as detect and track model it (a pinhole at the image centre).
+    /// `[camera]`: the camera that takes the frames.
     pub struct CameraSetup {
-        /// Horizontal field of view, degrees; the pinhole focal length is
-        /// `(width / 2) / tan(hfov / 2)` at full resolution unless `focal_length_per_width` is
-        /// set. 118 = GoPro HERO3+ Black 1080p wide (the thesis camera).
+        /// Calibration file of the camera, ROS `camera_info` YAML (`plumb_bob` or `equidistant`
+        /// distortion): used for every pixel ↔ ray conversion, and frames of another size with
+        /// the same aspect use it scaled. Empty = a distortion-free lens from
+        /// `focal_length_per_width` / `hfov_deg`. Also `--camera FILE`.
+        pub calibration: String = String::new();
+        /// Without a calibration: horizontal field of view, degrees; the focal length is
+        /// `(width / 2) / tan(hfov / 2)` unless `focal_length_per_width` is set.
         pub hfov_deg: f64 = 118.0, closed(1.0, 179.0);
-        /// Centre focal length divided by the image width, overriding `hfov_deg` when > 0. A lens
-        /// with strong barrel distortion has a much longer centre focal length than the pinhole
-        /// value from its edge field of view: the GoPro HERO3+ wide has 833.9 px at 1920 wide
-        /// (0.4343) against 577 px (0.3004) from 118°, which would make every distance ~31 %
-        /// short. 0 = use `hfov_deg`.
+        /// Without a calibration: centre focal length divided by the image width, overriding
+        /// `hfov_deg` when > 0. A lens with strong barrel distortion has a much longer centre
+        /// focal length than the pinhole value from its edge field of view: the GoPro HERO3+
+        /// wide has 833.9 px at 1920 wide (0.4343) against 577 px (0.3004) from 118°. 0 = use
+        /// `hfov_deg`.
         pub focal_length_per_width: f64 = GOPRO_FOCAL_LENGTH_PER_WIDTH, zero_or_closed(0.05, 10.0);
     }
 }
 
 params! {
-    /// `[turbine]`: the dimensions of the turbine type being approached.
+    /// `[turbine]`: the dimensions of the turbine type being approached (a profile from
+    /// `config/turbines/`, or the keys themselves). The defaults are the thesis turbine, an
+    /// Enercon E-70 (`config/turbines/enercon_e70.toml`).
     pub struct TurbineSetup {
+        /// Turbine profile file (TOML with the keys of this section): its values replace the
+        /// section's, except keys given with `--set`. Empty = the keys of this section. Also
+        /// `--turbine FILE`.
+        pub profile: String = String::new();
+        /// Name of the turbine type, for logs and reports.
+        pub name: String = "Enercon E-70 (thesis turbine)".to_string();
+        /// Height of the rotor centre above the tower base, m.
+        pub hub_height_m: f64 = 64.0, closed(10.0, 250.0);
+        /// Blade tip radius, m: the rotor's extent in the image.
+        pub rotor_radius_m: f64 = 35.5, closed(5.0, 150.0);
         /// Tower diameter just under the nacelle, where the detector measures its width, m; the
         /// distance estimate divides it by the measured width.
         pub tower_top_diameter_m: f64 = 2.2, closed(0.1, 30.0);
+        /// Tower diameter at the ground, m: with the top diameter, the taper that says how much
+        /// wider the tower is below the point the detector measures.
+        pub tower_base_diameter_m: f64 = 4.3, closed(0.1, 30.0);
         /// Horizontal distance from the tower axis to the hub centre along the rotor axis, m; the
         /// yaw estimate (thesis eq. 7.14) divides the hub–tower gap in the image by it.
         pub hub_overhang_m: f64 = 4.2, closed(0.1, 50.0);
@@ -42,15 +67,199 @@ params! {
 }
 
 impl CameraSetup {
-    /// Checks every value; errors name the key under `camera`.
+    /// Checks every value and that the calibration file (if any) reads; errors name the key
+    /// under `camera`.
     pub fn validate(&self) -> Result<(), ParamError> {
-        self.check_ranges("camera")
+        self.check_ranges("camera")?;
+        self.calibrated().map_err(|e| ParamError {
+            key: "camera.calibration".into(),
+            value: format!("{:?}", self.calibration),
+            allowed: format!("a ROS camera_info YAML file ({})", e.reason),
+        })?;
+        Ok(())
+    }
+
+    /// For logs: the calibration file, or the pinhole it falls back to.
+    pub fn describe(&self) -> String {
+        if !self.calibration.is_empty() {
+            format!("calibration {}", self.calibration)
+        } else if self.focal_length_per_width > 0.0 {
+            format!(
+                "uncalibrated pinhole, focal length {} x width",
+                self.focal_length_per_width
+            )
+        } else {
+            format!("uncalibrated pinhole, {} deg wide", self.hfov_deg)
+        }
+    }
+
+    /// The calibration file's camera, `None` without one.
+    pub fn calibrated(&self) -> Result<Option<CameraModel>, CalibrationError> {
+        if self.calibration.is_empty() {
+            return Ok(None);
+        }
+        CameraModel::load(std::path::Path::new(&self.calibration)).map(Some)
+    }
+
+    /// The uncalibrated lens for `width` × `height` frames: a centred pinhole of the configured
+    /// focal length.
+    pub fn pinhole(&self, width: u32, height: u32) -> CameraModel {
+        let f = if self.focal_length_per_width > 0.0 {
+            self.focal_length_per_width * f64::from(width)
+        } else {
+            (f64::from(width) / 2.0) / (self.hfov_deg.to_radians() / 2.0).tan()
+        };
+        CameraModel::centred(width, height, f, hubtrack_camera::Distortion::None)
+    }
+}
+
+/// The camera for frames of one size: the calibration scaled to it, or the configured pinhole.
+/// Built once from [`CameraSetup`] so that the file is read once.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Lens {
+    calibrated: Option<CameraModel>,
+    setup: CameraSetup,
+}
+
+impl Lens {
+    /// Reads the calibration file of `setup` (if any).
+    pub fn new(setup: &CameraSetup) -> Result<Lens, CalibrationError> {
+        Ok(Lens {
+            calibrated: setup.calibrated()?,
+            setup: setup.clone(),
+        })
+    }
+
+    /// A lens from a camera model (tests, the simulator).
+    pub fn from_model(model: CameraModel) -> Lens {
+        Lens {
+            calibrated: Some(model),
+            setup: CameraSetup::default(),
+        }
+    }
+
+    /// The calibrated camera, if a calibration was given.
+    pub fn calibration(&self) -> Option<&CameraModel> {
+        self.calibrated.as_ref()
+    }
+
+    /// The camera for `width` × `height` frames; refused when a calibration of another aspect
+    /// ratio cannot describe them.
+    pub fn for_frame(&self, width: u32, height: u32) -> Result<CameraModel, SizeMismatch> {
+        match &self.calibrated {
+            Some(c) => c.scaled_to(width, height),
+            None => Ok(self.setup.pinhole(width, height)),
+        }
+    }
+
+    /// Centre focal length per image width (for size priors that need one number).
+    pub fn focal_length_per_width(&self) -> f64 {
+        match &self.calibrated {
+            Some(c) => c.focal_length_per_width(),
+            None => self.setup.pinhole(1000, 1000).focal_length_per_width(),
+        }
+    }
+}
+
+impl Default for Lens {
+    fn default() -> Lens {
+        Lens {
+            calibrated: None,
+            setup: CameraSetup::default(),
+        }
     }
 }
 
 impl TurbineSetup {
     /// Checks every value; errors name the key under `turbine`.
     pub fn validate(&self) -> Result<(), ParamError> {
-        self.check_ranges("turbine")
+        self.check_ranges("turbine")?;
+        let check = Check::new("turbine");
+        check.less_eq(
+            "tower_top_diameter_m",
+            self.tower_top_diameter_m,
+            "tower_base_diameter_m",
+            self.tower_base_diameter_m,
+        )?;
+        check.less(
+            "spinner_diameter_m",
+            self.spinner_diameter_m,
+            "rotor_radius_m",
+            self.rotor_radius_m,
+        )?;
+        check.less(
+            "rotor_radius_m",
+            self.rotor_radius_m,
+            "hub_height_m",
+            self.hub_height_m,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_defaults_are_the_shipped_thesis_profile() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../config/turbines/enercon_e70.toml"
+        );
+        let text = std::fs::read_to_string(path).unwrap();
+        let profile: TurbineSetup = toml_like(&text);
+        assert_eq!(profile, TurbineSetup::default());
+    }
+
+    /// The profile files are flat `key = value` TOML; shared-types has no TOML parser, so read
+    /// them line by line here (the config loader's own test reads them with the real one).
+    fn toml_like(text: &str) -> TurbineSetup {
+        let mut t = TurbineSetup::default();
+        for line in text.lines().map(str::trim) {
+            let Some((k, v)) = line.split_once('=') else {
+                continue;
+            };
+            if line.starts_with('#') {
+                continue;
+            }
+            let (k, v) = (k.trim(), v.trim());
+            let f = || v.parse::<f64>().unwrap();
+            match k {
+                "name" => t.name = v.trim_matches('"').to_string(),
+                "hub_height_m" => t.hub_height_m = f(),
+                "rotor_radius_m" => t.rotor_radius_m = f(),
+                "tower_top_diameter_m" => t.tower_top_diameter_m = f(),
+                "tower_base_diameter_m" => t.tower_base_diameter_m = f(),
+                "hub_overhang_m" => t.hub_overhang_m = f(),
+                "spinner_diameter_m" => t.spinner_diameter_m = f(),
+                other => panic!("unknown key {other}"),
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn a_lens_without_calibration_is_the_configured_pinhole() {
+        let lens = Lens::new(&CameraSetup::default()).unwrap();
+        let cam = lens.for_frame(1920, 1080).unwrap();
+        assert!((cam.fx - GOPRO_FOCAL_LENGTH_PER_WIDTH * 1920.0).abs() < 1e-9);
+        // Any frame size works without a calibration.
+        assert!(lens.for_frame(640, 480).is_ok());
+        let gopro = Lens::from_model(CameraModel::gopro_hero3());
+        assert!(gopro.for_frame(960, 540).is_ok());
+        assert!(gopro.for_frame(640, 480).is_err());
+    }
+
+    #[test]
+    fn turbine_constraints_between_keys() {
+        let mut t = TurbineSetup::default();
+        t.tower_top_diameter_m = 5.0;
+        assert_eq!(
+            t.validate().unwrap_err().key,
+            "turbine.tower_top_diameter_m"
+        );
+        let mut t = TurbineSetup::default();
+        t.rotor_radius_m = 70.0;
+        assert_eq!(t.validate().unwrap_err().key, "turbine.rotor_radius_m");
     }
 }

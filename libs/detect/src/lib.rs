@@ -596,8 +596,19 @@ impl Detector {
     /// budget): one pyramid level.
     pub fn detect(&mut self, image: &ImageView<'_>, hints: &Hints) -> Result<Output, DetectError> {
         image::check_view(image)?;
+        self.check_lens(image)?;
         let levels = self.levels_for(image);
         self.detect_at(image, &hints.sanitized(), levels, false)
+    }
+
+    /// Refuses a frame the camera's calibration cannot describe (another aspect ratio).
+    fn check_lens(&self, image: &ImageView<'_>) -> Result<(), DetectError> {
+        self.config
+            .camera
+            .lens
+            .for_frame(image.width, image.height)
+            .map(|_| ())
+            .map_err(|e| DetectError::BadImage(e.to_string()))
     }
 
     /// Detect the hub in a still photo (`hubtrack detect`, `hubtrack eval` on photos): as
@@ -612,6 +623,8 @@ impl Detector {
         image: &ImageView<'_>,
         hints: &Hints,
     ) -> Result<Output, DetectError> {
+        image::check_view(image)?;
+        self.check_lens(image)?;
         let hints = &hints.sanitized();
         let seen = self.detect_still_levels(image, hints)?;
         let how = self.config.default.still_mirror;

@@ -41,12 +41,14 @@ hubtrack_types::params! {
 }
 
 impl DetectConfig {
-    /// This configuration with the lens and turbine of `[camera]` and `[turbine]`.
-    pub fn with_setup(self, camera: &CameraSetup, turbine: &TurbineSetup) -> DetectConfig {
+    /// This configuration with the lens of `[camera]` (see [`Lens::new`]) and the turbine of
+    /// `[turbine]`.
+    pub fn with_setup(self, lens: &Lens, turbine: &TurbineSetup) -> DetectConfig {
         DetectConfig {
             camera: CameraParams {
-                hfov_deg: camera.hfov_deg,
-                focal_length_per_width: camera.focal_length_per_width,
+                hfov_deg: self.camera.hfov_deg,
+                focal_length_per_width: lens.focal_length_per_width(),
+                lens: lens.clone(),
                 tower_top_diameter_m: turbine.tower_top_diameter_m,
                 hub_tower_gap_m: turbine.hub_overhang_m,
                 spinner_diameter_m: turbine.spinner_diameter_m,
@@ -63,7 +65,7 @@ impl DetectConfig {
     }
 }
 
-use hubtrack_types::setup::{CameraSetup, TurbineSetup, GOPRO_FOCAL_LENGTH_PER_WIDTH};
+use hubtrack_types::setup::{Lens, TurbineSetup, GOPRO_FOCAL_LENGTH_PER_WIDTH};
 
 hubtrack_types::params! {
     /// Camera optics and known turbine dimensions used for distance and yaw estimates.
@@ -87,6 +89,10 @@ hubtrack_types::params! {
         /// Spinner (nose cone) diameter at the blade roots, metres (3.2 m on the modelled turbine):
         /// with the tracker's distance it gives the spinner radius to search for.
         pub spinner_diameter_m: f64 = 3.2, closed(0.1, 30.0);
+        /// The camera (from `[camera]`): frames of a size its calibration cannot describe are
+        /// refused.
+        #[serde(skip)]
+        pub lens: Lens = Lens::default();
     }
 }
 

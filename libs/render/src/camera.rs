@@ -1,4 +1,6 @@
-//! Camera intrinsics with radial lens distortion, and the camera pose relative to the turbine.
+//! The camera pose relative to the turbine, and the rasteriser's projection. The camera itself
+//! (intrinsics and lens distortion) is [`hubtrack_camera::CameraModel`], the model every stage
+//! shares.
 //!
 //! Pixel convention (same as OpenCV): the centre of pixel `(col, row)` is at pixel coordinate
 //! `(col, row)`; the image spans `[-0.5, width - 0.5] x [-0.5, height - 0.5]`. A centred principal
@@ -8,181 +10,17 @@ use serde::{Deserialize, Serialize};
 
 use crate::math::{add, cross, deg, normalize, scale, WorldToCam, V3};
 
-/// Points closer than this in front of the camera (metres, along the optical axis) do not project.
-pub const MIN_PROJECT_DEPTH_M: f64 = 1e-3;
+pub use hubtrack_camera::CameraModel as Camera;
+pub use hubtrack_camera::Distortion;
+pub use hubtrack_camera::{GOPRO_F_PX, GOPRO_K1, GOPRO_K2, MIN_PROJECT_DEPTH_M, USB_DFOV_DEG};
 
 /// GoPro HERO3+ Black, 1080p "wide": horizontal FOV (degrees).
 pub const GOPRO_HFOV_DEG: f64 = 118.0;
 /// GoPro HERO3+ Black, 1080p "wide": vertical FOV (degrees).
 pub const GOPRO_VFOV_DEG: f64 = 69.5;
-/// GoPro HERO3+ Black, 1080p "wide": diagonal FOV (degrees) used as the third fit constraint.
+/// GoPro HERO3+ Black, 1080p "wide": diagonal FOV (degrees), the third constraint of the fit of
+/// [`GOPRO_F_PX`], [`GOPRO_K1`], [`GOPRO_K2`].
 pub const GOPRO_DFOV_DEG: f64 = 133.6;
-/// Focal length in pixels of the GoPro model. Together with [`GOPRO_K1`] and [`GOPRO_K2`] this is the
-/// exact solution of the three conditions "image edge at half the horizontal / vertical / diagonal
-/// FOV" (118°, 69.5°, 133.6°) for the 1920x1080 frame (see the `gopro_fov_edges` test).
-pub const GOPRO_F_PX: f64 = 833.933_951_036_557_1;
-/// Radial distortion k1 of the GoPro model (barrel: negative).
-pub const GOPRO_K1: f64 = -0.144_044_163_816_726_08;
-/// Radial distortion k2 of the GoPro model.
-pub const GOPRO_K2: f64 = 0.011_818_423_162_821_256;
-/// Diagonal FOV of the narrow USB camera (degrees).
-pub const USB_DFOV_DEG: f64 = 60.0;
-
-/// Camera intrinsics + lens distortion.
-///
-/// Model (OpenCV radial, two terms): a camera-frame point `(x, y, z)` (x right, y down, z forward)
-/// maps to normalised `(x/z, y/z)`, with `r² = (x/z)² + (y/z)²` scaled by `1 + k1 r² + k2 r⁴`, then
-/// to pixels `u = fx·x_d + cx`, `v = fy·y_d + cy`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Camera {
-    /// Image width in pixels.
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
-    /// Focal length along x, pixels.
-    pub fx: f64,
-    /// Focal length along y, pixels.
-    pub fy: f64,
-    /// Principal point x, pixels (pixel-centre convention, see module docs).
-    pub cx: f64,
-    /// Principal point y, pixels.
-    pub cy: f64,
-    /// First radial distortion coefficient (negative = barrel).
-    pub k1: f64,
-    /// Second radial distortion coefficient.
-    pub k2: f64,
-}
-
-impl Camera {
-    /// GoPro HERO3+ Black wide: 1920x1080, 118° x 69.5° field of view, visible barrel distortion (k1<0).
-    pub fn gopro_hero3() -> Camera {
-        Camera {
-            width: 1920,
-            height: 1080,
-            fx: GOPRO_F_PX,
-            fy: GOPRO_F_PX,
-            cx: 959.5,
-            cy: 539.5,
-            k1: GOPRO_K1,
-            k2: GOPRO_K2,
-        }
-    }
-
-    /// Narrow USB camera: 640x480, 60° diagonal field of view, negligible distortion.
-    pub fn usb_narrow() -> Camera {
-        let (w, h) = (640u32, 480u32);
-        let half_diag_px = 0.5 * ((w * w + h * h) as f64).sqrt();
-        let f = half_diag_px / deg(USB_DFOV_DEG / 2.0).tan();
-        Camera {
-            width: w,
-            height: h,
-            fx: f,
-            fy: f,
-            cx: (w as f64 - 1.0) / 2.0,
-            cy: (h as f64 - 1.0) / 2.0,
-            k1: 0.0,
-            k2: 0.0,
-        }
-    }
-
-    /// Any size with a given horizontal FOV (pinhole, no distortion), handy for tests.
-    pub fn pinhole(width: u32, height: u32, hfov_deg: f64) -> Camera {
-        let f = (width as f64 / 2.0) / deg(hfov_deg / 2.0).tan();
-        Camera {
-            width,
-            height,
-            fx: f,
-            fy: f,
-            cx: (width as f64 - 1.0) / 2.0,
-            cy: (height as f64 - 1.0) / 2.0,
-            k1: 0.0,
-            k2: 0.0,
-        }
-    }
-
-    /// Number of bytes of one BGR8 frame (`width * height * 3`).
-    pub fn frame_bytes(&self) -> usize {
-        self.width as usize * self.height as usize * 3
-    }
-
-    /// Largest undistorted radius `r = |(x/z, y/z)|` for which the distortion polynomial is still
-    /// monotonic (beyond it the model folds back and projection is undefined). `f64::INFINITY` if
-    /// it is monotonic everywhere (the case for all cameras built in here).
-    pub fn max_undistorted_radius(&self) -> f64 {
-        // d/dr [r (1 + k1 r² + k2 r⁴)] = 1 + 3 k1 s + 5 k2 s², s = r². Smallest positive root.
-        let (a, b, c) = (5.0 * self.k2, 3.0 * self.k1, 1.0);
-        let mut s_min = f64::INFINITY;
-        if a.abs() < 1e-15 {
-            if b < 0.0 {
-                s_min = -c / b;
-            }
-        } else {
-            let disc = b * b - 4.0 * a * c;
-            if disc >= 0.0 {
-                let sq = disc.sqrt();
-                for s in [(-b - sq) / (2.0 * a), (-b + sq) / (2.0 * a)] {
-                    if s > 0.0 && s < s_min {
-                        s_min = s;
-                    }
-                }
-            }
-        }
-        s_min.sqrt()
-    }
-
-    /// Radial distortion factor `1 + k1 r² + k2 r⁴` for `r2 = r²`.
-    #[inline]
-    pub fn distortion_factor(&self, r2: f64) -> f64 {
-        1.0 + r2 * (self.k1 + r2 * self.k2)
-    }
-
-    /// Project a point in the camera frame (x right, y down, z forward, metres) to distorted pixels; None if behind.
-    ///
-    /// Also `None` if the point lies beyond the monotonic range of the distortion polynomial
-    /// (never the case for the built-in cameras).
-    pub fn project(&self, p_cam: [f64; 3]) -> Option<[f64; 2]> {
-        if !(p_cam[2] > MIN_PROJECT_DEPTH_M) {
-            return None;
-        }
-        let x = p_cam[0] / p_cam[2];
-        let y = p_cam[1] / p_cam[2];
-        let r2 = x * x + y * y;
-        let rmax = self.max_undistorted_radius();
-        if r2 > rmax * rmax {
-            return None;
-        }
-        let f = self.distortion_factor(r2);
-        Some([self.fx * x * f + self.cx, self.fy * y * f + self.cy])
-    }
-
-    /// Inverse of the distortion: pixel to the normalised undistorted ray `(x/z, y/z)`.
-    /// Newton iteration on the radius; exact to ~1e-12 within the monotonic range.
-    pub fn unproject(&self, px: [f64; 2]) -> [f64; 2] {
-        let xd = (px[0] - self.cx) / self.fx;
-        let yd = (px[1] - self.cy) / self.fy;
-        let rd = (xd * xd + yd * yd).sqrt();
-        if rd < 1e-15 || (self.k1 == 0.0 && self.k2 == 0.0) {
-            return [xd, yd];
-        }
-        let rmax = self.max_undistorted_radius();
-        let mut r = rd;
-        for _ in 0..50 {
-            let r2 = r * r;
-            let g = r * self.distortion_factor(r2) - rd;
-            let dg = 1.0 + r2 * (3.0 * self.k1 + 5.0 * self.k2 * r2);
-            if dg <= 1e-9 {
-                break;
-            }
-            let step = g / dg;
-            r = (r - step).clamp(0.0, rmax.min(1e6));
-            if step.abs() < 1e-14 {
-                break;
-            }
-        }
-        let s = r / rd;
-        [xd * s, yd * s]
-    }
-}
 
 /// Where the camera is, relative to the turbine.
 ///
@@ -274,24 +112,23 @@ impl CameraPose {
 }
 
 /// Projection used by the rasteriser: like [`Camera::project`] but never fails for points in
-/// front of the camera. Beyond the monotonic range of the polynomial it continues radially and
+/// front of the camera. Beyond the valid range of the lens model it continues radially and
 /// linearly, so triangles that leave the valid range stay well formed (they are off-screen).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RasterProjector {
     cam: Camera,
     r_lim: f64,
-    rd_lim: f64,
 }
+
+/// Fraction of the lens model's valid radius up to which the rasteriser uses it exactly.
+const RASTER_VALID_FRACTION: f64 = 0.98;
+/// Normalised radius beyond which nothing is on screen for any real camera (89.9° off axis).
+const RASTER_MAX_RADIUS: f64 = 1e3;
 
 impl RasterProjector {
     pub fn new(cam: &Camera) -> RasterProjector {
-        let r_lim = (cam.max_undistorted_radius() * 0.98).min(1e3);
-        let rd_lim = r_lim * cam.distortion_factor(r_lim * r_lim);
-        RasterProjector {
-            cam: *cam,
-            r_lim,
-            rd_lim,
-        }
+        let r_lim = (cam.max_undistorted_radius() * RASTER_VALID_FRACTION).min(RASTER_MAX_RADIUS);
+        RasterProjector { cam: *cam, r_lim }
     }
 
     /// Focal length along x (pixels).
@@ -304,18 +141,16 @@ impl RasterProjector {
     #[inline]
     pub fn project(&self, p: V3) -> [f64; 2] {
         let iz = 1.0 / p[2];
-        let x = p[0] * iz;
-        let y = p[1] * iz;
-        let r2 = x * x + y * y;
-        let f = if r2 <= self.r_lim * self.r_lim {
-            self.cam.distortion_factor(r2)
+        let n = [p[0] * iz, p[1] * iz];
+        let r2 = n[0] * n[0] + n[1] * n[1];
+        let d = if r2 <= self.r_lim * self.r_lim {
+            self.cam.distortion.distort(n)
         } else {
             // Continue with the distorted radius growing like r: keeps the map monotonic.
-            self.rd_lim / self.r_lim
+            let k = self.r_lim / r2.sqrt();
+            let at_limit = self.cam.distortion.distort([n[0] * k, n[1] * k]);
+            [at_limit[0] / k, at_limit[1] / k]
         };
-        [
-            self.cam.fx * x * f + self.cam.cx,
-            self.cam.fy * y * f + self.cam.cy,
-        ]
+        self.cam.to_pixel(d)
     }
 }

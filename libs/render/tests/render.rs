@@ -1,5 +1,6 @@
 //! End-to-end checks of projection, truth, conventions, effects and robustness.
 
+use hubtrack_render::camera::Distortion;
 use hubtrack_render::scene::{HUB_OVERHANG_M, SPINNER_NOSE_LENGTH_M};
 use hubtrack_render::{
     Camera, CameraPose, Distractor, Ground, RenderError, Renderer, Scene, Sky, Truth,
@@ -66,7 +67,7 @@ fn gopro_fov_edges() {
         "{corner:?}"
     );
     // Barrel distortion: a point at the pinhole edge position lands well inside the frame.
-    assert!(cam.k1 < 0.0);
+    assert!(matches!(cam.distortion, Distortion::PlumbBob { k1, .. } if k1 < 0.0));
     let pin_edge = cam.project([960.0 / cam.fx, 0.0, 1.0]).expect("in front");
     assert!(pin_edge[0] < 1919.5 - 50.0, "{pin_edge:?}");
 }
@@ -639,8 +640,7 @@ fn tiny_and_odd_sized_cameras_do_not_panic() {
         for cam in [
             Camera::pinhole(w, h, 70.0),
             Camera {
-                k1: -0.2,
-                k2: 0.02,
+                distortion: Distortion::radial(-0.2, 0.02),
                 ..Camera::pinhole(w, h, 100.0)
             },
         ] {
@@ -662,8 +662,7 @@ fn tiny_and_odd_sized_cameras_do_not_panic() {
 fn strong_custom_distortion_renders() {
     // k1 alone folds back beyond r = 1/sqrt(3 |k1|): projection must refuse those points.
     let cam = Camera {
-        k1: -0.3,
-        k2: 0.0,
+        distortion: Distortion::radial(-0.3, 0.0),
         ..Camera::pinhole(640, 480, 120.0)
     };
     let r_max = cam.max_undistorted_radius();

@@ -200,26 +200,24 @@ fn scene_for(seed: u64, cfg: &SimConfig) -> Scene {
     s
 }
 
-/// The renderer camera of the config: GoPro HERO3+ or USB, scaled by `scale` (width, height,
-/// fx, fy scaled; principal point centred; distortion unchanged).
-pub fn render_camera(camera: &CameraConfig) -> Camera {
-    let base = match camera.model {
-        CameraModel::Gopro => Camera::gopro_hero3(),
-        CameraModel::Usb => Camera::usb_narrow(),
+/// The renderer camera: the calibrated camera when one is given (`[camera] calibration`), else
+/// the config's model (GoPro HERO3+ or USB), scaled by `scale` (intrinsics scaled, distortion
+/// unchanged).
+pub fn render_camera(camera: &CameraConfig, calibration: Option<&Camera>) -> Camera {
+    let base = match (calibration, camera.model) {
+        (Some(c), _) => *c,
+        (None, CameraModel::Gopro) => Camera::gopro_hero3(),
+        (None, CameraModel::Usb) => Camera::usb_narrow(),
     };
     let s = camera.scale;
     let width = ((base.width as f64 * s).round() as u32).max(1);
     let height = ((base.height as f64 * s).round() as u32).max(1);
-    Camera {
-        width,
-        height,
-        fx: base.fx * s,
-        fy: base.fy * s,
-        cx: (width as f64 - 1.0) / 2.0,
-        cy: (height as f64 - 1.0) / 2.0,
-        k1: base.k1,
-        k2: base.k2,
-    }
+    // Rounding keeps the aspect within the model's tolerance for every allowed scale; should it
+    // not, scale by the width alone.
+    base.scaled_to(width, height).unwrap_or_else(|_| {
+        let f = base.fx * f64::from(width) / f64::from(base.width);
+        Camera::centred(width, height, f, base.distortion)
+    })
 }
 
 /// The renderer's camera pose for the vehicle state: position relative to the hub in world axes,
@@ -348,7 +346,7 @@ mod tests {
     }
 
     fn render(sc: &Scenario, pose: &CameraPose, cam: &CameraConfig) -> Truth {
-        let camera = render_camera(cam);
+        let camera = render_camera(cam, None);
         let mut r = Renderer::new(camera);
         let mut buf = vec![0u8; camera.frame_bytes()];
         r.render(&sc.scene, pose, &mut buf).unwrap()
@@ -467,20 +465,32 @@ mod tests {
 
     #[test]
     fn render_cameras_are_scaled_and_centred() {
-        let c = render_camera(&CameraConfig::default());
+        let c = render_camera(&CameraConfig::default(), None);
         assert_eq!((c.width, c.height), (960, 540));
         assert!((c.fx - Camera::gopro_hero3().fx / 2.0).abs() < 1e-9);
         assert_eq!((c.cx, c.cy), (479.5, 269.5));
-        assert_eq!(
-            (c.k1, c.k2),
-            (Camera::gopro_hero3().k1, Camera::gopro_hero3().k2)
-        );
-        let u = render_camera(&CameraConfig {
+        assert_eq!(c.distortion, Camera::gopro_hero3().distortion);
+        let usb = CameraConfig {
             model: CameraModel::Usb,
             scale: 1.0,
             mount_pitch_deg: 0.0,
-        });
-        assert_eq!(u, Camera::usb_narrow());
+        };
+        assert_eq!(render_camera(&usb, None), Camera::usb_narrow());
+        // A calibration replaces the model.
+        let fisheye = Camera::centred(
+            1280,
+            960,
+            500.0,
+            hubtrack_types::setup::Distortion::Equidistant {
+                k1: 0.01,
+                k2: 0.0,
+                k3: 0.0,
+                k4: 0.0,
+            },
+        );
+        let half = render_camera(&CameraConfig::default(), Some(&fisheye));
+        assert_eq!((half.width, half.height, half.fx), (640, 480, 250.0));
+        assert_eq!(half.distortion, fisheye.distortion);
     }
 
     #[test]
@@ -497,7 +507,7 @@ mod tests {
             assert!((pose.distance_m - 20.0).abs() < 1e-9 && (pose.lateral_m - 4.0).abs() < 1e-9);
             let g = geometry(&s, &v);
             assert!(g.heading_error_deg.abs() < 1e-9);
-            let cam = render_camera(&small_cam());
+            let cam = render_camera(&small_cam(), None);
             let t = render(&s, &pose, &small_cam());
             let hub = t.hub_px.unwrap();
             assert!(
@@ -524,7 +534,7 @@ mod tests {
         let pose = camera_pose(&s, &v, &cam);
         assert!((pose.pitch_deg - elevation).abs() < 1e-9);
         let t = render(&s, &pose, &cam);
-        let c = render_camera(&cam);
+        let c = render_camera(&cam, None);
         let hub = t.hub_px.unwrap();
         assert!(
             (hub[0] - c.cx).abs() < 1e-6 && (hub[1] - c.cy).abs() < 1e-6,
@@ -541,7 +551,7 @@ mod tests {
     fn yaw_pitch_roll_move_the_hub_the_right_way_in_the_image() {
         let s = Scenario::from_seed(8, &SimConfig::default());
         let cam = small_cam();
-        let c = render_camera(&cam);
+        let c = render_camera(&cam, None);
         let p = at_offsets(&s, 25.0, 0.0, 0.0);
         let b = bearing(&s, p);
         let hub_px = |roll: f64, pitch: f64, yaw: f64| {

@@ -16,6 +16,7 @@
 //! content counter-clockwise about the principal point. [`ego_motion`] does this exactly (ray
 //! rotation and re-projection), and with a velocity and a range also the parallax of translation.
 
+use hubtrack_types::setup::{CameraModel, Distortion};
 use hubtrack_types::VehicleState;
 use nalgebra::{Rotation3, Vector3};
 
@@ -31,15 +32,19 @@ pub fn focal_length_px(image_width_px: f64, hfov_deg: f64) -> f64 {
     (image_width_px / 2.0) / (hfov_deg.to_radians() / 2.0).tan()
 }
 
-/// A pinhole camera with a centred principal point and square pixels.
+/// The camera of one frame size: the calibrated model (intrinsics and lens distortion, see
+/// [`hubtrack_types::setup::Lens`]) with its centre focal length and principal point at hand.
+/// Without a calibration it is a distortion-free pinhole.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pinhole {
-    /// Focal length, px.
+    /// Centre focal length, px.
     pub f_px: f64,
     /// Principal point x, px.
     pub cx: f64,
     /// Principal point y, px.
     pub cy: f64,
+    /// The full model (distortion included).
+    pub model: CameraModel,
 }
 
 impl Pinhole {
@@ -50,20 +55,30 @@ impl Pinhole {
 
     /// Camera for a `width` × `height` frame with focal length `f_px`.
     pub fn with_focal(width: u32, height: u32, f_px: f64) -> Pinhole {
+        Pinhole::from_model(CameraModel::centred(width, height, f_px, Distortion::None))
+    }
+
+    /// The camera of a calibrated model.
+    pub fn from_model(model: CameraModel) -> Pinhole {
         Pinhole {
-            f_px,
-            cx: (f64::from(width) - 1.0) / 2.0,
-            cy: (f64::from(height) - 1.0) / 2.0,
+            f_px: model.fx,
+            cx: model.cx,
+            cy: model.cy,
+            model,
         }
     }
 
-    /// Viewing ray of a pixel in the camera frame, `z = 1`.
+    /// Viewing ray of a pixel in the camera frame, `z = 1` (lens distortion removed).
     pub fn ray(&self, px: [f64; 2]) -> Vector3<f64> {
-        Vector3::new(
-            (px[0] - self.cx) / self.f_px,
-            (px[1] - self.cy) / self.f_px,
-            1.0,
-        )
+        let [x, y, z] = self.model.ray(px);
+        Vector3::new(x, y, z)
+    }
+
+    /// Focal length at pixel `px`, px per radian of small horizontal extent: `f_px` for a
+    /// distortion-free lens, less towards the edge of a barrel lens. Sizes measured at `px` (a
+    /// tower's width, a spinner's radius, a gap) convert to angles with it.
+    pub fn focal_at(&self, px: [f64; 2]) -> f64 {
+        self.model.local_focal_px(px)
     }
 
     /// Pixel of a camera-frame point; `None` behind (or beside) the camera.
@@ -71,10 +86,7 @@ impl Pinhole {
         if p.z <= MIN_FORWARD_FRACTION * p.norm() {
             return None;
         }
-        Some([
-            self.cx + self.f_px * p.x / p.z,
-            self.cy + self.f_px * p.y / p.z,
-        ])
+        self.model.project([p.x, p.y, p.z])
     }
 }
 

@@ -84,6 +84,9 @@ hubtrack_types::params! {
         /// Camera mount pitch relative to the body x axis, degrees, positive up. Default 0 (camera
         /// looks along the body's nose).
         pub mount_pitch_deg: f64 = 0.0, closed(-90.0, 90.0);
+        /// The camera of `[camera]` (calibration or pinhole): see [`TrackConfig::with_setup`].
+        #[serde(skip)]
+        pub lens: hubtrack_types::setup::Lens = hubtrack_types::setup::Lens::default();
     }
 }
 
@@ -531,14 +534,15 @@ impl ModeConfig {
 }
 
 impl TrackConfig {
-    /// This configuration with the lens and turbine of `[camera]` and `[turbine]`.
+    /// This configuration with the camera of `[camera]` (see
+    /// [`hubtrack_types::setup::Lens::new`]) and the turbine of `[turbine]`.
     pub fn with_setup(
         mut self,
-        camera: &hubtrack_types::setup::CameraSetup,
+        lens: &hubtrack_types::setup::Lens,
         turbine: &hubtrack_types::setup::TurbineSetup,
     ) -> TrackConfig {
-        self.camera.hfov_deg = camera.hfov_deg;
-        self.camera.focal_length_per_width = camera.focal_length_per_width;
+        self.camera.focal_length_per_width = lens.focal_length_per_width();
+        self.camera.lens = lens.clone();
         self.distance.tower_diameter_m = turbine.tower_top_diameter_m;
         self.distance.spinner_diameter_m = turbine.spinner_diameter_m;
         self.yaw.hub_tower_offset_m = turbine.hub_overhang_m;

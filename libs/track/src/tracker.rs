@@ -163,9 +163,15 @@ impl Core {
         f64::from(self.image_size().0) / self.cfg.filter.reference_width_px
     }
 
+    /// The camera at the frame size: the calibration scaled to it, else a pinhole of the
+    /// configured focal length (also should a frame the calibration cannot describe reach here:
+    /// the detect stage refuses those).
     fn camera(&self) -> Pinhole {
         let (w, h) = self.image_size();
         let c = &self.cfg.camera;
+        if let Some(Ok(model)) = c.lens.calibration().map(|m| m.scaled_to(w, h)) {
+            return Pinhole::from_model(model);
+        }
         let f = if c.focal_length_per_width > 0.0 {
             c.focal_length_per_width * f64::from(w)
         } else {
@@ -535,7 +541,7 @@ impl Core {
             return None;
         }
         distance_from_tower_width(
-            self.camera().f_px,
+            self.camera().focal_at(det.hub_px),
             d.tower_diameter_m,
             det.tower_width_px,
             d.tower_width_std_px * s,
@@ -552,7 +558,7 @@ impl Core {
                 det.hub_tower_gap_px,
                 y.gap_std_lines_px * self.scale(),
                 td,
-                self.camera().f_px,
+                self.camera().focal_at(det.hub_px),
                 y.hub_tower_offset_m,
                 y.max_abs_deg.to_radians(),
             )
@@ -576,7 +582,7 @@ impl Core {
         let s = self.scale();
         if det.circle_found && 2.0 * det.circle[2] >= dc.min_size_px * s {
             distance_from_spinner(
-                self.camera().f_px,
+                self.camera().focal_at([det.circle[0], det.circle[1]]),
                 dc.spinner_diameter_m,
                 det.circle[2],
                 dc.spinner_radius_std_px * s,
@@ -621,8 +627,8 @@ impl Core {
         sizes.tower_rejected = sizes.tower.is_none();
         if sizes.tower_rejected {
             let psi = self.yaw.estimate().map_or(0.0, |e| e.value);
-            let expected_px =
-                self.camera().f_px * dc.tower_diameter_m / (sp.value + offset * psi.cos());
+            let expected_px = self.camera().focal_at(det.hub_px) * dc.tower_diameter_m
+                / (sp.value + offset * psi.cos());
             sizes.rejected_width_ratio = Some(det.tower_width_px / expected_px);
         }
         log::debug!(
@@ -715,7 +721,7 @@ impl Core {
         } else {
             yc.gap_std_lines_px
         };
-        let (s, f) = (self.scale(), self.camera().f_px);
+        let (s, f) = (self.scale(), self.camera().focal_at(det.hub_px));
         tower_depth.and_then(|td| {
             yaw_from_gap(
                 det.hub_tower_gap_px,
@@ -738,7 +744,7 @@ impl Core {
         innovation_px: f64,
     ) -> Option<Estimate> {
         let yc = &self.cfg.yaw;
-        let (s, f) = (self.scale(), self.camera().f_px);
+        let (s, f) = (self.scale(), self.camera().focal_at(det.hub_px));
         let hub_settled = yc.nacelle_gate_px <= 0.0 || innovation_px <= yc.nacelle_gate_px * s;
         let on_spinner = det.circle_found || !yc.nacelle_needs_spinner;
         if !(yc.use_nacelle && det.detected && det.nacelle_found && hub_settled && on_spinner) {

@@ -1622,3 +1622,55 @@ fn motion_parallax_corrects_a_tower_and_spinner_that_agree_on_twice_the_distance
         s.distance_std_m
     );
 }
+
+/// A hub seen off-centre through a strong barrel lens: the tower under it is imaged smaller than
+/// at the centre. With the lens's calibration the tracker measures the width in angle and finds
+/// the true distance; with only the centre focal length (no distortion) it reads the distance
+/// long. The turbine profile's tower diameter reaches the estimate the same way.
+#[test]
+fn the_calibrated_lens_and_the_turbine_profile_reach_the_distance() {
+    use hubtrack_types::setup::{CameraModel, Lens, TurbineSetup};
+    let gopro = CameraModel::gopro_hero3();
+    let turbine = TurbineSetup {
+        tower_top_diameter_m: 3.0,
+        spinner_diameter_m: 2.0,
+        hub_overhang_m: 5.0,
+        ..TurbineSetup::default()
+    };
+    let d_hub = 30.0;
+    let d_tower = d_hub + turbine.hub_overhang_m;
+    // Hub 55 % of the way to the right edge, tower top just under it.
+    let hub = [gopro.cx + 0.55 * gopro.cx, gopro.cy];
+    let ray = gopro.ray(hub);
+    let edge = |side: f64| {
+        let p = [
+            ray[0] * d_tower + side * turbine.tower_top_diameter_m / 2.0,
+            ray[1] * d_tower,
+            d_tower,
+        ];
+        gopro.project(p).unwrap()[0]
+    };
+    let width_px = edge(1.0) - edge(-1.0);
+    let track = |lens: &Lens| {
+        let cfg = TrackConfig::default().with_setup(lens, &turbine);
+        let mut tr = Tracker::new(cfg).unwrap();
+        let mut s = None;
+        for k in 0..60 {
+            let mut d = det(k, frame_t(k, 30.0), Some(hub));
+            d.tower_found = true;
+            d.tower_width_px = width_px;
+            s = Some(tr.update(&d, None));
+        }
+        s.unwrap().distance_m
+    };
+    let calibrated = track(&Lens::from_model(gopro));
+    assert!(
+        (calibrated - d_hub).abs() < 0.03 * d_hub,
+        "calibrated lens: {calibrated:.2} m for {d_hub} m"
+    );
+    let centre_only = track(&Lens::default());
+    assert!(
+        centre_only > 1.1 * d_hub,
+        "the centre focal length alone reads long off-centre: {centre_only:.2} m"
+    );
+}

@@ -8,6 +8,7 @@ use hubtrack_detect::{Detector, Hints, ImageView};
 use hubtrack_runtime::ipc::{FrameSubscriber, MsgPublisher, MsgSubscriber};
 use hubtrack_runtime::stage::{Stage, StageArgs};
 use hubtrack_types::services::{DETECTIONS, OVERLAY, TRACK, VEHICLE};
+use hubtrack_types::setup::Lens;
 use hubtrack_types::time::monotonic_ns;
 use hubtrack_types::{
     DetectOverlay, Detection, OverlayKind, OverlaySegment, Stamps, TrackState, VehicleState,
@@ -56,7 +57,13 @@ fn run() -> anyhow::Result<()> {
         return Ok(());
     };
     log::info!("mode {:?}", config.detect.mode);
-    let detect = config.detect.with_setup(&config.camera, &config.turbine);
+    let lens = Lens::new(&config.camera)?;
+    log::info!(
+        "camera {}, turbine {}",
+        config.camera.describe(),
+        config.turbine.name
+    );
+    let detect = config.detect.with_setup(&lens, &config.turbine);
     let mut detector = Detector::new(detect)?;
 
     let mut frames = FrameSubscriber::new(&node, 1)?;

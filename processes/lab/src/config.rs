@@ -3,7 +3,7 @@
 //! checked against the defaults.
 
 use hubtrack_runtime::config::{ConfigArgs, ParamError, RunConfig, Sections};
-use hubtrack_types::setup::{CameraSetup, TurbineSetup};
+use hubtrack_types::setup::{CameraSetup, Lens, TurbineSetup};
 use serde::{Deserialize, Serialize};
 
 /// Every section of a config file.
@@ -48,8 +48,9 @@ impl Sections for LabConfig {
 /// turbine of `[camera]` and `[turbine]`, as their stages do.
 pub fn load(args: &ConfigArgs) -> anyhow::Result<LabConfig> {
     let mut config = args.load::<LabConfig>()?;
-    config.detect = config.detect.with_setup(&config.camera, &config.turbine);
-    config.track = config.track.with_setup(&config.camera, &config.turbine);
+    let lens = Lens::new(&config.camera)?;
+    config.detect = config.detect.with_setup(&lens, &config.turbine);
+    config.track = config.track.with_setup(&lens, &config.turbine);
     Ok(config)
 }
 

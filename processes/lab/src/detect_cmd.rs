@@ -149,9 +149,11 @@ pub fn run(args: DetectArgs) -> anyhow::Result<()> {
         };
         println!("{line}");
     }
-    // Each failure is on its own line above; a run in which nothing could be read is an error.
+    // Each failure is on its own line above; a run in which no input gave a result is an error.
     if done == 0 && failed > 0 {
-        anyhow::bail!("none of the {failed} input(s) could be read");
+        anyhow::bail!(
+            "none of the {failed} input(s) could be read and detected on (each error is above)"
+        );
     }
     Ok(())
 }

@@ -118,8 +118,8 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             format!("sim.link=\"udpout:127.0.0.1:{port}\""),
         ]);
         let config_args = ConfigArgs {
-            config: args.config.config.clone(),
             overrides,
+            ..args.config.clone()
         };
         let config = crate::config::load(&config_args)?;
         let outcome_path = dir.join(format!("outcome-{seed}.json"));

@@ -51,16 +51,20 @@ struct Args {
     outcome: Option<PathBuf>,
 }
 
-/// What the simulator stage reads: `[sim]`.
+/// What the simulator stage reads: `[sim]`, and `[camera]` (a calibration, when given, is the
+/// camera the simulator renders through, so that the world matches what detect and track
+/// assume).
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 struct SimSections {
     sim: hubtrack_sim::SimConfig,
+    camera: hubtrack_types::setup::CameraSetup,
 }
 
 impl hubtrack_runtime::Sections for SimSections {
     fn validate(&self) -> Result<(), hubtrack_runtime::config::ParamError> {
         self.sim.validate()?;
+        self.camera.validate()?;
         self.sim
             .link
             .parse::<hubtrack_mavlink::Endpoint>()
@@ -90,7 +94,8 @@ fn run() -> anyhow::Result<()> {
     };
     let cfg = &config.sim;
     let scenario = Scenario::from_seed(cfg.seed, cfg);
-    let camera = render_camera(&cfg.camera);
+    let calibration = config.camera.calibrated()?;
+    let camera = render_camera(&cfg.camera, calibration.as_ref());
     let mut renderer = Renderer::new(camera);
     let mut vehicle = Multicopter::new(&scenario.start, &cfg.vehicle);
     let mut wind = Wind::new(cfg.seed, &cfg.wind);

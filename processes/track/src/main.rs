@@ -49,7 +49,8 @@ fn run() -> anyhow::Result<()> {
     else {
         return Ok(());
     };
-    let track = config.track.with_setup(&config.camera, &config.turbine);
+    let lens = hubtrack_types::setup::Lens::new(&config.camera)?;
+    let track = config.track.with_setup(&lens, &config.turbine);
     let mut tracker = Tracker::new(track).map_err(|e| anyhow::anyhow!("{e}"))?;
 
     let detections = MsgSubscriber::<Detection>::new(&node, &DETECTIONS, DETECTION_BUFFER)?;

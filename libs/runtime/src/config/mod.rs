@@ -7,6 +7,7 @@
 //! every value is checked against its declared range. Keys left out take the documented defaults.
 //! `hubtrack config` checks a whole file by asking every stage binary to check its sections.
 
+mod files;
 mod run;
 
 pub use run::{RestartConfig, RestartPolicy, RunConfig, DEFAULT_NICE, KNOWN_STAGES};
@@ -224,7 +225,8 @@ fn quoted(text: &str) -> String {
     }
 }
 
-/// Command-line options of every process that reads the config: `--config FILE`, `--set K=V`.
+/// Command-line options of every process that reads the config: `--config FILE`, `--set K=V`,
+/// and the camera calibration and turbine profile files.
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct ConfigArgs {
     /// Config file (TOML); default: built-in defaults, as documented in config/hubtrack.toml.
@@ -233,16 +235,45 @@ pub struct ConfigArgs {
     /// Override one key, e.g. `--set capture.fps=60` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub overrides: Vec<String>,
+    /// Camera calibration, ROS camera_info YAML (e.g. config/cameras/*.yaml); the same as
+    /// `--set camera.calibration=FILE`.
+    #[arg(long = "camera", value_name = "CAL.yaml")]
+    pub camera: Option<PathBuf>,
+    /// Turbine profile, TOML (e.g. config/turbines/*.toml); the same as
+    /// `--set turbine.profile=FILE`.
+    #[arg(long = "turbine", value_name = "T.toml")]
+    pub turbine: Option<PathBuf>,
 }
 
 impl ConfigArgs {
-    /// The file (or the defaults) with the overrides applied.
+    /// The file (or the defaults) with the overrides applied, file paths made absolute and the
+    /// turbine profile read in.
     pub fn document(&self) -> Result<ConfigDoc, ConfigError> {
         let mut doc = match &self.config {
             Some(path) => ConfigDoc::load(path)?,
             None => ConfigDoc::defaults(),
         };
-        doc.apply_overrides(&self.overrides)?;
+        if let Some(dir) = self.config.as_deref().and_then(Path::parent) {
+            doc.absolutize_paths(dir);
+        }
+        let mut overrides = self.overrides.clone();
+        let as_toml = |p: &Path| toml::Value::String(p.display().to_string()).to_string();
+        if let Some(c) = &self.camera {
+            overrides.push(format!("camera.calibration={}", as_toml(c)));
+        }
+        if let Some(t) = &self.turbine {
+            overrides.push(format!("turbine.profile={}", as_toml(t)));
+        }
+        doc.apply_overrides(&overrides)?;
+        if let Ok(cwd) = std::env::current_dir() {
+            doc.absolutize_paths(&cwd);
+        }
+        let explicit: Vec<String> = overrides
+            .iter()
+            .filter_map(|o| o.split_once('=')?.0.trim().strip_prefix("turbine."))
+            .map(str::to_string)
+            .collect();
+        doc.apply_turbine_profile(&explicit)?;
         Ok(doc)
     }
 
@@ -251,8 +282,15 @@ impl ConfigArgs {
         self.document()?.sections()
     }
 
-    /// The same options as arguments for a child process.
+    /// The same options as arguments for a child process (paths absolute, so that a child in
+    /// another working directory reads the same files).
     pub fn to_args(&self) -> Vec<String> {
+        let absolute = |p: &Path| {
+            std::path::absolute(p)
+                .unwrap_or_else(|_| p.to_path_buf())
+                .display()
+                .to_string()
+        };
         let mut args = Vec::new();
         if let Some(c) = &self.config {
             args.push("--config".to_string());
@@ -261,6 +299,14 @@ impl ConfigArgs {
         for o in &self.overrides {
             args.push("--set".to_string());
             args.push(o.clone());
+        }
+        if let Some(c) = &self.camera {
+            args.push("--camera".to_string());
+            args.push(absolute(c));
+        }
+        if let Some(t) = &self.turbine {
+            args.push("--turbine".to_string());
+            args.push(absolute(t));
         }
         args
     }

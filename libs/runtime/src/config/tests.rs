@@ -104,8 +104,8 @@ fn cross_key_limits_name_both_keys() {
 #[test]
 fn overrides_apply_and_validate() {
     let args = |o: &[&str]| ConfigArgs {
-        config: None,
         overrides: o.iter().map(|s| s.to_string()).collect(),
+        ..Default::default()
     };
     let run = args(&["run.stop_timeout_ms=200", "run.record_dir=flights"])
         .load::<RunSections>()
@@ -149,4 +149,131 @@ fn a_huge_bad_value_is_not_echoed_whole() {
         .unwrap_err()
         .to_string();
     assert!(err.len() < 1_000, "{} bytes", err.len());
+}
+
+crate::sections! {
+    /// The camera and turbine sections, as detect and track read them.
+    struct SetupSections {
+        camera: hubtrack_types::setup::CameraSetup,
+        turbine: hubtrack_types::setup::TurbineSetup,
+    }
+}
+
+fn shipped(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../config")
+        .join(path)
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("hubtrack-files-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn a_turbine_profile_fills_the_section_and_set_keys_win() {
+    let args = ConfigArgs {
+        turbine: Some(shipped("turbines/nrel_5mw.toml")),
+        overrides: vec!["turbine.hub_overhang_m=5.5".into()],
+        ..Default::default()
+    };
+    let s: SetupSections = args.load().unwrap();
+    assert_eq!(s.turbine.name, "NREL 5 MW reference");
+    assert_eq!(s.turbine.tower_top_diameter_m, 3.87);
+    assert_eq!(s.turbine.rotor_radius_m, 63.0);
+    assert_eq!(s.turbine.hub_overhang_m, 5.5, "--set wins over the profile");
+    assert!(Path::new(&s.turbine.profile).is_absolute());
+}
+
+#[test]
+fn every_shipped_turbine_profile_reads() {
+    let mut n = 0;
+    for entry in std::fs::read_dir(shipped("turbines")).unwrap() {
+        let path = entry.unwrap().path();
+        let args = ConfigArgs {
+            turbine: Some(path.clone()),
+            ..Default::default()
+        };
+        let s: SetupSections = args
+            .load()
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(!s.turbine.name.is_empty());
+        n += 1;
+    }
+    assert!(n >= 3, "{n} profiles");
+}
+
+#[test]
+fn a_profile_replaces_the_config_files_turbine_keys() {
+    let dir = temp_dir("replace");
+    std::fs::write(dir.join("p.toml"), "tower_top_diameter_m = 3.0\n").unwrap();
+    // A relative profile path in a config file is relative to the file.
+    std::fs::write(
+        dir.join("c.toml"),
+        "[turbine]\nprofile = \"p.toml\"\ntower_top_diameter_m = 2.0\nspinner_diameter_m = 2.5\n",
+    )
+    .unwrap();
+    let args = ConfigArgs {
+        config: Some(dir.join("c.toml")),
+        ..Default::default()
+    };
+    let s: SetupSections = args.load().unwrap();
+    assert_eq!(s.turbine.tower_top_diameter_m, 3.0);
+    assert_eq!(
+        s.turbine.spinner_diameter_m, 2.5,
+        "keys the profile lacks stay"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_profiles_and_calibrations_are_named() {
+    let dir = temp_dir("bad");
+    std::fs::write(dir.join("typo.toml"), "tower_top_diamter_m = 3.0\n").unwrap();
+    std::fs::write(dir.join("range.toml"), "spinner_diameter_m = 99.0\n").unwrap();
+    std::fs::write(dir.join("cal.yaml"), "image_width: 640\n").unwrap();
+    let err = |args: ConfigArgs| args.load::<SetupSections>().unwrap_err().to_string();
+    let typo = err(ConfigArgs {
+        turbine: Some(dir.join("typo.toml")),
+        ..Default::default()
+    });
+    assert!(
+        typo.contains("typo.toml") && typo.contains("tower_top_diamter_m"),
+        "{typo}"
+    );
+    let range = err(ConfigArgs {
+        turbine: Some(dir.join("range.toml")),
+        ..Default::default()
+    });
+    assert!(range.contains("turbine.spinner_diameter_m"), "{range}");
+    let missing = err(ConfigArgs {
+        turbine: Some(dir.join("absent.toml")),
+        ..Default::default()
+    });
+    assert!(missing.contains("absent.toml"), "{missing}");
+    let cal = err(ConfigArgs {
+        camera: Some(dir.join("cal.yaml")),
+        ..Default::default()
+    });
+    assert!(
+        cal.contains("camera.calibration") && cal.contains("image_height"),
+        "{cal}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_calibration_given_on_the_command_line_reaches_the_section() {
+    let args = ConfigArgs {
+        camera: Some(shipped("cameras/usb_narrow_640x480.yaml")),
+        ..Default::default()
+    };
+    let s: SetupSections = args.load().unwrap();
+    let cam = s.camera.calibrated().unwrap().unwrap();
+    assert_eq!((cam.width, cam.height), (640, 480));
+    // Children get absolute paths.
+    let child = args.to_args();
+    let at = child.iter().position(|a| a == "--camera").unwrap();
+    assert!(Path::new(&child[at + 1]).is_absolute());
 }

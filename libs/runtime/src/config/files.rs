@@ -1,0 +1,105 @@
+//! The two keys that name files rather than values: `camera.calibration` (a ROS `camera_info`
+//! YAML) and `turbine.profile` (a TOML file with the keys of `[turbine]`).
+//!
+//! Relative paths in a config file are relative to that file; on the command line (`--camera`,
+//! `--turbine`, `--set`) relative to the working directory. Paths are made absolute here, so that
+//! the stage processes the supervisor starts read the same files. A profile's keys replace the
+//! config file's `[turbine]` keys, except keys given with `--set`, which win.
+
+use super::{quoted, ConfigDoc, ConfigError, MAX_CONFIG_BYTES};
+use hubtrack_types::setup::TurbineSetup;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// `(section, key)` of every key that holds a file path.
+const PATH_KEYS: [(&str, &str); 2] = [("camera", "calibration"), ("turbine", "profile")];
+
+impl ConfigDoc {
+    /// Makes the path keys absolute, relative ones taken relative to `base`.
+    pub(super) fn absolutize_paths(&mut self, base: &Path) {
+        for (section, key) in PATH_KEYS {
+            let Some(toml::Value::String(path)) = self
+                .table
+                .get_mut(section)
+                .and_then(|s| s.as_table_mut())
+                .and_then(|s| s.get_mut(key))
+            else {
+                continue;
+            };
+            if !path.is_empty() && Path::new(path.as_str()).is_relative() {
+                *path = base.join(path.as_str()).display().to_string();
+            }
+        }
+    }
+
+    /// Fills `[turbine]` from the profile named by `turbine.profile`, leaving the keys in
+    /// `explicit` (given with `--set`) as they are.
+    pub(super) fn apply_turbine_profile(&mut self, explicit: &[String]) -> Result<(), ConfigError> {
+        let Some(turbine) = self.table.get("turbine").and_then(|t| t.as_table()) else {
+            return Ok(());
+        };
+        let path = match turbine.get("profile") {
+            Some(toml::Value::String(p)) if !p.is_empty() => PathBuf::from(p),
+            _ => return Ok(()),
+        };
+        let profile = read_profile(&path)?;
+        let section = self
+            .table
+            .get_mut("turbine")
+            .and_then(|t| t.as_table_mut())
+            .expect("checked above");
+        for (key, value) in profile {
+            if !explicit.iter().any(|k| k == &key) {
+                section.insert(key, value);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Reads and checks a turbine profile: a TOML file of `[turbine]` keys (without `profile`).
+fn read_profile(path: &Path) -> Result<toml::Table, ConfigError> {
+    let origin = format!("turbine profile {}", path.display());
+    let io = |cause| ConfigError::Io {
+        path: path.to_path_buf(),
+        cause,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let mut text = String::new();
+    file.take(MAX_CONFIG_BYTES + 1)
+        .read_to_string(&mut text)
+        .map_err(io)?;
+    if text.len() as u64 > MAX_CONFIG_BYTES {
+        return Err(ConfigError::TooLarge {
+            path: path.to_path_buf(),
+        });
+    }
+    let table = text
+        .parse::<toml::Table>()
+        .map_err(|e| ConfigError::Invalid {
+            origin: origin.clone(),
+            key: "(syntax)".into(),
+            message: quoted(e.to_string().trim()),
+        })?;
+    if table.contains_key("profile") {
+        return Err(ConfigError::Invalid {
+            origin,
+            key: "profile".into(),
+            message: "a profile cannot name another profile".into(),
+        });
+    }
+    // Strict parse: an unknown or misspelt key is an error naming the profile, not the config.
+    let parsed: TurbineSetup = serde_path_to_error::deserialize(toml::Value::Table(table.clone()))
+        .map_err(|e| ConfigError::Invalid {
+            origin: origin.clone(),
+            key: quoted(&e.path().to_string()),
+            message: quoted(e.into_inner().to_string().trim()),
+        })?;
+    parsed.validate().map_err(|e| ConfigError::OutOfRange {
+        origin,
+        key: e.key,
+        value: quoted(&e.value),
+        allowed: e.allowed,
+    })?;
+    Ok(table)
+}
