@@ -115,7 +115,7 @@ impl CameraSetup {
 
 /// The camera for frames of one size: the calibration scaled to it, or the configured pinhole.
 /// Built once from [`CameraSetup`] so that the file is read once.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Lens {
     calibrated: Option<CameraModel>,
     setup: CameraSetup,
@@ -161,14 +161,6 @@ impl Lens {
     }
 }
 
-impl Default for Lens {
-    fn default() -> Lens {
-        Lens {
-            calibrated: None,
-            setup: CameraSetup::default(),
-        }
-    }
-}
 
 impl TurbineSetup {
     /// Checks every value; errors name the key under `turbine`.
@@ -252,14 +244,18 @@ mod tests {
 
     #[test]
     fn turbine_constraints_between_keys() {
-        let mut t = TurbineSetup::default();
-        t.tower_top_diameter_m = 5.0;
+        let t = TurbineSetup {
+            tower_top_diameter_m: 5.0,
+            ..TurbineSetup::default()
+        };
         assert_eq!(
             t.validate().unwrap_err().key,
             "turbine.tower_top_diameter_m"
         );
-        let mut t = TurbineSetup::default();
-        t.rotor_radius_m = 70.0;
+        let t = TurbineSetup {
+            rotor_radius_m: 70.0,
+            ..TurbineSetup::default()
+        };
         assert_eq!(t.validate().unwrap_err().key, "turbine.rotor_radius_m");
     }
 }

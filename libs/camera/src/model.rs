@@ -92,7 +92,7 @@ impl CameraModel {
     /// Pixel of a camera-frame point (x right, y down, z forward, metres); `None` behind the
     /// camera or beyond the valid range of the lens model.
     pub fn project(&self, p_cam: [f64; 3]) -> Option<[f64; 2]> {
-        if !(p_cam[2] > MIN_PROJECT_DEPTH_M) {
+        if p_cam[2].is_nan() || p_cam[2] <= MIN_PROJECT_DEPTH_M {
             return None;
         }
         let n = [p_cam[0] / p_cam[2], p_cam[1] / p_cam[2]];

@@ -333,3 +333,64 @@ pub fn flight(seed: u64, frames: u64) -> Vec<FlightFrame> {
 
 /// Fraction of [`FLIGHT_MAX_DRIFT_M`] a flight's drift amplitude is drawn from (±).
 const FLIGHT_DRIFT_FACTOR: f64 = 1.0;
+
+/// Cameras no model or ranker of the project was trained or tuned on (those saw the GoPro and the
+/// narrow USB camera only), for the cross-domain evaluation (`hubtrack eval --cross-domain`):
+/// other sizes, fields of view and lens models, each with the calibration detect is given.
+pub fn held_out_cameras() -> Vec<(&'static str, Camera)> {
+    use crate::camera::Distortion;
+    vec![
+        ("pinhole 640x480 90deg", Camera::pinhole(640, 480, 90.0)),
+        ("pinhole 1280x720 60deg", Camera::pinhole(1280, 720, 60.0)),
+        (
+            "plumb_bob 2704x1520 100deg",
+            Camera::centred(
+                2704,
+                1520,
+                1300.0,
+                Distortion::PlumbBob {
+                    k1: -0.22,
+                    k2: 0.05,
+                    p1: 0.0008,
+                    p2: -0.0005,
+                    k3: -0.004,
+                },
+            ),
+        ),
+        (
+            "equidistant 1920x1080 fisheye",
+            Camera::centred(
+                1920,
+                1080,
+                700.0,
+                Distortion::Equidistant {
+                    k1: -0.03,
+                    k2: 0.008,
+                    k3: -0.002,
+                    k4: 0.0003,
+                },
+            ),
+        ),
+    ]
+}
+
+/// Seed mix of the held-out turbine draws (independent of the scene's other draws).
+const HELD_OUT_TURBINE_SEED_MIX: u64 = 0x7E1D_0F15_C0DE_0047;
+/// Tower top diameters of the held-out turbine family, metres (real fleets: 1.8–3.5).
+pub const HELD_OUT_TOWER_TOP_M: (f64, f64) = (1.8, 3.5);
+/// Tower base over top diameter of the held-out family (taper).
+pub const HELD_OUT_TAPER: (f64, f64) = (1.4, 2.2);
+/// Blade lengths of the held-out family, metres (rotors of 25–65 m radius).
+pub const HELD_OUT_BLADE_M: (f64, f64) = (23.0, 63.0);
+
+/// Gives `scene` turbine proportions outside the training family (which varies the tower by
+/// ±5 % around 2.2 m and keeps 33.5 m blades): tower top, taper and blade length drawn over
+/// what real fleets have. The hub height grows with the blades so the rotor clears the ground.
+pub fn held_out_turbine(scene: &mut Scene, seed: u64) {
+    let mut r = Rng(seed ^ HELD_OUT_TURBINE_SEED_MIX);
+    let top = r.range(HELD_OUT_TOWER_TOP_M.0, HELD_OUT_TOWER_TOP_M.1);
+    scene.tower_top_diameter_m = top;
+    scene.tower_base_diameter_m = top * r.range(HELD_OUT_TAPER.0, HELD_OUT_TAPER.1);
+    scene.blade_length_m = r.range(HELD_OUT_BLADE_M.0, HELD_OUT_BLADE_M.1);
+    scene.hub_height_m = scene.hub_height_m.max(scene.blade_length_m + 25.0);
+}

@@ -8,10 +8,12 @@ use hubtrack_capture::images::read_image;
 use hubtrack_detect::params::Mode;
 use hubtrack_detect::{Hints, ImageView, Output};
 use hubtrack_render::dataset::{
-    photo_case, photo_case_close, photo_lenses, synth_case, SynthCase, CLASSES,
+    held_out_cameras, held_out_turbine, photo_case, photo_case_close, photo_lenses, synth_case,
+    SynthCase, CLASSES, HELD_OUT_BLADE_M, HELD_OUT_TOWER_TOP_M,
 };
 use hubtrack_render::{Camera, Renderer};
 use hubtrack_runtime::config::ConfigArgs;
+use hubtrack_types::setup::Lens;
 use hubtrack_types::PixelFormat;
 use opencv::core::{Mat, MatTraitConst};
 use std::io::Write;
@@ -48,6 +50,12 @@ pub struct EvalArgs {
     /// both pyramid levels) instead of as video frames with the roll known (the detect stage).
     #[arg(long)]
     pub as_stills: bool,
+    /// Cross-domain: also render the `--synthetic` set through cameras no model was trained on
+    /// (other sizes, fields of view, plumb_bob and fisheye lenses; detect gets each one's
+    /// calibration) and with turbine proportions outside the training family, one table each,
+    /// printed after the in-domain table.
+    #[arg(long)]
+    pub cross_domain: bool,
     /// Seed of the synthetic set and flights.
     #[arg(long, default_value_t = 2026)]
     pub seed: u64,
@@ -122,9 +130,14 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     }
     if args.synthetic > 0 {
         let table = eval_synthetic(
-            args.synthetic,
-            args.seed,
-            args.as_stills,
+            &Synthetic {
+                per_class: args.synthetic,
+                seed: args.seed,
+                still: args.as_stills,
+                lenses: [Camera::gopro_hero3(), Camera::usb_narrow()],
+                held_out_turbines: false,
+                camera_label: None,
+            },
             &mut detectors,
             misses,
             cand_out.as_mut(),
@@ -142,6 +155,9 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
             &names,
             &table,
         );
+    }
+    if args.cross_domain && args.synthetic > 0 {
+        eval_cross_domain(&args, &config, &names, &mut detectors)?;
     }
     if args.photo_like > 0 {
         let table = eval_photo_like(
@@ -359,27 +375,49 @@ fn eval_truth_file(
 
 /// `per_class` synthetic frames per distance class (plus negatives), as video frames or, with
 /// `still`, as still photos.
-fn eval_synthetic(
+/// One synthetic set: cases per distance class, through which lenses (`[0]` for the wide
+/// cases, `[1]` for the narrow ones), and whether the turbines are of the held-out family.
+struct Synthetic {
     per_class: u64,
     seed: u64,
     still: bool,
+    lenses: [Camera; 2],
+    held_out_turbines: bool,
+    /// The category label of a single held-out camera.
+    camera_label: Option<&'static str>,
+}
+
+fn eval_synthetic(
+    set: &Synthetic,
     detectors: &mut [hubtrack_detect::Detector],
     misses: Option<&Path>,
     mut cand_out: Option<&mut CandidateSink>,
 ) -> anyhow::Result<Table> {
     let mut table = Table::new();
+    let per_class = set.per_class;
     for (class, class_def) in CLASSES.iter().enumerate() {
         let cases = (0..per_class + per_class / 12).map(|i| {
-            (
-                format!("{}_{i:04}", class_def.0),
-                synth_case(seed, class, i, i >= per_class),
-            )
+            let mut case = synth_case(set.seed, class, i, i >= per_class);
+            if set.held_out_turbines {
+                let seed = case.scene.seed;
+                held_out_turbine(&mut case.scene, seed);
+            }
+            if let Some(label) = set.camera_label {
+                // One camera for every case: its name, not the in-domain lens the case drew.
+                for c in case
+                    .categories
+                    .iter_mut()
+                    .filter(|c| c.starts_with("camera:"))
+                {
+                    *c = format!("camera:{label}");
+                }
+            }
+            (format!("{}_{i:04}", class_def.0), case)
         });
-        let lenses = [Camera::gopro_hero3(), Camera::usb_narrow()];
         eval_rendered(
             cases,
-            lenses,
-            still,
+            set.lenses,
+            set.still,
             detectors,
             misses,
             cand_out.as_deref_mut(),
@@ -388,6 +426,72 @@ fn eval_synthetic(
         eprintln!("[eval] synthetic class {} done", class_def.0);
     }
     Ok(table)
+}
+
+/// The synthetic set through each held-out camera (detect configured with its calibration),
+/// then with held-out turbine proportions (in-domain cameras), one table each.
+fn eval_cross_domain(
+    args: &EvalArgs,
+    config: &crate::config::LabConfig,
+    names: &[&str],
+    in_domain_detectors: &mut [hubtrack_detect::Detector],
+) -> anyhow::Result<()> {
+    for (name, camera) in held_out_cameras() {
+        let lens = Lens::from_model(camera);
+        let detect = config.detect.clone().with_setup(&lens, &config.turbine);
+        let mut detectors = MODES
+            .iter()
+            .map(|(m, _)| detector(&detect, Some(*m)))
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        let table = eval_synthetic(
+            &Synthetic {
+                per_class: args.synthetic,
+                seed: args.seed,
+                still: args.as_stills,
+                lenses: [camera, camera],
+                held_out_turbines: false,
+                camera_label: Some(name),
+            },
+            &mut detectors,
+            None,
+            None,
+        )?;
+        print_table(
+            &format!(
+                "cross-domain camera {name}: {} per distance class, seed {}",
+                args.synthetic, args.seed
+            ),
+            names,
+            &table,
+        );
+    }
+    let table = eval_synthetic(
+        &Synthetic {
+            per_class: args.synthetic,
+            seed: args.seed,
+            still: args.as_stills,
+            lenses: [Camera::gopro_hero3(), Camera::usb_narrow()],
+            held_out_turbines: true,
+            camera_label: None,
+        },
+        in_domain_detectors,
+        None,
+        None,
+    )?;
+    print_table(
+        &format!(
+            "cross-domain turbines (tower top {}-{} m, blades {}-{} m): {} per distance class, seed {}",
+            HELD_OUT_TOWER_TOP_M.0,
+            HELD_OUT_TOWER_TOP_M.1,
+            HELD_OUT_BLADE_M.0,
+            HELD_OUT_BLADE_M.1,
+            args.synthetic,
+            args.seed
+        ),
+        names,
+        &table,
+    );
+    Ok(())
 }
 
 /// `count` photo-like rendered views (plus a twelfth as many negatives), the `close` ones or

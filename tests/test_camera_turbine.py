@@ -1,0 +1,90 @@
+"""The operator's camera and turbine as inputs: `--camera CAL.yaml` (ROS camera_info) and
+`--turbine T.toml` on the lab and flight commands, reaching detect, track and the stages `run`
+starts; files that cannot describe the frames are refused with the reason."""
+
+import json
+
+from conftest import ROOT
+
+GOPRO = ROOT / "config" / "cameras" / "gopro_hero3_wide_1080p.yaml"
+USB = ROOT / "config" / "cameras" / "usb_narrow_640x480.yaml"
+
+
+def rendered_frames(runner, tmp_path, n=30):
+    out = tmp_path / "frames"
+    out.mkdir()
+    res = runner.run("hubtrack", "render", "--frames", str(n), "-o", out, timeout=120)
+    assert res.returncode == 0, res.stderr[-2000:]
+    truth = [json.loads(line)["truth"] for line in res.stdout.splitlines() if line.strip()]
+    return out, truth
+
+
+def last_track(runner, frames, *options):
+    res = runner.run("hubtrack", "track", "--fps", "30", *options, frames, timeout=300)
+    assert res.returncode == 0, res.stderr[-2000:]
+    return [json.loads(line) for line in res.stdout.splitlines() if line.strip()][-1]
+
+
+def test_the_turbine_profile_and_the_calibration_reach_the_tracked_distance(runner, tmp_path):
+    frames, truth = rendered_frames(runner, tmp_path)
+    base = last_track(runner, frames, "--camera", GOPRO)
+    assert base["detected"] and base["distance_m"] > 0, base
+    # The tracked distance is within 15 % of the renderer's truth with the right lens and turbine.
+    true_d = truth[-1]["distance_m"]
+    assert abs(base["distance_m"] / true_d - 1) < 0.15, (base["distance_m"], true_d)
+    # A turbine 1.5 times as large in every dimension seen the same size is 1.5 times as far.
+    big = tmp_path / "big.toml"
+    big.write_text('name = "x1.5"\nhub_height_m = 96.0\nrotor_radius_m = 53.25\n'
+                   "tower_top_diameter_m = 3.3\ntower_base_diameter_m = 6.45\n"
+                   "hub_overhang_m = 6.3\nspinner_diameter_m = 4.8\n")
+    scaled = last_track(runner, frames, "--camera", GOPRO, "--turbine", big)
+    assert abs(scaled["distance_m"] / base["distance_m"] - 1.5) < 0.03, (scaled, base)
+    # --set wins over the profile's key.
+    over = last_track(runner, frames, "--camera", GOPRO, "--turbine", big,
+                      "--set", "turbine.tower_top_diameter_m=2.2",
+                      "--set", "turbine.spinner_diameter_m=3.2",
+                      "--set", "turbine.hub_overhang_m=4.2")
+    assert abs(over["distance_m"] / base["distance_m"] - 1) < 0.03, (over, base)
+
+
+def test_frames_the_calibration_cannot_describe_are_refused_naming_both_sizes(runner, tmp_path):
+    frames, _ = rendered_frames(runner, tmp_path, n=2)
+    for cmd in (["detect"], ["track", "--fps", "30"]):
+        res = runner.run("hubtrack", *cmd, "--camera", USB, frames, timeout=120)
+        assert res.returncode == 1, (cmd, res.stdout, res.stderr[-2000:])
+        assert "1920x1080 does not match the camera calibration (640x480)" in res.stdout + res.stderr, \
+            (cmd, res.stdout, res.stderr[-2000:])
+
+
+def test_bad_calibration_and_profile_files_are_named(runner, tmp_path):
+    cases = {
+        "missing.yaml": (None, "cannot open"),
+        "short.yaml": ("image_width: 640\nimage_height: 480\n", "camera_matrix"),
+        "nan.yaml": (USB.read_text().replace("692.820323027551, 0.0, 319.5", ".nan, 0.0, 319.5"), "NaN"),
+        "model.yaml": (USB.read_text().replace("plumb_bob", "rational_polynomial"), "not supported"),
+    }
+    for name, (text, reason) in cases.items():
+        path = tmp_path / name
+        if text is not None:
+            path.write_text(text)
+        res = runner.run("hubtrack", "config", "--camera", path, timeout=60)
+        assert res.returncode == 1, (name, res.stdout, res.stderr)
+        assert "camera.calibration" in res.stderr and reason in res.stderr, (name, res.stderr)
+    typo = tmp_path / "typo.toml"
+    typo.write_text("tower_top_diamter_m = 3.0\n")
+    res = runner.run("hubtrack", "config", "--turbine", typo, timeout=60)
+    assert res.returncode == 1 and "typo.toml" in res.stderr and "tower_top_diamter_m" in res.stderr, res.stderr
+
+
+def test_the_stage_binaries_read_the_files_passed_on(runner):
+    # `hubtrack config` asks every stage binary to check its sections with the options `run`
+    # would pass them: the files reach each stage.
+    res = runner.run("hubtrack", "config", "--camera", GOPRO,
+                     "--turbine", ROOT / "config" / "turbines" / "nrel_5mw.toml", timeout=60)
+    assert res.returncode == 0, res.stderr
+    res = runner.run("hubtrack", "config", "--print", "--camera", GOPRO,
+                     "--turbine", ROOT / "config" / "turbines" / "nrel_5mw.toml", timeout=60)
+    assert res.returncode == 0, res.stderr
+    assert 'name = "NREL 5 MW reference"' in res.stdout and "tower_top_diameter_m = 3.87" in res.stdout, \
+        res.stdout[:3000]
+    assert str(GOPRO) in res.stdout, res.stdout[:3000]
