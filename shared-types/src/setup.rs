@@ -161,7 +161,6 @@ impl Lens {
     }
 }
 
-
 impl TurbineSetup {
     /// Checks every value; errors name the key under `turbine`.
     pub fn validate(&self) -> Result<(), ParamError> {
