@@ -114,7 +114,12 @@ impl ConfigDoc {
                 path: path.to_path_buf(),
             });
         }
-        ConfigDoc::parse(&text, &path.display().to_string())
+        let mut doc = ConfigDoc::parse(&text, &path.display().to_string())?;
+        // Paths in a file are relative to the file.
+        if let Some(dir) = path.parent() {
+            doc.absolutize_paths(&std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf()));
+        }
+        Ok(doc)
     }
 
     /// Parses TOML text; `origin` names it in errors.
@@ -253,9 +258,6 @@ impl ConfigArgs {
             Some(path) => ConfigDoc::load(path)?,
             None => ConfigDoc::defaults(),
         };
-        if let Some(dir) = self.config.as_deref().and_then(Path::parent) {
-            doc.absolutize_paths(dir);
-        }
         let mut overrides = self.overrides.clone();
         let as_toml = |p: &Path| toml::Value::String(p.display().to_string()).to_string();
         if let Some(c) = &self.camera {
