@@ -32,7 +32,8 @@ pub struct EvalArgs {
     /// Rendered frames only: no photos, neither the default set nor --truth files.
     #[arg(long, conflicts_with = "truth")]
     pub no_photos: bool,
-    /// Synthetic frames per distance class (0: none), plus as many negatives (no turbine) / 4.
+    /// Synthetic frames per distance class (0: none), plus as many negatives (no turbine) / 4,
+    /// filmed through the `--camera` calibration if one is given, else the GoPro and USB lenses.
     #[arg(long, default_value_t = 200)]
     pub synthetic: u64,
     /// Photo-like rendered views (0: none; 12–250 m, from below and above, relative yaw to ±70°,
@@ -129,14 +130,17 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         print_table(&format!("real photos: {}", truth.display()), &names, &table);
     }
     if args.synthetic > 0 {
+        // With a calibration (`--camera`) the set is filmed through that camera alone.
+        let calibrated = config.camera.calibrated()?;
         let table = eval_synthetic(
             &Synthetic {
                 per_class: args.synthetic,
                 seed: args.seed,
                 still: args.as_stills,
-                lenses: [Camera::gopro_hero3(), Camera::usb_narrow()],
+                lenses: calibrated
+                    .map_or([Camera::gopro_hero3(), Camera::usb_narrow()], |c| [c, c]),
                 held_out_turbines: false,
-                camera_label: None,
+                camera_label: calibrated.is_some().then_some("calibrated"),
             },
             &mut detectors,
             misses,

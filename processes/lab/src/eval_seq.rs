@@ -13,6 +13,9 @@ use hubtrack_types::{Detection, PixelFormat, TrackMode, TrackState, VehicleState
 
 /// Distance range over which distance errors are scored, metres.
 const DISTANCE_SCORED_M: (f64, f64) = (8.0, 30.0);
+/// Distance bands of the approach whose errors are reported separately, metres (far to close):
+/// a tower 20–40 px wide far out, the spinner's size and the parallax close in.
+const DISTANCE_BANDS_M: [(f64, f64); 3] = [(20.0, 30.0), (12.0, 20.0), (5.0, 12.0)];
 /// Largest |relative yaw| over which yaw errors are scored, degrees.
 const YAW_SCORED_DEG: f64 = 35.0;
 /// A track (re)acquired farther than this from the truth is a false lock, fraction of height.
@@ -28,6 +31,8 @@ struct Metrics {
     valid_after_lock: u64,
     longest_gap: u64,
     dist_err_pct: Vec<f64>,
+    /// Signed distance error, % of the truth, per [`DISTANCE_BANDS_M`] band.
+    band_err_pct: [Vec<f64>; 3],
     yaw_err_deg: Vec<f64>,
     false_locks: u64,
 }
@@ -41,6 +46,9 @@ impl Metrics {
         self.valid_after_lock += o.valid_after_lock;
         self.longest_gap = self.longest_gap.max(o.longest_gap);
         self.dist_err_pct.extend(&o.dist_err_pct);
+        for (a, b) in self.band_err_pct.iter_mut().zip(&o.band_err_pct) {
+            a.extend(b);
+        }
         self.yaw_err_deg.extend(&o.yaw_err_deg);
         self.false_locks += o.false_locks;
     }
@@ -110,6 +118,14 @@ impl Scorer {
         } else {
             self.gap += 1;
             self.m.longest_gap = self.m.longest_gap.max(self.gap);
+        }
+        if s.distance_valid {
+            let signed = 100.0 * (s.distance_m - truth.distance_m) / truth.distance_m;
+            for (band, errs) in DISTANCE_BANDS_M.iter().zip(self.m.band_err_pct.iter_mut()) {
+                if truth.distance_m > band.0 && truth.distance_m <= band.1 {
+                    errs.push(signed);
+                }
+            }
         }
         if s.distance_valid
             && (DISTANCE_SCORED_M.0..=DISTANCE_SCORED_M.1).contains(&truth.distance_m)
@@ -194,7 +210,14 @@ pub fn run(
         None => None,
     };
     let mut detector = Detector::new(config.detect.clone())?;
-    let mut renderer = Renderer::new(Camera::gopro_hero3());
+    // The flights are filmed through the configured camera (`--camera`), else the GoPro, and
+    // show the configured turbine (`--turbine`), else the renderer's own.
+    let camera = config
+        .camera
+        .calibrated()?
+        .unwrap_or_else(Camera::gopro_hero3);
+    let turbine = (!config.turbine.profile.is_empty()).then_some(&config.turbine);
+    let mut renderer = Renderer::new(camera);
     let cam = *renderer.camera();
     let mut pixels = vec![0u8; cam.frame_bytes()];
     let height = cam.height as f64;
@@ -212,7 +235,12 @@ pub fn run(
         "", "hubtrack tracker", "thesis filter (no gating, no attitude)"
     );
     for f in 0..flights {
-        let path = flight(seed.wrapping_add(f), frames);
+        let mut path = flight(seed.wrapping_add(f), frames);
+        if let Some(t) = turbine {
+            for fr in &mut path {
+                apply_turbine(&mut fr.scene, t);
+            }
+        }
         let mut ours = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
         let mut thesis =
             BaselineTracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -340,6 +368,18 @@ distance error median {:.1} % p90 {:.1} % (8-30 m), yaw error median {:.1} deg p
         rms(&t.filt_sq), 100.0 * t.valid_after_lock as f64 / t.after_lock.max(1) as f64, t.longest_gap,
         pct(&t.dist_err_pct, 0.5), pct(&t.dist_err_pct, 0.9), pct(&t.yaw_err_deg, 0.5), pct(&t.yaw_err_deg, 0.9), t.false_locks
     );
+    for (band, (eo, et)) in DISTANCE_BANDS_M
+        .iter()
+        .zip(o.band_err_pct.iter().zip(&t.band_err_pct))
+    {
+        let abs = |v: &[f64]| v.iter().map(|e| e.abs()).collect::<Vec<f64>>();
+        println!(
+            "distance {:>2}-{:>2} m: hubtrack |error| median {:.1} % p90 {:.1} %, signed median {:+.1} % ({} frames) | thesis filter median {:.1} % p90 {:.1} %",
+            band.1, band.0,
+            pct(&abs(eo), 0.5), pct(&abs(eo), 0.9), pct(eo, 0.5), eo.len(),
+            pct(&abs(et), 0.5), pct(&abs(et), 0.9)
+        );
+    }
     println!("RMS in % of image height over frames with a valid estimate after first lock; gap = frames without one.");
     if let Some(w) = cand_out.as_mut() {
         w.flush()
@@ -404,4 +444,14 @@ fn write_sequence_miss(
             .with_context(|| format!("writing {}", hints_path.display()))?;
     }
     Ok(())
+}
+
+/// Gives a rendered scene the dimensions of a turbine profile the renderer can draw: tower
+/// diameters, rotor and hub height (the renderer's nacelle, spinner and overhang are its own:
+/// profiles whose spinner or overhang differ from them are not drawn faithfully).
+fn apply_turbine(scene: &mut hubtrack_render::Scene, t: &hubtrack_types::setup::TurbineSetup) {
+    scene.tower_top_diameter_m = t.tower_top_diameter_m;
+    scene.tower_base_diameter_m = t.tower_base_diameter_m;
+    scene.blade_length_m = t.rotor_radius_m;
+    scene.hub_height_m = t.hub_height_m;
 }
