@@ -70,6 +70,8 @@ def main():
     ap.add_argument("--out", type=Path, default=Path("/tmp/hubtrack-kill-storm"))
     ap.add_argument("--seed", type=int, default=45)
     ap.add_argument("--bin", type=Path, default=ROOT / "target" / "release")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="more configuration overrides for `hubtrack run`")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     rng = random.Random(args.seed)
@@ -84,6 +86,8 @@ def main():
            "--set", "capture.synthetic.camera=usb", "--set", "capture.fps=10",
            "--set", "run.restart.max_restarts=1000", "--set", "run.restart.window_s=1",
            "--set", "run.restart.backoff_initial_ms=100"]
+    for kv in args.set:
+        cmd += ["--set", kv]
     log = open(args.out / "run.stderr", "wb")
     run = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=log)
     t_end = time.monotonic() + 30

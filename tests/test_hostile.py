@@ -102,3 +102,28 @@ def test_mutants_of_a_real_recording_never_crash_a_reader(recording, tmp_path):
                 crashes.append((k, tool, res.returncode, res.stderr[-500:]))
         path.unlink()
     assert crashes == []
+
+
+def test_replay_never_writes_over_its_input_or_an_existing_file(recording, tmp_path):
+    r, rec = recording
+    before = rec.read_bytes()
+    for out in (rec, rec.parent / "." / rec.name):
+        res = r.run("hubtrack", "replay", rec, "--into", "detect", "-o", out, "--force", timeout=60)
+        assert res.returncode == 1 and "is the recording being replayed" in res.stderr, res.stderr
+    link = tmp_path / "link.mcap"
+    os.link(rec, link)
+    res = r.run("hubtrack", "replay", rec, "--into", "detect", "-o", link, timeout=60)
+    assert res.returncode == 1 and "is the recording being replayed" in res.stderr, res.stderr
+    assert rec.read_bytes() == before
+    existing = tmp_path / "existing.mcap"
+    existing.write_bytes(b"keep me")
+    res = r.run("hubtrack", "replay", rec, "--into", "detect", "-o", existing, timeout=60)
+    assert res.returncode == 1 and "already exists" in res.stderr and "--force" in res.stderr, res.stderr
+    assert existing.read_bytes() == b"keep me"
+    res = r.run("hubtrack", "replay", rec, "--into", "detect", "-o", existing, "--force", timeout=300)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert not (tmp_path / "existing.mcap.partial").exists()
+    with open(existing, "rb") as f:
+        topics = {c.topic for _, c, _ in make_reader(f).iter_messages()}
+    assert "/detections" in topics, topics
+    assert rec.read_bytes() == before
