@@ -268,6 +268,8 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
         outcome,
         interactive,
     } = opts;
+    // Before anything is started: one supervisor per IPC domain, no stage of a killed one left.
+    let _lock = crate::instance::claim_domain()?;
     let shutdown = Shutdown::install()?;
     let node = open_node("supervisor")?;
     let heartbeats = MsgSubscriber::<StageStatus>::new(&node, &STATUS, 64)?;
