@@ -186,3 +186,58 @@ def test_one_run_per_domain_and_orphans_of_a_killed_supervisor_are_stopped(runne
     # One camera only: its seqs from 0, strictly increasing (two cameras interleave two series;
     # a frame dropped by a loaded recorder is counted there, not here).
     assert seqs and seqs[0] == 0 and all(b > a for a, b in zip(seqs, seqs[1:])), seqs[:50]
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 20 MiB file system (tmpfs): needs root to mount; skipped otherwise."""
+    import subprocess
+    d = tmp_path / "small"
+    d.mkdir()
+    res = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=20m", "tmpfs", str(d)], capture_output=True)
+    if res.returncode != 0:
+        pytest.skip(f"cannot mount a small tmpfs (needs root): {res.stderr.decode().strip()}")
+    yield d
+    subprocess.run(["umount", "-l", str(d)])
+
+
+def test_a_full_disk_is_named_counted_and_fails_the_run(runner, small_disk):
+    rec = small_disk / "full.mcap"
+    res = runner.run("hubtrack", "run", "--record", rec, "--duration", "4",
+                     "--set", 'run.stages=["capture","recorder"]', "--set", "recorder.min_free_mib=0",
+                     "--set", 'recorder.compression="none"', timeout=60)
+    assert res.returncode == 1, (res.returncode, res.stdout, res.stderr[-3000:])
+    assert "No space left on device" in res.stderr
+    assert "writing " + str(rec) + " failed" in res.stderr
+    last = res.stderr.strip().splitlines()[-1]
+    assert "recorder" in last and "No space left on device" in last, last
+    line = next(l for l in res.stdout.splitlines() if l.strip().startswith("recorder "))
+    assert "0 errors" not in line and "No space left on device" in line, line
+    # What reached the disk is readable by an independent reader, up to the cut.
+    from conftest import read_mcap_messages
+    frames = read_mcap_messages(rec, topics={"/frames/header"}, tolerate_truncation=True)
+    assert len(frames) >= 1
+
+
+def test_every_stage_given_up_on_is_named_and_retried_later(runner, tmp_path):
+    from conftest import BIN
+    stage_dir = tmp_path / "bin"
+    stage_dir.mkdir()
+    (stage_dir / "hubtrack-capture").symlink_to(BIN / "hubtrack-capture")
+    for name in ("detect", "track"):
+        fake = stage_dir / f"hubtrack-{name}"
+        fake.write_text("#!/bin/sh\ncase \"$*\" in *-config*) exit 0;; esac\n"
+                        f"echo '{name} cannot start' >&2\nexit 3\n")
+        fake.chmod(0o755)
+    runner.env["HUBTRACK_STAGE_DIR"] = str(stage_dir)
+    res = runner.run("hubtrack", "run", "--duration", "6", "--set", "capture.synthetic.camera=usb",
+                     "--set", 'run.stages=["capture","detect","track"]',
+                     "--set", "run.restart.max_restarts=2", "--set", "run.restart.backoff_initial_ms=50",
+                     "--set", "run.restart.retry_after_s=2", timeout=60)
+    assert res.returncode == 1
+    last = res.stderr.strip().splitlines()[-1]
+    assert "stage detect was given up on" in last and "stage track was given up on" in last, last
+    assert "trying again in 2 s" in res.stderr
+    # Retried after 2 s: started again (3 starts before the first give-up, more after).
+    for name in ("detect", "track"):
+        assert res.stderr.count(f"started {name} ") >= 4, res.stderr[-3000:]
