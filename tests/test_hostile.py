@@ -241,3 +241,28 @@ def test_every_stage_given_up_on_is_named_and_retried_later(runner, tmp_path):
     # Retried after 2 s: started again (3 starts before the first give-up, more after).
     for name in ("detect", "track"):
         assert res.stderr.count(f"started {name} ") >= 4, res.stderr[-3000:]
+
+
+def png_claiming(width, height):
+    """A valid PNG signature and header declaring `width` x `height` RGB, and one small IDAT."""
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr)
+            + chunk(b"IDAT", zlib.compress(bytes(200_000))) + chunk(b"IEND", b""))
+
+
+def test_an_image_bomb_is_refused_by_its_header(runner, tmp_path):
+    import resource
+    bomb = tmp_path / "bomb.png"
+    bomb.write_bytes(png_claiming(20000, 20000))
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    res = runner.run("hubtrack", "detect", bomb, timeout=60)
+    peak_kib = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    assert res.returncode == 1, (res.returncode, res.stderr[-2000:])
+    # One JSON line per input: the image's error names the cause.
+    assert "declares 20000x20000 pixels" in res.stdout and "refused before decoding" in res.stdout, res.stdout
+    assert str(bomb) in res.stdout
+    assert max(before, peak_kib) < 600 * 1024, f"peak RSS of a child {peak_kib / 1024:.0f} MiB"
