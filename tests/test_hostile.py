@@ -266,3 +266,21 @@ def test_an_image_bomb_is_refused_by_its_header(runner, tmp_path):
     assert "declares 20000x20000 pixels" in res.stdout and "refused before decoding" in res.stdout, res.stdout
     assert str(bomb) in res.stdout
     assert max(before, peak_kib) < 600 * 1024, f"peak RSS of a child {peak_kib / 1024:.0f} MiB"
+
+
+def test_fuzz_command_runs_every_target_from_the_corpus_without_a_crash(runner):
+    from conftest import ROOT
+    res = subprocess_in(ROOT, runner, "hubtrack", "fuzz", "--executions", "3000")
+    assert res.returncode == 0, res.stdout + res.stderr[-2000:]
+    rows = {l.split()[0]: l.split() for l in res.stdout.splitlines() if l.split() and l.split()[0] in ("mcap", "mavlink", "config")}
+    assert set(rows) == {"mcap", "mavlink", "config"}, res.stdout
+    for name, row in rows.items():
+        assert int(row[2]) == 3000 and int(row[4]) == 0, (name, row)
+    assert "0 crashes" in res.stdout and "peak memory" in res.stdout
+
+
+def subprocess_in(cwd, runner, name, *args):
+    import subprocess
+    from conftest import binary
+    return subprocess.run([str(binary(name)), *map(str, args)], cwd=cwd, env=runner.env,
+                          capture_output=True, text=True, timeout=300)
