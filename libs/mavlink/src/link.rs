@@ -600,6 +600,46 @@ mod tests {
     }
 
     #[test]
+    fn udpin_replies_only_to_the_autopilot() {
+        use crate::test_support::{autopilot_heartbeat, header};
+        let mut server = Link::open(&"udpin:127.0.0.1:0".parse().unwrap()).unwrap();
+        server.expect_autopilot(AutopilotId {
+            system_id: 1,
+            component_id: 1,
+        });
+        let to = server.local_addr().unwrap();
+        let autopilot = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let stranger = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let hb = |sys, seq| crate::encode_v2(header(sys, 1, seq), &autopilot_heartbeat(true, 4));
+        let drain = |server: &mut Link, n: usize| {
+            let t = Instant::now();
+            let mut got = 0;
+            while got < n && t.elapsed() < WAIT {
+                got += server.recv(Duration::from_millis(20)).unwrap().len();
+            }
+        };
+        // A stranger speaks first: no reply address yet.
+        stranger.send_to(&hb(99, 0), to).unwrap();
+        drain(&mut server, 1);
+        assert_eq!(server.peer(), None);
+        autopilot.send_to(&hb(1, 0), to).unwrap();
+        drain(&mut server, 1);
+        assert_eq!(server.peer(), Some(autopilot.local_addr().unwrap()));
+        // Garbage and another system afterwards do not move it.
+        stranger.send_to(b"\xfd garbage", to).unwrap();
+        stranger.send_to(&hb(99, 1), to).unwrap();
+        drain(&mut server, 1);
+        std::thread::sleep(Duration::from_millis(50));
+        let _ = server.recv(Duration::from_millis(50)).unwrap();
+        assert_eq!(server.peer(), Some(autopilot.local_addr().unwrap()));
+        assert!(
+            server.refused_datagrams() >= 2,
+            "{}",
+            server.refused_datagrams()
+        );
+    }
+
+    #[test]
     fn garbage_datagrams_are_counted() {
         let mut server = Link::open(&"udpin:127.0.0.1:0".parse().unwrap()).unwrap();
         let raw = UdpSocket::bind("127.0.0.1:0").unwrap();
