@@ -55,6 +55,8 @@ struct Supervised {
     given_up: u32,
     /// Times it exited with an error status of its own (not killed by a signal or for hanging).
     error_exits: u32,
+    /// Why it last exited with an error status of its own.
+    last_error_exit: String,
 }
 
 fn exit_code(st: ExitStatus) -> i32 {
@@ -149,6 +151,7 @@ impl Supervisor {
         s.last_reason = reason.clone();
         if code > 0 {
             s.error_exits += 1;
+            s.last_error_exit = reason.clone();
         }
         let wanted = match s.policy {
             RestartPolicy::Never => false,
@@ -313,6 +316,7 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
             segment: 0,
             given_up: 0,
             error_exits: 0,
+            last_error_exit: String::new(),
         });
     }
     let recording = names.contains(&"recorder");
@@ -523,7 +527,7 @@ fn run_failure(stages: &[Supervised]) -> Option<String> {
     {
         why.push(format!(
             "the recorder failed {} time(s) and the recording has holes (last: {})",
-            r.error_exits, r.last_reason
+            r.error_exits, r.last_error_exit
         ));
     }
     (!why.is_empty()).then(|| why.join("; "))
