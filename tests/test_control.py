@@ -325,3 +325,33 @@ def test_bad_link_string_names_the_key(runner):
     r = runner.run("hubtrack-control", "--set", "control.link=\"tcp:nowhere\"", timeout=30)
     assert r.returncode != 0
     assert "control.link" in r.stderr, r.stderr
+
+
+def test_a_second_system_cannot_redirect_or_receive_setpoints(runner, udp_autopilot):
+    """A stranger (system 99) on the udpin port sends garbage and autopilot heartbeats, also
+    while the real autopilot is silent: it never receives a setpoint, and the autopilot does."""
+    ap, link = udp_autopilot
+    _, control = start_pipeline(runner, link)
+    setpoints_arrive(ap, 0.0, n=5, timeout=30)
+    stranger = FakeAutopilot(UdpTransport(ap.t.addr[1]))
+    stranger.mav = mav2.MAVLink(None, srcSystem=99, srcComponent=1)
+    spoof_comp = mav2.MAVLink(None, srcSystem=1, srcComponent=42)
+    try:
+        rng = random.Random(45)
+        for _ in range(50):
+            stranger.t.write(bytes(rng.randrange(256) for _ in range(rng.randrange(1, 100))))
+            stranger.t.write(spoof_comp.heartbeat_encode(
+                mav2.MAV_TYPE_QUADROTOR, mav2.MAV_AUTOPILOT_ARDUPILOTMEGA, ARMED, GUIDED,
+                mav2.MAV_STATE_ACTIVE).pack(spoof_comp))
+            time.sleep(0.02)
+        setpoints_arrive(ap, time.monotonic(), n=5)
+        # The autopilot falls silent past control.link_timeout_ms; the stranger keeps talking.
+        ap.heartbeats = False
+        time.sleep(3.0)
+        ap.heartbeats = True
+        setpoints_arrive(ap, time.monotonic(), n=5, timeout=20)
+        assert stranger.messages("SET_POSITION_TARGET_LOCAL_NED") == [], "a stranger received setpoints"
+        assert control.alive(), control.stderr()[-2000:]
+        assert "system 99" not in control.stderr(), "the stranger was adopted as the autopilot"
+    finally:
+        stranger.close()

@@ -18,6 +18,7 @@
 #![warn(missing_docs)]
 
 pub mod messages;
+pub mod mutate;
 pub mod params;
 pub mod services;
 pub mod setup;

@@ -54,6 +54,19 @@ pub fn has_image_extension(p: &Path) -> bool {
 pub fn read_image(path: &Path) -> Result<opencv::core::Mat, CaptureError> {
     let unreadable = || CaptureError::ImageUnreadable { path: path.into() };
     let name = path.to_str().ok_or_else(unreadable)?;
+    if let Some((width, height)) =
+        crate::image_header::declared_size(path).map_err(|_| unreadable())?
+    {
+        let limit = crate::image_header::MAX_IMAGE_PIXELS;
+        if u64::from(width) * u64::from(height) > limit {
+            return Err(CaptureError::ImageTooLarge {
+                path: path.into(),
+                width,
+                height,
+                limit,
+            });
+        }
+    }
     let m = imgcodecs::imread(name, imgcodecs::IMREAD_COLOR).map_err(|_| unreadable())?;
     if m.empty() {
         return Err(unreadable());

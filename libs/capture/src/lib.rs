@@ -10,6 +10,7 @@
 
 pub mod config;
 pub mod convert;
+pub mod image_header;
 pub mod images;
 pub mod pacing;
 pub mod sink;
@@ -88,6 +89,19 @@ pub enum CaptureError {
         /// File path.
         path: PathBuf,
     },
+    /// An image declares more pixels than [`image_header::MAX_IMAGE_PIXELS`] (refused before
+    /// decoding: a small file can declare gigabytes of pixels).
+    #[error("image {path} declares {width}x{height} pixels, more than the {limit} allowed: refused before decoding")]
+    ImageTooLarge {
+        /// File path.
+        path: PathBuf,
+        /// Declared width, px.
+        width: u32,
+        /// Declared height, px.
+        height: u32,
+        /// The limit, pixels.
+        limit: u64,
+    },
     /// Every image of the set was unreadable.
     #[error("none of the {count} images at `{pattern}` could be read")]
     NoReadableImage {
@@ -120,7 +134,9 @@ impl CaptureError {
     pub fn is_per_frame(&self) -> bool {
         matches!(
             self,
-            CaptureError::ImageUnreadable { .. } | CaptureError::BadFrame { .. }
+            CaptureError::ImageUnreadable { .. }
+                | CaptureError::ImageTooLarge { .. }
+                | CaptureError::BadFrame { .. }
         )
     }
 }

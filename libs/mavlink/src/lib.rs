@@ -20,6 +20,7 @@ mod link;
 mod messages;
 mod monitor;
 mod parser;
+mod peer;
 
 /// The `mavlink` crate, with the common dialect also at `mavlink::common` (mavlink 0.21 puts it
 /// at `mavlink::dialects::common`), so users write `hubtrack_mavlink::mavlink::common::MavType`.
@@ -41,6 +42,7 @@ pub use monitor::{
     aged_state, follows_setpoints, VehicleEvent, VehicleMonitor, REBOOT_BACKSTEP_MS,
 };
 pub use parser::{encode_v2, FrameParser, LinkStats};
+pub use peer::{AutopilotId, PeerLock};
 
 #[cfg(test)]
 mod test_support;

@@ -10,6 +10,7 @@ use mavlink::dialects::common::MavMessage;
 use mavlink::MavHeader;
 
 use crate::parser::{encode_v2, FrameParser, LinkStats};
+use crate::peer::{AutopilotId, PeerLock};
 
 /// Receive buffer size: the largest UDP datagram.
 const READ_BUF_LEN: usize = 65_536;
@@ -179,6 +180,10 @@ pub struct Link {
     bytes_out: u64,
     frames_out: u64,
     unsent_frames: u64,
+    /// Whom to expect (see [`Link::expect_autopilot`]).
+    autopilot: Option<AutopilotId>,
+    /// udpin: the reply address, set and moved only by frames of the autopilot.
+    peer_lock: PeerLock<SocketAddr>,
 }
 
 impl fmt::Debug for Link {
@@ -238,6 +243,8 @@ impl Link {
             bytes_out: 0,
             frames_out: 0,
             unsent_frames: 0,
+            autopilot: None,
+            peer_lock: PeerLock::default(),
         })
     }
 
@@ -276,12 +283,17 @@ impl Link {
     }
 
     /// One read waiting at most `timeout`; returns the number of bytes (0: nothing arrived).
-    fn read_some(&mut self, timeout: Duration) -> Result<usize, LinkError> {
+    /// On `udpin`, `source` is set to the datagram's sender.
+    fn read_some(
+        &mut self,
+        timeout: Duration,
+        source: &mut Option<SocketAddr>,
+    ) -> Result<usize, LinkError> {
         let result = match &mut self.transport {
             Transport::Udp {
                 socket,
-                peer,
                 follow_peer,
+                ..
             } => {
                 // A zero read timeout means "block forever" to the OS, and a tiny one still
                 // waits for the next scheduler tick (1 µs measured 8 ms here), which stalled
@@ -299,7 +311,7 @@ impl Link {
                 };
                 received.map(|(n, from)| {
                     if *follow_peer {
-                        *peer = Some(from);
+                        *source = Some(from);
                     }
                     n
                 })
@@ -332,21 +344,52 @@ impl Link {
         let mut frames = Vec::new();
         loop {
             let remaining = deadline.saturating_duration_since(Instant::now());
-            let n = self.read_some(remaining)?;
+            let mut from = None;
+            let n = self.read_some(remaining, &mut from)?;
             if n > 0 {
-                frames.extend(self.parser.push(&self.read_buf[..n]));
+                self.take(n, from, &mut frames);
                 for _ in 0..MAX_DRAIN_READS {
-                    let n = self.read_some(Duration::ZERO)?;
+                    let n = self.read_some(Duration::ZERO, &mut from)?;
                     if n == 0 {
                         break;
                     }
-                    frames.extend(self.parser.push(&self.read_buf[..n]));
+                    self.take(n, from, &mut frames);
                 }
             }
             if !frames.is_empty() || remaining.is_zero() || Instant::now() >= deadline {
                 return Ok(frames);
             }
         }
+    }
+
+    /// Parses `n` received bytes; on `udpin`, lets the frames of the autopilot in them set the
+    /// reply address.
+    fn take(
+        &mut self,
+        n: usize,
+        from: Option<SocketAddr>,
+        frames: &mut Vec<(MavHeader, MavMessage)>,
+    ) {
+        let new = self.parser.push(&self.read_buf[..n]);
+        if let (Some(from), Transport::Udp { peer, .. }) = (from, &mut self.transport) {
+            self.peer_lock
+                .observe(from, new.iter().map(|(h, _)| h), self.autopilot);
+            *peer = self.peer_lock.peer;
+        }
+        frames.extend(new);
+    }
+
+    /// Takes heartbeats for replies only from `autopilot`: on `udpin`, the reply address is the
+    /// one its frames come from, never moved by other senders or garbage. Without it, the first
+    /// sender of any valid frame sets the address.
+    pub fn expect_autopilot(&mut self, autopilot: AutopilotId) {
+        self.autopilot = Some(autopilot);
+    }
+
+    /// Datagrams from other addresses that carried no frame of the autopilot (`udpin`): they did
+    /// not move the reply address.
+    pub fn refused_datagrams(&self) -> u64 {
+        self.peer_lock.refused
     }
 
     /// Counters of the parser plus what was sent.
@@ -553,6 +596,46 @@ mod tests {
         assert_eq!(
             client.recv(WAIT).unwrap(),
             vec![(me.header(1), companion_heartbeat())]
+        );
+    }
+
+    #[test]
+    fn udpin_replies_only_to_the_autopilot() {
+        use crate::test_support::{autopilot_heartbeat, header};
+        let mut server = Link::open(&"udpin:127.0.0.1:0".parse().unwrap()).unwrap();
+        server.expect_autopilot(AutopilotId {
+            system_id: 1,
+            component_id: 1,
+        });
+        let to = server.local_addr().unwrap();
+        let autopilot = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let stranger = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let hb = |sys, seq| crate::encode_v2(header(sys, 1, seq), &autopilot_heartbeat(true, 4));
+        let drain = |server: &mut Link, n: usize| {
+            let t = Instant::now();
+            let mut got = 0;
+            while got < n && t.elapsed() < WAIT {
+                got += server.recv(Duration::from_millis(20)).unwrap().len();
+            }
+        };
+        // A stranger speaks first: no reply address yet.
+        stranger.send_to(&hb(99, 0), to).unwrap();
+        drain(&mut server, 1);
+        assert_eq!(server.peer(), None);
+        autopilot.send_to(&hb(1, 0), to).unwrap();
+        drain(&mut server, 1);
+        assert_eq!(server.peer(), Some(autopilot.local_addr().unwrap()));
+        // Garbage and another system afterwards do not move it.
+        stranger.send_to(b"\xfd garbage", to).unwrap();
+        stranger.send_to(&hb(99, 1), to).unwrap();
+        drain(&mut server, 1);
+        std::thread::sleep(Duration::from_millis(50));
+        let _ = server.recv(Duration::from_millis(50)).unwrap();
+        assert_eq!(server.peer(), Some(autopilot.local_addr().unwrap()));
+        assert!(
+            server.refused_datagrams() >= 2,
+            "{}",
+            server.refused_datagrams()
         );
     }
 

@@ -213,6 +213,8 @@ pub struct VehicleMonitor {
     global_position: Option<(u64, GLOBAL_POSITION_INT_DATA)>,
     time_boot_ms: Option<u32>,
     ignored: u64,
+    /// Only this system/component is taken as the autopilot (see [`VehicleMonitor::expect_autopilot`]).
+    expected: Option<crate::AutopilotId>,
 }
 
 impl VehicleMonitor {
@@ -233,7 +235,15 @@ impl VehicleMonitor {
             global_position: None,
             time_boot_ms: None,
             ignored: 0,
+            expected: None,
         }
+    }
+
+    /// Takes only `id` as the autopilot: heartbeats and telemetry of any other system or
+    /// component are ignored (counted), also when the autopilot has fallen silent.
+    pub fn expect_autopilot(mut self, id: crate::AutopilotId) -> Self {
+        self.expected = Some(id);
+        self
     }
 
     /// Feeds one received message; `now_ns` is its receive time on the pipeline clock.
@@ -254,7 +264,9 @@ impl VehicleMonitor {
         if source.is_none() || source != self.target {
             match (source, msg) {
                 (Some(source), MavMessage::HEARTBEAT(hb))
-                    if is_autopilot(hb) && !self.link_ok(now_ns) =>
+                    if is_autopilot(hb)
+                        && !self.link_ok(now_ns)
+                        && self.expected.is_none_or(|id| id.sent(header)) =>
                 {
                     self.adopt(now_ns, source, hb, &mut events);
                 }
@@ -305,6 +317,7 @@ impl VehicleMonitor {
             custom_mode: hb.custom_mode,
             last_recv_ns: now_ns,
             ignored: self.ignored,
+            expected: self.expected,
             ..VehicleMonitor::new(self.link_timeout_ns, self.state_timeout_ns)
         };
         events.push(VehicleEvent::AutopilotFound {
@@ -889,5 +902,32 @@ mod tests {
             custom_mode: LOITER,
             ..published
         }));
+    }
+
+    #[test]
+    fn only_the_expected_autopilot_is_adopted_even_after_silence() {
+        use crate::test_support::{autopilot_heartbeat, header};
+        let mut m =
+            VehicleMonitor::new(LINK_TIMEOUT, STATE_TIMEOUT).expect_autopilot(crate::AutopilotId {
+                system_id: 1,
+                component_id: 1,
+            });
+        let hb = autopilot_heartbeat(false, 4);
+        assert!(m.handle(1, &header(99, 1, 0), &hb).is_empty());
+        assert!(m.handle(2, &header(1, 2, 0), &hb).is_empty());
+        let ev = m.handle(3, &header(1, 1, 0), &hb);
+        assert!(matches!(
+            ev[..],
+            [VehicleEvent::AutopilotFound { system_id: 1, .. }]
+        ));
+        // The autopilot falls silent: a stranger claiming to be one is still not adopted.
+        let later = 3 + LINK_TIMEOUT * 2;
+        let ev = m.handle(later, &header(99, 1, 0), &hb);
+        assert!(
+            !ev.iter()
+                .any(|e| matches!(e, VehicleEvent::AutopilotFound { .. })),
+            "{ev:?}"
+        );
+        assert_eq!(m.target, Some((1, 1)));
     }
 }

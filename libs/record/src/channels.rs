@@ -1,12 +1,11 @@
 //! The pipeline's messages of one recording, by frame `seq`: what the analysis tools
 //! ([`crate::latency`], [`crate::flight`]) read.
 
+use crate::reader::OpenError;
 use crate::writer::ChannelKind;
 use crate::RecordError;
 use hubtrack_types::{Detection, FrameHeader, Setpoint, Stamps, TrackState};
-use mcap::sans_io::LinearReaderOptions;
 use std::collections::BTreeMap;
-use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
 /// The stamped messages of a recording, keyed by frame `seq` (the last one wins).
@@ -36,12 +35,9 @@ pub enum ReadError {
     /// Opening or reading the file failed.
     #[error(transparent)]
     Record(#[from] RecordError),
-    /// The file is not MCAP.
-    #[error("{path} is not an MCAP file (bad magic)")]
-    NotMcap {
-        /// The file.
-        path: PathBuf,
-    },
+    /// The file could not be opened, or is not MCAP (empty, or bad magic).
+    #[error(transparent)]
+    Open(#[from] OpenError),
     /// The file holds no stamped hubtrack message.
     #[error("{path} holds no stamped hubtrack messages ({messages} messages read{detail})")]
     NoStamps {
@@ -60,26 +56,9 @@ fn stamped(s: &Stamps) -> bool {
 
 /// Reads `path` (complete, cut or damaged: whatever is readable).
 pub fn read(path: &Path) -> Result<Channels, ReadError> {
-    let io = |cause| RecordError::Io {
-        path: path.into(),
-        cause,
-    };
-    let mut file = std::fs::File::open(path).map_err(io)?;
-    let mut magic = [0u8; 8];
-    if file.read_exact(&mut magic).is_err() || &magic != crate::reader::MCAP_MAGIC {
-        return Err(ReadError::NotMcap { path: path.into() });
-    }
-    let file = std::fs::File::open(path).map_err(io)?;
+    let mut messages = crate::reader::messages(path)?;
     let mut c = Channels::default();
-    let options = LinearReaderOptions::default().with_skip_end_magic(true);
-    for m in mcap::io::MessageReader::new_with_options(BufReader::new(file), options) {
-        let m = match m {
-            Ok(m) => m,
-            Err(e) => {
-                c.read_error = Some(e.to_string());
-                break;
-            }
-        };
+    for m in messages.by_ref() {
         c.messages += 1;
         let topic = m.channel.topic.as_str();
         let mut unstamped = || *c.unstamped.entry(topic.to_string()).or_insert(0) += 1;
@@ -115,6 +94,7 @@ pub fn read(path: &Path) -> Result<Channels, ReadError> {
             None => *c.unknown_topics.entry(topic.to_string()).or_insert(0) += 1,
         }
     }
+    c.read_error = messages.stopped;
     if c.frames.is_empty()
         && c.detections.is_empty()
         && c.tracks.is_empty()

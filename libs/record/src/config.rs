@@ -15,13 +15,17 @@ pub enum Compression {
     Zstd,
 }
 
+/// The largest `recorder.chunk_size_kib`: a chunk plus the largest frame stays well within what
+/// every reader accepts ([`crate::reader::MAX_RECORD_BYTES`]).
+pub const MAX_CHUNK_SIZE_KIB: u64 = 64 << 10;
+
 params! {
     /// `[recorder]`.
     pub struct RecorderConfig {
         /// Chunk compression.
         pub compression: Compression = Compression::Lz4;
         /// Target chunk size, KiB. A chunk is also closed at every flush.
-        pub chunk_size_kib: u64 = 4096, closed(16, 1 << 20);
+        pub chunk_size_kib: u64 = 4096, closed(16, MAX_CHUNK_SIZE_KIB);
         /// Frames buffered between the shared-memory reader and the disk writer; when full,
         /// further frames are dropped and counted (the camera never waits for the disk).
         pub queue_frames: usize = 16, closed(1, 1024);

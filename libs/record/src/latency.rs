@@ -297,7 +297,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let empty = dir.path().join("empty.mcap");
         std::fs::write(&empty, b"").unwrap();
-        assert!(matches!(analyze(&empty), Err(LatencyError::NotMcap { .. })));
+        assert!(matches!(
+            analyze(&empty),
+            Err(LatencyError::Open(crate::reader::OpenError::NotMcap { .. }))
+        ));
         let only_status = dir.path().join("status.mcap");
         let mut rec = Recording::create(&only_status, &RecordingOptions::default()).unwrap();
         rec.write_json(

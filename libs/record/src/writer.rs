@@ -154,10 +154,18 @@ pub struct Recording {
     realtime_offset_ns: i128,
 }
 
-fn mcap_err(path: &Path, e: impl std::fmt::Display) -> RecordError {
+/// The error with its causes: the MCAP library's I/O error only says "I/O error from writing"
+/// and keeps the cause (e.g. "No space left on device") as its source.
+fn mcap_err(path: &Path, e: impl std::error::Error) -> RecordError {
+    let mut message = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        message += &format!(": {s}");
+        source = s.source();
+    }
     RecordError::Mcap {
         path: path.into(),
-        message: e.to_string(),
+        message,
     }
 }
 

@@ -25,6 +25,10 @@ params! {
         pub system_id: u8 = 1, closed(1, 255);
         /// Our MAVLink component id: 191 = MAV_COMP_ID_ONBOARD_COMPUTER.
         pub component_id: u8 = 191, closed(1, 255);
+        /// The autopilot's component id (1 = MAV_COMP_ID_AUTOPILOT1; 0: any component of
+        /// `system_id`). Heartbeats and telemetry from any other system or component are
+        /// ignored, and on "udpin" replies go only to the address the autopilot speaks from.
+        pub autopilot_component_id: u8 = 1, closed(0, 255);
         /// Frame of the velocity setpoints: "body_offset_ned" (MAV_FRAME_BODY_OFFSET_NED = 9,
         /// velocities along the vehicle's heading, what ArduCopter documents for body
         /// velocities) or "body_ned" (8).

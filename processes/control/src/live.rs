@@ -119,8 +119,14 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
     } = stage;
     let cfg = &config.control;
     let endpoint: Endpoint = cfg.link.parse().context("control.link")?;
-    let link = Link::open(&endpoint)
+    let mut link = Link::open(&endpoint)
         .with_context(|| format!("cannot open the autopilot link {endpoint}"))?;
+    // The autopilot shares the vehicle's system id; nobody else steers the link.
+    let autopilot_id = hubtrack_mavlink::AutopilotId {
+        system_id: cfg.system_id,
+        component_id: cfg.autopilot_component_id,
+    };
+    link.expect_autopilot(autopilot_id);
     match link.local_addr() {
         Some(local) => log::info!(
             "MAVLink link {endpoint} (local {local}) as system {} component {}",
@@ -154,7 +160,8 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
     let mut monitor = VehicleMonitor::new(
         ms_to_ns(cfg.link_timeout_ms),
         ms_to_ns(cfg.vehicle_timeout_ms),
-    );
+    )
+    .expect_autopilot(autopilot_id);
     let started_ns = monotonic_ns();
     // Heartbeat, resending and staleness run on the wall clock, whatever `control.clock` says.
     let mut gate = CommandGate::new(GateTiming::from_rates(

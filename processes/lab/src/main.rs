@@ -9,6 +9,7 @@ mod detect_cmd;
 mod eval;
 mod eval_seq;
 mod fly;
+mod fuzz;
 mod score;
 mod track_cmd;
 mod train_ranker;
@@ -50,6 +51,9 @@ enum Command {
     TrainRanker(train_ranker::TrainRankerArgs),
     /// Render one synthetic frame exactly as the capture stage would publish it.
     Render(RenderArgs),
+    /// Mutate valid inputs millions of times through every parser of outside data (recordings,
+    /// MAVLink, config): executions, crashes, slowest input and peak memory per target.
+    Fuzz(fuzz::FuzzArgs),
     /// Compare a simulated flight's detections and track with its truth, per band of distance.
     Diagnose {
         /// A recording with truth (`hubtrack fly --record FILE`, or its replay).
@@ -97,6 +101,7 @@ fn main() {
         Command::TrainRanker(a) => train_ranker::run(a),
         Command::Render(a) => render(a),
         Command::Diagnose { file, json } => diagnose(&file, json),
+        Command::Fuzz(a) => fuzz::run(a),
     };
     hubtrack_runtime::exit_with(result);
 }

@@ -22,6 +22,7 @@ use hubtrack_types::{
 };
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
+use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
 
 /// Sleep of the reader between checks for frames, shutdown and the other services.
@@ -125,22 +126,38 @@ fn run() -> anyhow::Result<()> {
     }
     let (queue_tx, queue_rx) = mpsc::sync_channel::<Item>(cfg.queue_frames + RESULT_BUFFER * 5);
     let (stats_tx, stats_rx) = mpsc::channel::<RecorderStats>();
+    // Set once by the writer when the file can no longer be written (e.g. the disk is full).
+    let writer_failed = Arc::new(OnceLock::<String>::new());
+    let failed = writer_failed.clone();
     let writer = std::thread::Builder::new()
         .name("mcap-writer".into())
         .spawn(move || {
-            write_loop(
+            let r = write_loop(
                 recording,
                 queue_rx,
                 free_tx,
                 stats_tx,
                 cfg.flush_interval_ms,
                 cfg.min_free_mib,
-            )
+            );
+            if let Err(e) = &r {
+                let _ = failed.set(format!("{e:#}"));
+            }
+            r
         })?;
 
     let mut stats = RecorderStats::default();
     let mut stats_at = Instant::now();
     while !shutdown.requested() {
+        if let Some(why) = writer_failed.get() {
+            // Nothing more can be recorded: say why, count it, and end (the supervisor restarts
+            // the recorder into a new segment, which works again once space is freed).
+            // The status text is short: the innermost cause (e.g. "No space left on device").
+            let cause = why.rsplit(": ").next().unwrap_or(why);
+            status.error(&format!("write failed: {cause}"));
+            status.publish_now();
+            break;
+        }
         frames.wait(READER_WAIT);
         while let Some(sample) = frames.receive()? {
             stats.frames_received += 1;
@@ -271,7 +288,15 @@ fn run() -> anyhow::Result<()> {
     drop(queue_tx);
     let final_stats = writer
         .join()
-        .map_err(|_| anyhow::anyhow!("writer thread panicked"))??;
+        .map_err(|_| anyhow::anyhow!("writer thread panicked"))?
+        .with_context(|| {
+            format!(
+                "recording to {} failed after {} frames received ({} dropped)",
+                output.display(),
+                stats.frames_received,
+                stats.frames_dropped_queue
+            )
+        })?;
     stats.frames_recorded = final_stats.frames_recorded;
     stats.frames_dropped_disk = final_stats.frames_dropped_disk;
     stats.messages_recorded = final_stats.messages_recorded;
@@ -398,6 +423,10 @@ fn merged(reader: &RecorderStats, writer: &RecorderStats) -> RecorderStats {
     }
 }
 
+/// Writes until the queue closes, then finishes the file. When a write fails (a full disk, an I/O
+/// error), the error is logged with its cause, the file is finished if the file system still
+/// allows it (otherwise `hubtrack recover` reads it up to its last intact chunk), and the error
+/// is returned: the reader then stops and the recorder exits with it.
 fn write_loop(
     mut rec: Recording,
     queue: Receiver<Item>,
@@ -406,9 +435,50 @@ fn write_loop(
     flush_interval_ms: u64,
     min_free_mib: u64,
 ) -> anyhow::Result<RecorderStats> {
+    let mut stats = RecorderStats::default();
+    let result = write_items(
+        &mut rec,
+        &queue,
+        &free,
+        &stats_out,
+        &mut stats,
+        flush_interval_ms,
+        min_free_mib,
+    );
+    match result {
+        Ok(()) => {
+            rec.finish().context("finishing the file")?;
+            Ok(stats)
+        }
+        Err(e) => {
+            let path = rec.path().display().to_string();
+            log::error!(
+                "writing {path} failed: {e:#}; {} frames recorded until then",
+                stats.frames_recorded
+            );
+            let _ = stats_out.send(stats);
+            match rec.finish() {
+                Ok(()) => log::warn!("{path} finished despite the error"),
+                Err(f) => log::error!(
+                    "{path} could not be finished ({f}): `hubtrack recover {path}` copies what it holds"
+                ),
+            }
+            Err(e)
+        }
+    }
+}
+
+fn write_items(
+    rec: &mut Recording,
+    queue: &Receiver<Item>,
+    free: &SyncSender<Vec<u8>>,
+    stats_out: &mpsc::Sender<RecorderStats>,
+    stats: &mut RecorderStats,
+    flush_interval_ms: u64,
+    min_free_mib: u64,
+) -> anyhow::Result<()> {
     let flush_interval = Duration::from_millis(flush_interval_ms);
     let mut disk = DiskGuard::new(rec.path(), min_free_mib);
-    let mut stats = RecorderStats::default();
     let mut flushed_at = Instant::now();
     let mut reported = RecorderStats::default();
     let mut last_frame = FrameHeader::default();
@@ -466,7 +536,7 @@ fn write_loop(
                             last_frame.seq,
                             log_time,
                             publish_time,
-                            &merged(&reader_stats, &stats),
+                            &merged(&reader_stats, stats),
                         )
                     }
                 };
@@ -490,9 +560,9 @@ fn write_loop(
             rec.flush().context("flushing")?;
             flushed_at = Instant::now();
             disk.check();
-            if stats != reported {
-                let _ = stats_out.send(stats);
-                reported = stats;
+            if *stats != reported {
+                let _ = stats_out.send(*stats);
+                reported = *stats;
             }
         }
     }
@@ -502,8 +572,7 @@ fn write_loop(
         last_frame.seq,
         now,
         now,
-        &merged(&reader_stats, &stats),
+        &merged(&reader_stats, stats),
     )?;
-    rec.finish().context("finishing the file")?;
-    Ok(stats)
+    Ok(())
 }

@@ -5,6 +5,7 @@
 #![warn(missing_docs)]
 
 pub mod config_check;
+pub mod instance;
 pub mod launch;
 pub mod replay;
 pub mod summary;

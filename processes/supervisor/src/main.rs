@@ -20,6 +20,7 @@ const LAB_COMMANDS: &[&str] = &[
     "train-ranker",
     "render",
     "diagnose",
+    "fuzz",
 ];
 
 #[derive(Parser)]

@@ -43,10 +43,16 @@ pub fn print_summary(
     }
     if let Some(r) = statuses.get("recorder") {
         println!(
-            "  recorder  {} frames received, {} recorded, {} dropped (disk behind or lost in shared memory){}",
+            "  recorder  {} frames received, {} recorded, {} dropped (disk behind or lost in shared memory), {} errors{}{}",
             r.inputs,
             r.outputs,
             r.dropped,
+            r.errors,
+            if r.errors > 0 {
+                format!(" (last: {})", r.last_error.as_str())
+            } else {
+                String::new()
+            },
             if segments.len() > 1 { " (last segment)" } else { "" }
         );
     }

@@ -51,6 +51,12 @@ struct Supervised {
     last_reason: String,
     /// Recorder only: segment number of the current file.
     segment: u32,
+    /// Times this stage was given up on (it is retried after `retry_after_s`).
+    given_up: u32,
+    /// Times it exited with an error status of its own (not killed by a signal or for hanging).
+    error_exits: u32,
+    /// Why it last exited with an error status of its own.
+    last_error_exit: String,
 }
 
 fn exit_code(st: ExitStatus) -> i32 {
@@ -143,6 +149,10 @@ impl Supervisor {
         s.process = None;
         s.last_exit = code;
         s.last_reason = reason.clone();
+        if code > 0 {
+            s.error_exits += 1;
+            s.last_error_exit = reason.clone();
+        }
         let wanted = match s.policy {
             RestartPolicy::Never => false,
             RestartPolicy::OnFailure => failure,
@@ -168,11 +178,19 @@ impl Supervisor {
         }
         if s.restart_times.len() as u32 >= restart.max_restarts {
             s.state = StageState::Failed;
+            s.given_up += 1;
+            let retry = (restart.retry_after_s > 0.0).then(|| {
+                // A fresh crash-loop budget for the retry.
+                s.restart_times.clear();
+                Duration::from_secs_f64(restart.retry_after_s)
+            });
+            s.next_start = retry.map(|d| now + d);
             log::error!(
-                "{} ended ({reason}) {} times within {:.0} s: giving up on it; the other stages keep running",
+                "{} ended ({reason}) {} times within {:.0} s: giving up on it{}; the other stages keep running",
                 s.name,
-                s.restart_times.len() + 1,
-                restart.window_s
+                restart.max_restarts + 1,
+                restart.window_s,
+                retry.map_or(String::new(), |d| format!(" (trying again in {:.0} s)", d.as_secs_f64()))
             );
             return;
         }
@@ -268,6 +286,8 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
         outcome,
         interactive,
     } = opts;
+    // Before anything is started: one supervisor per IPC domain, no stage of a killed one left.
+    let _lock = crate::instance::claim_domain()?;
     let shutdown = Shutdown::install()?;
     let node = open_node("supervisor")?;
     let heartbeats = MsgSubscriber::<StageStatus>::new(&node, &STATUS, 64)?;
@@ -294,6 +314,9 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
             last_exit: 0,
             last_reason: String::new(),
             segment: 0,
+            given_up: 0,
+            error_exits: 0,
+            last_error_exit: String::new(),
         });
     }
     let recording = names.contains(&"recorder");
@@ -475,13 +498,39 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
             }
         }
     }
-    let failure = failure.or_else(|| {
-        sup.stages
-            .iter()
-            .find(|s| s.state == StageState::Failed)
-            .map(|s| format!("stage {} was given up on ({})", s.name, s.last_reason))
-    });
+    let failure = failure.or_else(|| run_failure(&sup.stages));
     Ok(RunReport { elapsed, failure })
+}
+
+/// Why a run that reached its end still failed: every stage given up on (with its last reason)
+/// and a recorder that could not write (a recording with a hole is not a good run).
+fn run_failure(stages: &[Supervised]) -> Option<String> {
+    let mut why: Vec<String> = stages
+        .iter()
+        .filter(|s| s.given_up > 0)
+        .map(|s| {
+            format!(
+                "stage {} was given up on{} ({})",
+                s.name,
+                match (s.given_up, s.state == StageState::Failed) {
+                    (1, true) => String::new(),
+                    (n, true) => format!(" {n} times"),
+                    (n, false) => format!(" {n} times (running again at the end)"),
+                },
+                s.last_reason
+            )
+        })
+        .collect();
+    if let Some(r) = stages
+        .iter()
+        .find(|s| s.name == "recorder" && s.error_exits > 0 && s.given_up == 0)
+    {
+        why.push(format!(
+            "the recorder failed {} time(s) and the recording has holes (last: {})",
+            r.error_exits, r.last_error_exit
+        ));
+    }
+    (!why.is_empty()).then(|| why.join("; "))
 }
 
 fn drain(

@@ -40,22 +40,37 @@ pub struct EchoArgs {
     pub duration: Option<f64>,
 }
 
-/// `hubtrack recover`: copies every readable message of a damaged recording into a new file.
+/// `hubtrack recover`: copies every intact message of a damaged recording into a new file.
+/// Fails (exit status 1) when the input is not MCAP or nothing could be recovered; says whether
+/// the input was complete, cut short or damaged (and where reading stopped).
 pub fn recover(input: &Path, output: Option<PathBuf>) -> anyhow::Result<()> {
     let output = output.unwrap_or_else(|| input.with_extension("recovered.mcap"));
     if output.exists() {
-        bail!("output {} already exists", output.display());
+        bail!(
+            "output {} already exists (recover never replaces a file)",
+            output.display()
+        );
     }
     let report = hubtrack_record::recover(input, &output)?;
+    if report.messages == 0 {
+        let _ = std::fs::remove_file(&output);
+        bail!(
+            "no message could be recovered from {}{}",
+            input.display(),
+            report
+                .stopped_by
+                .map_or(String::new(), |why| format!(" (reading stopped: {why})"))
+        );
+    }
     println!(
         "recovered {} messages from {} into {}{}",
         report.messages,
         input.display(),
         output.display(),
-        if report.input_complete {
-            " (the input was complete)"
-        } else {
-            " (the input was cut short)"
+        match (&report.stopped_by, report.input_complete) {
+            (_, true) => " (the input was complete)",
+            (Some(_), _) => " (the input is damaged or cut short: the rest is lost)",
+            (None, false) => " (the input was cut short)",
         }
     );
     if let Some(why) = report.stopped_by {

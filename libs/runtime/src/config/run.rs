@@ -72,6 +72,10 @@ params! {
         pub max_restarts: u32 = 5, closed(0, 1000);
         /// The crash-loop window, seconds.
         pub window_s: f64 = 60.0, closed(1.0, 86_400.0);
+        /// A stage given up on is tried again this long after, seconds (0: never): a cause
+        /// that goes away (a disk freed, a device plugged back) does not keep it down for the
+        /// rest of the run.
+        pub retry_after_s: f64 = 60.0, zero_or_closed(1.0, 86_400.0);
         /// A running stage that sends no heartbeat for this long is hung: it is killed and
         /// restarted, ms (at least 4 × `run.status_interval_ms`).
         pub liveness_timeout_ms: u64 = 1500, closed(0, 600_000);

@@ -1,9 +1,7 @@
 //! `hubtrack replay --compare`: the replayed outputs against the recorded ones, per channel.
 
-use mcap::sans_io::LinearReaderOptions;
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
-use std::io::BufReader;
 use std::path::Path;
 
 /// Differing fields named in a table row, at most (the rest are counted).
@@ -74,11 +72,8 @@ fn diff(path: &str, a: &Value, b: &Value, out: &mut Diff) {
 /// The messages of `topic` by seq, run-specific fields removed; the first per seq (live control
 /// publishes a second, silent setpoint under the last track's seq when its input goes stale).
 fn outputs(path: &Path, topic: &str) -> anyhow::Result<BTreeMap<u64, Value>> {
-    let file = std::fs::File::open(path)?;
     let mut out = BTreeMap::new();
-    let options = LinearReaderOptions::default().with_skip_end_magic(true);
-    for m in mcap::io::MessageReader::new_with_options(BufReader::new(file), options) {
-        let Ok(m) = m else { break };
+    for m in hubtrack_record::reader::messages(path)? {
         if m.channel.topic == topic {
             if let Ok(v) = serde_json::from_slice::<Value>(&m.data) {
                 let seq = v["stamps"]["seq"].as_u64().unwrap_or(u64::from(m.sequence));

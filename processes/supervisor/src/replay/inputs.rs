@@ -8,14 +8,11 @@
 //! stage received it (the `recv_ns` of its recorded output), a vehicle state by when it was
 //! published, and the two streams are merged by key within a bounded look-ahead.
 
-use anyhow::bail;
 use hubtrack_record::raw_image::RawImage;
 use hubtrack_record::writer::{ChannelKind, FRAMES_TOPIC};
 use hubtrack_types::{Detection, FrameHeader, Stamps, TrackState, VehicleState};
-use mcap::sans_io::LinearReaderOptions;
 use prost::Message as _;
 use std::collections::{BTreeMap, VecDeque};
-use std::io::BufReader;
 use std::path::Path;
 
 /// How much later than another message one published before it can stand in the file: the
@@ -133,41 +130,11 @@ struct StampsOnly {
     stamps: Stamps,
 }
 
-fn check_magic(path: &Path) -> anyhow::Result<()> {
-    use std::io::Read;
-    let mut magic = [0u8; 8];
-    let mut f = std::fs::File::open(path)
-        .map_err(|e| anyhow::anyhow!("opening {}: {e}", path.display()))?;
-    if f.read_exact(&mut magic).is_err() || &magic != hubtrack_record::reader::MCAP_MAGIC {
-        bail!(
-            "{} is not an MCAP file (empty, or bad magic)",
-            path.display()
-        );
-    }
-    Ok(())
-}
-
-fn messages(path: &Path) -> anyhow::Result<mcap::io::MessageReader<BufReader<std::fs::File>>> {
-    let file = std::fs::File::open(path)?;
-    let options = LinearReaderOptions::default().with_skip_end_magic(true);
-    Ok(mcap::io::MessageReader::new_with_options(
-        BufReader::new(file),
-        options,
-    ))
-}
-
 /// Reads `path` once (as far as it is intact) for what replay into `first` needs to know.
 pub fn survey(path: &Path, first: FirstStage) -> anyhow::Result<Survey> {
-    check_magic(path)?;
+    let mut messages = hubtrack_record::reader::messages(path)?;
     let mut s = Survey::default();
-    for m in messages(path)? {
-        let m = match m {
-            Ok(m) => m,
-            Err(e) => {
-                s.stopped = Some(e.to_string());
-                break;
-            }
-        };
+    for m in messages.by_ref() {
         let topic = m.channel.topic.as_str();
         *s.topics.entry(topic.to_string()).or_insert(0) += 1;
         let kind = ChannelKind::from_topic(topic);
@@ -187,12 +154,13 @@ pub fn survey(path: &Path, first: FirstStage) -> anyhow::Result<Survey> {
             s.vehicles += 1;
         }
     }
+    s.stopped = messages.stopped;
     Ok(s)
 }
 
 /// The inputs of the first replayed stage and the vehicle states, streamed in file order.
 pub struct Reader {
-    reader: mcap::io::MessageReader<BufReader<std::fs::File>>,
+    reader: hubtrack_record::reader::Messages,
     first: FirstStage,
     pending_image: Option<(u32, Vec<u8>)>,
     /// Why the file ended early, if it did.
@@ -204,9 +172,8 @@ pub struct Reader {
 impl Reader {
     /// Opens `path` for replay into `first`.
     pub fn open(path: &Path, first: FirstStage) -> anyhow::Result<Reader> {
-        check_magic(path)?;
         Ok(Reader {
-            reader: messages(path)?,
+            reader: hubtrack_record::reader::messages(path)?,
             first,
             pending_image: None,
             stopped: None,
@@ -227,12 +194,9 @@ impl Iterator for Reader {
     type Item = Input;
     fn next(&mut self) -> Option<Input> {
         loop {
-            let m = match self.reader.next()? {
-                Ok(m) => m,
-                Err(e) => {
-                    self.stopped = Some(e.to_string());
-                    return None;
-                }
+            let Some(m) = self.reader.next() else {
+                self.stopped = self.reader.stopped.clone();
+                return None;
             };
             let topic = m.channel.topic.as_str();
             let frames = self.first == FirstStage::Detect;

@@ -14,6 +14,7 @@
 
 mod compare;
 mod inputs;
+mod output;
 
 use crate::launch::{stage_binary, Stage};
 use anyhow::bail;
@@ -56,9 +57,13 @@ pub struct ReplayArgs {
     /// Publish at the recorded pace instead of lossless lock-step.
     #[arg(long)]
     pub paced: bool,
-    /// Output recording (default: <file stem>.replay.mcap next to the input).
+    /// Output recording (default: <file stem>.replay.mcap next to the input). Never the input;
+    /// an existing file is refused unless --force.
     #[arg(long, short = 'o')]
     pub output: Option<PathBuf>,
+    /// Replace the output file if it exists (once the replay is finished).
+    #[arg(long)]
+    pub force: bool,
     /// Compare the new outputs with the recorded ones.
     #[arg(long)]
     pub compare: bool,
@@ -259,6 +264,7 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
             .map_or("recording".into(), |s| s.to_string_lossy().into_owned());
         args.file.with_file_name(format!("{stem}.replay.mcap"))
     });
+    output::check(&args.file, &output, args.force)?;
     // One pass first: what the live first stage took and when, and whether there is anything to feed.
     let survey = inputs::survey(&args.file, first)?;
     if survey.drivers == 0 {
@@ -280,7 +286,12 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     std::env::set_var(DOMAIN_ENV, format!("replay-{}", std::process::id()));
     let node = open_node("replay")?;
     let heartbeats = MsgSubscriber::<StageStatus>::new(&node, &STATUS, 64)?;
-    let mut processes = start_stages(&heartbeats, &stages, &args.config.to_args(), &output)?;
+    let mut processes = start_stages(
+        &heartbeats,
+        &stages,
+        &args.config.to_args(),
+        &output::partial(&output),
+    )?;
 
     let outputs = match last {
         "detect" => LastOutputs::Detections(MsgSubscriber::new(&node, &DETECTIONS, 64)?),
@@ -377,12 +388,14 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
         );
     }
     if sent == 0 {
+        let _ = std::fs::remove_file(output::partial(&output));
         bail!(
             "{} holds no readable {} to replay",
             args.file.display(),
             first.drivers()
         );
     }
+    output::publish(&args.file, &output, args.force)?;
     println!("new outputs recorded to {}", output.display());
     if args.compare {
         compare::compare(&args.file, &output, &stages)?;
