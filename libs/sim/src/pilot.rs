@@ -138,10 +138,18 @@ impl Pilot {
                     ));
                 }
                 self.autopilot = Some(source);
-                self.mode = hb.custom_mode;
-                self.armed = hb
+                let armed = hb
                     .base_mode
                     .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+                if (hb.custom_mode, armed) != (self.mode, self.armed) {
+                    self.log.push(format!(
+                        "autopilot in mode {}, {}",
+                        hb.custom_mode,
+                        if armed { "armed" } else { "disarmed" }
+                    ));
+                }
+                self.mode = hb.custom_mode;
+                self.armed = armed;
             }
             MavMessage::COMMAND_ACK(ack) if Some(source) == self.autopilot => {
                 if ack.command == MavCmd::MAV_CMD_NAV_TAKEOFF
@@ -182,7 +190,9 @@ impl Pilot {
         let next = match self.phase {
             PilotPhase::WaitAutopilot => Some(PilotPhase::Guided),
             PilotPhase::Guided if guided => Some(PilotPhase::Arm),
-            PilotPhase::Arm if self.armed && guided => Some(PilotPhase::Takeoff),
+            // Before the take-off, GUIDED lost (or never kept) means asking for it again.
+            PilotPhase::Arm | PilotPhase::Takeoff if !guided => Some(PilotPhase::Guided),
+            PilotPhase::Arm if self.armed => Some(PilotPhase::Takeoff),
             PilotPhase::Takeoff if self.takeoff_accepted => Some(PilotPhase::Climb),
             PilotPhase::Climb if -view.position_ned[2] >= -self.target_ned[2] - 1.0 => {
                 Some(PilotPhase::Position)
