@@ -10,6 +10,7 @@ mod eval;
 mod eval_seq;
 mod fly;
 mod score;
+mod sitl;
 mod track_cmd;
 mod train_ranker;
 
