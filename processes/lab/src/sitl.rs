@@ -56,20 +56,35 @@ pub fn in_private_network() -> bool {
 }
 
 /// Re-runs this command inside a new network namespace with only loopback up, waits for it and
-/// returns its exit code.
+/// returns its exit code. SIGINT/SIGTERM to this process are passed on (as SIGTERM), so the
+/// flights inside stop cleanly and take their SITL with them.
 pub fn rerun_in_private_network() -> anyhow::Result<i32> {
+    let shutdown = hubtrack_runtime::shutdown::Shutdown::install()?;
     let exe = std::env::current_exe().context("finding the hubtrack executable")?;
-    let status = Command::new("unshare")
+    // `unshare` execs the command after entering the namespace: the child is `hubtrack fly`.
+    let mut child = Command::new("unshare")
         .arg("-n")
         .arg("--")
         .arg(&exe)
         .args(std::env::args_os().skip(1))
         .env(NETNS_ENV, "1")
-        .status()
+        .spawn()
         .context("running `unshare -n` (util-linux) for a private network")?;
-    match status.code() {
-        Some(code) => Ok(code),
-        None => bail!("hubtrack fly in its private network ended by a signal"),
+    let mut forwarded = false;
+    loop {
+        if let Some(status) = child.try_wait()? {
+            return match status.code() {
+                Some(code) => Ok(code),
+                None => bail!("hubtrack fly in its private network ended by a signal ({status})"),
+            };
+        }
+        if shutdown.requested() && !forwarded {
+            forwarded = true;
+            let _ = Command::new("kill")
+                .args(["-TERM", &child.id().to_string()])
+                .status();
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
     }
 }
 
