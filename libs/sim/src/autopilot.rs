@@ -290,15 +290,14 @@ impl Autopilot {
     /// LOCAL_POSITION_NED is applied; every command is answered with COMMAND_ACK.
     fn command_long(&mut self, c: &mavlink::dialects::common::COMMAND_LONG_DATA) {
         let (sys, comp) = self.identity();
-        if !matches!(c.target_system, 0) && c.target_system != sys
-            || !matches!(c.target_component, 0) && c.target_component != comp
-        {
+        let for_us = |target: u8, own: u8| target == 0 || target == own;
+        if !(for_us(c.target_system, sys) && for_us(c.target_component, comp)) {
             return;
         }
         let result = if c.command == MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL {
             let rate = |configured: f64| match c.param2 {
                 i if i < 0.0 => Some(0.0),
-                i if i == 0.0 => Some(configured),
+                0.0 => Some(configured),
                 i if i.is_finite() => Some(1e6 / f64::from(i)),
                 _ => None,
             };

@@ -233,9 +233,9 @@ impl Rotorcraft {
             accel = [0.0; 3];
         } else {
             self.on_ground = false;
-            for i in 0..3 {
-                self.vel[i] += accel[i] * dt;
-                self.pos[i] += self.vel[i] * dt;
+            for ((v, p), a) in self.vel.iter_mut().zip(&mut self.pos).zip(accel) {
+                *v += a * dt;
+                *p += *v * dt;
             }
             if self.pos[2] > 0.0 {
                 // Touched down.
@@ -245,8 +245,8 @@ impl Rotorcraft {
             let [p, q, rr] = self.rates;
             let half = 0.5 * dt;
             let dq = quat_mul(self.q, [0.0, p * half, q * half, rr * half]);
-            for i in 0..4 {
-                self.q[i] += dq[i];
+            for (qi, d) in self.q.iter_mut().zip(dq) {
+                *qi += d;
             }
             let n = self.q.iter().map(|v| v * v).sum::<f64>().sqrt();
             self.q = self.q.map(|v| v / n);
