@@ -300,8 +300,21 @@ def test_autopilot_restart_no_commands_until_guided_and_armed_again(flight):
     assert not any(s["sent"] for s in after), "control commanded a disarmed, restarted autopilot"
     err = flight.control.stderr()
     assert "link lost" in err or "rebooted" in err, err[-2000:]
-    # The pilot arms it in GUIDED again: from then on control commands it (on the ground its
-    # velocity setpoints are taken as a climb).
+    # The pilot arms it in GUIDED again: from then on control commands it. (Landed, the firmware
+    # disarms again after DISARM_DELAY unless a climb comes, so watch from before arming.)
+    echo = flight.runner.start("hubtrack", "echo", "setpoints", "--duration", "60", label="echo-rearm")
     gcs.take_off(climb=False)
-    gcs.wait(lambda: any(s["sent"] for s in flight.setpoints(2.0)), 30,
-             "control commanding after GUIDED and armed again")
+    armed_at = time.monotonic()
+
+    def sent_lines():
+        lines = []
+        for line in echo.stdout().splitlines():
+            try:
+                lines.append(json.loads(line))
+            except ValueError:
+                pass  # the line being written
+        return [s for s in lines if s.get("sent")]
+
+    gcs.wait(lambda: sent_lines(), 20, "control commanding after GUIDED and armed again")
+    assert time.monotonic() - armed_at < 5.0
+    echo.stop()
