@@ -16,6 +16,7 @@ import json
 import math
 import os
 import signal
+import socket
 import subprocess
 import time
 from pathlib import Path
@@ -97,10 +98,20 @@ class GroundStation:
     def __init__(self):
         from pymavlink import mavutil
         self.mavutil = mavutil
+        # SITL opens its TCP ports a moment after it starts (longer on a loaded machine).
+        wait_until(self.port_open, timeout=60, interval=0.2, what="SITL's SERIAL1 (TCP 5762)")
         self.m = mavutil.mavlink_connection("tcp:127.0.0.1:5762", source_system=255, source_component=190,
                                             autoreconnect=True)
         self.last = {}
         self.texts = []
+
+    @staticmethod
+    def port_open():
+        try:
+            socket.create_connection(("127.0.0.1", 5762), timeout=1).close()
+            return True
+        except OSError:
+            return False
 
     def pump(self, seconds=0.05):
         end = time.monotonic() + seconds
@@ -189,8 +200,12 @@ class Flight:
         self.start_control()
 
     def start_sitl(self, wipe):
+        # No telemetry streams configured on control's port (SRn_* 0, as on a flight controller
+        # nobody set up): control has to ask for what it reads.
+        no_streams = self.workdir / "no-streams.parm"
+        no_streams.write_text("SR0_EXTRA1 0\nSR0_POSITION 0\n")
         args = [str(SITL), "--model", "+", "--speedup", str(SPEEDUP), "-I0", "--home", "63.4,10.4,50,0",
-                "--defaults", f"{SITL_DIR / 'copter.parm'},{PARAMS}",
+                "--defaults", f"{SITL_DIR / 'copter.parm'},{PARAMS},{no_streams}",
                 "--serial0", f"udpclient:127.0.0.1:{self.control_port}"]
         if wipe:
             args.append("-w")
@@ -236,6 +251,13 @@ def test_control_commands_the_firmware_which_flies(flight):
     assert sent, "control sent nothing"
     out = flight.control.stderr()
     assert "autopilot found" in out and "MAV_AUTOPILOT_ARDUPILOTMEGA" in out
+    # Attitude and position reach control only because it asked for them.
+    r = flight.runner.run("hubtrack", "echo", "vehicle", "--count", "3", "--duration", "10")
+    states = [json.loads(l) for l in r.stdout.splitlines() if l.startswith("{")]
+    assert states, r.stderr
+    v = states[-1]
+    assert v["link_ok"] and v["armed"] and v["custom_mode"] == GUIDED, v
+    assert v["attitude_valid"] and v["position_valid"], v
 
 
 def test_pilot_loiter_silences_control_and_it_never_takes_guided_back(flight):
