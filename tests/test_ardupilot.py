@@ -104,6 +104,9 @@ class GroundStation:
                                             autoreconnect=True)
         self.last = {}
         self.texts = []
+        # The pilot's throttle stick: centred once airborne (in LOITER a low stick descends).
+        self.hold_throttle = False
+        self.last_stick = 0.0
 
     @staticmethod
     def port_open():
@@ -113,11 +116,22 @@ class GroundStation:
         except OSError:
             return False
 
+    def stick(self):
+        # RC_CHANNELS_OVERRIDE: channel 3 (throttle) at mid stick, the others left alone (UINT16_MAX);
+        # repeated well within RC_OVERRIDE_TIME (3 s of firmware time).
+        if self.hold_throttle and time.monotonic() - self.last_stick > 0.1:
+            self.last_stick = time.monotonic()
+            keep = 65535
+            self.m.mav.rc_channels_override_send(1, 1, keep, keep, 1500, keep, keep, keep, keep, keep)
+
     def pump(self, seconds=0.05):
         end = time.monotonic() + seconds
         while True:
+            self.stick()
             msg = self.m.recv_match(blocking=True, timeout=max(0.0, end - time.monotonic()))
-            if msg is not None and msg.get_type() != "BAD_DATA":
+            # Only the autopilot's own messages: the firmware also routes control's HEARTBEAT here.
+            if (msg is not None and msg.get_type() != "BAD_DATA"
+                    and (msg.get_srcSystem(), msg.get_srcComponent()) == (1, 1)):
                 self.last[msg.get_type()] = msg
                 if msg.get_type() == "STATUSTEXT":
                     self.texts.append(msg.text)
@@ -158,10 +172,17 @@ class GroundStation:
 
     def take_off(self, alt=80.0, climb=True):
         mav = self.mavutil.mavlink
+        self.hold_throttle = False  # arming needs the stick released (the override lapses)
         self.wait(lambda: self.mode() is not None, 60, "HEARTBEAT")
         self.streams()
-        self.set_mode(GUIDED)
-        self.wait(lambda: self.mode() == GUIDED, 30, "GUIDED")
+
+        # Asked again until it holds: during its start-up the firmware falls back to STABILIZE once.
+        def guided():
+            self.set_mode(GUIDED)
+            self.pump(0.5)
+            return self.mode() == GUIDED
+
+        self.wait(guided, 30, "GUIDED")
 
         def arm():
             if self.mode() != GUIDED:
@@ -176,6 +197,7 @@ class GroundStation:
         self.command(mav.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, alt)
         self.wait(lambda: (self.last.get("LOCAL_POSITION_NED") is not None
                            and -self.last["LOCAL_POSITION_NED"].z > alt - 1.0), 60, f"the climb to {alt} m")
+        self.hold_throttle = True
         self.streams()
 
 
@@ -193,6 +215,10 @@ class Flight:
         self.gcs.take_off()
         sets = ["--set", "capture.fps=15", "--set", "capture.synthetic.camera=\"usb\""]
         self.sets = sets
+        # The synthetic camera does not move with the vehicle, so control's commands are not
+        # closing a loop here; a small vertical limit keeps the vehicle from wandering into the
+        # ground over the tests.
+        self.control_sets = ["--set", "control.approach.max_vertical_m_s=0.05"]
         self.runner.start("hubtrack-capture", *sets, label="capture")
         self.runner.start("hubtrack-detect", *sets, label="detect")
         self.track = self.runner.start("hubtrack-track", *sets, label="track")
@@ -214,7 +240,8 @@ class Flight:
 
     def start_control(self):
         self.control = self.runner.start(
-            "hubtrack-control", *self.sets, "--set", f"control.link=\"udpin:127.0.0.1:{self.control_port}\"",
+            "hubtrack-control", *self.sets, *self.control_sets,
+            "--set", f"control.link=\"udpin:127.0.0.1:{self.control_port}\"",
             label=f"control-{time.monotonic_ns()}")
 
     def setpoints(self, seconds):
@@ -226,6 +253,10 @@ class Flight:
             self.gcs.pump(0.2)
         echo.wait(10)
         return echo.json_lines()
+
+    def commanding(self):
+        """Control sent setpoints within a 2 s window."""
+        return any(s["sent"] for s in self.setpoints(2.0))
 
     def moving(self):
         return self.gcs.speed() is not None and self.gcs.speed() > 0.3
@@ -261,7 +292,7 @@ def test_control_commands_the_firmware_which_flies(flight):
 
 
 def test_pilot_loiter_silences_control_and_it_never_takes_guided_back(flight):
-    flight.gcs.wait(flight.moving, 60, "the vehicle moving")
+    flight.gcs.wait(flight.commanding, 60, "control commanding")
     flight.gcs.set_mode(LOITER)
     flight.gcs.wait(lambda: flight.gcs.mode() == LOITER, 10, "LOITER")
     flight.gcs.pump(1.0)
@@ -273,24 +304,25 @@ def test_pilot_loiter_silences_control_and_it_never_takes_guided_back(flight):
     # The pilot, not control, gives GUIDED back; then control commands again.
     flight.gcs.set_mode(GUIDED)
     flight.gcs.wait(lambda: flight.gcs.mode() == GUIDED, 10, "GUIDED")
-    flight.gcs.wait(flight.moving, 30, "control commanding again")
+    flight.gcs.wait(flight.commanding, 30, "control commanding again")
 
 
 def test_track_lost_control_goes_silent_and_the_vehicle_holds(flight):
-    flight.gcs.wait(flight.moving, 60, "the vehicle moving")
+    flight.gcs.wait(flight.commanding, 60, "control commanding")
     flight.track.signal(signal.SIGKILL)
     flight.track.wait(5)
     flight.gcs.wait(lambda: not flight.moving(), GUID_TIMEOUT_S + 20, "the vehicle to stop")
+    flight.gcs.pump(1.0)  # control.input_timeout_ms = 500
     during = flight.setpoints(2.0)
     assert not any(s["sent"] for s in during), "control commanded without a track"
     assert "stale" in flight.control.stderr()
     flight.track = flight.runner.start("hubtrack-track", *flight.sets, label="track-again")
-    flight.gcs.wait(flight.moving, 30, "control commanding again")
+    flight.gcs.wait(flight.commanding, 30, "control commanding again")
 
 
 def test_control_killed_the_firmware_stops_the_vehicle_by_its_guided_timeout(flight):
     gcs = flight.gcs
-    gcs.wait(flight.moving, 60, "the vehicle moving")
+    gcs.wait(flight.moving, 90, "the vehicle moving under control's setpoints")
     flight.control.signal(signal.SIGKILL)
     flight.control.wait(5)
     t_kill = gcs.last["LOCAL_POSITION_NED"].time_boot_ms / 1000.0
@@ -306,12 +338,12 @@ def test_control_killed_the_firmware_stops_the_vehicle_by_its_guided_timeout(fli
     assert early and min(early) > 0.3, samples[:40]
     assert late and max(late) < 0.2, samples[-40:]
     flight.start_control()
-    gcs.wait(flight.moving, 30, "a new control commanding")
+    gcs.wait(flight.commanding, 30, "a new control commanding")
 
 
 def test_autopilot_restart_no_commands_until_guided_and_armed_again(flight):
     gcs = flight.gcs
-    gcs.wait(flight.moving, 60, "the vehicle moving")
+    gcs.wait(flight.commanding, 60, "control commanding")
     flight.sitl.kill()
     flight.sitl.wait()
     flight.start_sitl(wipe=False)
