@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Installs everything hubtrack needs on a fresh Debian 12 machine, skipping what is already there:
 #   - apt: OpenCV (dev headers), clang/libclang (opencv-rust binding generator), libudev (v4l),
-#          pkg-config, util-linux (taskset for the 2-core benchmark)
+#          pkg-config, util-linux (taskset for the 2-core benchmark; unshare and nsenter for the
+#          private network ArduCopter SITL flies in), iproute2 (ip, to bring its loopback up)
 #   - a Python virtualenv in .venv with the independent test peers (mcap reader, protobuf, pymavlink)
 # Safe to run repeatedly. Needs root (or sudo) only when an apt package is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-APT_PACKAGES=(libopencv-dev clang libclang-dev libudev-dev pkg-config util-linux python3-venv)
+APT_PACKAGES=(libopencv-dev clang libclang-dev libudev-dev pkg-config util-linux iproute2 python3-venv)
 
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

@@ -16,6 +16,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod interval;
 mod link;
 mod messages;
 mod monitor;
@@ -33,6 +34,7 @@ pub use ::mavlink::dialects::common;
 pub use ::mavlink::dialects::common::MavMessage;
 pub use ::mavlink::MavHeader;
 
+pub use interval::{set_message_interval, StreamRequests, WantedStream};
 pub use link::{Endpoint, Link, LinkError};
 pub use messages::{
     companion_heartbeat, copter_mode_name, velocity_setpoint, Identity, SetpointFrame,

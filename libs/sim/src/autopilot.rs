@@ -19,17 +19,24 @@
 //!   proportional to the heading error ([`YAW_ANGLE_GAIN_PER_S`]).
 //! * **Timeout.** Without a new accepted setpoint for `command_timeout_s` (ArduCopter:
 //!   3 s) the velocity and yaw rate drop to zero (hover); a yaw *angle* target is kept.
-//! * **Telemetry.** HEARTBEAT, ATTITUDE and LOCAL_POSITION_NED at their configured rates, stamped
-//!   with `time_boot_ms` = simulated time since boot.
+//! * **Telemetry.** HEARTBEAT, ATTITUDE and LOCAL_POSITION_NED at their configured rates (as if
+//!   the SRn_* stream parameters were set), stamped with `time_boot_ms` = simulated time since
+//!   boot. MAV_CMD_SET_MESSAGE_INTERVAL (COMMAND_LONG) changes the rate of ATTITUDE or
+//!   LOCAL_POSITION_NED (interval −1 stops it, 0 restores the configured rate) and is answered
+//!   with COMMAND_ACK, as the firmware does; other commands are answered
+//!   MAV_RESULT_UNSUPPORTED. The real firmware sends a link nothing but HEARTBEAT and STATUSTEXT
+//!   until asked, which is why control asks.
 //!
 //! The autopilot knows the vehicle's heading from the last [`Autopilot::handle`] or
 //! [`Autopilot::outgoing`] call (the simulator calls `outgoing` after every physics step), like
 //! the real one knows its own attitude.
 
 use mavlink::dialects::common::{
-    MavAutopilot, MavMessage, MavModeFlag, MavState, MavType, ATTITUDE_DATA, HEARTBEAT_DATA,
-    LOCAL_POSITION_NED_DATA, MINOR_MAVLINK_VERSION, SET_POSITION_TARGET_LOCAL_NED_DATA,
+    MavAutopilot, MavCmd, MavMessage, MavModeFlag, MavResult, MavState, MavType, ATTITUDE_DATA,
+    COMMAND_ACK_DATA, HEARTBEAT_DATA, LOCAL_POSITION_NED_DATA, MINOR_MAVLINK_VERSION,
+    SET_POSITION_TARGET_LOCAL_NED_DATA,
 };
+use mavlink::MessageData;
 use serde::{Deserialize, Serialize};
 
 use crate::math::wrap_pi;
@@ -199,6 +206,11 @@ pub struct Autopilot {
     next_heartbeat: f64,
     next_attitude: f64,
     next_position: f64,
+    /// ATTITUDE and LOCAL_POSITION_NED rates now, Hz (0 = stopped).
+    attitude_hz: f64,
+    position_hz: f64,
+    /// Answers to commands, sent with the next [`Autopilot::outgoing`].
+    acks: Vec<MavMessage>,
     stats: AutopilotStats,
 }
 
@@ -221,6 +233,9 @@ impl Autopilot {
             next_heartbeat: 0.0,
             next_attitude: 0.0,
             next_position: 0.0,
+            attitude_hz: cfg.attitude_hz,
+            position_hz: cfg.position_hz,
+            acks: Vec::new(),
             stats: AutopilotStats::default(),
         }
     }
@@ -271,7 +286,46 @@ impl Autopilot {
         result
     }
 
+    /// A COMMAND_LONG for this vehicle: MAV_CMD_SET_MESSAGE_INTERVAL for ATTITUDE or
+    /// LOCAL_POSITION_NED is applied; every command is answered with COMMAND_ACK.
+    fn command_long(&mut self, c: &mavlink::dialects::common::COMMAND_LONG_DATA) {
+        let (sys, comp) = self.identity();
+        let for_us = |target: u8, own: u8| target == 0 || target == own;
+        if !(for_us(c.target_system, sys) && for_us(c.target_component, comp)) {
+            return;
+        }
+        let result = if c.command == MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL {
+            let rate = |configured: f64| match c.param2 {
+                i if i < 0.0 => Some(0.0),
+                0.0 => Some(configured),
+                i if i.is_finite() => Some(1e6 / f64::from(i)),
+                _ => None,
+            };
+            let id = c.param1;
+            if id == ATTITUDE_DATA::ID as f32 {
+                rate(self.cfg.attitude_hz).map(|r| self.attitude_hz = r)
+            } else if id == LOCAL_POSITION_NED_DATA::ID as f32 {
+                rate(self.cfg.position_hz).map(|r| self.position_hz = r)
+            } else {
+                None
+            }
+            .map_or(MavResult::MAV_RESULT_FAILED, |()| {
+                MavResult::MAV_RESULT_ACCEPTED
+            })
+        } else {
+            MavResult::MAV_RESULT_UNSUPPORTED
+        };
+        self.acks.push(MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+            command: c.command,
+            result,
+        }));
+    }
+
     fn handle_inner(&mut self, now_s: f64, msg: &MavMessage, yaw_now: f64) -> CommandResult {
+        if let MavMessage::COMMAND_LONG(c) = msg {
+            self.command_long(c);
+            return CommandResult::Ignored(IgnoreReason::NotASetpoint);
+        }
         let MavMessage::SET_POSITION_TARGET_LOCAL_NED(d) = msg else {
             return CommandResult::Ignored(IgnoreReason::NotASetpoint);
         };
@@ -384,11 +438,11 @@ impl Autopilot {
         let [roll, pitch, yaw] = vehicle.attitude();
         self.vehicle_yaw = Some(yaw);
         let time_boot_ms = (now_s.max(0.0) * 1000.0).round() as u32;
-        let mut out = Vec::new();
+        let mut out = std::mem::take(&mut self.acks);
         if due(&mut self.next_heartbeat, now_s, self.cfg.heartbeat_hz) {
             out.push(self.heartbeat());
         }
-        if due(&mut self.next_attitude, now_s, self.cfg.attitude_hz) {
+        if self.attitude_hz > 0.0 && due(&mut self.next_attitude, now_s, self.attitude_hz) {
             let [p, q, r] = vehicle.body_rates();
             out.push(MavMessage::ATTITUDE(ATTITUDE_DATA {
                 time_boot_ms,
@@ -400,7 +454,7 @@ impl Autopilot {
                 yawspeed: r as f32,
             }));
         }
-        if due(&mut self.next_position, now_s, self.cfg.position_hz) {
+        if self.position_hz > 0.0 && due(&mut self.next_position, now_s, self.position_hz) {
             let p = vehicle.position_ned();
             let v = vehicle.velocity_ned();
             out.push(MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
@@ -1008,6 +1062,82 @@ mod tests {
         assert_eq!(ap.command(5.1).velocity_ned, [0.0, 1.0, 0.0]);
         assert_eq!(ap.command(9.0), VelocityCommand::HOVER);
         assert_eq!(ap.stats().timeouts, 2);
+    }
+
+    #[test]
+    fn set_message_interval_is_acknowledged_and_applied() {
+        use mavlink::dialects::common::COMMAND_LONG_DATA;
+        let mut ap = Autopilot::new(&AutopilotConfig::default());
+        let v = vehicle(0.0);
+        let request = |id: u32, interval_us: f32, command| {
+            MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+                param1: id as f32,
+                param2: interval_us,
+                command,
+                target_system: 1,
+                target_component: 1,
+                ..Default::default()
+            })
+        };
+        let count = |ap: &mut Autopilot, from: f64| {
+            let mut n = 0;
+            let mut acks = Vec::new();
+            for i in 0..1000 {
+                for m in ap.outgoing(from + i as f64 * 0.001, &v) {
+                    match m {
+                        MavMessage::ATTITUDE(_) => n += 1,
+                        MavMessage::COMMAND_ACK(a) => acks.push((a.command, a.result)),
+                        _ => {}
+                    }
+                }
+            }
+            (n, acks)
+        };
+        // ATTITUDE (id 30) at 50 Hz: 20 000 µs.
+        ap.handle(
+            0.0,
+            &header(),
+            &request(30, 20_000.0, MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL),
+            &v,
+        );
+        let (n, acks) = count(&mut ap, 0.0);
+        assert_eq!(n, 50);
+        assert_eq!(
+            acks,
+            vec![(
+                MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
+                MavResult::MAV_RESULT_ACCEPTED
+            )]
+        );
+        // −1 stops it; an id it cannot stream fails; another command is unsupported.
+        ap.handle(
+            1.0,
+            &header(),
+            &request(30, -1.0, MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL),
+            &v,
+        );
+        ap.handle(
+            1.0,
+            &header(),
+            &request(999, 1000.0, MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL),
+            &v,
+        );
+        ap.handle(
+            1.0,
+            &header(),
+            &request(0, 0.0, MavCmd::MAV_CMD_NAV_TAKEOFF),
+            &v,
+        );
+        let (n, acks) = count(&mut ap, 1.0);
+        assert_eq!(n, 0);
+        assert_eq!(
+            acks.iter().map(|a| a.1).collect::<Vec<_>>(),
+            vec![
+                MavResult::MAV_RESULT_ACCEPTED,
+                MavResult::MAV_RESULT_FAILED,
+                MavResult::MAV_RESULT_UNSUPPORTED
+            ]
+        );
     }
 
     #[test]

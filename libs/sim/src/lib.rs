@@ -51,7 +51,10 @@ pub mod autopilot;
 pub mod math;
 pub mod outcome;
 pub mod params;
+pub mod pilot;
+pub mod rotorcraft;
 pub mod scenario;
+pub mod sitl_json;
 pub mod vehicle;
 pub mod wind;
 
@@ -63,9 +66,11 @@ pub use autopilot::{
 pub use math::{wrap_deg, wrap_pi, GRAVITY_M_S2};
 pub use outcome::{FlightRecorder, Outcome};
 pub use params::{
-    AutopilotConfig, CameraConfig, CameraModel, ParamError, ScenarioConfig, SimConfig, SimPace,
-    SuccessConfig, VehicleConfig, WindConfig,
+    AutopilotConfig, CameraConfig, CameraModel, FlightController, ParamError, ScenarioConfig,
+    SimConfig, SimPace, SuccessConfig, VehicleConfig, WindConfig,
 };
+pub use pilot::{Pilot, PilotConfig, PilotPhase, PilotView};
+pub use rotorcraft::{FrameLayout, Rotorcraft, RotorcraftConfig};
 pub use scenario::{camera_pose, geometry, render_camera, Geometry, Scenario};
 pub use vehicle::{Multicopter, VehicleStart, VelocityCommand};
 pub use wind::Wind;

@@ -55,7 +55,28 @@ hubtrack_types::params! {
         pub scenario: ScenarioConfig = ScenarioConfig::default();
         /// When a flight counts as a success.
         pub success: SuccessConfig = SuccessConfig::default();
+        /// Who flies the vehicle: "model" (our model of ArduCopter: `[sim.autopilot]` and
+        /// `[sim.vehicle]`) or "ardupilot" (ArduCopter SITL coupled through its JSON physics
+        /// interface: `[sim.rotorcraft]` and `[sim.pilot]`; `hubtrack fly --autopilot ardupilot`).
+        pub flight_controller: FlightController = FlightController::Model;
+        /// UDP port on which the simulator serves ArduPilot SITL's JSON physics (SITL's
+        /// `--sim-port-out`; 9002 is SITL's default), [1, 65535].
+        pub sitl_json_port: u16 = 9002, closed(1, 65535);
+        /// The quadcopter ArduCopter SITL flies.
+        pub rotorcraft: crate::rotorcraft::RotorcraftConfig = Default::default();
+        /// The pilot that takes ArduCopter SITL to the start pose.
+        pub pilot: crate::pilot::PilotConfig = Default::default();
     }
+}
+
+/// Who flies the simulated vehicle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FlightController {
+    /// Our model of ArduCopter in GUIDED (`libs/sim` autopilot and vehicle).
+    Model,
+    /// The real ArduCopter firmware as SITL, flying our rotorcraft physics.
+    Ardupilot,
 }
 
 /// How simulated time advances.
@@ -253,7 +274,9 @@ impl SimConfig {
         self.autopilot.check_ranges("sim.autopilot")?;
         self.wind.validate("sim.wind")?;
         self.scenario.validate("sim.scenario")?;
-        self.success.check_ranges("sim.success")
+        self.success.check_ranges("sim.success")?;
+        self.rotorcraft.validate("sim.rotorcraft")?;
+        self.pilot.check_ranges("sim.pilot")
     }
 }
 

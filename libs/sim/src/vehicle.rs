@@ -268,6 +268,13 @@ impl Multicopter {
     pub fn set_position_ned(&mut self, position_ned: [f64; 3]) {
         self.pos = position_ned;
     }
+
+    /// Set the velocity, NED, m/s: with [`Multicopter::set_position_ned`] and
+    /// [`Multicopter::set_attitude`], this mirrors a vehicle whose physics runs elsewhere (the
+    /// rotorcraft flown by ArduPilot SITL) for the geometry, camera and outcome.
+    pub fn set_velocity_ned(&mut self, velocity_ned: [f64; 3]) {
+        self.vel = velocity_ned;
+    }
 }
 
 /// Roll and pitch that point the thrust so that it produces the horizontal acceleration `a_h`

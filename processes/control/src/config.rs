@@ -46,6 +46,14 @@ params! {
         /// No track state for this long (wall clock) means our inputs are stale: send nothing at
         /// all, so ArduPilot's guided-mode timeout stops the vehicle, ms.
         pub input_timeout_ms: u64 = 500, closed(50, 5000);
+        /// ATTITUDE asked of the autopilot (MAV_CMD_SET_MESSAGE_INTERVAL), Hz: detect levels the
+        /// image with it and track compensates the vehicle's rotation.
+        pub attitude_rate_hz: f64 = 50.0, closed(1.0, 200.0);
+        /// LOCAL_POSITION_NED asked of the autopilot, Hz.
+        pub position_rate_hz: f64 = 25.0, closed(1.0, 200.0);
+        /// A requested message not heard for this long (wall clock) is asked for again, ms: after
+        /// an autopilot reboot, a lost request, or before the autopilot was there.
+        pub stream_retry_ms: u64 = 1000, closed(100, 60_000);
         /// Clock used to stamp autopilot messages: "monotonic" (flight) or "sim" (simulated
         /// flights, where the simulator's clock drives the pipeline).
         pub clock: ClockSource = ClockSource::Monotonic;

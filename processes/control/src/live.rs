@@ -9,9 +9,10 @@ use crate::setpoint::{Controller, TRACK_BUFFER};
 use crate::ControlStage;
 use anyhow::Context;
 use hubtrack_control_stage::gate::{Action, AutopilotView, CommandGate, GateTiming};
+use hubtrack_mavlink::mavlink::MessageData;
 use hubtrack_mavlink::{
     companion_heartbeat, follows_setpoints, velocity_setpoint, Endpoint, Link, MavHeader,
-    MavMessage, SetpointFrame, VehicleMonitor,
+    MavMessage, SetpointFrame, StreamRequests, VehicleMonitor, WantedStream,
 };
 use hubtrack_runtime::ipc::{MsgPublisher, MsgSubscriber};
 use hubtrack_runtime::stage::Stage;
@@ -108,6 +109,32 @@ impl Sender {
     }
 }
 
+/// MAVLink message id of ATTITUDE (30).
+const ATTITUDE_ID: u32 = <hubtrack_mavlink::common::ATTITUDE_DATA as MessageData>::ID;
+/// MAVLink message id of LOCAL_POSITION_NED (32).
+const LOCAL_POSITION_NED_ID: u32 =
+    <hubtrack_mavlink::common::LOCAL_POSITION_NED_DATA as MessageData>::ID;
+
+/// Logs what the autopilot says that an operator must see: its STATUSTEXTs (pre-arm failures,
+/// EKF and GPS state, failsafes; warnings and worse at warn level) and refused commands.
+fn report_autopilot_text(msg: &MavMessage) {
+    use hubtrack_mavlink::common::{MavResult, MavSeverity};
+    match msg {
+        MavMessage::STATUSTEXT(t) => {
+            let text = t.text.to_str().unwrap_or("?").trim_end_matches('\0');
+            if (t.severity as u32) <= MavSeverity::MAV_SEVERITY_WARNING as u32 {
+                log::warn!("autopilot says: {text}");
+            } else {
+                log::info!("autopilot says: {text}");
+            }
+        }
+        MavMessage::COMMAND_ACK(a) if a.result != MavResult::MAV_RESULT_ACCEPTED => {
+            log::warn!("autopilot refused {:?}: {:?}", a.command, a.result);
+        }
+        _ => {}
+    }
+}
+
 /// Runs live control until SIGINT/SIGTERM.
 pub fn run(stage: ControlStage) -> anyhow::Result<()> {
     let mut controller = Controller::new(&stage)?;
@@ -169,6 +196,21 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
         cfg.setpoint_rate_hz,
         cfg.input_timeout_ms,
     ));
+    // ArduPilot sends a link only the messages asked for; asked again whenever one stops.
+    let mut streams = StreamRequests::new(
+        &[
+            WantedStream {
+                message_id: ATTITUDE_ID,
+                rate_hz: cfg.attitude_rate_hz,
+            },
+            WantedStream {
+                message_id: LOCAL_POSITION_NED_ID,
+                rate_hz: cfg.position_rate_hz,
+            },
+        ],
+        ms_to_ns(cfg.stream_retry_ms),
+        ms_to_ns(cfg.stream_retry_ms),
+    );
     // Not heard from yet.
     let mut autopilot = AutopilotView::default();
     let mut sim_now_ns = 0u64;
@@ -214,7 +256,15 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
             for event in monitor.handle(now_ns, h, msg) {
                 log::info!("autopilot: {event}");
             }
+            let from_autopilot = monitor.target() == Some((h.system_id as u8, h.component_id));
+            if from_autopilot {
+                streams.seen(wall_ns, msg);
+                report_autopilot_text(msg);
+            }
             vehicle_changed = true;
+        }
+        for request in streams.poll(wall_ns, monitor.target()) {
+            sender.send(&request, &mut status);
         }
         for event in monitor.poll(now_ns) {
             log::warn!("autopilot: {event}");

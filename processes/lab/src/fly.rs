@@ -38,6 +38,24 @@ pub struct FlyArgs {
     /// Record each flight: `PATH.mcap` for one flight, `PATH-seedN.mcap` for several.
     #[arg(long, value_name = "PATH.mcap")]
     record: Option<PathBuf>,
+    /// Who flies the vehicle: `sim` (our model of ArduCopter) or `ardupilot` (the real
+    /// ArduCopter firmware as SITL, coupled in lockstep through its JSON physics interface).
+    #[arg(long, value_enum, default_value_t = AutopilotKind::Sim)]
+    autopilot: AutopilotKind,
+    /// Folder with the ArduCopter SITL binary `arducopter` and its `copter.parm` (default:
+    /// `HUBTRACK_ARDUPILOT_DIR`, else `../shared/tools/ardupilot`).
+    #[arg(long, value_name = "DIR")]
+    ardupilot_dir: Option<PathBuf>,
+}
+
+/// `--autopilot`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+enum AutopilotKind {
+    /// Our model of ArduCopter (`libs/sim`).
+    Sim,
+    /// ArduCopter SITL.
+    Ardupilot,
 }
 
 /// One flight's result line.
@@ -47,21 +65,38 @@ struct FlightLine<'a> {
     outcome: &'a Outcome,
     wall_s: f64,
     recording: Option<String>,
+    autopilot: AutopilotKind,
 }
 
 /// Runs the flights and prints the table (or JSON lines).
 pub fn run(args: FlyArgs) -> anyhow::Result<()> {
     // Fail on a bad config before starting anything.
     crate::config::load(&args.config)?;
+    let ardupilot = match args.autopilot {
+        AutopilotKind::Sim => None,
+        AutopilotKind::Ardupilot => {
+            let dir = crate::sitl::locate(args.ardupilot_dir.as_deref())?;
+            if !crate::sitl::in_private_network() {
+                // Everything from here on runs again inside the private network.
+                std::process::exit(crate::sitl::rerun_in_private_network()?);
+            }
+            crate::sitl::loopback_up()?;
+            Some(dir)
+        }
+    };
     let shutdown = Shutdown::install()?;
     let dir = tempdir()?;
     let mut outcomes = Vec::new();
     let mut unfinished = Vec::new();
     if !args.json {
         println!(
-            "hubtrack fly: {} flight(s) from seed {}, {}{}",
+            "hubtrack fly: {} flight(s) from seed {}, autopilot {}, {}{}",
             args.seeds,
             args.first_seed,
+            match args.autopilot {
+                AutopilotKind::Sim => "model",
+                AutopilotKind::Ardupilot => "ArduCopter SITL",
+            },
             if args.realtime {
                 "real time"
             } else {
@@ -117,14 +152,42 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             format!("control.link=\"udpin:127.0.0.1:{port}\""),
             format!("sim.link=\"udpout:127.0.0.1:{port}\""),
         ]);
+        // With the firmware: SITL's SERIAL0 goes to control's link, SERIAL1 to the simulator's
+        // pilot; the simulator serves SITL's physics.
+        let mut sitl = None;
+        let mut _pilot_lease = None;
+        if let Some(sitl_dir) = &ardupilot {
+            let (pilot_port, lease) = free_udp_port()?;
+            _pilot_lease = Some(lease);
+            overrides.extend([
+                "sim.flight_controller=\"ardupilot\"".to_string(),
+                format!("sim.link=\"udpin:127.0.0.1:{pilot_port}\""),
+            ]);
+            sitl = Some(crate::sitl::Sitl::start(
+                sitl_dir,
+                &dir.join(format!("sitl-seed{seed}")),
+                crate::sitl::SitlPorts {
+                    control: port,
+                    pilot: pilot_port,
+                },
+            )?);
+        }
         let config_args = ConfigArgs {
             overrides,
             ..args.config.clone()
         };
         let config = crate::config::load(&config_args)?;
         let outcome_path = dir.join(format!("outcome-{seed}.json"));
+        // With the firmware the flight starts on the ground: the pilot's time to the start pose
+        // comes first.
+        let preflight_s = if ardupilot.is_some() {
+            config.sim.pilot.deadline_s
+        } else {
+            0.0
+        };
         let wall_limit = Duration::from_secs_f64(
-            config.sim.max_time_s * if args.realtime { 1.2 } else { 4.0 } + WALL_MARGIN_S,
+            (config.sim.max_time_s + preflight_s) * if args.realtime { 1.2 } else { 4.0 }
+                + WALL_MARGIN_S,
         );
         let report = supervise(RunOptions {
             config: config.run.clone(),
@@ -134,6 +197,14 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             outcome: Some(outcome_path.clone()),
             interactive: false,
         })?;
+        if let Some(mut s) = sitl.take() {
+            if !s.running() {
+                log::warn!(
+                    "ArduCopter SITL had ended before the flight did:\n{}",
+                    s.log_tail()
+                );
+            }
+        }
         let outcome: Outcome = match std::fs::read_to_string(&outcome_path) {
             Ok(text) => {
                 serde_json::from_str(&text).with_context(|| format!("outcome of seed {seed}"))?
@@ -158,6 +229,7 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             outcome: &outcome,
             wall_s: report.elapsed.as_secs_f64(),
             recording: record.as_ref().map(|r| r.display().to_string()),
+            autopilot: args.autopilot,
         };
         if outcome.lockstep_misses > 0 {
             log::warn!(

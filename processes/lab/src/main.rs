@@ -11,6 +11,7 @@ mod eval_seq;
 mod fly;
 mod fuzz;
 mod score;
+mod sitl;
 mod track_cmd;
 mod train_ranker;
 

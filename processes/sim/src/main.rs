@@ -15,25 +15,22 @@
 //! closest approach to the rotor plane) is logged and written as JSON to `--outcome`.
 
 use anyhow::Context;
+use camera::SimCamera;
 use clap::Parser;
-use hubtrack_capture::sink::ShmSink;
-use hubtrack_capture::synthetic::frame_truth;
-use hubtrack_capture::{FrameInfo, FrameSink};
 use hubtrack_mavlink::{Endpoint, Link, MavHeader, MavMessage};
-use hubtrack_render::Renderer;
-use hubtrack_runtime::ipc::{FramePublisher, MsgPublisher, MsgSubscriber};
+use hubtrack_runtime::ipc::{MsgPublisher, MsgSubscriber};
 use hubtrack_runtime::stage::{Stage, StageArgs};
 use hubtrack_sim::{
-    camera_pose, geometry, render_camera, Autopilot, FlightRecorder, Multicopter, Scenario,
-    SimPace, Wind,
+    geometry, Autopilot, FlightController, FlightRecorder, Multicopter, Scenario, SimPace, Wind,
 };
 use hubtrack_types::services::{CLOCK, SETPOINTS, VEHICLE};
 use hubtrack_types::time::monotonic_ns;
-use hubtrack_types::{
-    ApproachTask, FrameSourceKind, PixelFormat, Setpoint, SimClock, VehicleState,
-};
+use hubtrack_types::{ApproachTask, Setpoint, SimClock, VehicleState};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
+
+mod ardupilot;
+mod camera;
 
 /// Poll period while waiting for the pipeline in lockstep.
 const LOCKSTEP_POLL: Duration = Duration::from_millis(1);
@@ -95,8 +92,17 @@ fn run() -> anyhow::Result<()> {
     let cfg = &config.sim;
     let scenario = Scenario::from_seed(cfg.seed, cfg);
     let calibration = config.camera.calibrated()?;
-    let camera = render_camera(&cfg.camera, calibration.as_ref());
-    let mut renderer = Renderer::new(camera);
+    if cfg.flight_controller == FlightController::Ardupilot {
+        return ardupilot::run(
+            &config.sim,
+            calibration.as_ref(),
+            &shutdown,
+            &node,
+            &mut status,
+            args.outcome.as_deref(),
+        );
+    }
+    let mut cam = SimCamera::new(&node, &cfg.camera, calibration.as_ref())?;
     let mut vehicle = Multicopter::new(&scenario.start, &cfg.vehicle);
     let mut wind = Wind::new(cfg.seed, &cfg.wind);
     let mut autopilot = Autopilot::new(&cfg.autopilot);
@@ -110,10 +116,6 @@ fn run() -> anyhow::Result<()> {
         sequence: 0,
     };
 
-    let mut sink = ShmSink::new(
-        FramePublisher::new(&node, camera.frame_bytes())?,
-        FrameSourceKind::Sim,
-    );
     let clock = MsgPublisher::<SimClock>::new(&node, &CLOCK)?;
     let setpoints = MsgSubscriber::<Setpoint>::new(&node, &SETPOINTS, 16)?;
     let vehicle_states = MsgSubscriber::<VehicleState>::new(&node, &VEHICLE, 16)?;
@@ -123,7 +125,7 @@ fn run() -> anyhow::Result<()> {
         "seed {}: start {:.1} m from the hub, lateral {:+.1} m, height {:+.1} m, relative yaw {:+.1}°, heading error {:+.1}°; {} at {} fps, {}x{}",
         cfg.seed, geo0.distance_m, geo0.lateral_m, geo0.height_m, geo0.relative_yaw_deg, geo0.heading_error_deg,
         match cfg.pace { SimPace::Lockstep => "lockstep", SimPace::Realtime => "realtime" },
-        cfg.fps, camera.width, camera.height
+        cfg.fps, cam.camera().width, cam.camera().height
     );
 
     let epoch_ns = monotonic_ns();
@@ -202,22 +204,7 @@ fn run() -> anyhow::Result<()> {
         }
 
         // The camera frame of this instant.
-        let pose = camera_pose(&scenario, &vehicle, &cfg.camera);
-        let mut scene = scenario.scene.clone();
-        scene.frame = seq;
-        let info = FrameInfo {
-            width: camera.width,
-            height: camera.height,
-            format: PixelFormat::Bgr8,
-            capture_ns: Some(now_ns),
-            truth: Default::default(),
-        };
-        sink.publish(info, &mut |out| {
-            let truth = renderer
-                .render(&scene, &pose, out)
-                .map_err(|e| hubtrack_capture::CaptureError::Render(e.to_string()))?;
-            Ok(Some(frame_truth(&truth)))
-        })?;
+        cam.publish(&scenario, &vehicle, seq, now_ns)?;
         status.status.outputs += 1;
 
         // The pipeline's answer: in lockstep wait for control's setpoint of this frame.
@@ -347,7 +334,7 @@ impl ReflectedState {
     }
 }
 
-fn wait_for<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend + 'static>(
+pub(crate) fn wait_for<T: std::fmt::Debug + Copy + iceoryx2::prelude::ZeroCopySend + 'static>(
     sub: &MsgSubscriber<T>,
     timeout: Duration,
     shutdown: &hubtrack_runtime::shutdown::Shutdown,
