@@ -81,7 +81,8 @@ impl ChannelKind {
         }
     }
 
-    /// The JSON schema, generated from the Rust type so it cannot drift.
+    /// The JSON schema, generated from the Rust type so it cannot drift, in the subset the
+    /// viewers parse ([`crate::viewer_schema`]).
     pub fn json_schema(self) -> Vec<u8> {
         use hubtrack_types as t;
         let schema = match self {
@@ -93,7 +94,8 @@ impl ChannelKind {
             ChannelKind::Status => schemars::schema_for!(t::StageStatus),
             ChannelKind::Recorder => schemars::schema_for!(RecorderStats),
         };
-        serde_json::to_vec(&schema).expect("schemas serialise")
+        let schema = serde_json::to_value(&schema).expect("schemas serialise");
+        serde_json::to_vec(&crate::viewer_schema::for_viewers(&schema)).expect("schemas serialise")
     }
 
     /// The channel of a topic, if it is one of hubtrack's JSON channels.
