@@ -6,7 +6,8 @@ import socket
 import pytest
 from conftest import ROOT, read_mcap_messages
 
-STAGES = ["--set", 'run.stages=["capture","detect","track","recorder"]']
+# Raw frames: lossless replay reproduces the live results bit for bit only from the captured pixels.
+STAGES = ["--set", 'run.stages=["capture","detect","track","recorder"]', "--set", 'recorder.frame_encoding="raw"']
 CHANNELS = ("/detections", "/track", "/setpoints")
 
 

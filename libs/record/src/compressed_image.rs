@@ -79,7 +79,13 @@ mod tests {
     #[test]
     fn round_trip_and_descriptor() {
         let mut out = Vec::new();
-        encode(1_500_000_000, "camera", "jpeg", vec![0xff, 0xd8, 1, 2], &mut out);
+        encode(
+            1_500_000_000,
+            "camera",
+            "jpeg",
+            vec![0xff, 0xd8, 1, 2],
+            &mut out,
+        );
         let m = CompressedImage::decode(out.as_slice()).unwrap();
         assert_eq!((m.format.as_str(), m.data.len()), ("jpeg", 4));
         assert_eq!(m.timestamp.unwrap().seconds, 1);

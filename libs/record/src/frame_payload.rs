@@ -45,7 +45,10 @@ pub fn pixels(coding: FrameCoding, data: &[u8], header: &FrameHeader) -> Result<
         FrameCoding::Compressed => {
             let img = CompressedImage::decode(data).map_err(|e| format!("CompressedImage: {e}"))?;
             if img.format != "jpeg" {
-                return Err(format!("CompressedImage format {:?} (only jpeg is read)", img.format));
+                return Err(format!(
+                    "CompressedImage format {:?} (only jpeg is read)",
+                    img.format
+                ));
             }
             crate::jpeg::decode(&img.data, header).map_err(|e| e.to_string())
         }

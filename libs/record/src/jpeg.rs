@@ -114,7 +114,11 @@ pub fn decode(jpeg: &[u8], header: &FrameHeader) -> Result<Vec<u8>, JpegError> {
     // imdecode returns a continuous image: rows of exactly `row` bytes.
     let src = image.data_bytes().map_err(cv)?;
     if src.len() != row * header.height as usize {
-        return Err(bad(format!("decoded {} bytes, expected {}", src.len(), row * header.height as usize)));
+        return Err(bad(format!(
+            "decoded {} bytes, expected {}",
+            src.len(),
+            row * header.height as usize
+        )));
     }
     let mut out = vec![0u8; header.payload_len()];
     for (dst, src) in out.chunks_mut(stride).zip(src.chunks(row)) {

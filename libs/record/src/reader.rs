@@ -93,6 +93,7 @@ mod tests {
             &RecordingOptions {
                 compression: None,
                 chunk_size: 1024,
+                ..RecordingOptions::default()
             },
         )
         .unwrap();

@@ -9,11 +9,10 @@
 //! published, and the two streams are merged by key within a bounded look-ahead.
 
 use anyhow::bail;
-use hubtrack_record::raw_image::RawImage;
-use hubtrack_record::writer::{ChannelKind, FRAMES_TOPIC};
+use hubtrack_record::frame_payload::{self, FrameCoding};
+use hubtrack_record::writer::{ChannelKind, FRAMES_TOPIC, RAW_FRAMES_TOPIC};
 use hubtrack_types::{Detection, FrameHeader, Stamps, TrackState, VehicleState};
 use mcap::sans_io::LinearReaderOptions;
-use prost::Message as _;
 use std::collections::{BTreeMap, VecDeque};
 use std::io::BufReader;
 use std::path::Path;
@@ -194,11 +193,16 @@ pub fn survey(path: &Path, first: FirstStage) -> anyhow::Result<Survey> {
 pub struct Reader {
     reader: mcap::io::MessageReader<BufReader<std::fs::File>>,
     first: FirstStage,
-    pending_image: Option<(u32, Vec<u8>)>,
+    /// The image messages read since the last frame header: (MCAP sequence, coding, message).
+    pending_images: Vec<(u32, FrameCoding, Vec<u8>)>,
     /// Why the file ended early, if it did.
     pub stopped: Option<String>,
     /// Messages that could not be decoded.
     pub undecodable: u64,
+    /// Frames fed from a lossy (JPEG) image: detect's results then differ from the live run's.
+    pub frames_lossy: u64,
+    /// Frames whose image did not decode (corrupt or truncated), skipped.
+    pub frames_bad: u64,
 }
 
 impl Reader {
@@ -208,9 +212,11 @@ impl Reader {
         Ok(Reader {
             reader: messages(path)?,
             first,
-            pending_image: None,
+            pending_images: Vec::new(),
             stopped: None,
             undecodable: 0,
+            frames_lossy: 0,
+            frames_bad: 0,
         })
     }
 
@@ -220,6 +226,33 @@ impl Reader {
             self.undecodable += 1;
         }
         v
+    }
+    /// The pixels of frame `h` from the images read before its header: the raw one if there is
+    /// one (bit-exact), else the decoded JPEG; `None` (counted) if none is usable.
+    fn frame_pixels(&mut self, h: &FrameHeader) -> Option<Vec<u8>> {
+        let mut images = std::mem::take(&mut self.pending_images);
+        images.retain(|(seq, _, _)| *seq == h.seq as u32);
+        images.sort_by_key(|(_, coding, _)| *coding != FrameCoding::Raw);
+        let mut failure = None;
+        for (_, coding, data) in &images {
+            match frame_payload::pixels(*coding, data, h) {
+                Ok(px) => {
+                    if *coding != FrameCoding::Raw {
+                        self.frames_lossy += 1;
+                    }
+                    return Some(px);
+                }
+                Err(e) => failure = Some(e),
+            }
+        }
+        match failure {
+            Some(e) => {
+                self.frames_bad += 1;
+                log::warn!("frame {} skipped: {e}", h.seq);
+            }
+            None => self.undecodable += 1,
+        }
+        None
     }
 }
 
@@ -237,22 +270,27 @@ impl Iterator for Reader {
             let topic = m.channel.topic.as_str();
             let frames = self.first == FirstStage::Detect;
             match (topic, ChannelKind::from_topic(topic), self.first) {
-                (FRAMES_TOPIC, _, _) if frames => match RawImage::decode(m.data.as_ref()) {
-                    Ok(img) => self.pending_image = Some((m.sequence, img.data)),
-                    Err(_) => self.undecodable += 1,
-                },
+                (FRAMES_TOPIC | RAW_FRAMES_TOPIC, _, _) if frames => {
+                    let coding = m
+                        .channel
+                        .schema
+                        .as_ref()
+                        .and_then(|s| FrameCoding::of_schema(&s.name));
+                    match coding {
+                        // Decoded when its header arrives, and only the one image used.
+                        Some(c) => self
+                            .pending_images
+                            .push((m.sequence, c, m.data.into_owned())),
+                        None => self.undecodable += 1,
+                    }
+                }
                 (_, Some(ChannelKind::FrameHeader), FirstStage::Detect) => {
                     let Some(h) = self.decode::<FrameHeader>(&m.data) else {
                         continue;
                     };
-                    // The recorder writes each image right before its header.
-                    match self.pending_image.take() {
-                        Some((seq, pixels))
-                            if seq == h.seq as u32 && pixels.len() == h.payload_len() =>
-                        {
-                            return Some(Input::Frame(h, pixels));
-                        }
-                        _ => self.undecodable += 1,
+                    // The recorder writes each frame's images right before its header.
+                    if let Some(pixels) = self.frame_pixels(&h) {
+                        return Some(Input::Frame(h, pixels));
                     }
                 }
                 (_, Some(ChannelKind::Detection), FirstStage::Track) => {
