@@ -25,6 +25,8 @@ const REORDER_MARGIN_NS: u64 = 200_000_000;
 /// are 50 MB). Beyond it the oldest goes out anyway: only possible when the stamps of the file
 /// do not follow one clock (e.g. a replay of a replay), where no order can be restored.
 const MAX_HELD_DRIVERS: usize = 8;
+/// Image messages of one frame (its JPEG and a raw copy) waiting for its header, at most.
+const MAX_PENDING_IMAGES: usize = 4;
 /// Vehicle states held back waiting for the next driving input, at most (small messages).
 const MAX_HELD_VEHICLES: usize = 4096;
 
@@ -227,6 +229,7 @@ impl Reader {
         }
         v
     }
+
     /// The pixels of frame `h` from the images read before its header: the raw one if there is
     /// one (bit-exact), else the decoded JPEG; `None` (counted) if none is usable.
     fn frame_pixels(&mut self, h: &FrameHeader) -> Option<Vec<u8>> {
@@ -278,9 +281,15 @@ impl Iterator for Reader {
                         .and_then(|s| FrameCoding::of_schema(&s.name));
                     match coding {
                         // Decoded when its header arrives, and only the one image used.
-                        Some(c) => self
-                            .pending_images
-                            .push((m.sequence, c, m.data.into_owned())),
+                        Some(c) => {
+                            // Images without a header (a damaged file) must not pile up.
+                            if self.pending_images.len() >= MAX_PENDING_IMAGES {
+                                self.pending_images.remove(0);
+                                self.undecodable += 1;
+                            }
+                            self.pending_images
+                                .push((m.sequence, c, m.data.into_owned()));
+                        }
                         None => self.undecodable += 1,
                     }
                 }
