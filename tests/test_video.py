@@ -197,3 +197,21 @@ def test_replay_decodes_jpeg_frames_and_skips_corrupt_ones(jpeg_run, tmp_path):
     assert res.returncode == 0, res.stderr[-3000:]
     assert "panicked" not in res.stderr
     assert "3 frames whose image did not decode" in res.stdout, res.stdout
+
+
+def test_sample_flight_has_every_channel_in_viewer_form():
+    from conftest import ROOT
+    from mcap.reader import make_reader
+
+    path = ROOT / "recordings" / "flight.mcap"
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    counts = {summary.channels[c].topic: n for c, n in summary.statistics.channel_message_counts.items()}
+    for topic in ("/frames", "/frames/overlay", "/frames/header", "/detections", "/track", "/setpoints",
+                  "/vehicle", "/status", "/recorder"):
+        assert counts.get(topic, 0) > 0, (topic, counts)
+    assert counts["/frames"] == counts["/frames/header"]
+    assert path.stat().st_size < 10e6, "a few MB"
+    for s in summary.schemas.values():
+        if s.encoding == "jsonschema":
+            assert not viewer_subset_errors(json.loads(s.data)), s.name

@@ -553,7 +553,7 @@ impl FrameWriter {
                 log::warn!("frame not encoded, header kept: {e}");
             }
         }
-        let raw_copy = self.raw_every > 0 && header.seq % self.raw_every == 0;
+        let raw_copy = self.raw_every > 0 && header.seq.is_multiple_of(self.raw_every);
         if raw_copy {
             stats.bytes_written += px.len() as u64;
         }
