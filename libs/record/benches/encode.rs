@@ -21,8 +21,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(60);
-    // One thread, as in the recorder (OpenCV's codecs are single-threaded anyway).
-    opencv::core::set_num_threads(1)?;
     println!("{n} synthetic frames per row; ms per frame on one core; MB/min and core share at the camera's rate");
     println!(
         "{:<10} {:>4} {:<14} {:>8} {:>8} {:>9} {:>8} {:>7}",

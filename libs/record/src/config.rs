@@ -19,7 +19,7 @@ pub enum Compression {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum FrameEncoding {
-    /// `foxglove.CompressedImage`, JPEG (libjpeg-turbo): about 30 times smaller than raw.
+    /// `foxglove.CompressedImage`, JPEG: about 40 times smaller than raw.
     Jpeg,
     /// `foxglove.RawImage`: the captured pixels, bit-exact (for replay that reproduces a run).
     Raw,

@@ -1,10 +1,10 @@
-//! JPEG frames: encoding for the recorder, decoding for replay. Through OpenCV's imgcodecs, which
-//! on Debian links libjpeg-turbo (SIMD; measured in `cargo bench -p hubtrack-record`).
+//! JPEG frames: encoding for the recorder, decoding for replay. Pure Rust (`jpeg-encoder` with
+//! its SIMD colour conversion and DCT, `jpeg-decoder`): OpenCV's imgcodecs would pull about 120
+//! shared libraries (GDAL, GDCM, ...) into the recorder and the `hubtrack` command and add
+//! 0.2 s to every start. Measured in `cargo bench -p hubtrack-record --bench encode`.
 
 use hubtrack_types::{FrameHeader, PixelFormat};
-use opencv::core::{Mat, Rect, Vector};
-use opencv::imgcodecs;
-use opencv::prelude::*;
+use jpeg_encoder::{ColorType, Encoder};
 
 /// Why a frame could not be encoded or decoded.
 #[derive(Debug, thiserror::Error)]
@@ -25,7 +25,7 @@ pub enum JpegError {
         /// Bytes per row.
         stride: u32,
     },
-    /// The bytes are not a JPEG of the header's size.
+    /// The bytes are not a JPEG of the header's size, or the encoder refused the frame.
     #[error("frame {seq}: {reason}")]
     Bad {
         /// Frame seq.
@@ -33,34 +33,31 @@ pub enum JpegError {
         /// What is wrong.
         reason: String,
     },
-    /// OpenCV failed.
-    #[error("frame {seq}: OpenCV: {0}", seq = .1)]
-    OpenCv(opencv::Error, u64),
 }
 
-/// Encodes frames to JPEG at a fixed quality, reusing its buffers.
+/// Encodes frames to JPEG at a fixed quality (4:2:0 chroma), reusing its row buffer.
 pub struct JpegEncoder {
-    params: Vector<i32>,
-    out: Vector<u8>,
+    quality: u8,
+    packed: Vec<u8>,
 }
 
 impl JpegEncoder {
     /// An encoder at `quality` (1..=100, libjpeg's scale).
     pub fn new(quality: u32) -> JpegEncoder {
         JpegEncoder {
-            params: Vector::from_slice(&[imgcodecs::IMWRITE_JPEG_QUALITY, quality as i32]),
-            out: Vector::new(),
+            quality: quality.clamp(1, 100) as u8,
+            packed: Vec::new(),
         }
     }
 
     /// The JPEG of one frame (the header says its size, layout and stride).
     pub fn encode(&mut self, header: &FrameHeader, pixels: &[u8]) -> Result<Vec<u8>, JpegError> {
         let seq = header.seq;
-        let cv = |e| JpegError::OpenCv(e, seq);
         let bpp = header.format.bytes_per_pixel();
         let need = header.payload_len();
         let row = header.width as usize * bpp;
-        if pixels.len() < need || (header.stride as usize) < row || need == 0 {
+        let too_big = header.width > u32::from(u16::MAX) || header.height > u32::from(u16::MAX);
+        if pixels.len() < need || (header.stride as usize) < row || need == 0 || too_big {
             return Err(JpegError::Size {
                 seq,
                 len: pixels.len(),
@@ -70,59 +67,90 @@ impl JpegEncoder {
                 stride: header.stride,
             });
         }
-        let h = header.height as i32;
-        // Borrowed: rows of `stride` bytes, the valid columns, then the channel layout.
-        let flat = Mat::new_rows_cols_with_data::<u8>(h, header.stride as i32, &pixels[..need])
-            .map_err(cv)?;
-        let roi = flat.roi(Rect::new(0, 0, row as i32, h)).map_err(cv)?;
-        let image = roi.reshape(bpp as i32, h).map_err(cv)?;
-        imgcodecs::imencode(".jpg", &image, &mut self.out, &self.params).map_err(cv)?;
-        Ok(self.out.to_vec())
+        // The encoder reads packed rows: copy only when the rows are padded.
+        let data = if header.stride as usize == row {
+            &pixels[..need]
+        } else {
+            self.packed.clear();
+            for r in pixels[..need].chunks(header.stride as usize) {
+                self.packed.extend_from_slice(&r[..row]);
+            }
+            &self.packed[..]
+        };
+        let color = match header.format {
+            PixelFormat::Bgr8 => ColorType::Bgr,
+            PixelFormat::Gray8 => ColorType::Luma,
+        };
+        let mut out = Vec::with_capacity(need / 16);
+        Encoder::new(&mut out, self.quality)
+            .encode(data, header.width as u16, header.height as u16, color)
+            .map_err(|e| JpegError::Bad {
+                seq,
+                reason: format!("JPEG encoder: {e}"),
+            })?;
+        Ok(out)
     }
 }
 
 /// The pixels of a JPEG frame in the layout `header` describes (format and stride), for replay.
 pub fn decode(jpeg: &[u8], header: &FrameHeader) -> Result<Vec<u8>, JpegError> {
     let seq = header.seq;
-    let cv = |e| JpegError::OpenCv(e, seq);
-    let flags = match header.format {
-        PixelFormat::Bgr8 => imgcodecs::IMREAD_COLOR,
-        PixelFormat::Gray8 => imgcodecs::IMREAD_GRAYSCALE,
-    };
     let bad = |reason: String| JpegError::Bad { seq, reason };
     if jpeg.len() < 4 || jpeg[..2] != [0xff, 0xd8] {
         return Err(bad(format!("not a JPEG ({} bytes)", jpeg.len())));
     }
-    let image = imgcodecs::imdecode(&Vector::<u8>::from_slice(jpeg), flags).map_err(cv)?;
-    if image.empty() {
-        return Err(bad("JPEG does not decode (corrupt or truncated)".into()));
-    }
-    if (image.cols() as u32, image.rows() as u32) != (header.width, header.height) {
+    let mut decoder = jpeg_decoder::Decoder::new(jpeg);
+    let decoded = decoder
+        .decode()
+        .map_err(|e| bad(format!("JPEG does not decode: {e}")))?;
+    let info = decoder
+        .info()
+        .ok_or_else(|| bad("JPEG without a frame header".into()))?;
+    if (u32::from(info.width), u32::from(info.height)) != (header.width, header.height) {
         return Err(bad(format!(
             "JPEG is {}x{}, the header says {}x{}",
-            image.cols(),
-            image.rows(),
-            header.width,
-            header.height
+            info.width, info.height, header.width, header.height
         )));
     }
-    let row = header.width as usize * header.format.bytes_per_pixel();
-    let stride = header.stride as usize;
-    if stride < row {
-        return Err(bad(format!("stride {stride} below a row of {row} bytes")));
-    }
-    // imdecode returns a continuous image: rows of exactly `row` bytes.
-    let src = image.data_bytes().map_err(cv)?;
-    if src.len() != row * header.height as usize {
+    let src_bpp = match info.pixel_format {
+        jpeg_decoder::PixelFormat::L8 => 1,
+        jpeg_decoder::PixelFormat::RGB24 => 3,
+        other => return Err(bad(format!("JPEG pixel format {other:?} not read"))),
+    };
+    let (w, h) = (header.width as usize, header.height as usize);
+    if decoded.len() != w * h * src_bpp {
         return Err(bad(format!(
             "decoded {} bytes, expected {}",
-            src.len(),
-            row * header.height as usize
+            decoded.len(),
+            w * h * src_bpp
+        )));
+    }
+    let bpp = header.format.bytes_per_pixel();
+    let stride = header.stride as usize;
+    if stride < w * bpp {
+        return Err(bad(format!(
+            "stride {stride} below a row of {} bytes",
+            w * bpp
         )));
     }
     let mut out = vec![0u8; header.payload_len()];
-    for (dst, src) in out.chunks_mut(stride).zip(src.chunks(row)) {
-        dst[..row].copy_from_slice(src);
+    for (dst, src) in out.chunks_mut(stride).zip(decoded.chunks(w * src_bpp)) {
+        match (header.format, src_bpp) {
+            (PixelFormat::Bgr8, 3) => {
+                for (d, s) in dst[..w * 3].chunks_mut(3).zip(src.chunks(3)) {
+                    d.copy_from_slice(&[s[2], s[1], s[0]]);
+                }
+            }
+            (PixelFormat::Bgr8, _) => {
+                for (d, &l) in dst[..w * 3].chunks_mut(3).zip(src) {
+                    d.fill(l);
+                }
+            }
+            (PixelFormat::Gray8, 1) => dst[..w].copy_from_slice(src),
+            (PixelFormat::Gray8, _) => {
+                return Err(bad("a colour JPEG for a grey frame".into()));
+            }
+        }
     }
     Ok(out)
 }
@@ -170,7 +198,7 @@ mod tests {
         let (h, px) = frame(32, 32, 96);
         assert!(JpegEncoder::new(90).encode(&h, &px[..100]).is_err());
         let jpeg = JpegEncoder::new(90).encode(&h, &px).unwrap();
-        // A cut JPEG: libjpeg may fill the missing rows or refuse; either way no panic.
+        // A cut JPEG: the decoder may fill the missing rows or refuse; either way no panic.
         let _ = decode(&jpeg[..jpeg.len() / 3], &h);
         assert!(decode(&[0xff, 0xd8, 0, 0, 1, 2, 3], &h).is_err());
         assert!(decode(b"not a jpeg", &h).is_err());
