@@ -48,7 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ..Default::default()
         };
         let mut rows: Vec<(String, Vec<f64>, f64)> = Vec::new();
-        for quality in [75u32, 85, 90, 95] {
+        for quality in [65u32, 75, 85, 95] {
             let mut enc = JpegEncoder::new(quality);
             let (mut times, mut bytes) = (Vec::new(), 0usize);
             for (seq, px) in frames.iter().enumerate() {
