@@ -29,3 +29,8 @@ def test_bench_pipeline_prints_latency_cpu_and_memory(runner):
     assert int(count) >= 30 and 0 < float(p50) <= float(p99), row
     setpoints = int(out.split("track states, ")[1].split()[0])
     assert setpoints >= int(count), out
+    # The recording's size per minute and the recorder's own counters (JPEG frames by default).
+    assert float(out.split("recording: ")[1].split()[0]) > 0, out
+    rec = next(l for l in out.splitlines() if l.startswith("recorder: "))
+    received, recorded = int(rec.split()[1]), int(rec.split("received, ")[1].split()[0])
+    assert received >= recorded > 0 and "not encodable" in rec, rec

@@ -16,7 +16,8 @@ def test_run_records_every_frame_and_pixels_match_renderer(runner, tmp_path, cam
 
     rec = tmp_path / "run.mcap"
     cfg = ["--set", f"capture.synthetic.camera={camera}", "--set", f"capture.max_frames={frames}"]
-    res = runner.run("hubtrack", "run", "--duration", "60", "--record", rec, *cfg)
+    res = runner.run("hubtrack", "run", "--duration", "60", "--record", rec, *cfg,
+                     "--set", 'recorder.frame_encoding="raw"')
     assert res.returncode == 0, res.stderr[-3000:]
     assert "hubtrack run summary" in res.stdout
     assert f"{frames} frames published" in res.stdout
@@ -212,8 +213,14 @@ def test_sample_recording_opens_with_independent_reader():
     from mcap.reader import make_reader
     from mcap_protobuf.decoder import DecoderFactory
 
+    import cv2
+    import numpy as np
+
     with open(ROOT / "recordings" / "demo.mcap", "rb") as f:
-        frames = [(m.sequence, d) for _, _, m, d in
-                  make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages(topics=["/frames"])]
-    assert [s for s, _ in frames] == list(range(len(frames))) and len(frames) >= 10
-    assert all((d.width, d.height, d.encoding) == (640, 480, "bgr8") for _, d in frames)
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        frames = [(sc.name, m.sequence, d) for sc, _, m, d in reader.iter_decoded_messages(topics=["/frames"])]
+    assert [s for _, s, _ in frames] == list(range(len(frames))) and len(frames) >= 10
+    assert all(name == "foxglove.CompressedImage" and d.format == "jpeg" for name, _, d in frames)
+    for _, _, d in frames:
+        img = cv2.imdecode(np.frombuffer(d.data, np.uint8), cv2.IMREAD_COLOR)
+        assert img is not None and img.shape == (480, 640, 3)

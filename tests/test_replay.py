@@ -6,7 +6,8 @@ import socket
 import pytest
 from conftest import ROOT, read_mcap_messages
 
-STAGES = ["--set", 'run.stages=["capture","detect","track","recorder"]']
+# Raw frames: lossless replay reproduces the live results bit for bit only from the captured pixels.
+STAGES = ["--set", 'run.stages=["capture","detect","track","recorder"]', "--set", 'recorder.frame_encoding="raw"']
 CHANNELS = ("/detections", "/track", "/setpoints")
 
 
@@ -31,7 +32,9 @@ def record_flight(tmp_path_factory, name, pace, seconds):
                 "--set", 'run.stages=["sim","detect","track","control","recorder"]',
                 "--set", f'sim.pace="{pace}"', "--set", 'control.clock="sim"',
                 "--set", f'control.link="udpin:127.0.0.1:{port}"', "--set", f'sim.link="udpout:127.0.0.1:{port}"',
-                "--set", "sim.seed=5", "--set", f"sim.max_time_s={seconds}", timeout=300)
+                "--set", "sim.seed=5", "--set", f"sim.max_time_s={seconds}",
+                # Raw frames: replay through detect reproduces the flight only from the rendered pixels.
+                "--set", 'recorder.frame_encoding="raw"', timeout=300)
     assert res.returncode == 0, res.stderr[-3000:]
     return r, rec
 

@@ -7,8 +7,9 @@ use serde_json::{json, Value};
 /// Schema name Foxglove recognises.
 pub const SCHEMA_NAME: &str = "foxglove.ImageAnnotations";
 
-/// `PointsAnnotation.type` LINE_LIST: pairs of points are segments.
-const LINE_LIST: u32 = 2;
+/// `PointsAnnotation.type` LINE_LIST: pairs of points are segments (foxglove/PointsAnnotation.proto:
+/// UNKNOWN 0, POINTS 1, LINE_LOOP 2, LINE_STRIP 3, LINE_LIST 4).
+pub const LINE_LIST: u32 = 4;
 /// Line thickness on the full-resolution image, px.
 const THICKNESS_PX: f64 = 3.0;
 /// Marker diameters, px.

@@ -19,6 +19,8 @@ pub struct Channels {
     pub tracks: BTreeMap<u64, TrackState>,
     /// `/setpoints`.
     pub setpoints: BTreeMap<u64, Setpoint>,
+    /// The last `/recorder` counters.
+    pub recorder: Option<crate::writer::RecorderStats>,
     /// Messages without usable stamps (all zero) or that did not decode, per topic.
     pub unstamped: BTreeMap<String, u64>,
     /// Messages on topics not read here (neither the above nor the images), per topic.
@@ -89,8 +91,14 @@ pub fn read(path: &Path) -> Result<Channels, ReadError> {
                 }
                 _ => unstamped(),
             },
+            Some(ChannelKind::Recorder) => {
+                if let Ok(r) = serde_json::from_slice(&m.data) {
+                    c.recorder = Some(r);
+                }
+            }
             Some(_) => {}
-            None if topic == "/frames" || topic == crate::writer::OVERLAY_TOPIC => {}
+            // The images (`/frames`, `/frames/raw`) and the overlay.
+            None if topic.starts_with("/frames") => {}
             None => *c.unknown_topics.entry(topic.to_string()).or_insert(0) += 1,
         }
     }

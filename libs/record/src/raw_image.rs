@@ -24,7 +24,12 @@ const WIRE_VARINT: u32 = 0;
 const WIRE_LEN: u32 = 2;
 const WIRE_FIXED32: u32 = 5;
 
-fn field(name: &str, number: i32, ty: Type, type_name: Option<&str>) -> FieldDescriptorProto {
+pub(crate) fn field(
+    name: &str,
+    number: i32,
+    ty: Type,
+    type_name: Option<&str>,
+) -> FieldDescriptorProto {
     FieldDescriptorProto {
         name: Some(name.into()),
         number: Some(number),
@@ -36,10 +41,9 @@ fn field(name: &str, number: i32, ty: Type, type_name: Option<&str>) -> FieldDes
     }
 }
 
-/// The serialized `FileDescriptorSet` of `foxglove.RawImage` and its dependency
-/// `google.protobuf.Timestamp`: the MCAP schema data for encoding `protobuf`.
-pub fn descriptor_set() -> Vec<u8> {
-    let timestamp = FileDescriptorProto {
+/// `google/protobuf/timestamp.proto`, the dependency of every Foxglove message.
+pub(crate) fn timestamp_file() -> FileDescriptorProto {
+    FileDescriptorProto {
         name: Some("google/protobuf/timestamp.proto".into()),
         package: Some("google.protobuf".into()),
         message_type: vec![DescriptorProto {
@@ -52,7 +56,13 @@ pub fn descriptor_set() -> Vec<u8> {
         }],
         syntax: Some("proto3".into()),
         ..Default::default()
-    };
+    }
+}
+
+/// The serialized `FileDescriptorSet` of `foxglove.RawImage` and its dependency
+/// `google.protobuf.Timestamp`: the MCAP schema data for encoding `protobuf`.
+pub fn descriptor_set() -> Vec<u8> {
+    let timestamp = timestamp_file();
     let raw_image = FileDescriptorProto {
         name: Some("foxglove/RawImage.proto".into()),
         package: Some("foxglove".into()),

@@ -217,6 +217,7 @@ mod tests {
             &RecordingOptions {
                 compression,
                 chunk_size: 1024,
+                ..RecordingOptions::default()
             },
         )
         .unwrap();

@@ -1,5 +1,7 @@
 //! Writing a recording.
 
+use crate::compressed_image;
+use crate::config::FrameEncoding;
 use crate::raw_image::{self, ImageMeta};
 use crate::RecordError;
 use hubtrack_types::{FrameHeader, PixelFormat};
@@ -11,8 +13,13 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
-/// Topic of the frames (foxglove.RawImage).
+/// Topic of the frames (foxglove.CompressedImage or foxglove.RawImage, by
+/// [`crate::config::FrameEncoding`]).
 pub const FRAMES_TOPIC: &str = "/frames";
+/// Topic of the raw copies of some frames when `/frames` is compressed (foxglove.RawImage).
+pub const RAW_FRAMES_TOPIC: &str = "/frames/raw";
+/// `format` of the JPEG frames.
+pub const JPEG_FORMAT: &str = "jpeg";
 /// Topic of the frame headers (stamps and truth).
 pub const FRAME_HEADERS_TOPIC: &str = "/frames/header";
 /// Topic of the detector overlay (foxglove.ImageAnnotations).
@@ -81,7 +88,8 @@ impl ChannelKind {
         }
     }
 
-    /// The JSON schema, generated from the Rust type so it cannot drift.
+    /// The JSON schema, generated from the Rust type so it cannot drift, in the subset the
+    /// viewers parse ([`crate::viewer_schema`]).
     pub fn json_schema(self) -> Vec<u8> {
         use hubtrack_types as t;
         let schema = match self {
@@ -93,7 +101,8 @@ impl ChannelKind {
             ChannelKind::Status => schemars::schema_for!(t::StageStatus),
             ChannelKind::Recorder => schemars::schema_for!(RecorderStats),
         };
-        serde_json::to_vec(&schema).expect("schemas serialise")
+        let schema = serde_json::to_value(&schema).expect("schemas serialise");
+        serde_json::to_vec(&crate::viewer_schema::for_viewers(&schema)).expect("schemas serialise")
     }
 
     /// The channel of a topic, if it is one of hubtrack's JSON channels.
@@ -118,6 +127,8 @@ pub struct RecorderStats {
     /// Frames whose pixels were not written because the disk was nearly full (`min_free_mib`);
     /// their headers were.
     pub frames_dropped_disk: u64,
+    /// Frames whose pixels could not be encoded (JPEG); their headers were written.
+    pub frames_encode_failed: u64,
     /// Result messages written.
     pub messages_recorded: u64,
     /// Bytes written so far (approximate until the file is finished).
@@ -131,6 +142,10 @@ pub struct RecordingOptions {
     pub compression: Option<mcap::Compression>,
     /// Target chunk size, bytes.
     pub chunk_size: u64,
+    /// How `/frames` holds the pixels.
+    pub frame_encoding: FrameEncoding,
+    /// With JPEG frames: whether raw copies of some frames go to `/frames/raw`.
+    pub raw_copies: bool,
 }
 
 impl Default for RecordingOptions {
@@ -138,6 +153,8 @@ impl Default for RecordingOptions {
         RecordingOptions {
             compression: Some(mcap::Compression::Lz4),
             chunk_size: 4 << 20,
+            frame_encoding: FrameEncoding::Raw,
+            raw_copies: false,
         }
     }
 }
@@ -146,7 +163,10 @@ impl Default for RecordingOptions {
 pub struct Recording {
     path: PathBuf,
     writer: mcap::Writer<BufWriter<File>>,
-    frames_channel: u16,
+    /// `/frames` when it holds JPEG.
+    jpeg_channel: Option<u16>,
+    /// Where raw pixels go: `/frames` (raw encoding) or `/frames/raw` (raw copies beside JPEG).
+    raw_channel: Option<u16>,
     overlay_channel: u16,
     json_channels: BTreeMap<ChannelKind, u16>,
     scratch: Vec<u8>,
@@ -198,16 +218,43 @@ impl Recording {
             .create(BufWriter::with_capacity(1 << 20, file))
             .map_err(|e| mcap_err(path, e))?;
         let no_meta = BTreeMap::new();
-        let image_schema = writer
-            .add_schema(
-                raw_image::SCHEMA_NAME,
-                "protobuf",
-                &raw_image::descriptor_set(),
+        let (jpeg, raw_topic) = match options.frame_encoding {
+            FrameEncoding::Raw => (false, Some(FRAMES_TOPIC)),
+            FrameEncoding::Jpeg => (true, options.raw_copies.then_some(RAW_FRAMES_TOPIC)),
+        };
+        let jpeg_channel = if jpeg {
+            let schema = writer
+                .add_schema(
+                    compressed_image::SCHEMA_NAME,
+                    "protobuf",
+                    &compressed_image::descriptor_set(),
+                )
+                .map_err(|e| mcap_err(path, e))?;
+            Some(
+                writer
+                    .add_channel(schema, FRAMES_TOPIC, "protobuf", &no_meta)
+                    .map_err(|e| mcap_err(path, e))?,
             )
-            .map_err(|e| mcap_err(path, e))?;
-        let frames_channel = writer
-            .add_channel(image_schema, FRAMES_TOPIC, "protobuf", &no_meta)
-            .map_err(|e| mcap_err(path, e))?;
+        } else {
+            None
+        };
+        let raw_channel = match raw_topic {
+            Some(topic) => {
+                let schema = writer
+                    .add_schema(
+                        raw_image::SCHEMA_NAME,
+                        "protobuf",
+                        &raw_image::descriptor_set(),
+                    )
+                    .map_err(|e| mcap_err(path, e))?;
+                Some(
+                    writer
+                        .add_channel(schema, topic, "protobuf", &no_meta)
+                        .map_err(|e| mcap_err(path, e))?,
+                )
+            }
+            None => None,
+        };
         let overlay_schema = writer
             .add_schema(
                 crate::annotations::SCHEMA_NAME,
@@ -233,7 +280,8 @@ impl Recording {
         Ok(Recording {
             path: path.into(),
             writer,
-            frames_channel,
+            jpeg_channel,
+            raw_channel,
             overlay_channel,
             json_channels,
             scratch: Vec::new(),
@@ -251,8 +299,39 @@ impl Recording {
         (monotonic_ns as i128 + self.realtime_offset_ns).max(0) as u64
     }
 
-    /// Writes one frame's pixels to `/frames` (skipped when `pixels` is `None`) and its header to
-    /// `/frames/header`. `log_time` is the wall-clock receive time.
+    /// Writes one frame's JPEG to `/frames` (call before [`Recording::write_frame`] of the same
+    /// frame: replay pairs an image with the header that follows it).
+    pub fn write_jpeg(
+        &mut self,
+        header: &FrameHeader,
+        jpeg: Vec<u8>,
+        log_time: u64,
+    ) -> Result<(), RecordError> {
+        let channel_id = self.jpeg_channel.ok_or_else(|| RecordError::Encode {
+            channel: FRAMES_TOPIC.into(),
+            message: "this recording's frames are raw, not JPEG".into(),
+        })?;
+        compressed_image::encode(
+            header.capture_realtime_ns,
+            CAMERA_FRAME_ID,
+            JPEG_FORMAT,
+            jpeg,
+            &mut self.scratch,
+        );
+        let h = MessageHeader {
+            channel_id,
+            sequence: header.seq as u32,
+            log_time,
+            publish_time: header.capture_realtime_ns,
+        };
+        self.writer
+            .write_to_known_channel(&h, &self.scratch)
+            .map_err(|e| mcap_err(&self.path, e))
+    }
+
+    /// Writes one frame's raw pixels (skipped when `pixels` is `None`) to `/frames` (raw
+    /// encoding) or `/frames/raw` (raw copies beside JPEG), then its header to `/frames/header`.
+    /// `log_time` is the wall-clock receive time.
     pub fn write_frame(
         &mut self,
         header: &FrameHeader,
@@ -270,9 +349,13 @@ impl Recording {
                 encoding: foxglove_encoding(header.format),
                 step: header.stride,
             };
+            let channel_id = self.raw_channel.ok_or_else(|| RecordError::Encode {
+                channel: RAW_FRAMES_TOPIC.into(),
+                message: "this recording has no channel for raw frames".into(),
+            })?;
             raw_image::encode(&meta, pixels, &mut self.scratch);
             let h = MessageHeader {
-                channel_id: self.frames_channel,
+                channel_id,
                 sequence,
                 log_time,
                 publish_time,

@@ -494,10 +494,15 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
     let report = hubtrack_record::latency::analyze(&rec)?;
     let info = hubtrack_record::inspect(&rec)?;
     println!(
-        "\npipeline: {camera} {w}x{h} at {fps} fps for {} s, {}, pinned to cpus {}",
+        "\npipeline: {camera} {w}x{h} at {fps} fps for {} s, {}, pinned to cpus {}{}",
         args.seconds,
         PIPELINE_STAGES.join("+"),
-        args.cpus
+        args.cpus,
+        if args.set.is_empty() {
+            " (default settings: JPEG frames)".to_string()
+        } else {
+            format!(", with {}", args.set.join(" "))
+        }
     );
     hubtrack_record::latency::print(&report);
     println!("{:<22}{:>10}{:>16}", "process", "CPU %", "peak RSS MB");
@@ -525,6 +530,17 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
         info.topic_counts.get("/setpoints").copied().unwrap_or(0),
         info.size_bytes as f64 / 1e6
     );
+    println!(
+        "recording: {:.0} MB per minute",
+        info.size_bytes as f64 / 1e6 / (args.seconds / 60.0)
+    );
+    match hubtrack_record::channels::read(&rec).ok().and_then(|c| c.recorder) {
+        Some(r) => println!(
+            "recorder: {} frames received, {} recorded, {} dropped (writer behind), {} lost in shared memory, {} not encodable",
+            r.frames_received, r.frames_recorded, r.frames_dropped_queue, r.frames_lost, r.frames_encode_failed
+        ),
+        None => println!("recorder: no /recorder counters in the file"),
+    }
     let _ = std::fs::remove_file(&rec);
     let _ = std::fs::remove_dir(&dir);
     Ok(())

@@ -6,10 +6,17 @@
 //! camera (the camera never waits for anyone anyway: safe overflow). On SIGINT/SIGTERM the writer
 //! drains the queue and finishes the file; after `kill -9` the file is readable up to its last
 //! flushed chunk (see `hubtrack recover`).
+//!
+//! Frames are JPEG-encoded by the writer thread (`recorder.frame_encoding = "jpeg"`, the
+//! default): in this process, which the supervisor starts at a lower priority than the camera
+//! and detect, behind the same bounded pool, so encoding can fall behind only into counted drops,
+//! never into the camera's or detect's time. A frame that does not encode keeps its header and
+//! is counted (`frames_encode_failed`).
 
 use anyhow::Context;
 use clap::Parser;
-use hubtrack_record::config::{Compression, RecorderConfig};
+use hubtrack_record::config::{Compression, FrameEncoding, RecorderConfig};
+use hubtrack_record::jpeg::JpegEncoder;
 use hubtrack_record::writer::{ChannelKind, RecorderStats};
 use hubtrack_record::{Recording, RecordingOptions};
 use hubtrack_runtime::ipc::{FrameSubscriber, MsgSubscriber};
@@ -132,14 +139,7 @@ fn run() -> anyhow::Result<()> {
     let writer = std::thread::Builder::new()
         .name("mcap-writer".into())
         .spawn(move || {
-            let r = write_loop(
-                recording,
-                queue_rx,
-                free_tx,
-                stats_tx,
-                cfg.flush_interval_ms,
-                cfg.min_free_mib,
-            );
+            let r = write_loop(recording, queue_rx, free_tx, stats_tx, &cfg);
             if let Err(e) = &r {
                 let _ = failed.set(format!("{e:#}"));
             }
@@ -257,6 +257,7 @@ fn run() -> anyhow::Result<()> {
         while let Ok(s) = stats_rx.try_recv() {
             stats.frames_recorded = s.frames_recorded;
             stats.frames_dropped_disk = s.frames_dropped_disk;
+            stats.frames_encode_failed = s.frames_encode_failed;
             stats.messages_recorded = s.messages_recorded;
             stats.bytes_written = s.bytes_written;
         }
@@ -299,17 +300,19 @@ fn run() -> anyhow::Result<()> {
         })?;
     stats.frames_recorded = final_stats.frames_recorded;
     stats.frames_dropped_disk = final_stats.frames_dropped_disk;
+    stats.frames_encode_failed = final_stats.frames_encode_failed;
     stats.messages_recorded = final_stats.messages_recorded;
     stats.bytes_written = final_stats.bytes_written;
     status.status.outputs = stats.frames_recorded;
     status.publish_now();
     log::info!(
-        "recorded {} frames ({} received, {} dropped: disk behind, {} lost: overwritten before read, {} without pixels: disk nearly full), {} messages, {} bytes",
+        "recorded {} frames ({} received, {} dropped: disk behind, {} lost: overwritten before read, {} without pixels: disk nearly full, {} without pixels: not encodable), {} messages, {} bytes",
         stats.frames_recorded,
         stats.frames_received,
         stats.frames_dropped_queue,
         stats.frames_lost,
         stats.frames_dropped_disk,
+        stats.frames_encode_failed,
         stats.messages_recorded,
         stats.bytes_written
     );
@@ -324,6 +327,8 @@ fn options(cfg: &RecorderConfig) -> RecordingOptions {
             Compression::Zstd => Some(mcap::Compression::Zstd),
         },
         chunk_size: cfg.chunk_size_kib * 1024,
+        frame_encoding: cfg.frame_encoding,
+        raw_copies: cfg.raw_every > 0,
     }
 }
 
@@ -416,6 +421,7 @@ impl DiskGuard {
 fn merged(reader: &RecorderStats, writer: &RecorderStats) -> RecorderStats {
     RecorderStats {
         frames_dropped_disk: writer.frames_dropped_disk,
+        frames_encode_failed: writer.frames_encode_failed,
         frames_recorded: writer.frames_recorded,
         messages_recorded: writer.messages_recorded,
         bytes_written: writer.bytes_written,
@@ -432,19 +438,10 @@ fn write_loop(
     queue: Receiver<Item>,
     free: SyncSender<Vec<u8>>,
     stats_out: mpsc::Sender<RecorderStats>,
-    flush_interval_ms: u64,
-    min_free_mib: u64,
+    cfg: &RecorderConfig,
 ) -> anyhow::Result<RecorderStats> {
     let mut stats = RecorderStats::default();
-    let result = write_items(
-        &mut rec,
-        &queue,
-        &free,
-        &stats_out,
-        &mut stats,
-        flush_interval_ms,
-        min_free_mib,
-    );
+    let result = write_items(&mut rec, &queue, &free, &stats_out, &mut stats, cfg);
     match result {
         Ok(()) => {
             rec.finish().context("finishing the file")?;
@@ -474,11 +471,11 @@ fn write_items(
     free: &SyncSender<Vec<u8>>,
     stats_out: &mpsc::Sender<RecorderStats>,
     stats: &mut RecorderStats,
-    flush_interval_ms: u64,
-    min_free_mib: u64,
+    cfg: &RecorderConfig,
 ) -> anyhow::Result<()> {
-    let flush_interval = Duration::from_millis(flush_interval_ms);
-    let mut disk = DiskGuard::new(rec.path(), min_free_mib);
+    let flush_interval = Duration::from_millis(cfg.flush_interval_ms);
+    let mut disk = DiskGuard::new(rec.path(), cfg.min_free_mib);
+    let mut frames = FrameWriter::new(cfg);
     let mut flushed_at = Instant::now();
     let mut reported = RecorderStats::default();
     let mut last_frame = FrameHeader::default();
@@ -502,10 +499,10 @@ fn write_items(
                     stats.frames_dropped_disk += 1;
                 }
                 let written = if keep_pixels { pixels.as_deref() } else { None };
-                rec.write_frame(&header, written, log_time)
+                frames
+                    .write(rec, &header, written, log_time, stats)
                     .context("writing a frame")?;
                 stats.frames_recorded += 1;
-                stats.bytes_written += written.map_or(0, |p| p.len() as u64);
                 last_frame = header;
                 if image_times.len() == IMAGE_TIME_MEMORY {
                     image_times.pop_front();
@@ -575,4 +572,53 @@ fn write_items(
         &merged(&reader_stats, stats),
     )?;
     Ok(())
+}
+
+/// Writes each frame's pixels the configured way: JPEG on `/frames` with a raw copy of every
+/// `raw_every`-th frame, or raw on `/frames`.
+struct FrameWriter {
+    jpeg: Option<JpegEncoder>,
+    raw_every: u64,
+}
+
+impl FrameWriter {
+    fn new(cfg: &RecorderConfig) -> FrameWriter {
+        FrameWriter {
+            jpeg: (cfg.frame_encoding == FrameEncoding::Jpeg)
+                .then(|| JpegEncoder::new(cfg.jpeg_quality)),
+            raw_every: cfg.raw_every,
+        }
+    }
+
+    fn write(
+        &mut self,
+        rec: &mut Recording,
+        header: &FrameHeader,
+        pixels: Option<&[u8]>,
+        log_time: u64,
+        stats: &mut RecorderStats,
+    ) -> Result<(), hubtrack_record::RecordError> {
+        let Some(encoder) = self.jpeg.as_mut() else {
+            stats.bytes_written += pixels.map_or(0, |p| p.len() as u64);
+            return rec.write_frame(header, pixels, log_time);
+        };
+        let Some(px) = pixels else {
+            return rec.write_frame(header, None, log_time);
+        };
+        match encoder.encode(header, px) {
+            Ok(jpeg) => {
+                stats.bytes_written += jpeg.len() as u64;
+                rec.write_jpeg(header, jpeg, log_time)?;
+            }
+            Err(e) => {
+                stats.frames_encode_failed += 1;
+                log::warn!("frame not encoded, header kept: {e}");
+            }
+        }
+        let raw_copy = self.raw_every > 0 && header.seq.is_multiple_of(self.raw_every);
+        if raw_copy {
+            stats.bytes_written += px.len() as u64;
+        }
+        rec.write_frame(header, raw_copy.then_some(px), log_time)
+    }
 }

@@ -8,10 +8,9 @@
 //! stage received it (the `recv_ns` of its recorded output), a vehicle state by when it was
 //! published, and the two streams are merged by key within a bounded look-ahead.
 
-use hubtrack_record::raw_image::RawImage;
-use hubtrack_record::writer::{ChannelKind, FRAMES_TOPIC};
+use hubtrack_record::frame_payload::{self, FrameCoding};
+use hubtrack_record::writer::{ChannelKind, FRAMES_TOPIC, RAW_FRAMES_TOPIC};
 use hubtrack_types::{Detection, FrameHeader, Stamps, TrackState, VehicleState};
-use prost::Message as _;
 use std::collections::{BTreeMap, VecDeque};
 use std::path::Path;
 
@@ -23,6 +22,8 @@ const REORDER_MARGIN_NS: u64 = 200_000_000;
 /// are 50 MB). Beyond it the oldest goes out anyway: only possible when the stamps of the file
 /// do not follow one clock (e.g. a replay of a replay), where no order can be restored.
 const MAX_HELD_DRIVERS: usize = 8;
+/// Image messages of one frame (its JPEG and a raw copy) waiting for its header, at most.
+const MAX_PENDING_IMAGES: usize = 4;
 /// Vehicle states held back waiting for the next driving input, at most (small messages).
 const MAX_HELD_VEHICLES: usize = 4096;
 
@@ -162,11 +163,16 @@ pub fn survey(path: &Path, first: FirstStage) -> anyhow::Result<Survey> {
 pub struct Reader {
     reader: hubtrack_record::reader::Messages,
     first: FirstStage,
-    pending_image: Option<(u32, Vec<u8>)>,
+    /// The image messages read since the last frame header: (MCAP sequence, coding, message).
+    pending_images: Vec<(u32, FrameCoding, Vec<u8>)>,
     /// Why the file ended early, if it did.
     pub stopped: Option<String>,
     /// Messages that could not be decoded.
     pub undecodable: u64,
+    /// Frames fed from a lossy (JPEG) image: detect's results then differ from the live run's.
+    pub frames_lossy: u64,
+    /// Frames whose image did not decode (corrupt or truncated), skipped.
+    pub frames_bad: u64,
 }
 
 impl Reader {
@@ -175,9 +181,11 @@ impl Reader {
         Ok(Reader {
             reader: hubtrack_record::reader::messages(path)?,
             first,
-            pending_image: None,
+            pending_images: Vec::new(),
             stopped: None,
             undecodable: 0,
+            frames_lossy: 0,
+            frames_bad: 0,
         })
     }
 
@@ -187,6 +195,34 @@ impl Reader {
             self.undecodable += 1;
         }
         v
+    }
+
+    /// The pixels of frame `h` from the images read before its header: the raw one if there is
+    /// one (bit-exact), else the decoded JPEG; `None` (counted) if none is usable.
+    fn frame_pixels(&mut self, h: &FrameHeader) -> Option<Vec<u8>> {
+        let mut images = std::mem::take(&mut self.pending_images);
+        images.retain(|(seq, _, _)| *seq == h.seq as u32);
+        images.sort_by_key(|(_, coding, _)| *coding != FrameCoding::Raw);
+        let mut failure = None;
+        for (_, coding, data) in &images {
+            match frame_payload::pixels(*coding, data, h) {
+                Ok(px) => {
+                    if *coding != FrameCoding::Raw {
+                        self.frames_lossy += 1;
+                    }
+                    return Some(px);
+                }
+                Err(e) => failure = Some(e),
+            }
+        }
+        match failure {
+            Some(e) => {
+                self.frames_bad += 1;
+                log::warn!("frame {} skipped: {e}", h.seq);
+            }
+            None => self.undecodable += 1,
+        }
+        None
     }
 }
 
@@ -201,22 +237,33 @@ impl Iterator for Reader {
             let topic = m.channel.topic.as_str();
             let frames = self.first == FirstStage::Detect;
             match (topic, ChannelKind::from_topic(topic), self.first) {
-                (FRAMES_TOPIC, _, _) if frames => match RawImage::decode(m.data.as_ref()) {
-                    Ok(img) => self.pending_image = Some((m.sequence, img.data)),
-                    Err(_) => self.undecodable += 1,
-                },
+                (FRAMES_TOPIC | RAW_FRAMES_TOPIC, _, _) if frames => {
+                    let coding = m
+                        .channel
+                        .schema
+                        .as_ref()
+                        .and_then(|s| FrameCoding::of_schema(&s.name));
+                    match coding {
+                        // Decoded when its header arrives, and only the one image used.
+                        Some(c) => {
+                            // Images without a header (a damaged file) must not pile up.
+                            if self.pending_images.len() >= MAX_PENDING_IMAGES {
+                                self.pending_images.remove(0);
+                                self.undecodable += 1;
+                            }
+                            self.pending_images
+                                .push((m.sequence, c, m.data.into_owned()));
+                        }
+                        None => self.undecodable += 1,
+                    }
+                }
                 (_, Some(ChannelKind::FrameHeader), FirstStage::Detect) => {
                     let Some(h) = self.decode::<FrameHeader>(&m.data) else {
                         continue;
                     };
-                    // The recorder writes each image right before its header.
-                    match self.pending_image.take() {
-                        Some((seq, pixels))
-                            if seq == h.seq as u32 && pixels.len() == h.payload_len() =>
-                        {
-                            return Some(Input::Frame(h, pixels));
-                        }
-                        _ => self.undecodable += 1,
+                    // The recorder writes each frame's images right before its header.
+                    if let Some(pixels) = self.frame_pixels(&h) {
+                        return Some(Input::Frame(h, pixels));
                     }
                 }
                 (_, Some(ChannelKind::Detection), FirstStage::Track) => {

@@ -387,6 +387,19 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
             reader.undecodable
         );
     }
+    if reader.frames_bad > 0 {
+        println!(
+            "note: {} frames whose image did not decode (corrupt or truncated) were skipped",
+            reader.frames_bad
+        );
+    }
+    if reader.frames_lossy > 0 {
+        println!(
+            "note: {} of the frames were decoded from JPEG (lossy): detect's results differ from the live run by the compression; \
+             recorder.frame_encoding = \"raw\" (or recorder.raw_every) records frames for bit-exact replay",
+            reader.frames_lossy
+        );
+    }
     if sent == 0 {
         let _ = std::fs::remove_file(output::partial(&output));
         bail!(
@@ -399,6 +412,11 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     println!("new outputs recorded to {}", output.display());
     if args.compare {
         compare::compare(&args.file, &output, &stages)?;
+        if reader.frames_lossy > 0 {
+            println!(
+                "(inputs decoded from JPEG: differences in /detections and after are expected from the compression)"
+            );
+        }
     }
     Ok(())
 }

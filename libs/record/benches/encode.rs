@@ -1,0 +1,100 @@
+//! Frame encoders for the recorder, on the synthetic camera's frames (sensor noise included):
+//! time per frame on one core, bytes per frame, MB per minute at the camera's rate, and the
+//! share of one core the encoding takes at that rate.
+//!
+//! `cargo bench -p hubtrack-record --bench encode`. `ENCODE_BENCH_FRAMES=N` sets the frames per
+//! row (default 60).
+
+use hubtrack_capture::config::{SyntheticCamera, SyntheticConfig};
+use hubtrack_capture::synthetic::SyntheticSource;
+use hubtrack_record::jpeg::JpegEncoder;
+use hubtrack_types::{FrameHeader, PixelFormat};
+use std::time::Instant;
+
+fn pct(v: &mut [f64], q: f64) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * q).round() as usize]
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let n: u64 = std::env::var("ENCODE_BENCH_FRAMES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(60);
+    println!("{n} synthetic frames per row; ms per frame on one core; MB/min and core share at the camera's rate");
+    println!(
+        "{:<10} {:>4} {:<14} {:>8} {:>8} {:>9} {:>8} {:>7}",
+        "size", "fps", "encoder", "median", "p99", "KB/frame", "MB/min", "core %"
+    );
+    for (camera, fps) in [(SyntheticCamera::Gopro, 30.0), (SyntheticCamera::Usb, 60.0)] {
+        let cfg = SyntheticConfig {
+            camera,
+            ..SyntheticConfig::default()
+        };
+        let mut source = SyntheticSource::new(&cfg, fps)?;
+        let (w, h) = source.size();
+        let mut frames = Vec::new();
+        for seq in 0..n {
+            let mut px = vec![0u8; w as usize * h as usize * 3];
+            source.render_index(seq, &mut px)?;
+            frames.push(px);
+        }
+        let header = |seq| FrameHeader {
+            seq,
+            width: w,
+            height: h,
+            stride: w * 3,
+            format: PixelFormat::Bgr8,
+            ..Default::default()
+        };
+        let mut rows: Vec<(String, Vec<f64>, f64)> = Vec::new();
+        for quality in [65u32, 75, 85, 95] {
+            let mut enc = JpegEncoder::new(quality);
+            let (mut times, mut bytes) = (Vec::new(), 0usize);
+            for (seq, px) in frames.iter().enumerate() {
+                let t = Instant::now();
+                let jpeg = enc.encode(&header(seq as u64), px)?;
+                times.push(t.elapsed().as_secs_f64() * 1e3);
+                bytes += jpeg.len();
+            }
+            rows.push((format!("jpeg q{quality}"), times, bytes as f64 / n as f64));
+        }
+        // The raw alternative: lz4 over the pixels, as the MCAP writer compresses raw frames.
+        let (mut times, mut bytes) = (Vec::new(), 0usize);
+        for px in &frames {
+            let t = Instant::now();
+            let c = lz4_flex_free(px);
+            times.push(t.elapsed().as_secs_f64() * 1e3);
+            bytes += c;
+        }
+        rows.push(("raw + lz4".into(), times, bytes as f64 / n as f64));
+        for (name, mut times, per_frame) in rows {
+            let median = pct(&mut times, 0.5);
+            println!(
+                "{:<10} {:>4} {:<14} {:>8.2} {:>8.2} {:>9.0} {:>8.0} {:>7.0}",
+                format!("{w}x{h}"),
+                fps,
+                name,
+                median,
+                pct(&mut times, 0.99),
+                per_frame / 1e3,
+                per_frame * fps * 60.0 / 1e6,
+                median * fps / 10.0
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Bytes of `px` after the MCAP writer's lz4 (frame format, as in a chunk).
+fn lz4_flex_free(px: &[u8]) -> usize {
+    let mut out = Vec::with_capacity(px.len() / 2);
+    let mut enc = lz4::EncoderBuilder::new()
+        .level(0)
+        .build(&mut out)
+        .expect("lz4 encoder");
+    std::io::Write::write_all(&mut enc, px).expect("in memory");
+    let (_, r) = enc.finish();
+    r.expect("in memory");
+    out.len()
+}
