@@ -1,5 +1,5 @@
 //! `hubtrack fuzz`: millions of mutations of valid inputs through every parser of outside data
-//! (recordings, MAVLink bytes and link state, configuration); each must end in a result or an
+//! (recordings, MAVLink bytes and link state, configuration, camera calibrations); each must end in a result or an
 //! error, never a panic. Prints executions, crashes, the slowest input and the peak memory.
 //!
 //! Seeds are the corpus in `tests/fuzz-corpus/` and the documented config files; mutations are
@@ -18,8 +18,12 @@ const MAX_INPUT: usize = 1 << 17;
 /// `hubtrack fuzz`'s options.
 #[derive(clap::Args)]
 pub struct FuzzArgs {
-    /// Targets, comma separated: mcap, mavlink, config (default: all).
-    #[arg(long, value_delimiter = ',', default_value = "mcap,mavlink,config")]
+    /// Targets, comma separated: mcap, mavlink, config, calibration (default: all).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "mcap,mavlink,config,calibration"
+    )]
     pub targets: Vec<String>,
     /// Mutations per target.
     #[arg(long, default_value_t = 1_000_000)]
@@ -87,6 +91,25 @@ fn run_target(name: &str, input: &[u8]) {
                 let _ = doc.sections::<crate::config::LabConfig>();
             }
         }
+        "calibration" => {
+            // A camera that loads is then used: every pixel ↔ ray path, scaled, on the corners.
+            let text = String::from_utf8_lossy(input);
+            if let Ok(cam) = hubtrack_types::setup::CameraModel::from_ros_yaml(&text) {
+                let (w, h) = (f64::from(cam.width), f64::from(cam.height));
+                for px in [
+                    [0.0, 0.0],
+                    [w - 1.0, h - 1.0],
+                    [cam.cx, cam.cy],
+                    [w / 3.0, h],
+                ] {
+                    let ray = cam.ray(px);
+                    std::hint::black_box(cam.project(ray));
+                    std::hint::black_box(cam.local_focal_px(px));
+                }
+                std::hint::black_box(cam.scaled_to(cam.width / 2, cam.height / 2).ok());
+                std::hint::black_box(cam.hfov_deg());
+            }
+        }
         other => unreachable!("unknown target {other}"),
     }
 }
@@ -139,7 +162,7 @@ fn peak_mib() -> f64 {
 /// Runs the command.
 pub fn run(args: FuzzArgs) -> anyhow::Result<()> {
     for t in &args.targets {
-        if !["mcap", "mavlink", "config"].contains(&t.as_str()) {
+        if !["mcap", "mavlink", "config", "calibration"].contains(&t.as_str()) {
             bail!("--targets {t}: one of mcap, mavlink, config");
         }
     }
