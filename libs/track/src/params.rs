@@ -229,13 +229,6 @@ hubtrack_types::params! {
         /// [`TrackConfig::with_setup`].
         #[serde(skip)]
         pub tower_diameter_m: f64 = 2.2, open_closed(0.0, MAX_SIZE_M);
-        /// Tower taper: how much the diameter grows per metre below the tower top, m/m. The
-        /// detector measures the width some rows under the top, where a tapered tower is wider:
-        /// at any distance that adds `taper × rows below the top` px, which the estimate takes
-        /// off. From `[turbine]`: (base − top diameter) / hub height (see
-        /// [`TrackConfig::with_setup`]).
-        #[serde(skip)]
-        pub tower_taper: f64 = (4.3 - 2.2) / 64.0, closed(0.0, 1.0);
         /// Standard deviation of the measured tower width, px at the reference width (the thesis:
         /// one pixel moved the estimate from 35 m to 40 m).
         pub tower_width_std_px: f64 = 1.0, open_closed(0.0, MAX_PX);
@@ -551,9 +544,6 @@ impl TrackConfig {
         self.camera.focal_length_per_width = lens.focal_length_per_width();
         self.camera.lens = lens.clone();
         self.distance.tower_diameter_m = turbine.tower_top_diameter_m;
-        self.distance.tower_taper =
-            ((turbine.tower_base_diameter_m - turbine.tower_top_diameter_m) / turbine.hub_height_m)
-                .max(0.0);
         self.distance.spinner_diameter_m = turbine.spinner_diameter_m;
         self.yaw.hub_tower_offset_m = turbine.hub_overhang_m;
         self

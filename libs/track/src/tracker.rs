@@ -543,20 +543,9 @@ impl Core {
         distance_from_tower_width(
             self.camera().focal_at(det.hub_px),
             d.tower_diameter_m,
-            self.tower_top_width_px(det),
+            det.tower_width_px,
             d.tower_width_std_px * s,
         )
-    }
-
-    /// The width the tower's top diameter has in the image, from the width measured some rows
-    /// below the top: a tapered tower is wider there by `taper × rows below the top` px at any
-    /// distance (the diameter grows by `taper` per metre, a metre is `f / d` px, and the width
-    /// is `f / d` px per metre of diameter).
-    fn tower_top_width_px(&self, det: &Detection) -> f64 {
-        let below_px = (det.tower_width_row - det.tower_top_px[1]).max(0.0);
-        let top = det.tower_width_px - self.cfg.distance.tower_taper * below_px;
-        // A measurement far below the top with an implausible taper must not vanish.
-        top.max(0.5 * det.tower_width_px)
     }
 
     /// The thesis's per-frame estimates: distance from the tower width (depth of the tower, eq.
@@ -640,7 +629,7 @@ impl Core {
             let psi = self.yaw.estimate().map_or(0.0, |e| e.value);
             let expected_px = self.camera().focal_at(det.hub_px) * dc.tower_diameter_m
                 / (sp.value + offset * psi.cos());
-            sizes.rejected_width_ratio = Some(self.tower_top_width_px(det) / expected_px);
+            sizes.rejected_width_ratio = Some(det.tower_width_px / expected_px);
         }
         log::debug!(
             "tower {tower_hub:.1} m and spinner {:.1} m disagree (chi2 {chi2:.0}): kept {}",

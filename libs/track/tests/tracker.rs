@@ -1674,39 +1674,3 @@ fn the_calibrated_lens_and_the_turbine_profile_reach_the_distance() {
         "the centre focal length alone reads long off-centre: {centre_only:.2} m"
     );
 }
-
-/// The detector measures a tapered tower some rows below its top, where it is wider; the
-/// profile's taper (base and top diameters over the hub height) takes that off, at any distance.
-#[test]
-fn the_towers_taper_from_the_profile_is_taken_off_the_width() {
-    use hubtrack_types::setup::{Lens, TurbineSetup};
-    let turbine = TurbineSetup {
-        tower_top_diameter_m: 2.5,
-        tower_base_diameter_m: 5.5,
-        hub_height_m: 100.0,
-        ..TurbineSetup::default()
-    };
-    let taper = (5.5 - 2.5) / 100.0;
-    let cfg = TrackConfig::default().with_setup(&Lens::default(), &turbine);
-    let f = cfg.camera.focal_length_per_width * f64::from(W);
-    for d_tower in [12.0, 25.0] {
-        let mut tr = Tracker::new(cfg.clone()).unwrap();
-        // Measured 6 m below the top.
-        let below_m = 6.0;
-        let mut s = None;
-        for k in 0..60 {
-            let mut d = det(k, frame_t(k, 30.0), Some([CX, CY]));
-            d.tower_found = true;
-            d.tower_top_px = [CX, CY + 40.0];
-            d.tower_width_row = CY + 40.0 + f * below_m / d_tower;
-            d.tower_width_px = f * (2.5 + taper * below_m) / d_tower;
-            s = Some(tr.update(&d, None));
-        }
-        let hub = s.unwrap().distance_m;
-        let want = d_tower - turbine.hub_overhang_m;
-        assert!(
-            (hub - want).abs() < 0.02 * want,
-            "tower at {d_tower} m: hub distance {hub:.2} m, want {want:.2} m"
-        );
-    }
-}
