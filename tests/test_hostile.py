@@ -205,7 +205,9 @@ def test_a_full_disk_is_named_counted_and_fails_the_run(runner, small_disk):
     rec = small_disk / "full.mcap"
     res = runner.run("hubtrack", "run", "--record", rec, "--duration", "4",
                      "--set", 'run.stages=["capture","recorder"]', "--set", "recorder.min_free_mib=0",
-                     "--set", 'recorder.compression="none"', timeout=60)
+                     "--set", 'recorder.compression="none"',
+                     # Raw frames fill 20 MiB within the run; JPEG ones would not.
+                     "--set", 'recorder.frame_encoding="raw"', timeout=60)
     assert res.returncode == 1, (res.returncode, res.stdout, res.stderr[-3000:])
     assert "No space left on device" in res.stderr
     assert "writing " + str(rec) + " failed" in res.stderr
