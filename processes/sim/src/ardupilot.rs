@@ -267,27 +267,11 @@ pub fn run(
         ));
     }
     log::info!(
-        "seed {} {}: {} after {:.1} s, distance {:.2} m, relative yaw {:+.1}°, lateral {:+.2} m, path {:.1} m, closest to rotor plane {:.2} m{}",
-        outcome.seed,
-        if outcome.success { "SUCCESS" } else { "FAILED" },
-        outcome.end_reason,
-        outcome.time_s,
-        outcome.final_distance_m,
-        outcome.final_yaw_deg,
-        outcome.final_lateral_m,
-        outcome.path_length_m,
-        outcome.min_rotor_plane_m,
-        outcome.failure.as_deref().map(|f| format!(" ({f})")).unwrap_or_default()
-    );
-    log::info!(
         "{seq} frames, {step} physics steps ({t:.1} s simulated) in {:.1} s wall; {bad_packets} bad SITL packets; lockstep misses {lockstep_misses}; pilot link {:?}",
         wall0.elapsed().as_secs_f64(),
         link.stats()
     );
-    if let Some(path) = outcome_path {
-        std::fs::write(path, serde_json::to_string(&outcome)? + "\n")
-            .with_context(|| format!("cannot write the outcome to {}", path.display()))?;
-    }
+    crate::report_outcome(&outcome, outcome_path)?;
     status.publish_now();
     Ok(())
 }

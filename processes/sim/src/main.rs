@@ -252,6 +252,24 @@ fn run() -> anyhow::Result<()> {
     outcome.lockstep_misses = lockstep_misses;
     let stats = autopilot.stats();
     log::info!(
+        "{} frames in {:.1} s wall ({:.2}x real time); autopilot: {:?}; lockstep misses {lockstep_misses}; link {:?}",
+        seq,
+        wall0.elapsed().as_secs_f64(),
+        t / wall0.elapsed().as_secs_f64().max(1e-9),
+        stats,
+        link.stats()
+    );
+    report_outcome(&outcome, args.outcome.as_deref())?;
+    status.publish_now();
+    Ok(())
+}
+
+/// Logs a flight's outcome and writes it as one JSON line to `path` (for `hubtrack fly`).
+pub(crate) fn report_outcome(
+    outcome: &hubtrack_sim::Outcome,
+    path: Option<&std::path::Path>,
+) -> anyhow::Result<()> {
+    log::info!(
         "seed {} {}: {} after {:.1} s, distance {:.2} m, relative yaw {:+.1}°, lateral {:+.2} m, path {:.1} m, closest to rotor plane {:.2} m{}",
         outcome.seed,
         if outcome.success { "SUCCESS" } else { "FAILED" },
@@ -264,19 +282,10 @@ fn run() -> anyhow::Result<()> {
         outcome.min_rotor_plane_m,
         outcome.failure.as_deref().map(|f| format!(" ({f})")).unwrap_or_default()
     );
-    log::info!(
-        "{} frames in {:.1} s wall ({:.2}x real time); autopilot: {:?}; lockstep misses {lockstep_misses}; link {:?}",
-        seq,
-        wall0.elapsed().as_secs_f64(),
-        t / wall0.elapsed().as_secs_f64().max(1e-9),
-        stats,
-        link.stats()
-    );
-    if let Some(path) = &args.outcome {
-        std::fs::write(path, serde_json::to_string(&outcome)? + "\n")
+    if let Some(path) = path {
+        std::fs::write(path, serde_json::to_string(outcome)? + "\n")
             .with_context(|| format!("cannot write the outcome to {}", path.display()))?;
     }
-    status.publish_now();
     Ok(())
 }
 

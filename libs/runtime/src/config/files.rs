@@ -6,9 +6,8 @@
 //! the stage processes the supervisor starts read the same files. A profile's keys replace the
 //! config file's `[turbine]` keys, except keys given with `--set`, which win.
 
-use super::{quoted, ConfigDoc, ConfigError, MAX_CONFIG_BYTES};
+use super::{quoted, read_bounded, ConfigDoc, ConfigError};
 use hubtrack_types::setup::TurbineSetup;
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// `(section, key)` of every key that holds a file path.
@@ -60,20 +59,7 @@ impl ConfigDoc {
 /// Reads and checks a turbine profile: a TOML file of `[turbine]` keys (without `profile`).
 fn read_profile(path: &Path) -> Result<toml::Table, ConfigError> {
     let origin = format!("turbine profile {}", path.display());
-    let io = |cause| ConfigError::Io {
-        path: path.to_path_buf(),
-        cause,
-    };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let mut text = String::new();
-    file.take(MAX_CONFIG_BYTES + 1)
-        .read_to_string(&mut text)
-        .map_err(io)?;
-    if text.len() as u64 > MAX_CONFIG_BYTES {
-        return Err(ConfigError::TooLarge {
-            path: path.to_path_buf(),
-        });
-    }
+    let text = read_bounded(path)?;
     let table = text
         .parse::<toml::Table>()
         .map_err(|e| ConfigError::Invalid {

@@ -100,20 +100,7 @@ impl ConfigDoc {
 
     /// Reads a config file (at most [`MAX_CONFIG_BYTES`]).
     pub fn load(path: &Path) -> Result<ConfigDoc, ConfigError> {
-        let io = |cause| ConfigError::Io {
-            path: path.to_path_buf(),
-            cause,
-        };
-        let file = std::fs::File::open(path).map_err(io)?;
-        let mut text = String::new();
-        file.take(MAX_CONFIG_BYTES + 1)
-            .read_to_string(&mut text)
-            .map_err(io)?;
-        if text.len() as u64 > MAX_CONFIG_BYTES {
-            return Err(ConfigError::TooLarge {
-                path: path.to_path_buf(),
-            });
-        }
+        let text = read_bounded(path)?;
         let mut doc = ConfigDoc::parse(&text, &path.display().to_string())?;
         // Paths in a file are relative to the file.
         if let Some(dir) = path.parent() {
@@ -220,6 +207,25 @@ impl ConfigDoc {
     pub fn origin(&self) -> &str {
         &self.origin
     }
+}
+
+/// Reads a TOML file of at most [`MAX_CONFIG_BYTES`] (a config or a turbine profile).
+fn read_bounded(path: &Path) -> Result<String, ConfigError> {
+    let io = |cause| ConfigError::Io {
+        path: path.to_path_buf(),
+        cause,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let mut text = String::new();
+    file.take(MAX_CONFIG_BYTES + 1)
+        .read_to_string(&mut text)
+        .map_err(io)?;
+    if text.len() as u64 > MAX_CONFIG_BYTES {
+        return Err(ConfigError::TooLarge {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(text)
 }
 
 /// Cuts a user-given text to [`MAX_QUOTED_CHARS`] for an error message.
