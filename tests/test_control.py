@@ -86,9 +86,11 @@ class FakeAutopilot:
     """ArduCopter as far as control can tell: HEARTBEAT 1 Hz, ATTITUDE 20 Hz, LOCAL_POSITION_NED
     10 Hz from system 1 component 1; records every message control sends (decoded by pymavlink)."""
 
-    def __init__(self, transport, custom_mode=GUIDED, armed=True):
+    def __init__(self, transport, custom_mode=GUIDED, armed=True, system_id=1):
         self.t = transport
-        self.mav = mav2.MAVLink(None, srcSystem=1, srcComponent=1)
+        # The identity is fixed before the sending thread starts: a stranger that sent even one
+        # frame as system 1 would be the autopilot as far as anyone can tell.
+        self.mav = mav2.MAVLink(None, srcSystem=system_id, srcComponent=1)
         self.custom_mode = custom_mode
         self.armed = armed
         self.heartbeats = True
@@ -333,8 +335,7 @@ def test_a_second_system_cannot_redirect_or_receive_setpoints(runner, udp_autopi
     ap, link = udp_autopilot
     _, control = start_pipeline(runner, link)
     setpoints_arrive(ap, 0.0, n=5, timeout=30)
-    stranger = FakeAutopilot(UdpTransport(ap.t.addr[1]))
-    stranger.mav = mav2.MAVLink(None, srcSystem=99, srcComponent=1)
+    stranger = FakeAutopilot(UdpTransport(ap.t.addr[1]), system_id=99)
     spoof_comp = mav2.MAVLink(None, srcSystem=1, srcComponent=42)
     try:
         rng = random.Random(45)
