@@ -5,33 +5,23 @@ use mavlink::MavHeader;
 
 use crate::{velocity_setpoint, SetpointFrame, COPTER_MODE_GUIDED};
 
-/// Small deterministic PRNG (SplitMix64), so tests need no extra crate and are reproducible.
-pub struct Rng(u64);
+/// The project's deterministic PRNG (SplitMix64), so tests are reproducible.
+pub use hubtrack_types::mutate::Rng;
 
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Rng(seed)
-    }
+/// Bytes from [`Rng`] for the parser's tests.
+pub trait RngBytes {
+    /// A random byte.
+    fn byte(&mut self) -> u8;
+    /// A random byte that is not a frame start.
+    fn non_stx_byte(&mut self) -> u8;
+}
 
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `0..n` (n > 0).
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-
-    pub fn byte(&mut self) -> u8 {
+impl RngBytes for Rng {
+    fn byte(&mut self) -> u8 {
         self.next_u64() as u8
     }
 
-    /// A random byte that is not a frame start.
-    pub fn non_stx_byte(&mut self) -> u8 {
+    fn non_stx_byte(&mut self) -> u8 {
         loop {
             let b = self.byte();
             if b != mavlink::MAV_STX && b != mavlink::MAV_STX_V2 {
