@@ -6,8 +6,10 @@ track states over iceoryx2. pymavlink decodes every message control sends; contr
 autopilot is read back from the vehicle service with `hubtrack echo`.
 """
 
+import hashlib
 import os
 import random
+import re
 import select
 import signal
 import socket
@@ -82,15 +84,26 @@ class PtyTransport:
         os.close(self.slave)
 
 
+def sign(mav, key, link_id):
+    """MAVLink 2 signing on a pymavlink MAVLink object, as mavutil's setup_signing does: outgoing
+    frames signed, incoming unsigned ones refused (no allow_unsigned_callback)."""
+    mav.signing.secret_key = key
+    mav.signing.sign_outgoing = True
+    mav.signing.link_id = link_id
+    mav.signing.timestamp = int((time.time() - 1420070400) * 100_000)  # 10 us units since 2015
+
+
 class FakeAutopilot:
     """ArduCopter as far as control can tell: HEARTBEAT 1 Hz, ATTITUDE 20 Hz, LOCAL_POSITION_NED
     10 Hz from system 1 component 1; records every message control sends (decoded by pymavlink)."""
 
-    def __init__(self, transport, custom_mode=GUIDED, armed=True, system_id=1):
+    def __init__(self, transport, custom_mode=GUIDED, armed=True, system_id=1, signing_key=None):
         self.t = transport
         # The identity is fixed before the sending thread starts: a stranger that sent even one
         # frame as system 1 would be the autopilot as far as anyone can tell.
         self.mav = mav2.MAVLink(None, srcSystem=system_id, srcComponent=1)
+        if signing_key is not None:
+            sign(self.mav, signing_key, link_id=1)
         self.custom_mode = custom_mode
         self.armed = armed
         self.heartbeats = True
@@ -356,3 +369,102 @@ def test_a_second_system_cannot_redirect_or_receive_setpoints(runner, udp_autopi
         assert "system 99" not in control.stderr(), "the stranger was adopted as the autopilot"
     finally:
         stranger.close()
+
+
+def signing_key_file(tmp_path, passphrase, mode=0o600):
+    """A key file as `hubtrack signing-key` writes it: SHA-256 of the passphrase as hex."""
+    key = hashlib.sha256(passphrase.encode()).digest()
+    path = tmp_path / f"{passphrase}.key"
+    path.write_text(key.hex() + "\n")
+    path.chmod(mode)
+    return key, path
+
+
+def test_signing_refuses_unsigned_and_wrongly_signed_spoofers(runner, tmp_path):
+    """With control.signing_key_file, spoofers using the autopilot's own ids (system 1 component
+    1) send HEARTBEATs (disarmed, LOITER) and ATTITUDEs (roll 1 rad), unsigned and signed with
+    another key: control's vehicle state never shows them, setpoints keep going to the autopilot
+    only, signed (pymavlink verifies them), and the refusals are counted and logged once per
+    cause."""
+    key, key_path = signing_key_file(tmp_path, "hubtrack-45")
+    port = free_port()
+    ap = FakeAutopilot(UdpTransport(port), signing_key=key)
+    spoofers = []
+    try:
+        _, control = start_pipeline(runner, f"udpin:127.0.0.1:{port}",
+                                    "--set", f"control.signing_key_file=\"{key_path}\"")
+        setpoints_arrive(ap, 0.0, n=10, timeout=30)
+        echo = runner.start("hubtrack", "echo", "vehicle", "--duration", "8", label="echo-vehicle")
+        time.sleep(1.0)
+        unsigned = mav2.MAVLink(None, srcSystem=1, srcComponent=1)
+        wrong = mav2.MAVLink(None, srcSystem=1, srcComponent=1)
+        sign(wrong, hashlib.sha256(b"guess").digest(), link_id=1)
+        spoofers = [(UdpTransport(port), unsigned), (UdpTransport(port), wrong)]
+        t0 = time.monotonic()
+        boot = 0
+        while time.monotonic() - t0 < 4.0:
+            boot += 20
+            for t, mav in spoofers:
+                t.write(mav.heartbeat_encode(mav2.MAV_TYPE_QUADROTOR, mav2.MAV_AUTOPILOT_ARDUPILOTMEGA,
+                                             DISARMED, LOITER, mav2.MAV_STATE_ACTIVE).pack(mav))
+                t.write(mav.attitude_encode(boot, 1.0, 0.5, -2.0, 0.0, 0.0, 0.0).pack(mav))
+            time.sleep(0.02)
+        during = ap.messages("SET_POSITION_TARGET_LOCAL_NED", t0)
+        assert len(during) >= 30, f"{len(during)} setpoints in 4 s of spoofing: the spoofer was believed"
+        echo.wait(timeout=15)
+        states = echo.json_lines()
+        assert states, echo.stderr()
+        spoofed = [v for v in states if abs(v["roll_rad"] - 1.0) < 1e-6 or not v["armed"] or v["custom_mode"] != GUIDED]
+        assert not spoofed, f"{len(spoofed)} of {len(states)} vehicle states carry the spoofer's values: {spoofed[0]}"
+        for t, _ in spoofers:
+            data = b"".join(iter(t.read, b""))
+            got = mav2.MAVLink(None).parse_buffer(data) or []
+            assert not [m for m in got if m.get_type() == "SET_POSITION_TARGET_LOCAL_NED"], "a spoofer received setpoints"
+        # Everything control sent was signed with the key: pymavlink refused nothing.
+        sps = ap.messages("SET_POSITION_TARGET_LOCAL_NED")
+        assert sps and all(m._signed for m in sps)
+        assert ap.mav.signing.goodsig_count > 0
+        assert (ap.mav.signing.badsig_count, ap.mav.signing.reject_count) == (0, 0)
+        assert control.alive(), control.stderr()[-2000:]
+        control.stop()
+        err = control.stderr()
+        assert "MAVLink 2 signing on" in err, err[-2000:]
+        refusals = [l for l in err.splitlines() if "MAVLink signing: refused" in l]
+        assert len(refusals) == 2 and any("unsigned" in l for l in refusals) and any("wrong signature" in l for l in refusals), refusals
+        last = [l for l in err.splitlines() if "refused by signing" in l][-1]
+        m = re.search(r"refused by signing: (\d+) unsigned, (\d+) bad signatures", last)
+        # 4 s at 50 Hz, HEARTBEAT and ATTITUDE, per spoofer.
+        assert m and int(m[1]) >= 200 and int(m[2]) >= 200, last
+    finally:
+        ap.close()
+        for t, _ in spoofers:
+            t.close()
+
+
+def test_signing_key_file_open_to_others_is_refused(runner, tmp_path):
+    _, key_path = signing_key_file(tmp_path, "open", mode=0o644)
+    r = runner.run("hubtrack-control", "--set", f"control.signing_key_file=\"{key_path}\"", timeout=30)
+    assert r.returncode != 0
+    assert str(key_path) in r.stderr and "0644" in r.stderr and "control.signing_key_file" in r.stderr, r.stderr
+    bad = tmp_path / "short.key"
+    bad.write_text("abcd\n")
+    bad.chmod(0o600)
+    r = runner.run("hubtrack-control", "--set", f"control.signing_key_file=\"{bad}\"", timeout=30)
+    assert r.returncode != 0 and str(bad) in r.stderr and "64 hexadecimal digits" in r.stderr, r.stderr
+
+
+def test_signing_key_command_writes_the_mavproxy_key(tmp_path):
+    """`hubtrack signing-key FILE` makes the key MAVProxy's `signing setup PASSPHRASE` gives the
+    autopilot (SHA-256 of the passphrase), mode 0600, and never replaces a file."""
+    import subprocess
+    from conftest import binary
+    out = tmp_path / "vehicle.key"
+    r = subprocess.run([str(binary("hubtrack")), "signing-key", str(out)], input="correct horse\n",
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 0, r.stderr
+    assert out.read_text().strip() == hashlib.sha256(b"correct horse").hexdigest()
+    assert out.stat().st_mode & 0o777 == 0o600
+    r = subprocess.run([str(binary("hubtrack")), "signing-key", str(out)], input="other\n",
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode != 0 and str(out) in r.stderr
+    assert out.read_text().strip() == hashlib.sha256(b"correct horse").hexdigest()

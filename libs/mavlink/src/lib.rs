@@ -7,6 +7,7 @@
 //!   checksums and foreign message ids in [`LinkStats`] instead of failing; [`encode_v2`].
 //! - [`Link`]: UDP (`udpin`/`udpout`) or serial transport chosen by an [`Endpoint`] string.
 //! - [`companion_heartbeat`], [`velocity_setpoint`]: what the companion sends.
+//! - [`Signing`], [`SigningKey`]: MAVLink 2 message signing of a link.
 //! - [`VehicleMonitor`]: finds the autopilot, watches its link and boot clock, and turns its
 //!   messages into a [`hubtrack_types::VehicleState`].
 //!
@@ -22,6 +23,8 @@ mod messages;
 mod monitor;
 mod parser;
 mod peer;
+mod signing;
+mod signing_key;
 
 /// The `mavlink` crate, with the common dialect also at `mavlink::common` (mavlink 0.21 puts it
 /// at `mavlink::dialects::common`), so users write `hubtrack_mavlink::mavlink::common::MavType`.
@@ -45,6 +48,8 @@ pub use monitor::{
 };
 pub use parser::{encode_v2, FrameParser, LinkStats};
 pub use peer::{AutopilotId, PeerLock};
+pub use signing::{signing_timestamp, Refusal, Signing};
+pub use signing_key::{KeyError, SigningKey, SIGNING_KEY_LEN};
 
 #[cfg(test)]
 mod test_support;

@@ -4,13 +4,14 @@ use std::fmt;
 use std::io::{ErrorKind, Read, Write};
 use std::net::{Ipv4Addr, Ipv6Addr, SocketAddr, ToSocketAddrs, UdpSocket};
 use std::str::FromStr;
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime};
 
 use mavlink::dialects::common::MavMessage;
-use mavlink::MavHeader;
+use mavlink::{MavHeader, Message};
 
 use crate::parser::{encode_v2, FrameParser, LinkStats};
 use crate::peer::{AutopilotId, PeerLock};
+use crate::signing::{signing_timestamp, Refusal, Signing};
 
 /// Receive buffer size: the largest UDP datagram.
 const READ_BUF_LEN: usize = 65_536;
@@ -184,6 +185,10 @@ pub struct Link {
     autopilot: Option<AutopilotId>,
     /// udpin: the reply address, set and moved only by frames of the autopilot.
     peer_lock: PeerLock<SocketAddr>,
+    /// MAVLink 2 signing, when a key is configured (see [`Link::enable_signing`]).
+    signing: Option<Signing>,
+    /// Frames refused by signing, per [`Refusal`] cause.
+    refused: [u64; Refusal::ALL.len()],
 }
 
 impl fmt::Debug for Link {
@@ -245,6 +250,8 @@ impl Link {
             unsent_frames: 0,
             autopilot: None,
             peer_lock: PeerLock::default(),
+            signing: None,
+            refused: [0; Refusal::ALL.len()],
         })
     }
 
@@ -256,13 +263,17 @@ impl Link {
         }
     }
 
-    /// Encodes `msg` as one MAVLink 2 frame (see [`encode_v2`]) and sends it.
+    /// Encodes `msg` as one MAVLink 2 frame (see [`encode_v2`]), signed when signing is on, and
+    /// sends it.
     ///
     /// On a `udpin` link that has not received a datagram yet there is nowhere to send: the frame
     /// is dropped, `Ok` is returned, and it counts in [`Link::unsent_frames`], not in
     /// `frames_out`/`bytes_out`.
     pub fn send(&mut self, header: MavHeader, msg: &MavMessage) -> Result<(), LinkError> {
-        let frame = encode_v2(header, msg);
+        let frame = match &mut self.signing {
+            Some(signing) => signing.encode(header, msg, signing_timestamp(SystemTime::now())),
+            None => encode_v2(header, msg),
+        };
         let result = match &mut self.transport {
             Transport::Udp { socket, peer, .. } => match peer {
                 Some(peer) => socket.send_to(&frame, *peer).map(|_| ()),
@@ -370,13 +381,43 @@ impl Link {
         from: Option<SocketAddr>,
         frames: &mut Vec<(MavHeader, MavMessage)>,
     ) {
-        let new = self.parser.push(&self.read_buf[..n]);
+        let mut new = Vec::new();
+        let now = signing_timestamp(SystemTime::now());
+        let (signing, refused) = (&mut self.signing, &mut self.refused);
+        self.parser
+            .push_each(&self.read_buf[..n], |raw, header, msg| match signing {
+                Some(s) => match s.verify(raw, now) {
+                    Ok(()) => new.push((header, msg)),
+                    Err(why) => {
+                        refused[why.index()] += 1;
+                        // Once per cause: a spoofer must not flood the log.
+                        if refused[why.index()] == 1 {
+                            log::warn!(
+                                "MAVLink signing: refused {} from system {} component {} ({}); further ones are only counted",
+                                msg.message_name(),
+                                header.system_id,
+                                header.component_id,
+                                why.describe()
+                            );
+                        }
+                    }
+                },
+                None => new.push((header, msg)),
+            });
+        // Only frames that passed signing may set the reply address.
         if let (Some(from), Transport::Udp { peer, .. }) = (from, &mut self.transport) {
             self.peer_lock
                 .observe(from, new.iter().map(|(h, _)| h), self.autopilot);
             *peer = self.peer_lock.peer;
         }
         frames.extend(new);
+    }
+
+    /// Turns MAVLink 2 signing on: every frame sent is signed, and received frames that are not
+    /// signed with the same key or replay an old timestamp are refused (counted in
+    /// [`LinkStats`], the first of each cause logged) before anything else sees them.
+    pub fn enable_signing(&mut self, signing: Signing) {
+        self.signing = Some(signing);
     }
 
     /// Takes heartbeats for replies only from `autopilot`: on `udpin`, the reply address is the
@@ -397,6 +438,9 @@ impl Link {
         LinkStats {
             bytes_out: self.bytes_out,
             frames_out: self.frames_out,
+            unsigned_refused: self.refused[Refusal::Unsigned.index()],
+            bad_signatures: self.refused[Refusal::BadSignature.index()],
+            old_timestamps: self.refused[Refusal::OldTimestamp.index()],
             ..self.parser.stats()
         }
     }
@@ -637,6 +681,54 @@ mod tests {
             "{}",
             server.refused_datagrams()
         );
+    }
+
+    #[test]
+    fn with_signing_only_signed_frames_of_the_key_pass_and_set_the_peer() {
+        use crate::test_support::{autopilot_heartbeat, header};
+        use crate::{Signing, SigningKey};
+        let key = SigningKey::from_passphrase("hubtrack test");
+        let mut server = Link::open(&"udpin:127.0.0.1:0".parse().unwrap()).unwrap();
+        server.enable_signing(Signing::new(key.clone(), 0));
+        server.expect_autopilot(AutopilotId {
+            system_id: 1,
+            component_id: 1,
+        });
+        let port = server.local_addr().unwrap().port();
+        let to = format!("udpout:127.0.0.1:{port}").parse().unwrap();
+        let mut autopilot = Link::open(&to).unwrap();
+        autopilot.enable_signing(Signing::new(key, 1));
+        let mut unsigned = Link::open(&to).unwrap();
+        let mut wrong = Link::open(&to).unwrap();
+        wrong.enable_signing(Signing::new(SigningKey::from_passphrase("guess"), 1));
+        let hb = autopilot_heartbeat(true, 4);
+        // Spoofers with the autopilot's ids speak first: nothing passes, no reply address.
+        unsigned.send(header(1, 1, 0), &hb).unwrap();
+        wrong.send(header(1, 1, 0), &hb).unwrap();
+        let mut got = Vec::new();
+        let t = Instant::now();
+        while server.stats().frames_in < 2 && t.elapsed() < WAIT {
+            got.extend(server.recv(Duration::from_millis(20)).unwrap());
+        }
+        assert!(got.is_empty(), "{got:?}");
+        assert_eq!(server.peer(), None);
+        let s = server.stats();
+        assert_eq!((s.unsigned_refused, s.bad_signatures), (1, 1));
+        // The autopilot's signed heartbeat passes and sets the reply address.
+        autopilot.send(header(1, 1, 1), &hb).unwrap();
+        let t = Instant::now();
+        while got.is_empty() && t.elapsed() < WAIT {
+            got.extend(server.recv(Duration::from_millis(20)).unwrap());
+        }
+        assert_eq!(got, vec![(header(1, 1, 1), hb.clone())]);
+        assert_eq!(
+            server.peer().map(|a| a.port()),
+            autopilot.local_addr().map(|a| a.port())
+        );
+        // Our reply is signed: the autopilot's signing accepts it, an unsigned link would not.
+        server.send(header(1, 191, 0), &hb).unwrap();
+        assert_eq!(autopilot.recv(WAIT).unwrap(), vec![(header(1, 191, 0), hb)]);
+        assert_eq!(autopilot.stats().unsigned_refused, 0);
     }
 
     #[test]

@@ -65,6 +65,14 @@ pub struct LinkStats {
     /// MAVLink 1 frames accepted (they are decoded and returned like MAVLink 2 frames, and are
     /// also counted in `frames_in`).
     pub mavlink1_frames: u64,
+    /// With signing on (only on a [`crate::Link`]): decoded frames refused because they were
+    /// not signed (also counted in `frames_in`).
+    pub unsigned_refused: u64,
+    /// With signing on: decoded frames refused for a wrong signature (also in `frames_in`).
+    pub bad_signatures: u64,
+    /// With signing on: decoded, correctly signed frames refused for a timestamp not newer than
+    /// their stream's last one, i.e. replays (also in `frames_in`).
+    pub old_timestamps: u64,
 }
 
 /// Where one frame's parts lie in the buffer.
@@ -211,8 +219,9 @@ fn is_stx(b: u8) -> bool {
 /// inside what it claims. The price: a real frame whose payload contains a complete valid frame
 /// (MAVLink tunnelled in MAVLink) is lost in favour of the inner one.
 ///
-/// MAVLink 2 signed frames (incompatibility flag `0x01`) are accepted; the 13-byte signature is
-/// skipped, not verified (no key is configured on this link). Frames with other incompatibility
+/// MAVLink 2 signed frames (incompatibility flag `0x01`) are accepted with their 13-byte
+/// signature; checking it is the caller's (see [`FrameParser::push_each`] and
+/// [`crate::Signing`]). Frames with other incompatibility
 /// flags are not accepted (the start byte counts as garbage), as the MAVLink 2 spec requires.
 /// MAVLink 1 frames are accepted and counted in `mavlink1_frames` too.
 #[derive(Debug, Default)]
@@ -235,10 +244,23 @@ impl FrameParser {
 
     /// Adds received bytes; returns every frame completed by them, in stream order.
     pub fn push(&mut self, bytes: &[u8]) -> Vec<(MavHeader, MavMessage)> {
+        let mut out = Vec::new();
+        self.push_each(bytes, |_, header, msg| out.push((header, msg)));
+        out
+    }
+
+    /// Adds received bytes and calls `on_frame(raw, header, message)` for every frame completed
+    /// by them, in stream order; `raw` is the whole frame as received (start byte to the end of
+    /// its signature), e.g. for checking the signature.
+    pub fn push_each(
+        &mut self,
+        bytes: &[u8],
+        mut on_frame: impl FnMut(&[u8], MavHeader, MavMessage),
+    ) {
         self.stats.bytes_in += bytes.len() as u64;
         self.buf.extend_from_slice(bytes);
         self.settled.resize(self.buf.len(), false);
-        let mut out = Vec::new();
+        let out = &mut on_frame;
         let mut pos = 0;
         let end = self.buf.len();
         while pos < end {
@@ -269,7 +291,7 @@ impl FrameParser {
                     Scan::Undecided | Scan::Nothing => break,
                 },
                 Candidate::Valid(layout) => {
-                    self.accept(pos, layout, &mut out);
+                    self.accept(pos, layout, out);
                     pos += layout.total_len;
                 }
                 Candidate::Suspect { total_len, kind } => {
@@ -299,7 +321,6 @@ impl FrameParser {
         }
         self.buf.drain(..pos);
         self.settled.drain(..pos);
-        out
     }
 
     /// Looks for frame starts in `buf[from..to]` (frames may extend past `to`).
@@ -327,7 +348,12 @@ impl FrameParser {
     }
 
     /// Decodes the valid frame at `buf[pos..]`.
-    fn accept(&mut self, pos: usize, layout: Layout, out: &mut Vec<(MavHeader, MavMessage)>) {
+    fn accept(
+        &mut self,
+        pos: usize,
+        layout: Layout,
+        out: &mut impl FnMut(&[u8], MavHeader, MavMessage),
+    ) {
         let start = pos + layout.header_len;
         let payload = &self.buf[start..start + layout.payload_len];
         match MavMessage::parse(layout.version, layout.msg_id, payload) {
@@ -336,7 +362,7 @@ impl FrameParser {
                 if layout.version == MavlinkVersion::V1 {
                     self.stats.mavlink1_frames += 1;
                 }
-                out.push((layout.header, msg));
+                out(&self.buf[pos..pos + layout.total_len], layout.header, msg);
             }
             Err(e) => {
                 self.stats.parse_errors += 1;

@@ -29,6 +29,14 @@ params! {
         /// `system_id`). Heartbeats and telemetry from any other system or component are
         /// ignored, and on "udpin" replies go only to the address the autopilot speaks from.
         pub autopilot_component_id: u8 = 1, closed(0, 255);
+        /// MAVLink 2 signing key file ("": signing off): 64 hex digits, the 32-byte key shared
+        /// with the autopilot (make it with `hubtrack signing-key FILE`), readable by its owner
+        /// only. With a key, every frame sent is signed, and frames received unsigned, with
+        /// another key or with a replayed timestamp are refused and counted. Relative to the
+        /// config file.
+        pub signing_key_file: String = String::new();
+        /// Link id in the signature of our frames (one stream per link, spec: the channel).
+        pub signing_link_id: u8 = 0;
         /// Frame of the velocity setpoints: "body_offset_ned" (MAV_FRAME_BODY_OFFSET_NED = 9,
         /// velocities along the vehicle's heading, what ArduCopter documents for body
         /// velocities) or "body_ned" (8).

@@ -12,7 +12,7 @@ use hubtrack_control_stage::gate::{Action, AutopilotView, CommandGate, GateTimin
 use hubtrack_mavlink::mavlink::MessageData;
 use hubtrack_mavlink::{
     companion_heartbeat, follows_setpoints, velocity_setpoint, Endpoint, Link, MavHeader,
-    MavMessage, SetpointFrame, StreamRequests, VehicleMonitor, WantedStream,
+    MavMessage, SetpointFrame, Signing, SigningKey, StreamRequests, VehicleMonitor, WantedStream,
 };
 use hubtrack_runtime::ipc::{MsgPublisher, MsgSubscriber};
 use hubtrack_runtime::stage::Stage;
@@ -135,6 +135,14 @@ fn report_autopilot_text(msg: &MavMessage) {
     }
 }
 
+/// The signing refusals for the link log lines.
+fn signing_counts(s: &hubtrack_mavlink::LinkStats) -> String {
+    format!(
+        "refused by signing: {} unsigned, {} bad signatures, {} replayed",
+        s.unsigned_refused, s.bad_signatures, s.old_timestamps
+    )
+}
+
 /// Runs live control until SIGINT/SIGTERM.
 pub fn run(stage: ControlStage) -> anyhow::Result<()> {
     let mut controller = Controller::new(&stage)?;
@@ -154,6 +162,16 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
         component_id: cfg.autopilot_component_id,
     };
     link.expect_autopilot(autopilot_id);
+    if !cfg.signing_key_file.is_empty() {
+        let key = SigningKey::load(std::path::Path::new(&cfg.signing_key_file))
+            .context("control.signing_key_file")?;
+        link.enable_signing(Signing::new(key, cfg.signing_link_id));
+        log::info!(
+            "MAVLink 2 signing on: key {}, link id {}; unsigned and wrongly signed frames are refused",
+            cfg.signing_key_file,
+            cfg.signing_link_id
+        );
+    }
     match link.local_addr() {
         Some(local) => log::info!(
             "MAVLink link {endpoint} (local {local}) as system {} component {}",
@@ -300,10 +318,16 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
         if stats != last_stats && wall_ns.saturating_sub(last_stats_log_ns) >= STATS_LOG_INTERVAL_NS
         {
             log::info!(
-                "link: {} frames in, {} out; skipped {} garbage bytes, {} CRC errors, {} unknown messages",
-                stats.frames_in, stats.frames_out, stats.garbage_bytes, stats.crc_errors, stats.unknown_ids
+                "link: {} frames in, {} out; skipped {} garbage bytes, {} CRC errors, {} unknown messages; {}",
+                stats.frames_in, stats.frames_out, stats.garbage_bytes, stats.crc_errors, stats.unknown_ids,
+                signing_counts(&stats)
             );
-            status.status.dropped = stats.garbage_bytes + stats.crc_errors + stats.parse_errors;
+            status.status.dropped = stats.garbage_bytes
+                + stats.crc_errors
+                + stats.parse_errors
+                + stats.unsigned_refused
+                + stats.bad_signatures
+                + stats.old_timestamps;
             last_stats = stats;
             last_stats_log_ns = wall_ns;
         }
@@ -311,8 +335,9 @@ pub fn run(stage: ControlStage) -> anyhow::Result<()> {
     status.publish_now();
     let s = sender.link.stats();
     log::info!(
-        "stopped: {} setpoints published; link {} frames in, {} out, {} garbage bytes, {} CRC errors, {} unknown",
-        status.status.outputs, s.frames_in, s.frames_out, s.garbage_bytes, s.crc_errors, s.unknown_ids
+        "stopped: {} setpoints published; link {} frames in, {} out, {} garbage bytes, {} CRC errors, {} unknown; {}",
+        status.status.outputs, s.frames_in, s.frames_out, s.garbage_bytes, s.crc_errors, s.unknown_ids,
+        signing_counts(&s)
     );
     Ok(())
 }

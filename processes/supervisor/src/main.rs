@@ -80,6 +80,13 @@ enum Command {
     },
     /// Replay a recording's inputs through chosen stages and record their new outputs.
     Replay(hubtrack_supervisor::replay::ReplayArgs),
+    /// Write a MAVLink 2 signing key file (mode 0600) from a passphrase read from standard
+    /// input: the key is SHA-256 of the passphrase, as MAVProxy's `signing setup PASSPHRASE`
+    /// gives the autopilot. Never replaces a file.
+    SigningKey {
+        /// The key file to create (then set `control.signing_key_file` to it).
+        file: PathBuf,
+    },
     /// A lab command, handed over to `hubtrack-lab`.
     #[command(external_subcommand)]
     Lab(Vec<OsString>),
@@ -97,6 +104,7 @@ fn main() {
         Command::Recover { input, output } => tools::recover(&input, output),
         Command::Latency { file, json } => tools::latency(&file, json),
         Command::Replay(a) => hubtrack_supervisor::replay::run(a),
+        Command::SigningKey { file } => tools::signing_key(&file),
         Command::Lab(args) => hand_over_to_lab(&args),
     };
     hubtrack_runtime::exit_with(result);

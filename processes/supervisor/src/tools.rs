@@ -317,3 +317,35 @@ where
     }
     Ok(())
 }
+
+/// Longest passphrase read from standard input, bytes (MAVProxy takes any length; a bound keeps
+/// `hubtrack signing-key < /dev/zero` from reading forever).
+const MAX_PASSPHRASE_BYTES: u64 = 4096;
+
+/// `hubtrack signing-key FILE`: the key of the passphrase on standard input's first line, written
+/// as 64 hex digits with mode 0600.
+pub fn signing_key(file: &Path) -> anyhow::Result<()> {
+    use std::io::Read;
+    let mut input = Vec::new();
+    std::io::stdin()
+        .take(MAX_PASSPHRASE_BYTES + 1)
+        .read_to_end(&mut input)?;
+    if input.len() as u64 > MAX_PASSPHRASE_BYTES {
+        bail!("passphrase longer than {MAX_PASSPHRASE_BYTES} bytes");
+    }
+    let text = String::from_utf8(input)
+        .map_err(|_| anyhow::anyhow!("the passphrase on standard input is not UTF-8 text"))?;
+    let passphrase = text.lines().next().unwrap_or("");
+    if passphrase.is_empty() {
+        bail!(
+            "no passphrase on standard input (e.g. `hubtrack signing-key {} < passphrase.txt`)",
+            file.display()
+        );
+    }
+    hubtrack_mavlink::SigningKey::from_passphrase(passphrase).save(file)?;
+    eprintln!(
+        "wrote {} (mode 0600); give the autopilot the same passphrase (MAVProxy: signing setup PASSPHRASE)",
+        file.display()
+    );
+    Ok(())
+}

@@ -11,7 +11,11 @@ use hubtrack_types::setup::TurbineSetup;
 use std::path::{Path, PathBuf};
 
 /// `(section, key)` of every key that holds a file path.
-const PATH_KEYS: [(&str, &str); 2] = [("camera", "calibration"), ("turbine", "profile")];
+const PATH_KEYS: [(&str, &str); 3] = [
+    ("camera", "calibration"),
+    ("turbine", "profile"),
+    ("control", "signing_key_file"),
+];
 
 impl ConfigDoc {
     /// Makes the path keys absolute, relative ones taken relative to `base`.
