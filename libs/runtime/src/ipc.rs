@@ -4,6 +4,7 @@
 //! arrives (no polling, no added latency). Services are opened with the QoS from `shared-types`,
 //! identical in every process.
 
+use crate::stale_service::open_or_create_recovering;
 use hubtrack_types::services::{ServiceSpec, FRAMES};
 use hubtrack_types::FrameHeader;
 use iceoryx2::port::listener::Listener;
@@ -12,6 +13,7 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
+use iceoryx2::service::messaging_pattern::MessagingPattern;
 use std::fmt::Debug;
 use std::time::Duration;
 
@@ -114,34 +116,44 @@ fn open_event(node: &Node<Ipc>, spec: &ServiceSpec) -> Result<PortFactoryEvent, 
         .as_str()
         .try_into()
         .map_err(|e| svc_err(spec, e))?;
-    node.service_builder(&name)
-        .event()
-        .max_notifiers(spec.qos.max_publishers + 2)
-        .max_listeners(spec.qos.max_subscribers + 2)
-        .max_nodes(spec.qos.max_nodes)
-        .open_or_create()
-        .map_err(|e| svc_err(spec, e))
+    open_or_create_recovering(node, &name, MessagingPattern::Event, || {
+        node.service_builder(&name)
+            .event()
+            .max_notifiers(spec.qos.max_publishers + 2)
+            .max_listeners(spec.qos.max_subscribers + 2)
+            .max_nodes(spec.qos.max_nodes)
+            .open_or_create()
+    })
+    .map_err(|e| svc_err(spec, e))
 }
 
 type PortFactoryEvent = iceoryx2::service::port_factory::event::PortFactory<Ipc>;
 
-macro_rules! pubsub_builder {
-    ($node:expr, $spec:expr, $payload:ty) => {{
+/// Opens or creates the publish-subscribe service of `$spec` with payload `$payload`, the
+/// builder passed through `$more` (e.g. a user header), recovering from a service left
+/// half-created by a killed process.
+macro_rules! open_pubsub {
+    ($node:expr, $spec:expr, $payload:ty, |$b:ident| $more:expr) => {{
         let spec: &ServiceSpec = $spec;
+        let node: &Node<Ipc> = $node;
         let name: ServiceName = scoped_name(spec.name)
             .as_str()
             .try_into()
             .map_err(|e| svc_err(spec, e))?;
-        $node
-            .service_builder(&name)
-            .publish_subscribe::<$payload>()
-            .enable_safe_overflow(spec.qos.safe_overflow)
-            .history_size(spec.qos.history_size)
-            .subscriber_max_buffer_size(spec.qos.subscriber_max_buffer_size)
-            .subscriber_max_borrowed_samples(spec.qos.subscriber_max_borrowed_samples)
-            .max_subscribers(spec.qos.max_subscribers)
-            .max_publishers(spec.qos.max_publishers)
-            .max_nodes(spec.qos.max_nodes)
+        open_or_create_recovering(node, &name, MessagingPattern::PublishSubscribe, || {
+            let $b = node
+                .service_builder(&name)
+                .publish_subscribe::<$payload>()
+                .enable_safe_overflow(spec.qos.safe_overflow)
+                .history_size(spec.qos.history_size)
+                .subscriber_max_buffer_size(spec.qos.subscriber_max_buffer_size)
+                .subscriber_max_borrowed_samples(spec.qos.subscriber_max_borrowed_samples)
+                .max_subscribers(spec.qos.max_subscribers)
+                .max_publishers(spec.qos.max_publishers)
+                .max_nodes(spec.qos.max_nodes);
+            $more.open_or_create()
+        })
+        .map_err(|e| svc_err(spec, e))?
     }};
 }
 
@@ -156,10 +168,7 @@ impl FramePublisher {
     /// segment grows in powers of two if a larger frame comes).
     pub fn new(node: &Node<Ipc>, initial_max_len: usize) -> Result<FramePublisher, IpcError> {
         let spec = &FRAMES;
-        let service = pubsub_builder!(node, spec, [u8])
-            .user_header::<FrameHeader>()
-            .open_or_create()
-            .map_err(|e| svc_err(spec, e))?;
+        let service = open_pubsub!(node, spec, [u8], |b| b.user_header::<FrameHeader>());
         let publisher = service
             .publisher_builder()
             .initial_max_slice_len(initial_max_len.max(1))
@@ -252,10 +261,7 @@ impl FrameSubscriber {
     /// (the recorder woke first and copied the frame).
     pub fn polling(node: &Node<Ipc>, buffer: usize) -> Result<FrameSubscriber, IpcError> {
         let spec = &FRAMES;
-        let service = pubsub_builder!(node, spec, [u8])
-            .user_header::<FrameHeader>()
-            .open_or_create()
-            .map_err(|e| svc_err(spec, e))?;
+        let service = open_pubsub!(node, spec, [u8], |b| b.user_header::<FrameHeader>());
         let subscriber = service
             .subscriber_builder()
             .buffer_size(buffer.clamp(1, spec.qos.subscriber_max_buffer_size))
@@ -333,9 +339,7 @@ pub struct MsgPublisher<T: Debug + ZeroCopySend + Copy + 'static> {
 impl<T: Debug + ZeroCopySend + Copy + 'static> MsgPublisher<T> {
     /// Opens `spec` for publishing `T`.
     pub fn new(node: &Node<Ipc>, spec: &ServiceSpec) -> Result<Self, IpcError> {
-        let service = pubsub_builder!(node, spec, T)
-            .open_or_create()
-            .map_err(|e| svc_err(spec, e))?;
+        let service = open_pubsub!(node, spec, T, |b| b);
         let publisher = service
             .publisher_builder()
             .create()
@@ -386,9 +390,7 @@ impl<T: Debug + ZeroCopySend + Copy + 'static> MsgSubscriber<T> {
     /// inputs read alongside another one that paces the loop, so that publishers do not
     /// notify a listener nobody waits on.
     pub fn polling(node: &Node<Ipc>, spec: &ServiceSpec, buffer: usize) -> Result<Self, IpcError> {
-        let service = pubsub_builder!(node, spec, T)
-            .open_or_create()
-            .map_err(|e| svc_err(spec, e))?;
+        let service = open_pubsub!(node, spec, T, |b| b);
         let subscriber = service
             .subscriber_builder()
             .buffer_size(buffer.clamp(1, spec.qos.subscriber_max_buffer_size))

@@ -16,6 +16,7 @@ pub mod ipc;
 pub mod logging;
 pub mod shutdown;
 pub mod stage;
+mod stale_service;
 pub mod status;
 
 pub use config::{ConfigArgs, ConfigError, Sections};
