@@ -286,3 +286,35 @@ def subprocess_in(cwd, runner, name, *args):
     from conftest import binary
     return subprocess.run([str(binary(name)), *map(str, args)], cwd=cwd, env=runner.env,
                           capture_output=True, text=True, timeout=300)
+
+
+def test_a_recorder_that_falls_behind_logs_and_counts_the_frames_it_lost(runner, tmp_path):
+    """The camera never waits: a recorder stopped (SIGSTOP) longer than the frames service's
+    buffer loses frames. The loss is logged when it happens and counted, the gap is in the file,
+    and recording goes on."""
+    import signal
+
+    from conftest import read_mcap_messages, wait_until
+
+    usb = ["--set", "capture.synthetic.camera=usb", "--set", "capture.fps=30"]
+    rec = tmp_path / "behind.mcap"
+    recorder = runner.start("hubtrack-recorder", "--output", rec, *usb, label="recorder")
+    wait_until(lambda: "recording to" in recorder.stderr(), what="recorder start")
+    capture = runner.start("hubtrack-capture", *usb, label="capture")
+    wait_until(lambda: "publishing at" in capture.stderr(), what="capture start")
+    time.sleep(1.0)
+    recorder.signal(signal.SIGSTOP)
+    time.sleep(1.0)  # 30 frames, far more than the buffer holds
+    recorder.signal(signal.SIGCONT)
+    time.sleep(1.0)
+    assert capture.alive() and recorder.alive()
+    assert recorder.stop() == 0
+    capture.stop()
+    err = recorder.stderr()
+    lines = [l for l in err.splitlines() if "overwritten in shared memory before the recorder read them" in l]
+    assert lines, err[-2000:]
+    lost = int(lines[0].split("WARN", 1)[-1].split("frame(s)")[0].split()[-1])
+    seqs = [m.sequence for _, m in read_mcap_messages(rec, topics={"/frames"})]
+    gaps = sum(b - a - 1 for a, b in zip(seqs, seqs[1:]) if b > a + 1)
+    assert gaps >= lost >= 15, (gaps, lost, lines)
+    assert f"{gaps} lost: overwritten before read" in err, err[-1500:]

@@ -22,7 +22,7 @@ use hubtrack_record::{Recording, RecordingOptions};
 use hubtrack_runtime::ipc::{FrameSubscriber, MsgSubscriber};
 use hubtrack_runtime::stage::{Stage, StageArgs};
 use hubtrack_runtime::status::StatusReporter;
-use hubtrack_types::services::{DETECTIONS, OVERLAY, SETPOINTS, STATUS, TRACK, VEHICLE};
+use hubtrack_types::services::{DETECTIONS, FRAMES, OVERLAY, SETPOINTS, STATUS, TRACK, VEHICLE};
 use hubtrack_types::time::{monotonic_ns, realtime_ns};
 use hubtrack_types::{
     DetectOverlay, Detection, FrameHeader, Setpoint, StageStatus, TrackState, VehicleState,
@@ -148,6 +148,7 @@ fn run() -> anyhow::Result<()> {
 
     let mut stats = RecorderStats::default();
     let mut stats_at = Instant::now();
+    let (mut lost_unlogged, mut lost_logged_at) = (0u64, None::<Instant>);
     while !shutdown.requested() {
         if let Some(why) = writer_failed.get() {
             // Nothing more can be recorded: say why, count it, and end (the supervisor restarts
@@ -190,6 +191,21 @@ fn run() -> anyhow::Result<()> {
                 &mut stats,
                 &mut status,
             );
+        }
+        if frames.lost > stats.frames_lost {
+            lost_unlogged += frames.lost - stats.frames_lost;
+        }
+        // Each loss is logged (at most once per STATS_INTERVAL under sustained overload): the
+        // camera never waits, so a reader that falls more than the frames service's buffer
+        // behind loses the oldest frames.
+        if lost_unlogged > 0 && lost_logged_at.is_none_or(|t| t.elapsed() >= STATS_INTERVAL) {
+            log::warn!(
+                "{lost_unlogged} frame(s) overwritten in shared memory before the recorder read them ({} lost in this file): the recorder fell more than {} frames behind the camera",
+                frames.lost,
+                FRAMES.qos.subscriber_max_buffer_size
+            );
+            lost_unlogged = 0;
+            lost_logged_at = Some(Instant::now());
         }
         stats.frames_lost = frames.lost;
         let now = realtime_ns();
