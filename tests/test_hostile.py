@@ -274,8 +274,9 @@ def test_fuzz_command_runs_every_target_from_the_corpus_without_a_crash(runner):
     from conftest import ROOT
     res = subprocess_in(ROOT, runner, "hubtrack", "fuzz", "--executions", "3000")
     assert res.returncode == 0, res.stdout + res.stderr[-2000:]
-    rows = {l.split()[0]: l.split() for l in res.stdout.splitlines() if l.split() and l.split()[0] in ("mcap", "mavlink", "config", "calibration")}
-    assert set(rows) == {"mcap", "mavlink", "config", "calibration"}, res.stdout
+    targets = ("mcap", "mavlink", "config", "calibration", "detect")
+    rows = {l.split()[0]: l.split() for l in res.stdout.splitlines() if l.split() and l.split()[0] in targets}
+    assert set(rows) == set(targets), res.stdout
     for name, row in rows.items():
         assert int(row[2]) == 3000 and int(row[4]) == 0, (name, row)
     assert "0 crashes" in res.stdout and "peak memory" in res.stdout

@@ -50,13 +50,9 @@ pub fn has_image_extension(p: &Path) -> bool {
         .is_some_and(|e| IMAGE_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
 }
 
-/// Reads one image as BGR8; an unreadable file is [`CaptureError::ImageUnreadable`].
-pub fn read_image(path: &Path) -> Result<opencv::core::Mat, CaptureError> {
-    let unreadable = || CaptureError::ImageUnreadable { path: path.into() };
-    let name = path.to_str().ok_or_else(unreadable)?;
-    if let Some((width, height)) =
-        crate::image_header::declared_size(path).map_err(|_| unreadable())?
-    {
+/// Refuses a declared size over [`crate::image_header::MAX_IMAGE_PIXELS`] before decoding.
+fn check_declared(path: &Path, declared: Option<(u32, u32)>) -> Result<(), CaptureError> {
+    if let Some((width, height)) = declared {
         let limit = crate::image_header::MAX_IMAGE_PIXELS;
         if u64::from(width) * u64::from(height) > limit {
             return Err(CaptureError::ImageTooLarge {
@@ -67,7 +63,31 @@ pub fn read_image(path: &Path) -> Result<opencv::core::Mat, CaptureError> {
             });
         }
     }
+    Ok(())
+}
+
+/// Reads one image as BGR8; an unreadable file is [`CaptureError::ImageUnreadable`].
+pub fn read_image(path: &Path) -> Result<opencv::core::Mat, CaptureError> {
+    let unreadable = || CaptureError::ImageUnreadable { path: path.into() };
+    let name = path.to_str().ok_or_else(unreadable)?;
+    check_declared(
+        path,
+        crate::image_header::declared_size(path).map_err(|_| unreadable())?,
+    )?;
     let m = imgcodecs::imread(name, imgcodecs::IMREAD_COLOR).map_err(|_| unreadable())?;
+    if m.empty() {
+        return Err(unreadable());
+    }
+    Ok(m)
+}
+
+/// Decodes an encoded image (PNG, JPEG, BMP, ...) held in memory as BGR8, with the same pixel
+/// limit as [`read_image`]; `name` names it in errors.
+pub fn decode_image(bytes: &[u8], name: &Path) -> Result<opencv::core::Mat, CaptureError> {
+    let unreadable = || CaptureError::ImageUnreadable { path: name.into() };
+    check_declared(name, crate::image_header::size_from_bytes(bytes))?;
+    let buf = opencv::core::Vector::<u8>::from_slice(bytes);
+    let m = imgcodecs::imdecode(&buf, imgcodecs::IMREAD_COLOR).map_err(|_| unreadable())?;
     if m.empty() {
         return Err(unreadable());
     }

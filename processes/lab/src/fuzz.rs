@@ -1,5 +1,6 @@
 //! `hubtrack fuzz`: millions of mutations of valid inputs through every parser of outside data
-//! (recordings, MAVLink bytes and link state, configuration, camera calibrations); each must end in a result or an
+//! (recordings, MAVLink bytes and link state, configuration, camera calibrations) and through
+//! the detector (images and hints, [`crate::fuzz_detect`]); each must end in a result or an
 //! error, never a panic. Prints executions, crashes, the slowest input and the peak memory.
 //!
 //! Seeds are the corpus in `tests/fuzz-corpus/` and the documented config files; mutations are
@@ -18,11 +19,11 @@ const MAX_INPUT: usize = 1 << 17;
 /// `hubtrack fuzz`'s options.
 #[derive(clap::Args)]
 pub struct FuzzArgs {
-    /// Targets, comma separated: mcap, mavlink, config, calibration (default: all).
+    /// Targets, comma separated: mcap, mavlink, config, calibration, detect (default: all).
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "mcap,mavlink,config,calibration"
+        default_value = "mcap,mavlink,config,calibration,detect"
     )]
     pub targets: Vec<String>,
     /// Mutations per target.
@@ -42,9 +43,23 @@ pub struct FuzzArgs {
     pub out: PathBuf,
 }
 
+/// Every target.
+const TARGETS: [&str; 5] = ["mcap", "mavlink", "config", "calibration", "detect"];
+
+thread_local! {
+    /// The detect target's detector, made once (its networks take a while to set up).
+    static DETECTOR: std::cell::RefCell<Option<hubtrack_detect::Detector>> =
+        const { std::cell::RefCell::new(None) };
+}
+
 /// One target: what it reads.
 fn run_target(name: &str, input: &[u8]) {
     match name {
+        "detect" => DETECTOR.with(|d| {
+            let mut d = d.borrow_mut();
+            let det = d.get_or_insert_with(crate::fuzz_detect::detector);
+            crate::fuzz_detect::run(det, input);
+        }),
         "mcap" => {
             let mut m = hubtrack_record::reader::messages_from(
                 Box::new(std::io::Cursor::new(input.to_vec())),
@@ -162,8 +177,8 @@ fn peak_mib() -> f64 {
 /// Runs the command.
 pub fn run(args: FuzzArgs) -> anyhow::Result<()> {
     for t in &args.targets {
-        if !["mcap", "mavlink", "config", "calibration"].contains(&t.as_str()) {
-            bail!("--targets {t}: one of mcap, mavlink, config");
+        if !TARGETS.contains(&t.as_str()) {
+            bail!("--targets {t}: one of {}", TARGETS.join(", "));
         }
     }
     // Panics are what we count: keep their messages off the terminal.

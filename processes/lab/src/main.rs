@@ -10,6 +10,7 @@ mod eval;
 mod eval_seq;
 mod fly;
 mod fuzz;
+mod fuzz_detect;
 mod score;
 mod sitl;
 mod track_cmd;
@@ -53,7 +54,8 @@ enum Command {
     /// Render one synthetic frame exactly as the capture stage would publish it.
     Render(RenderArgs),
     /// Mutate valid inputs millions of times through every parser of outside data (recordings,
-    /// MAVLink, config): executions, crashes, slowest input and peak memory per target.
+    /// MAVLink, config, calibrations) and the detector (images and hints): executions, crashes,
+    /// slowest input and peak memory per target.
     Fuzz(fuzz::FuzzArgs),
     /// Compare a simulated flight's detections and track with its truth, per band of distance.
     Diagnose {
