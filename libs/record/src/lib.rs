@@ -17,6 +17,7 @@
 pub mod annotations;
 pub mod channels;
 pub mod compressed_image;
+pub mod compressed_video;
 pub mod config;
 pub mod encoder;
 pub mod flight;
