@@ -8,7 +8,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-APT_PACKAGES=(libopencv-dev clang libclang-dev libudev-dev pkg-config util-linux iproute2 python3-venv)
+APT_PACKAGES=(libopencv-dev clang libclang-dev libudev-dev pkg-config util-linux iproute2 python3-venv libturbojpeg0-dev nasm)
 
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

@@ -213,4 +213,21 @@ mod tests {
         );
         assert!(dec.decode(b"", &units[0].0).is_err());
     }
+
+    #[test]
+    fn a_missing_unit_breaks_the_chain_until_the_next_keyframe() {
+        let mut enc = FrameEncoder::new(&settings()).unwrap();
+        let mut dec = VideoDecoder::new();
+        let mut ok = Vec::new();
+        for seq in 0..12 {
+            let (h, px) = frame(seq, PixelFormat::Bgr8, 0);
+            let au = enc.encode(&h, &px).unwrap().data;
+            if seq != 2 {
+                ok.push((seq, dec.decode(&au, &h).is_ok()));
+            }
+        }
+        // OpenH264 sees the gap in frame_num: 3 and 4 are refused, 5 (a keyframe) resumes.
+        let refused: Vec<u64> = ok.iter().filter(|(_, d)| !d).map(|(s, _)| *s).collect();
+        assert_eq!(refused, vec![3, 4]);
+    }
 }
