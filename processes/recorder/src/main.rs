@@ -7,10 +7,10 @@
 //! drains the queue and finishes the file; after `kill -9` the file is readable up to its last
 //! flushed chunk (see `hubtrack recover`).
 //!
-//! Frames are JPEG-encoded by the writer thread (`recorder.frame_encoding = "jpeg"`, the
-//! default): in this process, which the supervisor starts at a lower priority than the camera
-//! and detect, behind the same bounded pool, so encoding can fall behind only into counted drops,
-//! never into the camera's or detect's time. A frame that does not encode keeps its header and
+//! Frames are compressed by the writer thread through `FrameEncoder` (JPEG through libjpeg-turbo
+//! by default, or H.264: `recorder.frame_encoding`): in this process, which the supervisor starts
+//! at a lower priority than the camera and detect, behind the same bounded pool, so encoding can
+//! fall behind only into counted drops, never into the camera's or detect's time. A frame that does not encode keeps its header and
 //! is counted (`frames_encode_failed`).
 
 use anyhow::Context;
