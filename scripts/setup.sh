@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs everything hubtrack needs on a fresh Debian 12 machine, skipping what is already there:
 #   - apt: OpenCV (dev headers), clang/libclang (opencv-rust binding generator), libudev (v4l),
+#          libturbojpeg (JPEG frames), nasm (OpenH264's assembly, built from source by the openh264 crate),
 #          pkg-config, util-linux (taskset for the 2-core benchmark; unshare and nsenter for the
 #          private network ArduCopter SITL flies in), iproute2 (ip, to bring its loopback up)
 #   - a Python virtualenv in .venv with the independent test peers (mcap reader, protobuf, pymavlink)
@@ -8,7 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-APT_PACKAGES=(libopencv-dev clang libclang-dev libudev-dev pkg-config util-linux iproute2 python3-venv)
+APT_PACKAGES=(libopencv-dev clang libclang-dev libudev-dev pkg-config util-linux iproute2 python3-venv libturbojpeg0-dev nasm)
 
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

@@ -1,7 +1,7 @@
-//! JPEG frames: encoding for the recorder, decoding for replay. Pure Rust (`jpeg-encoder` with
-//! its SIMD colour conversion and DCT, `jpeg-decoder`): OpenCV's imgcodecs would pull about 120
-//! shared libraries (GDAL, GDCM, ...) into the recorder and the `hubtrack` command and add
-//! 0.2 s to every start. Measured in `cargo bench -p hubtrack-record --bench encode`.
+//! JPEG frames in pure Rust: the `jpeg-encoder` backend of [`crate::encoder::FrameEncoder`]
+//! (`recorder.jpeg_library = "jpeg-encoder"`; libjpeg-turbo is the default) and decoding for
+//! replay (`jpeg-decoder`). OpenCV's imgcodecs would pull about 120 shared libraries into the
+//! recorder and the `hubtrack` command. Measured in `cargo bench -p hubtrack-record --bench encode`.
 
 use hubtrack_types::{FrameHeader, PixelFormat};
 use jpeg_encoder::{ColorType, Encoder};

@@ -17,13 +17,16 @@
 pub mod annotations;
 pub mod channels;
 pub mod compressed_image;
+pub mod compressed_video;
 pub mod config;
+pub mod encoder;
 pub mod flight;
 pub mod frame_payload;
 pub mod jpeg;
 pub mod latency;
 pub mod raw_image;
 pub mod reader;
+pub mod video;
 pub mod viewer_schema;
 pub mod writer;
 

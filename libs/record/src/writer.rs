@@ -1,7 +1,9 @@
 //! Writing a recording.
 
 use crate::compressed_image;
+use crate::compressed_video;
 use crate::config::FrameEncoding;
+use crate::encoder::{EncodedFormat, EncodedFrame};
 use crate::raw_image::{self, ImageMeta};
 use crate::RecordError;
 use hubtrack_types::{FrameHeader, PixelFormat};
@@ -163,8 +165,8 @@ impl Default for RecordingOptions {
 pub struct Recording {
     path: PathBuf,
     writer: mcap::Writer<BufWriter<File>>,
-    /// `/frames` when it holds JPEG.
-    jpeg_channel: Option<u16>,
+    /// `/frames` when it holds compressed frames, and their format.
+    compressed_channel: Option<(u16, EncodedFormat)>,
     /// Where raw pixels go: `/frames` (raw encoding) or `/frames/raw` (raw copies beside JPEG).
     raw_channel: Option<u16>,
     overlay_channel: u16,
@@ -218,25 +220,38 @@ impl Recording {
             .create(BufWriter::with_capacity(1 << 20, file))
             .map_err(|e| mcap_err(path, e))?;
         let no_meta = BTreeMap::new();
-        let (jpeg, raw_topic) = match options.frame_encoding {
-            FrameEncoding::Raw => (false, Some(FRAMES_TOPIC)),
-            FrameEncoding::Jpeg => (true, options.raw_copies.then_some(RAW_FRAMES_TOPIC)),
+        let (compressed, raw_topic) = match options.frame_encoding {
+            FrameEncoding::Raw => (None, Some(FRAMES_TOPIC)),
+            FrameEncoding::Jpeg => (
+                Some(EncodedFormat::Jpeg),
+                options.raw_copies.then_some(RAW_FRAMES_TOPIC),
+            ),
+            FrameEncoding::H264 => (
+                Some(EncodedFormat::H264),
+                options.raw_copies.then_some(RAW_FRAMES_TOPIC),
+            ),
         };
-        let jpeg_channel = if jpeg {
-            let schema = writer
-                .add_schema(
-                    compressed_image::SCHEMA_NAME,
-                    "protobuf",
-                    &compressed_image::descriptor_set(),
-                )
-                .map_err(|e| mcap_err(path, e))?;
-            Some(
-                writer
+        let compressed_channel = match compressed {
+            Some(format) => {
+                let (name, descriptor) = match format {
+                    EncodedFormat::Jpeg => (
+                        compressed_image::SCHEMA_NAME,
+                        compressed_image::descriptor_set(),
+                    ),
+                    EncodedFormat::H264 => (
+                        compressed_video::SCHEMA_NAME,
+                        compressed_video::descriptor_set(),
+                    ),
+                };
+                let schema = writer
+                    .add_schema(name, "protobuf", &descriptor)
+                    .map_err(|e| mcap_err(path, e))?;
+                let id = writer
                     .add_channel(schema, FRAMES_TOPIC, "protobuf", &no_meta)
-                    .map_err(|e| mcap_err(path, e))?,
-            )
-        } else {
-            None
+                    .map_err(|e| mcap_err(path, e))?;
+                Some((id, format))
+            }
+            None => None,
         };
         let raw_channel = match raw_topic {
             Some(topic) => {
@@ -280,7 +295,7 @@ impl Recording {
         Ok(Recording {
             path: path.into(),
             writer,
-            jpeg_channel,
+            compressed_channel,
             raw_channel,
             overlay_channel,
             json_channels,
@@ -299,23 +314,49 @@ impl Recording {
         (monotonic_ns as i128 + self.realtime_offset_ns).max(0) as u64
     }
 
-    /// Writes one frame's JPEG to `/frames` (call before [`Recording::write_frame`] of the same
-    /// frame: replay pairs an image with the header that follows it).
+    /// Writes one frame's JPEG to `/frames` (see [`Recording::write_encoded`]).
     pub fn write_jpeg(
         &mut self,
         header: &FrameHeader,
         jpeg: Vec<u8>,
         log_time: u64,
     ) -> Result<(), RecordError> {
-        let channel_id = self.jpeg_channel.ok_or_else(|| RecordError::Encode {
-            channel: FRAMES_TOPIC.into(),
-            message: "this recording's frames are raw, not JPEG".into(),
-        })?;
-        compressed_image::encode(
+        let frame = EncodedFrame {
+            data: jpeg,
+            format: EncodedFormat::Jpeg,
+            keyframe: true,
+        };
+        self.write_encoded(header, frame, log_time)
+    }
+
+    /// Writes one frame's compressed bytes to `/frames`: a `foxglove.CompressedImage` (JPEG) or
+    /// a `foxglove.CompressedVideo` (one H.264 access unit). Call before
+    /// [`Recording::write_frame`] of the same frame: replay pairs an image with the header that
+    /// follows it.
+    pub fn write_encoded(
+        &mut self,
+        header: &FrameHeader,
+        frame: EncodedFrame,
+        log_time: u64,
+    ) -> Result<(), RecordError> {
+        let (channel_id, format) = match self.compressed_channel {
+            Some((id, format)) if format == frame.format => (id, format),
+            _ => {
+                return Err(RecordError::Encode {
+                    channel: FRAMES_TOPIC.into(),
+                    message: format!("this recording's frames are not {}", frame.format.name()),
+                })
+            }
+        };
+        let encode = match format {
+            EncodedFormat::Jpeg => compressed_image::encode,
+            EncodedFormat::H264 => compressed_video::encode,
+        };
+        encode(
             header.capture_realtime_ns,
             CAMERA_FRAME_ID,
-            JPEG_FORMAT,
-            jpeg,
+            format.name(),
+            frame.data,
             &mut self.scratch,
         );
         let h = MessageHeader {

@@ -7,16 +7,16 @@
 //! drains the queue and finishes the file; after `kill -9` the file is readable up to its last
 //! flushed chunk (see `hubtrack recover`).
 //!
-//! Frames are JPEG-encoded by the writer thread (`recorder.frame_encoding = "jpeg"`, the
-//! default): in this process, which the supervisor starts at a lower priority than the camera
-//! and detect, behind the same bounded pool, so encoding can fall behind only into counted drops,
-//! never into the camera's or detect's time. A frame that does not encode keeps its header and
+//! Frames are compressed by the writer thread through `FrameEncoder` (JPEG through libjpeg-turbo
+//! by default, or H.264: `recorder.frame_encoding`): in this process, which the supervisor starts
+//! at a lower priority than the camera and detect, behind the same bounded pool, so encoding can
+//! fall behind only into counted drops, never into the camera's or detect's time. A frame that does not encode keeps its header and
 //! is counted (`frames_encode_failed`).
 
 use anyhow::Context;
 use clap::Parser;
-use hubtrack_record::config::{Compression, FrameEncoding, RecorderConfig};
-use hubtrack_record::jpeg::JpegEncoder;
+use hubtrack_record::config::{Compression, RecorderConfig};
+use hubtrack_record::encoder::FrameEncoder;
 use hubtrack_record::writer::{ChannelKind, RecorderStats};
 use hubtrack_record::{Recording, RecordingOptions};
 use hubtrack_runtime::ipc::{FrameSubscriber, MsgSubscriber};
@@ -491,7 +491,7 @@ fn write_items(
 ) -> anyhow::Result<()> {
     let flush_interval = Duration::from_millis(cfg.flush_interval_ms);
     let mut disk = DiskGuard::new(rec.path(), cfg.min_free_mib);
-    let mut frames = FrameWriter::new(cfg);
+    let mut frames = FrameWriter::new(cfg)?;
     let mut flushed_at = Instant::now();
     let mut reported = RecorderStats::default();
     let mut last_frame = FrameHeader::default();
@@ -590,20 +590,23 @@ fn write_items(
     Ok(())
 }
 
-/// Writes each frame's pixels the configured way: JPEG on `/frames` with a raw copy of every
-/// `raw_every`-th frame, or raw on `/frames`.
+/// Writes each frame's pixels the configured way: compressed (JPEG or H.264) on `/frames` with a
+/// raw copy of every `raw_every`-th frame, or raw on `/frames`.
 struct FrameWriter {
-    jpeg: Option<JpegEncoder>,
+    encoder: Option<FrameEncoder>,
     raw_every: u64,
 }
 
 impl FrameWriter {
-    fn new(cfg: &RecorderConfig) -> FrameWriter {
-        FrameWriter {
-            jpeg: (cfg.frame_encoding == FrameEncoding::Jpeg)
-                .then(|| JpegEncoder::new(cfg.jpeg_quality)),
+    fn new(cfg: &RecorderConfig) -> anyhow::Result<FrameWriter> {
+        let encoder = match cfg.encoder_settings() {
+            Some(s) => Some(FrameEncoder::new(&s).context("starting the frame encoder")?),
+            None => None,
+        };
+        Ok(FrameWriter {
+            encoder,
             raw_every: cfg.raw_every,
-        }
+        })
     }
 
     fn write(
@@ -614,7 +617,7 @@ impl FrameWriter {
         log_time: u64,
         stats: &mut RecorderStats,
     ) -> Result<(), hubtrack_record::RecordError> {
-        let Some(encoder) = self.jpeg.as_mut() else {
+        let Some(encoder) = self.encoder.as_mut() else {
             stats.bytes_written += pixels.map_or(0, |p| p.len() as u64);
             return rec.write_frame(header, pixels, log_time);
         };
@@ -622,9 +625,9 @@ impl FrameWriter {
             return rec.write_frame(header, None, log_time);
         };
         match encoder.encode(header, px) {
-            Ok(jpeg) => {
-                stats.bytes_written += jpeg.len() as u64;
-                rec.write_jpeg(header, jpeg, log_time)?;
+            Ok(frame) => {
+                stats.bytes_written += frame.data.len() as u64;
+                rec.write_encoded(header, frame, log_time)?;
             }
             Err(e) => {
                 stats.frames_encode_failed += 1;

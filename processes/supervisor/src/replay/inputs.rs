@@ -165,6 +165,8 @@ pub struct Reader {
     first: FirstStage,
     /// The image messages read since the last frame header: (MCAP sequence, coding, message).
     pending_images: Vec<(u32, FrameCoding, Vec<u8>)>,
+    /// Decodes the images (video frames in file order).
+    images: frame_payload::FrameDecoder,
     /// Why the file ended early, if it did.
     pub stopped: Option<String>,
     /// Messages that could not be decoded.
@@ -182,6 +184,7 @@ impl Reader {
             reader: hubtrack_record::reader::messages(path)?,
             first,
             pending_images: Vec::new(),
+            images: frame_payload::FrameDecoder::default(),
             stopped: None,
             undecodable: 0,
             frames_lossy: 0,
@@ -198,22 +201,32 @@ impl Reader {
     }
 
     /// The pixels of frame `h` from the images read before its header: the raw one if there is
-    /// one (bit-exact), else the decoded JPEG; `None` (counted) if none is usable.
+    /// one (bit-exact), else the decoded JPEG or H.264 frame; `None` (counted) if none is usable.
+    /// A video frame is always decoded, raw copy or not: the next video frames need it.
     fn frame_pixels(&mut self, h: &FrameHeader) -> Option<Vec<u8>> {
         let mut images = std::mem::take(&mut self.pending_images);
         images.retain(|(seq, _, _)| *seq == h.seq as u32);
         images.sort_by_key(|(_, coding, _)| *coding != FrameCoding::Raw);
         let mut failure = None;
+        let mut found = None;
         for (_, coding, data) in &images {
-            match frame_payload::pixels(*coding, data, h) {
+            if found.is_some() && *coding != FrameCoding::Video {
+                continue;
+            }
+            match self.images.pixels(*coding, data, h) {
                 Ok(px) => {
-                    if *coding != FrameCoding::Raw {
-                        self.frames_lossy += 1;
+                    if found.is_none() {
+                        found = Some((px, *coding != FrameCoding::Raw));
                     }
-                    return Some(px);
                 }
                 Err(e) => failure = Some(e),
             }
+        }
+        if let Some((px, lossy)) = found {
+            if lossy {
+                self.frames_lossy += 1;
+            }
+            return Some(px);
         }
         match failure {
             Some(e) => {

@@ -395,7 +395,7 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     }
     if reader.frames_lossy > 0 {
         println!(
-            "note: {} of the frames were decoded from JPEG (lossy): detect's results differ from the live run by the compression; \
+            "note: {} of the frames were decoded from JPEG/H.264 (lossy): detect's results differ from the live run by the compression; \
              recorder.frame_encoding = \"raw\" (or recorder.raw_every) records frames for bit-exact replay",
             reader.frames_lossy
         );
@@ -414,7 +414,7 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
         compare::compare(&args.file, &output, &stages)?;
         if reader.frames_lossy > 0 {
             println!(
-                "(inputs decoded from JPEG: differences in /detections and after are expected from the compression)"
+                "(inputs decoded from JPEG/H.264: differences in /detections and after are expected from the compression)"
             );
         }
     }
