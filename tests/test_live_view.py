@@ -213,3 +213,12 @@ def test_live_view_serves_video_and_track_and_costs_detect_nothing(runner, tmp_p
         assert skipped <= base_skipped + 1, f"{name}: detect skipped {skipped} frames, {base_skipped} without client"
         assert p50 <= 1.25 * base_p50 + 0.5, f"{name}: detect p50 {p50:.2f} ms, {base_p50:.2f} ms without client"
     assert rss_stalled - rss_before < 64 * 1024, "a stalled client does not grow the live view's memory"
+
+
+def test_bad_live_address_is_refused_naming_the_key(runner):
+    for bad in ("vehicle:8765", "127.0.0.1", "127.0.0.1:99999"):
+        res = runner.run("hubtrack", "run", "--live", bad, "--duration", "1",
+                         "--set", 'run.stages=["capture"]', timeout=60)
+        assert res.returncode != 0, res.stdout
+        assert "live.address" in res.stderr and "IP:PORT" in res.stderr, res.stderr[-2000:]
+        assert "panicked" not in res.stderr

@@ -210,6 +210,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::field_reassign_with_default)] // a fixed-size message, filled field by field
     fn rescale_moves_every_coordinate() {
         let mut o = DetectOverlay::default();
         o.segment_count = 1;
