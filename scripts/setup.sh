@@ -29,7 +29,7 @@ if [ "${HUBTRACK_SKIP_PYTHON:-0}" != "1" ]; then
     echo "[setup] creating Python virtualenv .venv"
     python3 -m venv .venv
   fi
-  if ! .venv/bin/python -c "import mcap, mcap_protobuf, google.protobuf, pymavlink, pytest, cv2, foxglove_schemas_protobuf" 2>/dev/null; then
+  if ! .venv/bin/python -c "import mcap, mcap_protobuf, google.protobuf, pymavlink, pytest, cv2, foxglove_schemas_protobuf, websockets" 2>/dev/null; then
     echo "[setup] installing Python test peers into .venv"
     .venv/bin/pip install -q --disable-pip-version-check -r tests/requirements.txt
   fi

@@ -118,6 +118,33 @@ pub fn to_json(overlay: &DetectOverlay, timestamp_ns: u64) -> Value {
     json!({"circles": circles, "points": points, "texts": texts})
 }
 
+/// Scales the image coordinates of annotations made by [`to_json`] by `factor` (positions,
+/// points and circle diameters; line widths and font sizes stay as they are), for an image
+/// shrunk by that factor (the live view's video).
+pub fn rescale(annotations: &mut Value, factor: f64) {
+    let scale_point = |p: &mut Value| {
+        for axis in ["x", "y"] {
+            if let Some(v) = p.get(axis).and_then(Value::as_f64) {
+                p[axis] = json!(v * factor);
+            }
+        }
+    };
+    for circle in annotations["circles"].as_array_mut().into_iter().flatten() {
+        scale_point(&mut circle["position"]);
+        if let Some(d) = circle.get("diameter").and_then(Value::as_f64) {
+            circle["diameter"] = json!(d * factor);
+        }
+    }
+    for points in annotations["points"].as_array_mut().into_iter().flatten() {
+        for p in points["points"].as_array_mut().into_iter().flatten() {
+            scale_point(p);
+        }
+    }
+    for text in annotations["texts"].as_array_mut().into_iter().flatten() {
+        scale_point(&mut text["position"]);
+    }
+}
+
 /// A JSON schema for the subset of `foxglove.ImageAnnotations` written here.
 pub fn json_schema() -> Vec<u8> {
     let color = json!({"type": "object", "properties": {"r": {"type": "number"}, "g": {"type": "number"}, "b": {"type": "number"}, "a": {"type": "number"}}});
@@ -180,5 +207,33 @@ mod tests {
         );
         assert_eq!(v["circles"][0]["position"]["x"], 100.0);
         assert_eq!(v["circles"][0]["timestamp"]["sec"], 1);
+    }
+
+    #[test]
+    #[allow(clippy::field_reassign_with_default)] // a fixed-size message, filled field by field
+    fn rescale_moves_every_coordinate() {
+        let mut o = DetectOverlay::default();
+        o.segment_count = 1;
+        o.segments[0] = OverlaySegment {
+            a: [30.0, 60.0],
+            b: [90.0, 120.0],
+            kind: OverlayKind::Tower,
+        };
+        o.detection.detected = true;
+        o.detection.hub_px = [300.0, 150.0];
+        let mut v = to_json(&o, 0);
+        rescale(&mut v, 0.5);
+        let p = &v["points"][0]["points"];
+        assert_eq!(
+            (p[0]["x"].as_f64(), p[1]["y"].as_f64()),
+            (Some(15.0), Some(60.0))
+        );
+        assert_eq!(v["circles"][0]["position"]["x"].as_f64(), Some(150.0));
+        assert_eq!(
+            v["circles"][0]["diameter"].as_f64(),
+            Some(HUB_MARKER_PX / 2.0)
+        );
+        assert_eq!(v["texts"][0]["position"]["y"].as_f64(), Some(75.0));
+        assert_eq!(v["points"][0]["thickness"].as_f64(), Some(THICKNESS_PX));
     }
 }

@@ -2,7 +2,7 @@
 //! simulator in one process, so it reads them all, and is where the documented files are
 //! checked against the defaults.
 
-use hubtrack_runtime::config::{ConfigArgs, ParamError, RunConfig, Sections};
+use hubtrack_runtime::config::{ConfigArgs, LiveConfig, ParamError, RunConfig, Sections};
 use hubtrack_types::setup::{CameraSetup, Lens, TurbineSetup};
 use serde::{Deserialize, Serialize};
 
@@ -28,6 +28,8 @@ pub struct LabConfig {
     pub control: toml::Table,
     /// `[sim]`.
     pub sim: hubtrack_sim::SimConfig,
+    /// `[live]`.
+    pub live: LiveConfig,
 }
 
 impl Sections for LabConfig {
@@ -39,6 +41,7 @@ impl Sections for LabConfig {
         self.recorder.validate()?;
         self.detect.validate()?;
         self.track.validate()?;
+        self.live.validate()?;
         self.sim.validate()
     }
 }

@@ -7,7 +7,9 @@ use hubtrack_runtime::config::{ConfigArgs, ConfigDoc, RunConfig, RunSections};
 use std::process::Command;
 
 /// The stage binaries that read sections, each its own (named as the stage).
-pub const STAGE_SECTIONS: &[&str] = &["capture", "recorder", "detect", "track", "control", "sim"];
+pub const STAGE_SECTIONS: &[&str] = &[
+    "capture", "recorder", "detect", "track", "control", "sim", "live",
+];
 /// Sections several stages read, and the stages that read them.
 const SHARED_SECTIONS: &[(&str, &[&str])] = &[
     ("camera", &["detect", "track"]),

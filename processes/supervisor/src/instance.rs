@@ -17,7 +17,9 @@ const LOCK_DIR: &str = "/tmp/hubtrack";
 /// How long an orphan gets to stop after SIGTERM before it is killed.
 const ORPHAN_STOP_TIMEOUT: Duration = Duration::from_secs(3);
 /// The stage binaries a supervisor starts (`hubtrack-NAME`).
-const STAGE_BINARIES: [&str; 6] = ["capture", "sim", "detect", "track", "control", "recorder"];
+const STAGE_BINARIES: [&str; 7] = [
+    "capture", "sim", "detect", "track", "control", "recorder", "live",
+];
 
 /// The held lock; released when dropped or when the process ends.
 #[derive(Debug)]

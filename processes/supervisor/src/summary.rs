@@ -56,6 +56,12 @@ pub fn print_summary(
             if segments.len() > 1 { " (last segment)" } else { "" }
         );
     }
+    if let Some(l) = statuses.get("live") {
+        println!(
+            "  live      {} frames in, {} sent as video, {} skipped (no viewer, or the frame-rate or bitrate cap), {} errors",
+            l.inputs, l.outputs, l.skipped, l.errors
+        );
+    }
     for path in segments {
         match hubtrack_record::inspect(path) {
             Ok(info) => {

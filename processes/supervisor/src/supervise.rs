@@ -26,8 +26,11 @@ use std::time::{Duration, Instant};
 /// Canonical start order; stages stop in reverse (control first, so the vehicle is told to hold
 /// first; recorder last, so the recording sees everything).
 /// The simulator starts last: its first frame finds the whole pipeline ready (in lockstep it
-/// would otherwise wait for stages still starting), and it stops first.
-pub const PIPELINE_ORDER: &[&str] = &["recorder", "capture", "detect", "track", "control", "sim"];
+/// would otherwise wait for stages still starting), and it stops first. The live view, a
+/// reader like the recorder, starts right after the recorder.
+pub const PIPELINE_ORDER: &[&str] = &[
+    "recorder", "live", "capture", "detect", "track", "control", "sim",
+];
 /// The stages that publish frames: a run whose frame source is given up on ends.
 const FRAME_SOURCES: &[&str] = &["capture", "sim"];
 /// Supervisor loop period (bounds restart and liveness reaction time).
@@ -244,20 +247,37 @@ pub struct RunArgs {
     /// Stop after this many seconds (default: run until Ctrl-C / SIGTERM).
     #[arg(long, value_name = "SECONDS", value_parser = hubtrack_runtime::cli::seconds)]
     pub duration: Option<f64>,
+    /// Serve the live view (Foxglove WebSocket) on this address, e.g. `127.0.0.1:8765`; the
+    /// same as `--set live.enabled=true --set live.address=ADDR`.
+    #[arg(long, value_name = "IP:PORT")]
+    pub live: Option<String>,
 }
 
 /// `hubtrack run`: runs the pipeline until the duration ends, a signal arrives, or the source
 /// (camera or simulated flight) ends.
-pub fn run(args: RunArgs) -> anyhow::Result<()> {
-    let stages = args
+pub fn run(mut args: RunArgs) -> anyhow::Result<()> {
+    if let Some(addr) = &args.live {
+        let addr = toml::Value::String(addr.clone()).to_string();
+        args.config.overrides.push("live.enabled=true".into());
+        args.config.overrides.push(format!("live.address={addr}"));
+    }
+    let mut stages = args
         .config
         .load::<hubtrack_runtime::config::RunSections>()?
         .run
         .stages;
+    let live = args
+        .config
+        .load::<hubtrack_runtime::config::LiveSections>()?
+        .live;
+    if live.enabled && !stages.iter().any(|s| s == "live") {
+        stages.push("live".into());
+    }
     // Every stage checks its own sections before anything starts, so a bad key stops the run
     // here rather than in a crash loop of one stage.
-    let config =
+    let mut config =
         crate::config_check::check(&args.config, crate::config_check::Scope::Stages(&stages))?;
+    config.stages = stages;
     let record = args
         .record
         .clone()

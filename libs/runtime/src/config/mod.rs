@@ -8,8 +8,10 @@
 //! `hubtrack config` checks a whole file by asking every stage binary to check its sections.
 
 mod files;
+mod live;
 mod run;
 
+pub use live::LiveConfig;
 pub use run::{RestartConfig, RestartPolicy, RunConfig, DEFAULT_NICE, KNOWN_STAGES};
 
 pub use hubtrack_types::params::ParamError;
@@ -27,7 +29,7 @@ const MAX_QUOTED_CHARS: usize = 120;
 /// The top-level sections a config file may have: `[run]`, the `[camera]` and `[turbine]` that
 /// detect and track share, and one per stage.
 pub const KNOWN_SECTIONS: &[&str] = &[
-    "run", "camera", "turbine", "capture", "recorder", "detect", "track", "control", "sim",
+    "run", "camera", "turbine", "capture", "recorder", "detect", "track", "control", "sim", "live",
 ];
 
 /// Why a config could not be used.
@@ -323,6 +325,11 @@ impl ConfigArgs {
 crate::sections! {
     /// The `[run]` section alone, for processes that read nothing else.
     pub struct RunSections { run: RunConfig }
+}
+
+crate::sections! {
+    /// The `[live]` section: the live-view stage and the supervisor (which starts it) read it.
+    pub struct LiveSections { live: LiveConfig }
 }
 
 #[cfg(test)]

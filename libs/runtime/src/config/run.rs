@@ -7,10 +7,12 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 /// The stage names `[run].stages` may contain.
-pub const KNOWN_STAGES: &[&str] = &["capture", "sim", "recorder", "detect", "track", "control"];
+pub const KNOWN_STAGES: &[&str] = &[
+    "capture", "sim", "recorder", "detect", "track", "control", "live",
+];
 
 /// Default niceness of the stages that do not run at 0 (see [`RunConfig::nice`]).
-pub const DEFAULT_NICE: &[(&str, i32)] = &[("recorder", 10)];
+pub const DEFAULT_NICE: &[(&str, i32)] = &[("recorder", 10), ("live", 10)];
 
 params! {
     /// `[run]`: which stages `hubtrack run` starts and how it stops them.
@@ -36,10 +38,10 @@ params! {
         pub restart: RestartConfig = RestartConfig::default();
         /// Scheduling niceness per stage, added to the niceness `hubtrack run` itself runs at (a
         /// systemd `Nice=` sets the base), -20 … 19. A stage not listed keeps its default: +10
-        /// for the recorder, 0 for the others (see [`RunConfig::nice_of`]). The recorder is
-        /// throughput-bound (its queue absorbs delays) while detect → track → control is
-        /// latency-bound, so on a 2-core computer the recorder yields the CPU to them. Going
-        /// below the base needs CAP_SYS_NICE.
+        /// for the recorder and the live view, 0 for the others (see [`RunConfig::nice_of`]).
+        /// The recorder is throughput-bound (its queue absorbs delays) while detect → track →
+        /// control is latency-bound, so on a 2-core computer the recorder yields the CPU to
+        /// them. Going below the base needs CAP_SYS_NICE.
         pub nice: BTreeMap<String, i32> =
             DEFAULT_NICE.iter().map(|(n, v)| (n.to_string(), *v)).collect();
     }
