@@ -287,7 +287,7 @@ pub fn run(
         let mut path = flight(seed.wrapping_add(f), frames);
         if let Some(t) = turbine {
             for fr in &mut path {
-                apply_turbine(&mut fr.scene, t);
+                hubtrack_sim::show_turbine(&mut fr.scene, t);
             }
         }
         let mut ours = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -523,13 +523,3 @@ fn write_sequence_miss(
     Ok(())
 }
 
-/// Gives a rendered scene the dimensions of a turbine profile: tower diameters, rotor, hub
-/// height, overhang and spinner (the nacelle body keeps the renderer's shape).
-fn apply_turbine(scene: &mut hubtrack_render::Scene, t: &hubtrack_types::setup::TurbineSetup) {
-    scene.tower_top_diameter_m = t.tower_top_diameter_m;
-    scene.tower_base_diameter_m = t.tower_base_diameter_m;
-    scene.blade_length_m = t.rotor_radius_m;
-    scene.hub_height_m = t.hub_height_m;
-    scene.hub_overhang_m = t.hub_overhang_m;
-    scene.spinner_diameter_m = t.spinner_diameter_m;
-}
