@@ -300,6 +300,17 @@ pub struct TrackState {
     pub frames_since_detection: u32,
     /// Seconds since the last accepted detection.
     pub time_since_detection_s: f64,
+    /// Share of the tower's width in this frame's fused distance measurement, 0..1 (its
+    /// inverse variance over the sum of all cues'); the three shares sum to 1 on a frame whose
+    /// detection gave a distance, else all are 0. Absent in recordings from before them: 0.
+    #[serde(default)]
+    pub distance_share_tower: f64,
+    /// Share of the spinner's size, 0..1 (see `distance_share_tower`).
+    #[serde(default)]
+    pub distance_share_spinner: f64,
+    /// Share of the motion parallax, 0..1 (see `distance_share_tower`).
+    #[serde(default)]
+    pub distance_share_parallax: f64,
 }
 
 /// A fixed-capacity ASCII text (NUL padded) for reasons and error messages in shared memory.

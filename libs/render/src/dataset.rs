@@ -382,10 +382,17 @@ pub const HELD_OUT_TOWER_TOP_M: (f64, f64) = (1.8, 3.5);
 pub const HELD_OUT_TAPER: (f64, f64) = (1.4, 2.2);
 /// Blade lengths of the held-out family, metres (rotors of 25–65 m radius).
 pub const HELD_OUT_BLADE_M: (f64, f64) = (23.0, 63.0);
+/// Spinner diameters of the held-out family, metres (the training family's is 3.2).
+pub const HELD_OUT_SPINNER_M: (f64, f64) = (2.4, 4.6);
+/// Hub overhangs of the held-out family, metres (the training family's is 4.2).
+pub const HELD_OUT_OVERHANG_M: (f64, f64) = (3.0, 7.0);
+/// Nacelle sizes of the held-out family over the training family's one nacelle.
+pub const HELD_OUT_NACELLE_SCALE: (f64, f64) = (0.8, 1.5);
 
 /// Gives `scene` turbine proportions outside the training family (which varies the tower by
-/// ±5 % around 2.2 m and keeps 33.5 m blades): tower top, taper and blade length drawn over
-/// what real fleets have. The hub height grows with the blades so the rotor clears the ground.
+/// ±5 % around 2.2 m and keeps 33.5 m blades, one spinner, overhang and nacelle): tower top,
+/// taper, blade length, spinner, overhang and nacelle size drawn over what real fleets have.
+/// The hub height grows with the blades so the rotor clears the ground.
 pub fn held_out_turbine(scene: &mut Scene, seed: u64) {
     let mut r = Rng(seed ^ HELD_OUT_TURBINE_SEED_MIX);
     let top = r.range(HELD_OUT_TOWER_TOP_M.0, HELD_OUT_TOWER_TOP_M.1);
@@ -393,4 +400,10 @@ pub fn held_out_turbine(scene: &mut Scene, seed: u64) {
     scene.tower_base_diameter_m = top * r.range(HELD_OUT_TAPER.0, HELD_OUT_TAPER.1);
     scene.blade_length_m = r.range(HELD_OUT_BLADE_M.0, HELD_OUT_BLADE_M.1);
     scene.hub_height_m = scene.hub_height_m.max(scene.blade_length_m + 25.0);
+    scene.spinner_diameter_m = r.range(HELD_OUT_SPINNER_M.0, HELD_OUT_SPINNER_M.1);
+    scene.nacelle_scale = r.range(HELD_OUT_NACELLE_SCALE.0, HELD_OUT_NACELLE_SCALE.1);
+    // The blade-root plane stays clear of the nacelle's front (its default 1.2 m, scaled).
+    scene.hub_overhang_m = r
+        .range(HELD_OUT_OVERHANG_M.0, HELD_OUT_OVERHANG_M.1)
+        .max(1.2 * scene.nacelle_scale + scene.spinner_diameter_m / 4.0);
 }

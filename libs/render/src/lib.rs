@@ -501,6 +501,9 @@ fn validate(scene: &Scene, pose: &CameraPose) -> Result<(), RenderError> {
         scene.tower_base_diameter_m,
         scene.tower_top_diameter_m,
         scene.blade_length_m,
+        scene.hub_overhang_m,
+        scene.spinner_diameter_m,
+        scene.nacelle_scale,
         scene.rotor_angle_deg,
         scene.nacelle_yaw_deg,
         scene.blade_pitch_deg,
@@ -526,6 +529,14 @@ fn validate(scene: &Scene, pose: &CameraPose) -> Result<(), RenderError> {
     if !(2.0..=200.0).contains(&scene.blade_length_m) {
         return Err(RenderError::InvalidInput(
             "blade_length_m must be within 2..200",
+        ));
+    }
+    if !(0.5..=20.0).contains(&scene.hub_overhang_m)
+        || !(0.5..=15.0).contains(&scene.spinner_diameter_m)
+        || !(0.3..=4.0).contains(&scene.nacelle_scale)
+    {
+        return Err(RenderError::InvalidInput(
+            "hub_overhang_m must be within 0.5..20 m, spinner_diameter_m within 0.5..15 m, nacelle_scale within 0.3..4",
         ));
     }
     if scene.noise_sigma < 0.0 || scene.noise_sigma > 100.0 {

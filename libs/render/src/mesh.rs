@@ -8,7 +8,7 @@
 use crate::math::{add, cross, deg, dot, lerp3, normalize, scale, sub, Rng, V3};
 use crate::scene::{
     Scene, HUB_OVERHANG_M, NACELLE_FRONT_X_M, NACELLE_HEIGHT_M, NACELLE_LENGTH_M, NACELLE_WIDTH_M,
-    SPINNER_NOSE_LENGTH_M, SPINNER_RADIUS_M,
+    SPINNER_RADIUS_M,
 };
 
 /// Turbine paint (RAL 7035-like light grey), linear 0..1 albedo per RGB channel.
@@ -40,6 +40,13 @@ const BLADE_ROOT_DIAMETER_M: f64 = 1.9;
 const BLADE_MAX_CHORD_M: f64 = 2.9;
 /// Chord near the tip (m) for a 33.5 m blade.
 const BLADE_TIP_CHORD_M: f64 = 0.55;
+/// How the root diameter grows with blade length: `(len / ref)^this`. Roots grow slower than
+/// the blade (about 1.9 m at 33.5 m, 2.0 m at 44 m, 2.3–2.5 m at 55 m blades in published blade
+/// data), so long blades do not end in roots as wide as the spinner.
+const BLADE_ROOT_SCALING_EXP: f64 = 0.5;
+/// How the chords grow with blade length: `(len / ref)^this` (about 2.9 m at 33.5 m, 3.5 m at
+/// 44 m, 4.0–4.3 m at 55 m).
+const BLADE_CHORD_SCALING_EXP: f64 = 0.75;
 /// Reference blade length the chord constants refer to (m).
 const BLADE_REF_LENGTH_M: f64 = 33.5;
 /// Radius (fraction of blade length) of maximum chord.
@@ -196,6 +203,12 @@ pub(crate) struct TurbineSpec {
     pub tower_base_d_m: f64,
     pub tower_top_d_m: f64,
     pub blade_length_m: f64,
+    /// Horizontal distance from the tower axis to the blade-root plane (m).
+    pub hub_overhang_m: f64,
+    /// Spinner radius at the blade-root plane (m); the nose length scales with it.
+    pub spinner_radius_m: f64,
+    /// Nacelle size over the default nacelle's (length, height, width alike).
+    pub nacelle_scale: f64,
     pub rotor_angle_deg: f64,
     pub nacelle_yaw_deg: f64,
     pub blade_pitch_deg: f64,
@@ -213,6 +226,9 @@ impl TurbineSpec {
             tower_base_d_m: scene.tower_base_diameter_m,
             tower_top_d_m: scene.tower_top_diameter_m,
             blade_length_m: scene.blade_length_m,
+            hub_overhang_m: scene.hub_overhang_m,
+            spinner_radius_m: scene.spinner_diameter_m / 2.0,
+            nacelle_scale: scene.nacelle_scale,
             rotor_angle_deg: scene.rotor_angle_deg,
             nacelle_yaw_deg: scene.nacelle_yaw_deg,
             blade_pitch_deg: scene.blade_pitch_deg,
@@ -275,6 +291,27 @@ fn ray_hits_box(p: V3, d: V3, lo: V3, hi: V3) -> bool {
     true
 }
 
+/// The nacelle body of a turbine in its local frame (m): the default box scaled by
+/// `nacelle_scale`, its front the default (scaled) distance behind the blade-root plane.
+struct NacelleBox {
+    front_x: f64,
+    length: f64,
+    height: f64,
+    width: f64,
+}
+
+impl NacelleBox {
+    fn of(s: &TurbineSpec) -> NacelleBox {
+        let k = s.nacelle_scale;
+        NacelleBox {
+            front_x: s.hub_overhang_m - (HUB_OVERHANG_M - NACELLE_FRONT_X_M) * k,
+            length: NACELLE_LENGTH_M * k,
+            height: NACELLE_HEIGHT_M * k,
+            width: NACELLE_WIDTH_M * k,
+        }
+    }
+}
+
 /// Append a complete turbine (tower, nacelle, spinner, three blades) to `mesh`.
 pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
     let yaw = deg(s.nacelle_yaw_deg);
@@ -287,21 +324,23 @@ pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
     let tag_tower = if high { Tag::Tower } else { Tag::Other };
     let alb = TURBINE_ALBEDO;
     let hub_z = s.hub_height_m;
-    let top_z = hub_z - NACELLE_HEIGHT_M / 2.0;
+    // The nacelle keeps its front the default distance (scaled) behind the blade-root plane.
+    let nacelle = NacelleBox::of(s);
+    let top_z = hub_z - nacelle.height / 2.0;
 
     // --- Tower: truncated cone, rings every few metres, fine rings under the nacelle.
     let segs = if high { TOWER_SEGMENTS } else { 12 };
     let (rb, rt) = (s.tower_base_d_m / 2.0, s.tower_top_d_m / 2.0);
     let slope = (rt - rb) / top_z;
     let nac_lo = [
-        NACELLE_FRONT_X_M - NACELLE_LENGTH_M,
-        -NACELLE_WIDTH_M / 2.0,
-        hub_z - NACELLE_HEIGHT_M / 2.0,
+        nacelle.front_x - nacelle.length,
+        -nacelle.width / 2.0,
+        hub_z - nacelle.height / 2.0,
     ];
     let nac_hi = [
-        NACELLE_FRONT_X_M,
-        NACELLE_WIDTH_M / 2.0,
-        hub_z + NACELLE_HEIGHT_M / 2.0,
+        nacelle.front_x,
+        nacelle.width / 2.0,
+        hub_z + nacelle.height / 2.0,
     ];
     let sun_local = s.shadow_sun.map(|w| f.to_local_dir(w));
     let mut z = 0.0;
@@ -343,9 +382,9 @@ pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
 
     // --- Nacelle: chamfered box along the rotor axis, each face flat-shaded.
     let (hw, hh, c) = (
-        NACELLE_WIDTH_M / 2.0,
-        NACELLE_HEIGHT_M / 2.0,
-        NACELLE_CHAMFER_M,
+        nacelle.width / 2.0,
+        nacelle.height / 2.0,
+        NACELLE_CHAMFER_M * s.nacelle_scale,
     );
     // Cross-section outline (y, z offsets from the axis), counter-clockwise seen from the front.
     let outline: [[f64; 2]; 8] = [
@@ -358,7 +397,7 @@ pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
         [-hw + c, -hh],
         [hw - c, -hh],
     ];
-    let x_rear = NACELLE_FRONT_X_M - NACELLE_LENGTH_M;
+    let x_rear = nacelle.front_x - nacelle.length;
     for k in 0..8 {
         let (p0, p1) = (outline[k], outline[(k + 1) % 8]);
         let mid = [(p0[0] + p1[0]) / 2.0, (p0[1] + p1[1]) / 2.0];
@@ -369,11 +408,11 @@ pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
             n2
         };
         let o = f.p([x_rear, p0[0], hub_z + p0[1]]);
-        let eu = f.d([NACELLE_LENGTH_M, 0.0, 0.0]);
+        let eu = f.d([nacelle.length, 0.0, 0.0]);
         let ev = f.d([0.0, p1[0] - p0[0], p1[1] - p0[1]]);
         mesh.flat_face(o, eu, ev, f.d(n2), alb, Tag::Other);
     }
-    for (x, nx) in [(NACELLE_FRONT_X_M, 1.0), (x_rear, -1.0)] {
+    for (x, nx) in [(nacelle.front_x, 1.0), (x_rear, -1.0)] {
         let n = f.d([nx, 0.0, 0.0]);
         let centre = mesh.vert(f.p([x, 0.0, hub_z]), n, alb);
         let first = mesh.verts.len() as u32;
@@ -386,12 +425,18 @@ pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
     }
 
     // --- Spinner: surface of revolution around the rotor axis; nose = half ellipsoid.
-    let hub_x = HUB_OVERHANG_M;
+    let hub_x = s.hub_overhang_m;
     let nseg = if high { SPINNER_SEGMENTS } else { 8 };
-    let (sr, sl) = (SPINNER_RADIUS_M, SPINNER_NOSE_LENGTH_M);
+    let sr = s.spinner_radius_m;
+    let sl = crate::scene::spinner_nose_length_m(sr);
     // Profile (axial offset from the blade-root plane, radius, axial normal, radial normal).
     let mut profile: [[f64; 4]; 12] = [[0.0; 4]; 12];
-    profile[0] = [-SPINNER_BACK_M, sr * 0.93, -0.3, 1.0];
+    profile[0] = [
+        -SPINNER_BACK_M * sr / SPINNER_RADIUS_M,
+        sr * 0.93,
+        -0.3,
+        1.0,
+    ];
     profile[1] = [-0.5, sr, 0.0, 1.0];
     for k in 0..10 {
         let th = (k as f64 / 9.0) * std::f64::consts::FRAC_PI_2;
@@ -455,9 +500,9 @@ fn build_blade(
     high: bool,
 ) {
     let k = len / BLADE_REF_LENGTH_M;
-    let root_d = BLADE_ROOT_DIAMETER_M * k;
-    let c_max = BLADE_MAX_CHORD_M * k;
-    let c_tip = BLADE_TIP_CHORD_M * k;
+    let root_d = BLADE_ROOT_DIAMETER_M * k.powf(BLADE_ROOT_SCALING_EXP);
+    let c_max = BLADE_MAX_CHORD_M * k.powf(BLADE_CHORD_SCALING_EXP);
+    let c_tip = BLADE_TIP_CHORD_M * k.powf(BLADE_CHORD_SCALING_EXP);
     let r_cmax = BLADE_MAX_CHORD_FRAC * len;
     let npts = if high { BLADE_SECTION_POINTS } else { 6 };
     let axis = [1.0, 0.0, 0.0];

@@ -17,20 +17,40 @@ pub const DEFAULT_TOWER_TOP_DIAMETER_M: f64 = 2.2;
 /// Default blade length from the rotor centre (m).
 pub const DEFAULT_BLADE_LENGTH_M: f64 = 33.5;
 
-/// Horizontal distance from the tower axis to the rotor centre (blade-root plane), metres.
+/// Default horizontal distance from the tower axis to the rotor centre (blade-root plane),
+/// metres ([`Scene::hub_overhang_m`]).
 pub const HUB_OVERHANG_M: f64 = 4.2;
-/// Nacelle body length (m).
+/// Default nacelle body length (m); [`Scene::nacelle_scale`] scales the whole body.
 pub const NACELLE_LENGTH_M: f64 = 10.0;
-/// Nacelle body height (m); the rotor axis runs through its mid-height.
+/// Default nacelle body height (m); the rotor axis runs through its mid-height.
 pub const NACELLE_HEIGHT_M: f64 = 3.5;
-/// Nacelle body width (m).
+/// Default nacelle body width (m).
 pub const NACELLE_WIDTH_M: f64 = 3.4;
-/// Position of the nacelle's front face ahead of the tower axis (m).
+/// Default position of the nacelle's front face ahead of the tower axis (m).
 pub const NACELLE_FRONT_X_M: f64 = 3.0;
-/// Spinner (nose cone) radius at the blade-root plane (m).
+/// Default spinner (nose cone) radius at the blade-root plane (m)
+/// ([`Scene::spinner_diameter_m`]).
 pub const SPINNER_RADIUS_M: f64 = 1.6;
-/// Distance from the blade-root plane to the tip of the spinner nose (m).
+/// Distance from the blade-root plane to the tip of the default spinner's nose (m); other
+/// spinners keep its proportions.
 pub const SPINNER_NOSE_LENGTH_M: f64 = 2.0;
+
+/// Nose length of a spinner of radius `radius_m` (the default spinner's proportions), metres.
+pub fn spinner_nose_length_m(radius_m: f64) -> f64 {
+    SPINNER_NOSE_LENGTH_M * radius_m / SPINNER_RADIUS_M
+}
+
+fn default_hub_overhang_m() -> f64 {
+    HUB_OVERHANG_M
+}
+
+fn default_spinner_diameter_m() -> f64 {
+    2.0 * SPINNER_RADIUS_M
+}
+
+fn default_nacelle_scale() -> f64 {
+    1.0
+}
 
 /// Sky appearance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -78,6 +98,15 @@ pub struct Scene {
     pub tower_top_diameter_m: f64,
     /// Blade length from the rotor centre, metres (~33.5).
     pub blade_length_m: f64,
+    /// Horizontal distance from the tower axis to the blade-root plane, metres (4.2).
+    #[serde(default = "default_hub_overhang_m")]
+    pub hub_overhang_m: f64,
+    /// Spinner diameter at the blade-root plane, metres (3.2).
+    #[serde(default = "default_spinner_diameter_m")]
+    pub spinner_diameter_m: f64,
+    /// Nacelle body size over the default 10 × 3.5 × 3.4 m body (1).
+    #[serde(default = "default_nacelle_scale")]
+    pub nacelle_scale: f64,
     /// Angle of blade 1 from vertical-up, clockwise as seen from the front (from the camera side);
     /// blades 2 and 3 at +120° and +240°.
     pub rotor_angle_deg: f64,
@@ -143,6 +172,9 @@ impl Scene {
             tower_base_diameter_m: DEFAULT_TOWER_BASE_DIAMETER_M,
             tower_top_diameter_m: DEFAULT_TOWER_TOP_DIAMETER_M,
             blade_length_m: DEFAULT_BLADE_LENGTH_M,
+            hub_overhang_m: HUB_OVERHANG_M,
+            spinner_diameter_m: 2.0 * SPINNER_RADIUS_M,
+            nacelle_scale: 1.0,
             rotor_angle_deg: 0.0,
             nacelle_yaw_deg: 0.0,
             blade_pitch_deg: 2.0,
@@ -193,6 +225,9 @@ impl Scene {
             tower_base_diameter_m: DEFAULT_TOWER_BASE_DIAMETER_M * r.range(0.95, 1.05),
             tower_top_diameter_m: DEFAULT_TOWER_TOP_DIAMETER_M * r.range(0.95, 1.05),
             blade_length_m: DEFAULT_BLADE_LENGTH_M,
+            hub_overhang_m: HUB_OVERHANG_M,
+            spinner_diameter_m: 2.0 * SPINNER_RADIUS_M,
+            nacelle_scale: 1.0,
             rotor_angle_deg: r.range(0.0, 120.0),
             nacelle_yaw_deg: 0.0,
             blade_pitch_deg: if parked {
@@ -238,7 +273,7 @@ impl Scene {
     pub fn hub_world(&self) -> [f64; 3] {
         add(
             [0.0, 0.0, self.hub_height_m],
-            scale(self.rotor_axis(), HUB_OVERHANG_M),
+            scale(self.rotor_axis(), self.hub_overhang_m),
         )
     }
 
@@ -246,13 +281,16 @@ impl Scene {
     pub fn nose_world(&self) -> [f64; 3] {
         add(
             self.hub_world(),
-            scale(self.rotor_axis(), SPINNER_NOSE_LENGTH_M),
+            scale(
+                self.rotor_axis(),
+                spinner_nose_length_m(self.spinner_diameter_m / 2.0),
+            ),
         )
     }
 
     /// Height of the tower top (flange under the nacelle) above the ground, metres.
     pub fn tower_top_height_m(&self) -> f64 {
-        self.hub_height_m - NACELLE_HEIGHT_M / 2.0
+        self.hub_height_m - self.nacelle_scale * NACELLE_HEIGHT_M / 2.0
     }
 
     /// Tower axis point at the top of the tower, world frame.

@@ -184,6 +184,51 @@ fn nose_is_spinner_length_in_front_of_hub() {
 }
 
 #[test]
+fn a_turbines_own_spinner_overhang_and_nacelle_reach_the_truth() {
+    let cam = Camera::pinhole(1000, 800, 40.0);
+    let scene = quiet(Scene {
+        spinner_diameter_m: 4.8,
+        hub_overhang_m: 6.0,
+        nacelle_scale: 1.3,
+        ..Scene::default_clear()
+    });
+    // Front view: the tower top is half the (scaled) nacelle under the hub, one overhang deeper.
+    let pose = CameraPose::front(100.0);
+    let (_, t) = render(cam, &scene, &pose);
+    let top = t.tower_top_px.expect("tower top");
+    let expected_v = cam.cy + cam.fy * (1.3 * 3.5 / 2.0) / (100.0 + 6.0);
+    assert!(
+        (top[1] - expected_v).abs() < 1e-6,
+        "{top:?} vs {expected_v}"
+    );
+    // Side view: a spinner 1.5 times the default's diameter has a 1.5 times longer nose.
+    let side = CameraPose::looking_at_hub(0.0, 50.0, 0.0);
+    let (_, t) = render(cam, &scene, &side);
+    let nose = t.nose_px.expect("nose");
+    let expected = cam.cx - cam.fx * 1.5 * SPINNER_NOSE_LENGTH_M / 50.0;
+    assert!((nose[0] - expected).abs() < 1e-6, "{nose:?} vs {expected}");
+    // Out of range: refused, not drawn.
+    let mut renderer = Renderer::new(cam);
+    let mut out = vec![0u8; cam.frame_bytes()];
+    for bad in [
+        Scene {
+            spinner_diameter_m: f64::NAN,
+            ..Scene::default_clear()
+        },
+        Scene {
+            hub_overhang_m: 0.0,
+            ..Scene::default_clear()
+        },
+        Scene {
+            nacelle_scale: 9.0,
+            ..Scene::default_clear()
+        },
+    ] {
+        assert!(renderer.render(&bad, &pose, &mut out).is_err());
+    }
+}
+
+#[test]
 fn tower_width_matches_pinhole_prediction() {
     let cam = Camera::pinhole(1280, 960, 40.0);
     for distance in [60.0, 100.0, 180.0, 300.0] {

@@ -71,6 +71,6 @@ pub use params::{
 };
 pub use pilot::{Pilot, PilotConfig, PilotPhase, PilotView};
 pub use rotorcraft::{FrameLayout, Rotorcraft, RotorcraftConfig};
-pub use scenario::{camera_pose, geometry, render_camera, Geometry, Scenario};
+pub use scenario::{camera_pose, geometry, render_camera, show_turbine, Geometry, Scenario};
 pub use vehicle::{Multicopter, VehicleStart, VelocityCommand};
 pub use wind::Wind;

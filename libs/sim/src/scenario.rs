@@ -17,6 +17,7 @@
 use serde::{Deserialize, Serialize};
 
 use hubtrack_render::{Camera, CameraPose, Distractor, Scene};
+use hubtrack_types::setup::TurbineSetup;
 
 use crate::math::{body_to_ned, dot, mat_vec, norm, sub, wrap_deg, wrap_pi};
 use crate::params::{CameraConfig, CameraModel, SimConfig, WindConfig};
@@ -108,6 +109,17 @@ impl Scenario {
         }
     }
 
+    /// This scenario with the turbine of a profile (`[turbine]`) instead of the seed's own:
+    /// tower, rotor, hub height, overhang and spinner as [`show_turbine`] draws them. The start
+    /// keeps its offsets from the hub.
+    pub fn with_turbine(mut self, turbine: &TurbineSetup) -> Scenario {
+        let climb = turbine.hub_height_m - self.scene.hub_height_m;
+        show_turbine(&mut self.scene, turbine);
+        self.hub_ned[2] -= climb;
+        self.start.position_ned[2] -= climb;
+        self
+    }
+
     /// The scenario of `cfg.seed`.
     pub fn from_config(cfg: &SimConfig) -> Scenario {
         Scenario::from_seed(cfg.seed, cfg)
@@ -169,6 +181,17 @@ impl Scenario {
 fn axes(h: f64) -> ([f64; 3], [f64; 3]) {
     let (s, c) = h.sin_cos();
     ([c, s, 0.0], [s, -c, 0.0])
+}
+
+/// Gives a rendered scene the dimensions of a turbine profile: tower diameters, rotor, hub
+/// height, overhang and spinner (the nacelle body keeps the renderer's shape).
+pub fn show_turbine(scene: &mut Scene, t: &TurbineSetup) {
+    scene.tower_top_diameter_m = t.tower_top_diameter_m;
+    scene.tower_base_diameter_m = t.tower_base_diameter_m;
+    scene.blade_length_m = t.rotor_radius_m;
+    scene.hub_height_m = t.hub_height_m;
+    scene.hub_overhang_m = t.hub_overhang_m;
+    scene.spinner_diameter_m = t.spinner_diameter_m;
 }
 
 /// The renderer scene of a scenario: [`Scene::random`] of the seed (sky, ground, sun, rotor

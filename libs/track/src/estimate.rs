@@ -97,6 +97,17 @@ pub fn distance_from_spinner(
     Some(Estimate { value, std })
 }
 
+/// Each estimate's share of [`fuse`]'s result: its inverse variance over the sum (0 for one
+/// that is absent or unusable); `None` when none is usable.
+pub fn fusion_shares<const N: usize>(estimates: [Option<Estimate>; N]) -> Option<[f64; N]> {
+    let weight = |e: &Option<Estimate>| {
+        e.filter(|e| e.value.is_finite() && e.std.is_finite() && e.std > 0.0)
+            .map_or(0.0, |e| 1.0 / e.var())
+    };
+    let total: f64 = estimates.iter().map(weight).sum();
+    (total > 0.0).then(|| estimates.map(|e| weight(&e) / total))
+}
+
 /// Inverse-variance fusion of independent estimates: `x = Σ(xᵢ/σᵢ²) / Σ(1/σᵢ²)`,
 /// `σ² = 1 / Σ(1/σᵢ²)`. `None` if there is none (non-finite or non-positive std are skipped).
 pub fn fuse(estimates: &[Estimate]) -> Option<Estimate> {
@@ -250,6 +261,17 @@ pub fn apparent_blade_angle(theta: f64, psi: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fusion_shares_are_the_inverse_variance_weights() {
+        let e = |value, std| Some(Estimate { value, std });
+        // σ 1 and 2: weights 1 and 1/4 → shares 0.8 and 0.2; an absent or unusable cue has 0.
+        let s = fusion_shares([e(20.0, 1.0), None, e(22.0, 2.0), e(21.0, 0.0)]).unwrap();
+        assert_eq!(s, [0.8, 0.0, 0.2, 0.0]);
+        let fused = fuse(&[e(20.0, 1.0).unwrap(), e(22.0, 2.0).unwrap()]).unwrap();
+        assert!((fused.value - (0.8 * 20.0 + 0.2 * 22.0)).abs() < 1e-12);
+        assert_eq!(fusion_shares::<2>([None, e(1.0, f64::NAN)]), None);
+    }
 
     #[test]
     fn distance_pinhole_hand_case_and_std() {

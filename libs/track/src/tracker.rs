@@ -9,8 +9,8 @@ use crate::camera::{
     CameraPose, Pinhole,
 };
 use crate::estimate::{
-    distance_from_spinner, distance_from_tower_width, fuse, nacelle_excess_sigma, yaw_from_gap,
-    yaw_from_nacelle, Estimate,
+    distance_from_spinner, distance_from_tower_width, fuse, fusion_shares, nacelle_excess_sigma,
+    yaw_from_gap, yaw_from_nacelle, Estimate,
 };
 use crate::filter::{CvModel, HubFilter, ScalarFilter};
 use crate::parallax::{ParallaxRanger, Sighting};
@@ -112,6 +112,8 @@ struct Core {
     parallax: ParallaxRanger,
     /// Raw per-frame (distance, yaw) of the baseline.
     raw: (Option<Estimate>, Option<Estimate>),
+    /// This frame's distance cues' shares of the fused measurement: tower, spinner, parallax.
+    distance_shares: [f64; 3],
     last_seq: u64,
 }
 
@@ -142,6 +144,7 @@ impl Core {
             net_fallback: false,
             parallax: ParallaxRanger::default(),
             raw: (None, None),
+            distance_shares: [0.0; 3],
             last_seq: 0,
         })
     }
@@ -472,6 +475,7 @@ impl Core {
         }
         self.set_image_size(det.image_width, det.image_height);
         let t = self.advance_to(det.stamps.capture_ns);
+        self.distance_shares = [0.0; 3];
 
         let usable = det.detected
             && det.confidence >= self.cfg.filter.min_confidence
@@ -941,14 +945,11 @@ impl Core {
                 std: td.std.hypot(offset * psi.sin() * sig),
             })
         });
-        let Some(m) = fuse(
-            &[tower_hub, sizes.spinner, parallax]
-                .into_iter()
-                .flatten()
-                .collect::<Vec<_>>(),
-        ) else {
+        let cues = [tower_hub, sizes.spinner, parallax];
+        let Some(m) = fuse(&cues.into_iter().flatten().collect::<Vec<_>>()) else {
             return;
         };
+        self.distance_shares = fusion_shares(cues).unwrap_or_default();
         // No jumps close in (see `distance.jump_min_distance_m`): only gated updates, while
         // the filter has accepted a reading within `jump_lockout_max_s`.
         let recent = dc.jump_lockout_max_s <= 0.0
@@ -1091,6 +1092,9 @@ impl Core {
             net_yaw_std_deg: net_yaw.map_or(0.0, |e| e.std.to_degrees()),
             frames_since_detection: self.frames_since,
             time_since_detection_s: since,
+            distance_share_tower: self.distance_shares[0],
+            distance_share_spinner: self.distance_shares[1],
+            distance_share_parallax: self.distance_shares[2],
         }
     }
 

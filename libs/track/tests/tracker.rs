@@ -1674,3 +1674,54 @@ fn the_calibrated_lens_and_the_turbine_profile_reach_the_distance() {
         "the centre focal length alone reads long off-centre: {centre_only:.2} m"
     );
 }
+
+#[test]
+fn the_distance_cues_shares_say_which_cue_carried_the_distance() {
+    let cfg = pinhole_config();
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let (tower_d, spinner_d) = (
+        cfg.distance.tower_diameter_m,
+        cfg.distance.spinner_diameter_m,
+    );
+    let d_hub = 20.0;
+    let d_tower = d_hub + cfg.yaw.hub_tower_offset_m;
+    let mut tr = Tracker::new(cfg).unwrap();
+    let hub = [W as f64 / 2.0, H as f64 / 2.0];
+    let mut last = None;
+    for k in 0..40 {
+        let mut d = det(k, frame_t(k, 30.0), Some(hub));
+        d.tower_found = true;
+        d.tower_width_px = f * tower_d / d_tower;
+        // The spinner from frame 20 on.
+        if k >= 20 {
+            d.circle_found = true;
+            d.circle = [hub[0], hub[1], f * spinner_d / 2.0 / d_hub];
+        }
+        let s = tr.update(&d, None);
+        let shares = [
+            s.distance_share_tower,
+            s.distance_share_spinner,
+            s.distance_share_parallax,
+        ];
+        if k == 10 {
+            assert_eq!(shares, [1.0, 0.0, 0.0], "tower alone");
+        }
+        last = Some(shares);
+    }
+    let [tower, spinner, parallax] = last.unwrap();
+    assert!((tower + spinner + parallax - 1.0).abs() < 1e-9);
+    assert!(
+        tower > 0.0 && spinner > 0.0 && parallax == 0.0,
+        "{tower} {spinner}"
+    );
+    // A frame without a detection measures nothing: all zero.
+    let s = tr.update(&det(40, frame_t(40, 30.0), None), None);
+    assert_eq!(
+        [
+            s.distance_share_tower,
+            s.distance_share_spinner,
+            s.distance_share_parallax
+        ],
+        [0.0; 3]
+    );
+}

@@ -18,8 +18,16 @@ const DISTANCE_SCORED_M: (f64, f64) = (8.0, 30.0);
 const DISTANCE_BANDS_M: [(f64, f64); 3] = [(20.0, 30.0), (12.0, 20.0), (5.0, 12.0)];
 /// Largest |relative yaw| over which yaw errors are scored, degrees.
 const YAW_SCORED_DEG: f64 = 35.0;
+/// Standard deviation of the white noise on the vehicle position given to the tracker, metres
+/// (an autopilot EKF's short-term relative accuracy with GPS: the parallax cue uses position
+/// changes over a few seconds).
+const POSITION_NOISE_M: f64 = 0.05;
 /// A track (re)acquired farther than this from the truth is a false lock, fraction of height.
 const FALSE_LOCK_FRAC: f64 = 0.05;
+/// A valid track farther than this from the truth is off the hub, fraction of height (the
+/// perception targets: off the hub in at most 2 % of the frames after first lock, never for
+/// more than 1 s at a time).
+const OFF_HUB_FRAC: f64 = 0.08;
 
 /// Accumulated results of one tracker over one or more flights.
 #[derive(Default, Clone)]
@@ -33,8 +41,15 @@ struct Metrics {
     dist_err_pct: Vec<f64>,
     /// Signed distance error, % of the truth, per [`DISTANCE_BANDS_M`] band.
     band_err_pct: [Vec<f64>; 3],
+    /// Per band, the sums of the distance cues' shares (tower, spinner, parallax) over the
+    /// frames that gave a distance measurement, and their count.
+    band_shares: [([f64; 3], u64); 3],
     yaw_err_deg: Vec<f64>,
     false_locks: u64,
+    /// Frames after first lock with a valid track more than [`OFF_HUB_FRAC`] off the hub.
+    off_hub: u64,
+    /// Longest run of such frames.
+    longest_off_hub: u64,
 }
 
 impl Metrics {
@@ -49,8 +64,16 @@ impl Metrics {
         for (a, b) in self.band_err_pct.iter_mut().zip(&o.band_err_pct) {
             a.extend(b);
         }
+        for (a, b) in self.band_shares.iter_mut().zip(&o.band_shares) {
+            for (x, y) in a.0.iter_mut().zip(b.0) {
+                *x += y;
+            }
+            a.1 += b.1;
+        }
         self.yaw_err_deg.extend(&o.yaw_err_deg);
         self.false_locks += o.false_locks;
+        self.off_hub += o.off_hub;
+        self.longest_off_hub = self.longest_off_hub.max(o.longest_off_hub);
     }
 }
 
@@ -80,6 +103,7 @@ struct Scorer {
     m: Metrics,
     locked: bool,
     gap: u64,
+    off_run: u64,
     was_valid: bool,
 }
 
@@ -89,6 +113,7 @@ impl Scorer {
             m: Metrics::default(),
             locked: false,
             gap: 0,
+            off_run: 0,
             was_valid: false,
         }
     }
@@ -115,9 +140,32 @@ impl Scorer {
             self.m.valid_after_lock += 1;
             self.m.filt_sq.push((100.0 * err).powi(2));
             self.gap = 0;
+            if err > OFF_HUB_FRAC {
+                self.m.off_hub += 1;
+                self.off_run += 1;
+                self.m.longest_off_hub = self.m.longest_off_hub.max(self.off_run);
+            } else {
+                self.off_run = 0;
+            }
         } else {
+            self.off_run = 0;
             self.gap += 1;
             self.m.longest_gap = self.m.longest_gap.max(self.gap);
+        }
+        let shares = [
+            s.distance_share_tower,
+            s.distance_share_spinner,
+            s.distance_share_parallax,
+        ];
+        if shares.iter().sum::<f64>() > 0.0 {
+            for (band, acc) in DISTANCE_BANDS_M.iter().zip(self.m.band_shares.iter_mut()) {
+                if truth.distance_m > band.0 && truth.distance_m <= band.1 {
+                    for (a, x) in acc.0.iter_mut().zip(shares) {
+                        *a += x;
+                    }
+                    acc.1 += 1;
+                }
+            }
         }
         if s.distance_valid {
             let signed = 100.0 * (s.distance_m - truth.distance_m) / truth.distance_m;
@@ -157,6 +205,7 @@ fn trace_line(
             "hub": s.hub_px,
             "distance_m": s.distance_valid.then_some(s.distance_m),
             "yaw_deg": s.yaw_valid.then_some(s.yaw_deg),
+            "distance_shares": [s.distance_share_tower, s.distance_share_spinner, s.distance_share_parallax],
         })
     };
     serde_json::json!({
@@ -238,7 +287,7 @@ pub fn run(
         let mut path = flight(seed.wrapping_add(f), frames);
         if let Some(t) = turbine {
             for fr in &mut path {
-                apply_turbine(&mut fr.scene, t);
+                hubtrack_sim::show_turbine(&mut fr.scene, t);
             }
         }
         let mut ours = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -247,6 +296,8 @@ pub fn run(
         let (mut so, mut st) = (Scorer::new(), Scorer::new());
         let mut raw_sq = Vec::new();
         let mut prev_heading: Option<(f64, u64)> = None;
+        let mut prev_position: Option<([f64; 3], u64)> = None;
+        let mut noise = hubtrack_types::mutate::Rng::new(seed.wrapping_add(f) ^ 0x5EED_0F_9051);
         // As in the live pipeline, the tracker's newest state focuses the detector on the next
         // frame (predicted hub, expected tower and spinner sizes); the thesis filter is fed the
         // same detections, so the two columns differ by the filter alone.
@@ -308,6 +359,18 @@ pub fn run(
                 (fr.heading_rad - h) / ((capture_ns - t) as f64 / 1e9)
             });
             prev_heading = Some((fr.heading_rad, capture_ns));
+            // The vehicle's position in a local NED frame whose north is the approach direction
+            // (toward the rotor face) and east the camera's right, origin at the hub: the frame
+            // `heading_rad` is measured in.
+            let position = [-fr.pose.distance_m, fr.pose.lateral_m, -fr.pose.height_m];
+            let velocity = prev_position.map_or([0.0; 3], |(p, t)| {
+                let dt = (capture_ns - t) as f64 / 1e9;
+                [0, 1, 2].map(|k| (position[k] - p[k]) / dt)
+            });
+            prev_position = Some((position, capture_ns));
+            let mut uniform = || (noise.next_u64() >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            // Uniform noise of the same standard deviation: width √12 σ.
+            let noisy = position.map(|x| x + 12f64.sqrt() * POSITION_NOISE_M * uniform());
             let vehicle = VehicleState {
                 recv_ns: capture_ns,
                 publish_ns: capture_ns,
@@ -317,6 +380,9 @@ pub fn run(
                 pitch_rad: fr.pose.pitch_deg.to_radians(),
                 yaw_rad: fr.heading_rad,
                 body_rates_rad_s: [0.0, 0.0, yaw_rate],
+                position_valid: true,
+                position_ned_m: noisy,
+                velocity_ned_m_s: velocity,
                 ..Default::default()
             };
             let state = ours.update(&det, Some(&vehicle));
@@ -368,18 +434,29 @@ distance error median {:.1} % p90 {:.1} % (8-30 m), yaw error median {:.1} deg p
         rms(&t.filt_sq), 100.0 * t.valid_after_lock as f64 / t.after_lock.max(1) as f64, t.longest_gap,
         pct(&t.dist_err_pct, 0.5), pct(&t.dist_err_pct, 0.9), pct(&t.yaw_err_deg, 0.5), pct(&t.yaw_err_deg, 0.9), t.false_locks
     );
-    for (band, (eo, et)) in DISTANCE_BANDS_M
+    for ((band, (eo, et)), (share_sum, n)) in DISTANCE_BANDS_M
         .iter()
         .zip(o.band_err_pct.iter().zip(&t.band_err_pct))
+        .zip(&o.band_shares)
     {
         let abs = |v: &[f64]| v.iter().map(|e| e.abs()).collect::<Vec<f64>>();
+        let share = |i: usize| 100.0 * share_sum[i] / (*n).max(1) as f64;
         println!(
-            "distance {:>2}-{:>2} m: hubtrack |error| median {:.1} % p90 {:.1} %, signed median {:+.1} % ({} frames) | thesis filter median {:.1} % p90 {:.1} %",
+            "distance {:>2}-{:>2} m: hubtrack |error| median {:.1} % p90 {:.1} %, signed median {:+.1} % ({} frames; cue shares tower {:.0} % spinner {:.0} % parallax {:.0} %) | thesis filter median {:.1} % p90 {:.1} %",
             band.1, band.0,
             pct(&abs(eo), 0.5), pct(&abs(eo), 0.9), pct(eo, 0.5), eo.len(),
+            share(0), share(1), share(2),
             pct(&abs(et), 0.5), pct(&abs(et), 0.9)
         );
     }
+    println!(
+        "off the hub (> {:.0} % of height): hubtrack {:.1} % of valid frames after first lock, longest {:.1} s | thesis filter {:.1} %, longest {:.1} s",
+        100.0 * OFF_HUB_FRAC,
+        100.0 * o.off_hub as f64 / o.valid_after_lock.max(1) as f64,
+        o.longest_off_hub as f64 / FLIGHT_FPS,
+        100.0 * t.off_hub as f64 / t.valid_after_lock.max(1) as f64,
+        t.longest_off_hub as f64 / FLIGHT_FPS
+    );
     println!("RMS in % of image height over frames with a valid estimate after first lock; gap = frames without one.");
     if let Some(w) = cand_out.as_mut() {
         w.flush()
@@ -446,12 +523,3 @@ fn write_sequence_miss(
     Ok(())
 }
 
-/// Gives a rendered scene the dimensions of a turbine profile the renderer can draw: tower
-/// diameters, rotor and hub height (the renderer's nacelle, spinner and overhang are its own:
-/// profiles whose spinner or overhang differ from them are not drawn faithfully).
-fn apply_turbine(scene: &mut hubtrack_render::Scene, t: &hubtrack_types::setup::TurbineSetup) {
-    scene.tower_top_diameter_m = t.tower_top_diameter_m;
-    scene.tower_base_diameter_m = t.tower_base_diameter_m;
-    scene.blade_length_m = t.rotor_radius_m;
-    scene.hub_height_m = t.hub_height_m;
-}

@@ -46,6 +46,12 @@ pub struct FlyArgs {
     /// `HUBTRACK_ARDUPILOT_DIR`, else `../shared/tools/ardupilot`).
     #[arg(long, value_name = "DIR")]
     ardupilot_dir: Option<PathBuf>,
+    /// Each seed flies its own camera (the built-in ones and the cross-domain evaluation's
+    /// held-out lenses) and turbine (tower top 1.8–3.5 m, rotor 25–63 m, spinner, overhang),
+    /// drawn from the seed and given to every stage as a calibration file and a turbine
+    /// profile; instead of `--camera` / `--turbine`.
+    #[arg(long)]
+    random_setup: bool,
 }
 
 /// `--autopilot`.
@@ -66,12 +72,21 @@ struct FlightLine<'a> {
     wall_s: f64,
     recording: Option<String>,
     autopilot: AutopilotKind,
+    /// With `--random-setup`: the seed's camera.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    camera: Option<String>,
+    /// With `--random-setup`: the seed's turbine.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    turbine: Option<String>,
 }
 
 /// Runs the flights and prints the table (or JSON lines).
 pub fn run(args: FlyArgs) -> anyhow::Result<()> {
     // Fail on a bad config before starting anything.
     crate::config::load(&args.config)?;
+    if args.random_setup && (args.config.camera.is_some() || args.config.turbine.is_some()) {
+        bail!("--random-setup draws each seed's camera and turbine: give it without --camera and --turbine");
+    }
     let ardupilot = match args.autopilot {
         AutopilotKind::Sim => None,
         AutopilotKind::Ardupilot => {
@@ -172,6 +187,14 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
                 },
             )?);
         }
+        let setup = if args.random_setup {
+            let s = crate::fly_setup::draw(seed, &dir)?;
+            log::info!("seed {seed}: camera {}, turbine {}", s.camera, s.turbine);
+            overrides.extend(s.overrides.iter().cloned());
+            Some(s)
+        } else {
+            None
+        };
         let config_args = ConfigArgs {
             overrides,
             ..args.config.clone()
@@ -230,6 +253,8 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             wall_s: report.elapsed.as_secs_f64(),
             recording: record.as_ref().map(|r| r.display().to_string()),
             autopilot: args.autopilot,
+            camera: setup.as_ref().map(|s| s.camera.clone()),
+            turbine: setup.as_ref().map(|s| s.turbine.clone()),
         };
         if outcome.lockstep_misses > 0 {
             log::warn!(
@@ -241,6 +266,9 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             println!("{}", serde_json::to_string(&line)?);
         } else {
             println!("{}", row(&line));
+            if let Some(s) = &setup {
+                println!("{:>5} camera {}; turbine {}", "", s.camera, s.turbine);
+            }
         }
         outcomes.push(outcome);
     }

@@ -9,6 +9,7 @@ mod detect_cmd;
 mod eval;
 mod eval_seq;
 mod fly;
+mod fly_setup;
 mod fuzz;
 mod fuzz_detect;
 mod score;

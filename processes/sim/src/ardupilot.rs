@@ -41,13 +41,13 @@ const PILOT_COMPONENT_ID: u8 = 190;
 /// Runs one flight with ArduCopter SITL until done, the time limit, or shutdown.
 pub fn run(
     cfg: &SimConfig,
+    scenario: Scenario,
     calibration: Option<&hubtrack_render::Camera>,
     shutdown: &Shutdown,
     node: &iceoryx2::prelude::Node<hubtrack_runtime::ipc::Ipc>,
     status: &mut StatusReporter,
     outcome_path: Option<&Path>,
 ) -> anyhow::Result<()> {
-    let scenario = Scenario::from_seed(cfg.seed, cfg);
     let start = scenario.start;
     let mut craft = Rotorcraft::on_ground([0.0; 3], start.yaw_rad, &cfg.rotorcraft);
     let mut mirror = Multicopter::new(&start, &cfg.vehicle);

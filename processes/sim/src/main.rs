@@ -48,20 +48,22 @@ struct Args {
     outcome: Option<PathBuf>,
 }
 
-/// What the simulator stage reads: `[sim]`, and `[camera]` (a calibration, when given, is the
-/// camera the simulator renders through, so that the world matches what detect and track
-/// assume).
+/// What the simulator stage reads: `[sim]`, `[camera]` (a calibration, when given, is the
+/// camera the simulator renders through) and `[turbine]` (a profile, when given, is the turbine
+/// it draws), so that the world matches what detect and track assume.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 struct SimSections {
     sim: hubtrack_sim::SimConfig,
     camera: hubtrack_types::setup::CameraSetup,
+    turbine: hubtrack_types::setup::TurbineSetup,
 }
 
 impl hubtrack_runtime::Sections for SimSections {
     fn validate(&self) -> Result<(), hubtrack_runtime::config::ParamError> {
         self.sim.validate()?;
         self.camera.validate()?;
+        self.turbine.validate()?;
         self.sim
             .link
             .parse::<hubtrack_mavlink::Endpoint>()
@@ -90,11 +92,17 @@ fn run() -> anyhow::Result<()> {
         return Ok(());
     };
     let cfg = &config.sim;
-    let scenario = Scenario::from_seed(cfg.seed, cfg);
+    let mut scenario = Scenario::from_seed(cfg.seed, cfg);
+    // With a turbine profile the world shows that turbine, as detect and track assume it.
+    if !config.turbine.profile.is_empty() {
+        scenario = scenario.with_turbine(&config.turbine);
+        log::info!("turbine: {}", config.turbine.describe());
+    }
     let calibration = config.camera.calibrated()?;
     if cfg.flight_controller == FlightController::Ardupilot {
         return ardupilot::run(
             &config.sim,
+            scenario,
             calibration.as_ref(),
             &shutdown,
             &node,
