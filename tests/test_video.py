@@ -110,6 +110,43 @@ def test_compressed_frames_follow_the_official_schema(jpeg_run):
     assert all(i.format == "jpeg" and i.frame_id == "camera" and i.data[:2] == b"\xff\xd8" for _, i in msgs)
 
 
+def test_a_cameras_own_jpeg_is_recorded_as_it_came(runner, tmp_path):
+    """Frames that come as JPEG (a V4L2 MJPG camera; here JPEG files, the same path through
+    capture) are recorded byte for byte, not encoded again; a PNG's frame is encoded. Read back
+    with the Python mcap reader and the official CompressedImage type."""
+    import cv2
+    import numpy as np
+    from foxglove_schemas_protobuf.CompressedImage_pb2 import CompressedImage
+
+    folder = tmp_path / "images"
+    folder.mkdir()
+    rng = np.random.default_rng(7)
+    files = []
+    for i in range(4):
+        img = cv2.GaussianBlur(rng.integers(0, 255, (240, 320, 3), dtype=np.uint8), (9, 9), 3)
+        path = folder / (f"{i}.png" if i == 2 else f"{i}.jpg")
+        assert cv2.imwrite(str(path), img, [cv2.IMWRITE_JPEG_QUALITY, 88])
+        files.append(path)
+    rec = tmp_path / "camera-jpeg.mcap"
+    res = runner.run("hubtrack", "run", "--record", rec, "--duration", "60",
+                     "--set", 'run.stages=["capture","recorder"]', "--set", "capture.source=images",
+                     "--set", f'capture.images.path="{folder}"', "--set", "capture.loop=false",
+                     "--set", "capture.fps=10", timeout=120)
+    assert res.returncode == 0, res.stderr[-3000:]
+    msgs = {m.sequence: CompressedImage.FromString(m.data) for _, m in read_mcap_messages(rec, topics={"/frames"})}
+    assert sorted(msgs) == [0, 1, 2, 3]
+    for seq, path in enumerate(files):
+        data = msgs[seq].data
+        if path.suffix == ".jpg":
+            assert data == path.read_bytes(), f"frame {seq}: the file's own JPEG"
+        else:
+            assert data != path.read_bytes() and data[:2] == b"\xff\xd8", "the PNG's pixels, encoded"
+            got = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+            assert psnr(got, cv2.imread(str(path))) >= 32.0
+    stats = [json.loads(m.data) for _, m in read_mcap_messages(rec, topics={"/recorder"})]
+    assert stats[-1]["frames_camera_jpeg"] == 3, stats[-1]
+
+
 def psnr(a, b):
     import numpy as np
     mse = np.mean((a.astype(np.float64) - b.astype(np.float64)) ** 2)

@@ -129,12 +129,30 @@ pub struct FrameHeader {
     pub source: FrameSourceKind,
     /// Ground truth for rendered frames.
     pub truth: FrameTruth,
+    /// Bytes of the camera's own JPEG of this frame (a V4L2 MJPG camera, a JPEG image file),
+    /// carried after the pixels in the same sample so the recorder stores it without encoding
+    /// again; 0: none.
+    #[serde(default)]
+    pub camera_jpeg_len: u32,
 }
 
 impl FrameHeader {
-    /// Payload bytes the header describes (`stride * height`).
+    /// Pixel bytes the header describes (`stride * height`).
     pub fn payload_len(&self) -> usize {
         self.stride as usize * self.height as usize
+    }
+
+    /// Bytes of the whole sample: the pixels, then the camera's JPEG if any.
+    pub fn sample_len(&self) -> usize {
+        self.payload_len() + self.camera_jpeg_len as usize
+    }
+
+    /// The camera's own JPEG in a sample's payload, if the header announces one and it is there.
+    pub fn camera_jpeg<'a>(&self, payload: &'a [u8]) -> Option<&'a [u8]> {
+        if self.camera_jpeg_len == 0 {
+            return None;
+        }
+        payload.get(self.payload_len()..self.sample_len())
     }
 }
 
@@ -527,6 +545,31 @@ mod tests {
         }
         let back: Detection = serde_json::from_value(det).unwrap();
         assert!(back.detected && !back.yaw_net_valid);
+    }
+
+    #[test]
+    fn the_cameras_jpeg_is_found_after_the_pixels_or_not_at_all() {
+        let mut h = FrameHeader {
+            width: 2,
+            height: 2,
+            stride: 6,
+            ..FrameHeader::default()
+        };
+        let mut payload = vec![0u8; 24];
+        payload[24 - 3..].copy_from_slice(&[0xFF, 0xD8, 0xFF]);
+        assert_eq!(h.camera_jpeg(&payload), None, "no JPEG announced");
+        h.camera_jpeg_len = 3;
+        assert_eq!(h.sample_len(), 15);
+        assert_eq!(h.camera_jpeg(&payload[..15]), Some(&payload[12..15]));
+        h.camera_jpeg_len = 20;
+        assert_eq!(h.camera_jpeg(&payload), None, "announced but cut short");
+        let mut old = serde_json::to_value(h).unwrap();
+        old.as_object_mut().unwrap().remove("camera_jpeg_len");
+        let back: FrameHeader = serde_json::from_value(old).unwrap();
+        assert_eq!(
+            back.camera_jpeg_len, 0,
+            "headers recorded before the field read as none"
+        );
     }
 
     #[test]

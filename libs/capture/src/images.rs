@@ -50,6 +50,12 @@ pub fn has_image_extension(p: &Path) -> bool {
         .is_some_and(|e| IMAGE_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
 }
 
+fn is_jpeg_name(p: &Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("jpg") || e.eq_ignore_ascii_case("jpeg"))
+}
+
 /// Refuses a declared size over [`crate::image_header::MAX_IMAGE_PIXELS`] before decoding.
 fn check_declared(path: &Path, declared: Option<(u32, u32)>) -> Result<(), CaptureError> {
     if let Some((width, height)) = declared {
@@ -171,7 +177,16 @@ impl FrameSource for ImageSource {
         }
         let path = &self.files[self.next];
         self.next += 1;
-        let m = read_image(path)?;
+        // A JPEG file is read once: decoded for the pixels, and its bytes go with the frame
+        // when they show exactly those pixels (the recorder then stores the file's JPEG).
+        let jpeg = is_jpeg_name(path)
+            .then(|| std::fs::read(path).ok())
+            .flatten()
+            .filter(|b| crate::camera_jpeg::recordable_as_is(b));
+        let m = match &jpeg {
+            Some(bytes) => decode_image(bytes, path)?,
+            None => read_image(path)?,
+        };
         self.readable_this_pass += 1;
         let info = FrameInfo {
             width: m.cols() as u32,
@@ -180,7 +195,52 @@ impl FrameSource for ImageSource {
             capture_ns: Some(monotonic_ns()),
             truth: FrameTruth::default(),
         };
-        sink.publish(info, &mut |out| mat_to_bgr(&m, out).map(|_| None))?;
+        let fill = &mut |out: &mut [u8]| mat_to_bgr(&m, out).map(|_| None);
+        match &jpeg {
+            Some(bytes) => sink.publish_with_camera_jpeg(info, bytes, fill)?,
+            None => sink.publish(info, fill)?,
+        }
         Ok(Step::Frame)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sink::VecSink;
+
+    fn write_image(path: &Path) {
+        let m = opencv::core::Mat::new_rows_cols_with_default(
+            40,
+            60,
+            opencv::core::CV_8UC3,
+            opencv::core::Scalar::new(30.0, 120.0, 200.0, 0.0),
+        )
+        .unwrap();
+        imgcodecs::imwrite_def(path.to_str().unwrap(), &m).unwrap();
+    }
+
+    #[test]
+    fn a_jpeg_files_bytes_go_with_its_frame_and_a_pngs_do_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let (jpg, png) = (dir.path().join("a.jpg"), dir.path().join("b.png"));
+        write_image(&jpg);
+        write_image(&png);
+        let mut src = ImageSource::open(dir.path().to_str().unwrap(), false).unwrap();
+        let mut sink = VecSink::default();
+
+        assert_eq!(src.next_frame(&mut sink).unwrap(), Step::Frame);
+        assert_eq!(sink.camera_jpeg, std::fs::read(&jpg).unwrap());
+        assert_eq!(sink.header.camera_jpeg_len as usize, sink.camera_jpeg.len());
+        assert_eq!((sink.header.width, sink.header.height), (60, 40));
+        assert_eq!(
+            sink.pixels.len(),
+            60 * 40 * 3,
+            "the pixels are decoded all the same"
+        );
+
+        assert_eq!(src.next_frame(&mut sink).unwrap(), Step::Frame);
+        assert!(sink.camera_jpeg.is_empty());
+        assert_eq!(sink.header.camera_jpeg_len, 0);
     }
 }

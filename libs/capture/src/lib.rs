@@ -8,6 +8,7 @@
 
 #![warn(missing_docs)]
 
+pub mod camera_jpeg;
 pub mod config;
 pub mod convert;
 pub mod image_header;
@@ -180,6 +181,19 @@ pub type Fill<'a> = dyn FnMut(&mut [u8]) -> Result<Option<FrameTruth>, CaptureEr
 pub trait FrameSink {
     /// Takes one frame: provides a buffer of `info.len()` bytes and calls `fill` on it.
     fn publish(&mut self, info: FrameInfo, fill: &mut Fill<'_>) -> Result<(), CaptureError>;
+
+    /// Takes one frame the camera also delivered as a JPEG (`jpeg`, of the same size as the
+    /// pixels): a sink that can keeps those bytes with the frame, so the recorder stores the
+    /// camera's own JPEG instead of encoding the pixels again. By default only the pixels.
+    fn publish_with_camera_jpeg(
+        &mut self,
+        info: FrameInfo,
+        jpeg: &[u8],
+        fill: &mut Fill<'_>,
+    ) -> Result<(), CaptureError> {
+        let _ = jpeg;
+        self.publish(info, fill)
+    }
 }
 
 /// What one call of [`FrameSource::next_frame`] did.

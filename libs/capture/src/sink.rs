@@ -40,15 +40,32 @@ pub fn header_for(info: &FrameInfo, seq: u64, source: FrameSourceKind) -> FrameH
         format: info.format,
         source,
         truth: info.truth,
+        camera_jpeg_len: 0,
     }
 }
 
-impl FrameSink for ShmSink {
-    fn publish(&mut self, info: FrameInfo, fill: &mut Fill<'_>) -> Result<(), CaptureError> {
-        let header = header_for(&info, self.next_seq, self.source);
+impl ShmSink {
+    fn send(
+        &mut self,
+        info: FrameInfo,
+        camera_jpeg: &[u8],
+        fill: &mut Fill<'_>,
+    ) -> Result<(), CaptureError> {
+        let mut header = header_for(&info, self.next_seq, self.source);
+        // A JPEG too large to announce is not kept: the recorder then encodes the pixels.
+        let camera_jpeg = match u32::try_from(camera_jpeg.len()) {
+            Ok(len) => {
+                header.camera_jpeg_len = len;
+                camera_jpeg
+            }
+            Err(_) => &[],
+        };
         let stamp_when_ready = info.capture_ns.is_none();
+        let pixels_len = header.payload_len();
         let sent = self.publisher.publish_with(header, |buf, header| {
-            if let Some(truth) = fill(buf)? {
+            let (pixels, tail) = buf.split_at_mut(pixels_len);
+            tail.copy_from_slice(camera_jpeg);
+            if let Some(truth) = fill(pixels)? {
                 header.truth = truth;
             }
             if stamp_when_ready {
@@ -63,6 +80,21 @@ impl FrameSink for ShmSink {
     }
 }
 
+impl FrameSink for ShmSink {
+    fn publish(&mut self, info: FrameInfo, fill: &mut Fill<'_>) -> Result<(), CaptureError> {
+        self.send(info, &[], fill)
+    }
+
+    fn publish_with_camera_jpeg(
+        &mut self,
+        info: FrameInfo,
+        jpeg: &[u8],
+        fill: &mut Fill<'_>,
+    ) -> Result<(), CaptureError> {
+        self.send(info, jpeg, fill)
+    }
+}
+
 /// Keeps the last frame in memory (tests, benchmarks, offline tools).
 #[derive(Default)]
 pub struct VecSink {
@@ -74,11 +106,26 @@ pub struct VecSink {
     pub header: FrameHeader,
     /// Frames taken.
     pub count: u64,
+    /// The camera's JPEG of the last frame (empty: none).
+    pub camera_jpeg: Vec<u8>,
 }
 
 impl FrameSink for VecSink {
+    fn publish_with_camera_jpeg(
+        &mut self,
+        info: FrameInfo,
+        jpeg: &[u8],
+        fill: &mut Fill<'_>,
+    ) -> Result<(), CaptureError> {
+        self.publish(info, fill)?;
+        self.camera_jpeg = jpeg.to_vec();
+        self.header.camera_jpeg_len = jpeg.len() as u32;
+        Ok(())
+    }
+
     fn publish(&mut self, info: FrameInfo, fill: &mut Fill<'_>) -> Result<(), CaptureError> {
         self.pixels.resize(info.len(), 0);
+        self.camera_jpeg.clear();
         self.header = header_for(&info, self.count, self.source);
         if let Some(truth) = fill(&mut self.pixels)? {
             self.header.truth = truth;

@@ -240,7 +240,13 @@ impl FrameSource for V4lSource {
         )
     }
     fn max_frame_len(&self) -> usize {
-        self.granted.width as usize * self.granted.height as usize * 3
+        let pixels = self.granted.width as usize * self.granted.height as usize;
+        match self.pixel {
+            Pixel::Yuyv => pixels * 3,
+            // BGR, then the camera's JPEG (about a tenth of that; a byte per pixel is ample,
+            // and the shared memory grows for a larger one).
+            Pixel::Mjpg => pixels * 4,
+        }
     }
     fn self_paced(&self) -> bool {
         true
@@ -289,9 +295,13 @@ impl FrameSource for V4lSource {
                     capture_ns: Some(capture_ns),
                     truth: FrameTruth::default(),
                 };
-                sink.publish(info, &mut |out| {
-                    crate::convert::mat_to_bgr(m, out).map(|_| None)
-                })?;
+                let fill = &mut |out: &mut [u8]| crate::convert::mat_to_bgr(m, out).map(|_| None);
+                if crate::camera_jpeg::recordable_as_is(data) {
+                    // The camera's own JPEG goes with the frame: the recorder stores it as it is.
+                    sink.publish_with_camera_jpeg(info, data, fill)?;
+                } else {
+                    sink.publish(info, fill)?;
+                }
             }
         }
         Ok(Step::Frame)

@@ -156,6 +156,14 @@ impl FrameEncoder {
         Ok(FrameEncoder { backend })
     }
 
+    /// What this encoder produces.
+    pub fn format(&self) -> EncodedFormat {
+        match self.backend {
+            Backend::Turbo { .. } | Backend::Rust(_) => EncodedFormat::Jpeg,
+            Backend::H264 { .. } => EncodedFormat::H264,
+        }
+    }
+
     /// The compressed form of one frame (`header` gives its size, pixel format and stride;
     /// `pixels` holds at least `header.payload_len()` bytes).
     pub fn encode(
@@ -226,7 +234,7 @@ impl FrameEncoder {
                             _ => yuv.insert(YUVBuffer::new(w, h)),
                         };
                         // The converter reads rows of whole pixels: repack only odd strides.
-                        let (rows, stride) = if stride % 3 == 0 {
+                        let (rows, stride) = if stride.is_multiple_of(3) {
                             (pixels, stride)
                         } else {
                             packed.clear();

@@ -131,6 +131,9 @@ pub struct RecorderStats {
     pub frames_dropped_disk: u64,
     /// Frames whose pixels could not be encoded (JPEG); their headers were written.
     pub frames_encode_failed: u64,
+    /// Frames recorded as the camera's own JPEG, without encoding (V4L2 MJPG, JPEG files).
+    #[serde(default)]
+    pub frames_camera_jpeg: u64,
     /// Result messages written.
     pub messages_recorded: u64,
     /// Bytes written so far (approximate until the file is finished).

@@ -186,17 +186,17 @@ impl FramePublisher {
         })
     }
 
-    /// Loans `header.payload_len()` bytes of shared memory, lets `fill` write the pixels (and
-    /// complete the header, e.g. with truth known only after rendering), stamps `publish_ns` and
-    /// sends. Never blocks on subscribers (safe overflow). If `fill` fails the loan is returned
-    /// unsent.
+    /// Loans `header.sample_len()` bytes of shared memory (the pixels, then the camera's JPEG if
+    /// the header announces one), lets `fill` write them (and complete the header, e.g. with
+    /// truth known only after rendering), stamps `publish_ns` and sends. Never blocks on
+    /// subscribers (safe overflow). If `fill` fails the loan is returned unsent.
     pub fn publish_with<E: From<IpcError>>(
         &self,
         mut header: FrameHeader,
         fill: impl FnOnce(&mut [u8], &mut FrameHeader) -> Result<(), E>,
     ) -> Result<FrameHeader, E> {
         let spec = &FRAMES;
-        let len = header.payload_len();
+        let len = header.sample_len();
         let mut sample = self
             .publisher
             .loan_slice_uninit(len)

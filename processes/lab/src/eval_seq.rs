@@ -297,7 +297,7 @@ pub fn run(
         let mut raw_sq = Vec::new();
         let mut prev_heading: Option<(f64, u64)> = None;
         let mut prev_position: Option<([f64; 3], u64)> = None;
-        let mut noise = hubtrack_types::mutate::Rng::new(seed.wrapping_add(f) ^ 0x5EED_0F_9051);
+        let mut noise = hubtrack_types::mutate::Rng::new(seed.wrapping_add(f) ^ 0x005E_ED0F_9051);
         // As in the live pipeline, the tracker's newest state focuses the detector on the next
         // frame (predicted hub, expected tower and spinner sizes); the thesis filter is fed the
         // same detections, so the two columns differ by the filter alone.
@@ -522,4 +522,3 @@ fn write_sequence_miss(
     }
     Ok(())
 }
-

@@ -8,7 +8,7 @@ use hubtrack_types::mutate::Rng;
 use std::path::{Path, PathBuf};
 
 /// Seed mix of the setup draws (independent of the scenario's own draws).
-const SETUP_SEED_MIX: u64 = 0x5E7_0F_F1E5;
+const SETUP_SEED_MIX: u64 = 0x0005_E70F_F1E5;
 /// Tower top diameters drawn, metres (real fleets).
 const TOWER_TOP_M: (f64, f64) = (1.8, 3.5);
 /// Tower base over top diameter.
@@ -86,7 +86,10 @@ pub fn draw(seed: u64, dir: &Path) -> anyhow::Result<FlightSetup> {
         camera: cam_name.to_string(),
         turbine,
         overrides: vec![
-            format!("camera.calibration={:?}", calibration_path.display().to_string()),
+            format!(
+                "camera.calibration={:?}",
+                calibration_path.display().to_string()
+            ),
             format!("turbine.profile={:?}", profile_path.display().to_string()),
         ],
     })

@@ -65,6 +65,7 @@ pub fn downscale(
         width: ow as u32,
         height: oh as u32,
         stride: orow as u32,
+        camera_jpeg_len: 0, // the camera's JPEG is of the full frame
         ..*header
     })
 }

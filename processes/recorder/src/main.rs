@@ -16,7 +16,7 @@
 use anyhow::Context;
 use clap::Parser;
 use hubtrack_record::config::{Compression, RecorderConfig};
-use hubtrack_record::encoder::FrameEncoder;
+use hubtrack_record::encoder::{EncodedFormat, EncodedFrame, FrameEncoder};
 use hubtrack_record::writer::{ChannelKind, RecorderStats};
 use hubtrack_record::{Recording, RecordingOptions};
 use hubtrack_runtime::ipc::{FrameSubscriber, MsgSubscriber};
@@ -274,6 +274,7 @@ fn run() -> anyhow::Result<()> {
             stats.frames_recorded = s.frames_recorded;
             stats.frames_dropped_disk = s.frames_dropped_disk;
             stats.frames_encode_failed = s.frames_encode_failed;
+            stats.frames_camera_jpeg = s.frames_camera_jpeg;
             stats.messages_recorded = s.messages_recorded;
             stats.bytes_written = s.bytes_written;
         }
@@ -317,18 +318,20 @@ fn run() -> anyhow::Result<()> {
     stats.frames_recorded = final_stats.frames_recorded;
     stats.frames_dropped_disk = final_stats.frames_dropped_disk;
     stats.frames_encode_failed = final_stats.frames_encode_failed;
+    stats.frames_camera_jpeg = final_stats.frames_camera_jpeg;
     stats.messages_recorded = final_stats.messages_recorded;
     stats.bytes_written = final_stats.bytes_written;
     status.status.outputs = stats.frames_recorded;
     status.publish_now();
     log::info!(
-        "recorded {} frames ({} received, {} dropped: disk behind, {} lost: overwritten before read, {} without pixels: disk nearly full, {} without pixels: not encodable), {} messages, {} bytes",
+        "recorded {} frames ({} received, {} dropped: disk behind, {} lost: overwritten before read, {} without pixels: disk nearly full, {} without pixels: not encodable, {} as the camera's own JPEG), {} messages, {} bytes",
         stats.frames_recorded,
         stats.frames_received,
         stats.frames_dropped_queue,
         stats.frames_lost,
         stats.frames_dropped_disk,
         stats.frames_encode_failed,
+        stats.frames_camera_jpeg,
         stats.messages_recorded,
         stats.bytes_written
     );
@@ -438,6 +441,7 @@ fn merged(reader: &RecorderStats, writer: &RecorderStats) -> RecorderStats {
     RecorderStats {
         frames_dropped_disk: writer.frames_dropped_disk,
         frames_encode_failed: writer.frames_encode_failed,
+        frames_camera_jpeg: writer.frames_camera_jpeg,
         frames_recorded: writer.frames_recorded,
         messages_recorded: writer.messages_recorded,
         bytes_written: writer.bytes_written,
@@ -591,7 +595,8 @@ fn write_items(
 }
 
 /// Writes each frame's pixels the configured way: compressed (JPEG or H.264) on `/frames` with a
-/// raw copy of every `raw_every`-th frame, or raw on `/frames`.
+/// raw copy of every `raw_every`-th frame, or raw on `/frames`. Recording JPEG, a frame that
+/// came with the camera's own JPEG is stored as those bytes, not encoded again.
 struct FrameWriter {
     encoder: Option<FrameEncoder>,
     raw_every: u64,
@@ -617,6 +622,9 @@ impl FrameWriter {
         log_time: u64,
         stats: &mut RecorderStats,
     ) -> Result<(), hubtrack_record::RecordError> {
+        // The sample holds the pixels, then the camera's JPEG if the header announces one.
+        let camera_jpeg = pixels.and_then(|p| header.camera_jpeg(p));
+        let pixels = pixels.map(|p| &p[..header.payload_len().min(p.len())]);
         let Some(encoder) = self.encoder.as_mut() else {
             stats.bytes_written += pixels.map_or(0, |p| p.len() as u64);
             return rec.write_frame(header, pixels, log_time);
@@ -624,7 +632,18 @@ impl FrameWriter {
         let Some(px) = pixels else {
             return rec.write_frame(header, None, log_time);
         };
-        match encoder.encode(header, px) {
+        let encoded = match camera_jpeg {
+            Some(jpeg) if encoder.format() == EncodedFormat::Jpeg => {
+                stats.frames_camera_jpeg += 1;
+                Ok(EncodedFrame {
+                    data: jpeg.to_vec(),
+                    format: EncodedFormat::Jpeg,
+                    keyframe: true,
+                })
+            }
+            _ => encoder.encode(header, px),
+        };
+        match encoded {
             Ok(frame) => {
                 stats.bytes_written += frame.data.len() as u64;
                 rec.write_encoded(header, frame, log_time)?;

@@ -96,7 +96,14 @@ fn run() -> anyhow::Result<()> {
     // With a turbine profile the world shows that turbine, as detect and track assume it.
     if !config.turbine.profile.is_empty() {
         scenario = scenario.with_turbine(&config.turbine);
-        log::info!("turbine: {}", config.turbine.describe());
+        let t = &config.turbine;
+        log::info!(
+            "turbine: {} (hub {} m, rotor radius {} m, tower top {} m)",
+            t.name,
+            t.hub_height_m,
+            t.rotor_radius_m,
+            t.tower_top_diameter_m
+        );
     }
     let calibration = config.camera.calibrated()?;
     if cfg.flight_controller == FlightController::Ardupilot {

@@ -152,6 +152,7 @@ impl InputPublishers {
                         .insert(FramePublisher::new(&self.node, pixels.len())?),
                 };
                 h.source = FrameSourceKind::Replay;
+                h.camera_jpeg_len = 0; // replay carries the pixels only
                 publisher.publish_with(h, |buf, _| {
                     buf.copy_from_slice(&pixels);
                     Ok::<(), IpcError>(())
