@@ -133,11 +133,12 @@ mod tests {
     #[test]
     fn budget_refills_only_up_to_one_second() {
         let mut budget = ByteBudget::new(80.0); // 10 kB/s
-        budget.spend(10_000, 0);
-        assert!(!budget.available(MS));
-        // A minute idle does not save up more than one second's worth.
+        budget.spend(15_000, 0);
+        assert!(!budget.available(MS), "overdrawn: waits until paid back");
+        assert!(budget.available(600 * MS));
+        // A minute idle does not save up more than one second's worth: 15 kB overdraw it again.
         assert!(budget.available(60_000 * MS));
-        budget.spend(10_000, 60_000 * MS);
+        budget.spend(15_000, 60_000 * MS);
         assert!(!budget.available(60_001 * MS));
     }
 }
