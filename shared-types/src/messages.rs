@@ -329,6 +329,11 @@ pub struct TrackState {
     /// Share of the motion parallax, 0..1 (see `distance_share_tower`).
     #[serde(default)]
     pub distance_share_parallax: f64,
+    /// This frame's detection put the hub where the turbine profile's hub cannot be relative to
+    /// the tower it found, and was kept out of the track (`[track.profile_check]`). Absent in
+    /// recordings from before it: false.
+    #[serde(default)]
+    pub profile_contradiction: bool,
 }
 
 /// A fixed-capacity ASCII text (NUL padded) for reasons and error messages in shared memory.

@@ -30,6 +30,10 @@
 //! - `search_requested`: in `lost` or `acquiring` after `modes.search_after_s` s without an
 //!   accepted detection (counted from the first frame if there never was one).
 //!
+//! A detection whose hub cannot be the profile's hub relative to the tower it found (below the
+//! tower top, or farther beside the axis than the overhang allows: [`profile_check`]) is not
+//! fed to the track at all.
+//!
 //! A confirmed track rejects a measurement whose squared Mahalanobis distance exceeds
 //! `gating.chi2_threshold` (unless it is within `gating.min_gate_px`); `gating.jump_accept_count`
 //! consecutive mutually consistent rejected measurements (the true hub after a jump) restart the
@@ -60,6 +64,7 @@ pub mod estimate;
 pub mod filter;
 pub mod parallax;
 pub mod params;
+pub mod profile_check;
 mod tracker;
 
 pub use hubtrack_types::{Detection, TrackMode, TrackState, VehicleState};

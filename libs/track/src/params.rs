@@ -55,6 +55,29 @@ hubtrack_types::params! {
         pub yaw: YawConfig = YawConfig::default();
         /// Distance from motion parallax (the hub triangulated from the vehicle's positions).
         pub parallax: ParallaxConfig = ParallaxConfig::default();
+        /// Detections whose hub cannot be the turbine's, given the tower they found and the
+        /// turbine profile, are kept out of the track.
+        pub profile_check: ProfileCheckConfig = ProfileCheckConfig::default();
+    }
+}
+
+hubtrack_types::params! {
+    /// `[track.profile_check]`: a detection whose hub sits where the profile's hub cannot be
+    /// relative to the detected tower (below its top, or beside its axis by more than the hub
+    /// overhang allows) is not fed to the track (`crate::profile_check`). Metres come from the
+    /// tower band's width and the profile's tower-top diameter.
+    pub struct ProfileCheckConfig {
+        /// Check detections against the profile.
+        pub enabled: bool = true;
+        /// The hub may lie this many spinner diameters below the detected tower top (a band
+        /// measured on the taper, a top the nacelle hides) before it contradicts the profile.
+        pub below_top_spinners: f64 = 1.0, closed(0.0, 100.0);
+        /// The hub may lie this many times (overhang + spinner radius) beside the tower axis
+        /// (a band read too narrow or too wide by a blade across it).
+        pub beside_slack: f64 = 1.5, closed(1.0, 100.0);
+        /// Frames from a camera rolled more than this are not checked, degrees (image rows are
+        /// then not horizontal).
+        pub max_roll_deg: f64 = 20.0, closed(0.0, 90.0);
     }
 }
 
@@ -516,6 +539,7 @@ impl TrackConfig {
         self.ego_motion.check_ranges("track.ego_motion")?;
         self.distance.check_ranges("track.distance")?;
         self.parallax.check_ranges("track.parallax")?;
+        self.profile_check.check_ranges("track.profile_check")?;
         self.yaw.validate("track.yaw")
     }
 }

@@ -15,6 +15,7 @@ use crate::estimate::{
 use crate::filter::{CvModel, HubFilter, ScalarFilter};
 use crate::parallax::{ParallaxRanger, Sighting};
 use crate::params::{ParamError, TrackConfig};
+use crate::profile_check::{self, Profile};
 
 /// Variance of a uniform distribution over a unit interval (`w²/12` for width `w`).
 const UNIFORM_VAR_PER_WIDTH2: f64 = 1.0 / 12.0;
@@ -22,6 +23,10 @@ const UNIFORM_VAR_PER_WIDTH2: f64 = 1.0 / 12.0;
 /// Height / width of the assumed frame before any detection told the size (16:9, as the thesis's
 /// 480×270).
 const FALLBACK_ASPECT: f64 = 9.0 / 16.0;
+
+/// A run of this many detections contradicting the turbine profile is warned about (and every
+/// further such run): 3 s at 30 fps, longer than a wrong object stays in view by chance.
+const CONTRADICTION_WARN_EVERY: u64 = 90;
 
 /// What distinguishes the two trackers.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -114,6 +119,10 @@ struct Core {
     raw: (Option<Estimate>, Option<Estimate>),
     /// This frame's distance cues' shares of the fused measurement: tower, spinner, parallax.
     distance_shares: [f64; 3],
+    /// This frame's detection contradicted the turbine profile (see `crate::profile_check`).
+    profile_contradiction: bool,
+    /// Detections in a row that contradicted the profile.
+    contradiction_streak: u64,
     last_seq: u64,
 }
 
@@ -145,6 +154,8 @@ impl Core {
             parallax: ParallaxRanger::default(),
             raw: (None, None),
             distance_shares: [0.0; 3],
+            profile_contradiction: false,
+            contradiction_streak: 0,
             last_seq: 0,
         })
     }
@@ -479,7 +490,8 @@ impl Core {
 
         let usable = det.detected
             && det.confidence >= self.cfg.filter.min_confidence
-            && det.hub_px.iter().all(|v| v.is_finite());
+            && det.hub_px.iter().all(|v| v.is_finite())
+            && !self.contradicts_profile(det);
         let (accepted, innovation_px) = if usable {
             self.measure_hub(det.hub_px, t)
         } else {
@@ -505,6 +517,32 @@ impl Core {
         self.apply_timeouts(t);
         self.last_seq = det.stamps.seq;
         self.output(t, det.stamps.seq, det.stamps.capture_ns)
+    }
+
+    /// Whether `det` puts the hub where the turbine profile's hub cannot be; logs the first of
+    /// a run and warns when a long run suggests the wrong profile.
+    fn contradicts_profile(&mut self, det: &Detection) -> bool {
+        let profile = Profile {
+            tower_top_diameter_m: self.cfg.distance.tower_diameter_m,
+            hub_overhang_m: self.cfg.yaw.hub_tower_offset_m,
+            spinner_diameter_m: self.cfg.distance.spinner_diameter_m,
+        };
+        let found = profile_check::contradiction(det, &profile, &self.cfg.profile_check);
+        self.profile_contradiction = found.is_some();
+        let Some(why) = found else {
+            self.contradiction_streak = 0;
+            return false;
+        };
+        self.contradiction_streak += 1;
+        match self.contradiction_streak {
+            1 => log::info!("track: detection {} kept out: {why}", det.stamps.seq),
+            n if n % CONTRADICTION_WARN_EVERY == 0 => log::warn!(
+                "track: the last {n} detections contradict the turbine profile ({why}): is the \
+                 turbine profile (--turbine) the turbine in view?"
+            ),
+            _ => log::debug!("track: detection {} kept out: {why}", det.stamps.seq),
+        }
+        true
     }
 
     /// Adds this frame's sighting of the detected hub (the camera's position and the world ray
@@ -1095,6 +1133,7 @@ impl Core {
             distance_share_tower: self.distance_shares[0],
             distance_share_spinner: self.distance_shares[1],
             distance_share_parallax: self.distance_shares[2],
+            profile_contradiction: self.profile_contradiction,
         }
     }
 
