@@ -748,6 +748,11 @@ fn full_det(
     d.tower_found = true;
     d.tower_width_px = f * cfg.distance.tower_diameter_m / d_tower + noise * rng.normal();
     d.hub_tower_gap_px = -f * l * psi.sin() / d_tower + noise * rng.normal();
+    // The tower top half a spinner below the hub, on the tower's axis.
+    d.tower_top_px = [
+        CX - d.hub_tower_gap_px,
+        CY + 0.5 * f * cfg.distance.spinner_diameter_m / d_tower,
+    ];
     d.circle_found = true;
     d.circle = [
         CX,
@@ -1587,6 +1592,7 @@ fn sideways_pass_with_half_size_cues(cfg: &TrackConfig) -> TrackState {
             Some([px[0] + 2.0 * rng.normal(), px[1] + 2.0 * rng.normal()]),
         );
         d.tower_found = true;
+        d.tower_top_px = [px[0], px[1] + 10.0]; // just under the hub
         d.tower_width_px = 0.5 * f * cfg.distance.tower_diameter_m
             / (d_hub + cfg.yaw.hub_tower_offset_m)
             + 0.3 * rng.normal();
@@ -1658,6 +1664,7 @@ fn the_calibrated_lens_and_the_turbine_profile_reach_the_distance() {
         for k in 0..60 {
             let mut d = det(k, frame_t(k, 30.0), Some(hub));
             d.tower_found = true;
+            d.tower_top_px = [hub[0], hub[1] + 10.0]; // just under the hub
             d.tower_width_px = width_px;
             s = Some(tr.update(&d, None));
         }
@@ -1691,6 +1698,7 @@ fn the_distance_cues_shares_say_which_cue_carried_the_distance() {
     for k in 0..40 {
         let mut d = det(k, frame_t(k, 30.0), Some(hub));
         d.tower_found = true;
+        d.tower_top_px = [hub[0], hub[1] + 10.0]; // just under the hub
         d.tower_width_px = f * tower_d / d_tower;
         // The spinner from frame 20 on.
         if k >= 20 {
@@ -1724,4 +1732,39 @@ fn the_distance_cues_shares_say_which_cue_carried_the_distance() {
         ],
         [0.0; 3]
     );
+}
+
+/// A lattice mast 20 m beside the turbine: for 2 s the detector puts the hub on the mast's top
+/// (a persistent jump the gate would accept), with the turbine's tower as the tower it found.
+/// With the profile check the track stays on the hub; without it the mast takes the lock.
+fn hub_x_after_a_mast_beside_the_tower(check: bool) -> (f64, bool) {
+    let mut cfg = pinhole_config();
+    cfg.profile_check.enabled = check;
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let mut rng = Rng::new(47);
+    let mut tr = Tracker::new(cfg.clone()).unwrap();
+    let d_hub = 25.0;
+    let mast_px = 20.0 * f / d_hub;
+    let mut s = TrackState::default();
+    let mut kept_out = false;
+    for k in 0..120u64 {
+        let mut d = full_det(k, frame_t(k, 30.0), d_hub, 0.0, &cfg, &mut rng, 0.3);
+        if k >= 60 {
+            d.hub_px[0] += mast_px;
+            d.hub_tower_gap_px += mast_px;
+            d.circle_found = false;
+        }
+        s = tr.update(&d, None);
+        kept_out |= s.profile_contradiction;
+    }
+    (s.hub_px[0], kept_out)
+}
+
+#[test]
+fn a_mast_beside_the_turbine_cannot_take_the_lock() {
+    let (with_check, kept_out) = hub_x_after_a_mast_beside_the_tower(true);
+    assert!((with_check - CX).abs() < 10.0, "stayed on the hub: x {with_check:.0}, hub {CX}");
+    assert!(kept_out, "the mast's detections are reported as contradicting the profile");
+    let (without, _) = hub_x_after_a_mast_beside_the_tower(false);
+    assert!((without - CX).abs() > 100.0, "without the check the mast took it: x {without:.0}");
 }
