@@ -158,5 +158,10 @@ params! {
         pub rotor_rpm: f64 = 0.0, closed(0.0, 30.0);
         /// Sensor noise standard deviation, 8-bit levels.
         pub noise_sigma: f64 = 2.0, closed(0.0, 50.0);
+        /// Render only the path's first N frames, then play them again in a loop (new seq and
+        /// stamps, the same pixels and truth): a camera that costs a copy per frame, as a V4L2
+        /// camera's DMA does, for benchmarks of the flight stages (rendering 1080p takes most of
+        /// a core). 0: render every frame.
+        pub cache_frames: u32 = 0, closed(0, 600);
     }
 }

@@ -57,6 +57,8 @@ pub struct SyntheticSource {
     scene: Scene,
     base_rotor_deg: f64,
     index: u64,
+    /// The first `cache_frames` frames and their truth (see `SyntheticConfig::cache_frames`).
+    cache: Vec<(Vec<u8>, FrameTruth)>,
 }
 
 impl SyntheticSource {
@@ -77,6 +79,7 @@ impl SyntheticSource {
             scene,
             base_rotor_deg,
             index: 0,
+            cache: Vec::new(),
         })
     }
 
@@ -134,9 +137,67 @@ impl FrameSource for SyntheticSource {
             capture_ns: None,
             truth: FrameTruth::default(),
         };
+        let cached = u64::from(self.cfg.cache_frames);
+        if cached == 0 {
+            sink.publish(info, &mut |out| {
+                Ok(Some(frame_truth(&self.render_index(index, out)?)))
+            })?;
+            return Ok(Step::Frame);
+        }
+        let slot = (index % cached) as usize;
+        if slot == self.cache.len() {
+            let mut pixels = vec![0u8; info.len()];
+            let truth = frame_truth(&self.render_index(index, &mut pixels)?);
+            self.cache.push((pixels, truth));
+        }
+        let (pixels, truth) = &self.cache[slot];
         sink.publish(info, &mut |out| {
-            Ok(Some(frame_truth(&self.render_index(index, out)?)))
+            out.copy_from_slice(pixels);
+            Ok(Some(*truth))
         })?;
         Ok(Step::Frame)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sink::VecSink;
+
+    #[test]
+    fn a_cached_camera_plays_its_first_frames_again() {
+        let cfg = SyntheticConfig {
+            camera: SyntheticCamera::Usb,
+            cache_frames: 2,
+            ..SyntheticConfig::default()
+        };
+        let mut src = SyntheticSource::new(&cfg, 30.0).unwrap();
+        let mut sink = VecSink::default();
+        let mut frames = Vec::new();
+        for _ in 0..3 {
+            src.next_frame(&mut sink).unwrap();
+            frames.push((sink.header, sink.pixels.clone()));
+        }
+        assert_eq!(
+            frames.iter().map(|(h, _)| h.seq).collect::<Vec<_>>(),
+            [0, 1, 2]
+        );
+        assert_ne!(
+            frames[0].1, frames[1].1,
+            "each cached frame is its own render"
+        );
+        assert_eq!(frames[0].1, frames[2].1, "frame 2 plays frame 0 again");
+        assert_eq!(frames[0].0.truth, frames[2].0.truth);
+        let mut fresh = SyntheticSource::new(
+            &SyntheticConfig {
+                cache_frames: 0,
+                ..cfg
+            },
+            30.0,
+        )
+        .unwrap();
+        let mut first = vec![0u8; frames[0].1.len()];
+        fresh.render_index(0, &mut first).unwrap();
+        assert_eq!(first, frames[0].1, "the cache holds the path's own frames");
     }
 }

@@ -103,7 +103,11 @@ mod tests {
     fn a_hub_on_the_nacelle_fits() {
         let cfg = ProfileCheckConfig::default();
         for (above, beside) in [(1.6, 0.0), (2.5, 4.0), (0.0, -3.0), (-1.0, 2.0), (6.0, 1.0)] {
-            assert_eq!(contradiction(&det(above, beside), &PROFILE, &cfg), None, "{above} {beside}");
+            assert_eq!(
+                contradiction(&det(above, beside), &PROFILE, &cfg),
+                None,
+                "{above} {beside}"
+            );
         }
     }
 

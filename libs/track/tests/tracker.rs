@@ -1763,8 +1763,17 @@ fn hub_x_after_a_mast_beside_the_tower(check: bool) -> (f64, bool) {
 #[test]
 fn a_mast_beside_the_turbine_cannot_take_the_lock() {
     let (with_check, kept_out) = hub_x_after_a_mast_beside_the_tower(true);
-    assert!((with_check - CX).abs() < 10.0, "stayed on the hub: x {with_check:.0}, hub {CX}");
-    assert!(kept_out, "the mast's detections are reported as contradicting the profile");
+    assert!(
+        (with_check - CX).abs() < 10.0,
+        "stayed on the hub: x {with_check:.0}, hub {CX}"
+    );
+    assert!(
+        kept_out,
+        "the mast's detections are reported as contradicting the profile"
+    );
     let (without, _) = hub_x_after_a_mast_beside_the_tower(false);
-    assert!((without - CX).abs() > 100.0, "without the check the mast took it: x {without:.0}");
+    assert!(
+        (without - CX).abs() > 100.0,
+        "without the check the mast took it: x {without:.0}"
+    );
 }

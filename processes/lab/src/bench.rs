@@ -288,6 +288,9 @@ const PIPELINE_STAGES: [&str; 5] = ["capture", "detect", "track", "control", "re
 const BENCH_CONTROL_LINK: &str = "udpin:127.0.0.1:0";
 /// Niceness of the synthetic camera in the pipeline benchmark (see `pipeline_one`).
 const SYNTHETIC_CAMERA_NICE: i32 = 10;
+/// Frames the benchmark's camera renders and then plays in a loop (one second at 30 fps; 190 MB
+/// at 1920x1080), unless `--render-every-frame`.
+const BENCH_CAMERA_CACHED_FRAMES: u32 = 30;
 
 /// Arguments of `hubtrack bench pipeline`.
 #[derive(clap::Args)]
@@ -301,6 +304,11 @@ pub struct PipelineBenchArgs {
     /// CPU list to pin the pipeline to (taskset syntax).
     #[arg(long, default_value = "0,1")]
     pub cpus: String,
+    /// Render every frame in the synthetic camera (most of a core at 1920x1080, work a real
+    /// camera does in hardware). By default the camera renders its first
+    /// `BENCH_CAMERA_CACHED_FRAMES` frames and plays them again, costing a copy per frame.
+    #[arg(long)]
+    pub render_every_frame: bool,
     /// Override one key of the benchmarked pipeline's config, after the benchmark's own, e.g.
     /// `--set recorder.compression="none"` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -393,6 +401,15 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
         // niceness: it loads the machine without standing in front of the flight stages.
         "--set".into(),
         format!("run.nice.capture={SYNTHETIC_CAMERA_NICE}"),
+        "--set".into(),
+        format!(
+            "capture.synthetic.cache_frames={}",
+            if args.render_every_frame {
+                0
+            } else {
+                BENCH_CAMERA_CACHED_FRAMES
+            }
+        ),
     ];
     let run_args: Vec<String> = run_args
         .into_iter()
@@ -494,10 +511,15 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
     let report = hubtrack_record::latency::analyze(&rec)?;
     let info = hubtrack_record::inspect(&rec)?;
     println!(
-        "\npipeline: {camera} {w}x{h} at {fps} fps for {} s, {}, pinned to cpus {}{}",
+        "\npipeline: {camera} {w}x{h} at {fps} fps for {} s, {}, pinned to cpus {}, camera {}{}",
         args.seconds,
         PIPELINE_STAGES.join("+"),
         args.cpus,
+        if args.render_every_frame {
+            "rendering every frame".to_string()
+        } else {
+            format!("playing {BENCH_CAMERA_CACHED_FRAMES} rendered frames in a loop")
+        },
         if args.set.is_empty() {
             " (default settings: JPEG frames)".to_string()
         } else {
