@@ -51,7 +51,8 @@ pub fn contradiction(
         || !det.detected
         || !det.tower_found
         || det.roll_used_deg.abs() > cfg.max_roll_deg
-        || !(det.tower_width_px > 0.0)
+        || det.tower_width_px.is_nan()
+        || det.tower_width_px <= 0.0
     {
         return None;
     }
