@@ -48,7 +48,7 @@ def test_printed_config_has_every_section_and_reads_back(runner, tmp_path):
     import tomllib
     printed = tomllib.loads(res.stdout)
     assert set(printed) == {"run", "camera", "turbine", "capture", "recorder", "detect", "track",
-                            "control", "sim"}
+                            "control", "live", "sim"}
     assert printed["turbine"]["hub_overhang_m"] == 4.2 and "camera" not in printed["detect"]
     assert printed["detect"]["default"]["canny_low_ratio"] == 0.5
     full = tmp_path / "full.toml"

@@ -196,10 +196,37 @@ def test_raw_copies_beside_jpeg_are_the_captured_pixels(runner, tmp_path):
     assert len(read_mcap_messages(rec, topics={"/frames"})) == 12
 
 
-def test_replay_decodes_jpeg_frames_and_skips_corrupt_ones(jpeg_run, tmp_path):
-    from foxglove_schemas_protobuf.CompressedImage_pb2 import CompressedImage
+def rewrite_frames(src, dst, message_type, damage, drop=()):
+    """Copies the recording `src` to `dst` with the Python mcap writer: the `/frames` message
+    of each seq in `damage` gets its `data` replaced by `damage[seq](data)`; seqs in `drop`
+    are left out."""
     from mcap.reader import make_reader
     from mcap.writer import Writer
+
+    with open(src, "rb") as f, open(dst, "wb") as out:
+        reader = make_reader(f)
+        w = Writer(out)
+        w.start()
+        schemas, channels = {}, {}
+        for schema, channel, m in reader.iter_messages(log_time_order=False):
+            if channel.id not in channels:
+                if schema.id not in schemas:
+                    schemas[schema.id] = w.register_schema(schema.name, schema.encoding, schema.data)
+                channels[channel.id] = w.register_channel(channel.topic, channel.message_encoding,
+                                                          schemas[schema.id], channel.metadata)
+            data = m.data
+            if channel.topic == "/frames" and m.sequence in drop:
+                continue
+            if channel.topic == "/frames" and m.sequence in damage:
+                msg = message_type.FromString(data)
+                msg.data = damage[m.sequence](msg.data)
+                data = msg.SerializeToString()
+            w.add_message(channels[channel.id], m.log_time, data, m.publish_time, m.sequence)
+        w.finish()
+
+
+def test_replay_decodes_jpeg_frames_and_skips_corrupt_ones(jpeg_run, tmp_path):
+    from foxglove_schemas_protobuf.CompressedImage_pb2 import CompressedImage
 
     runner, rec = jpeg_run
     res = runner.run("hubtrack", "replay", rec, "--into", "detect", "--compare", "-o", tmp_path / "r.mcap", timeout=300)
@@ -212,24 +239,7 @@ def test_replay_decodes_jpeg_frames_and_skips_corrupt_ones(jpeg_run, tmp_path):
     # Three frames damaged: cut to its first bytes, garbage after the JPEG marker, not JPEG.
     bad = tmp_path / "bad.mcap"
     damage = {3: lambda d: d[:12], 7: lambda d: b"\xff\xd8" + bytes(range(256)) * 4, 11: lambda d: b"PNG?"}
-    with open(rec, "rb") as f, open(bad, "wb") as out:
-        reader = make_reader(f)
-        w = Writer(out)
-        w.start()
-        schemas, channels = {}, {}
-        for schema, channel, m in reader.iter_messages(log_time_order=False):
-            if channel.id not in channels:
-                if schema.id not in schemas:
-                    schemas[schema.id] = w.register_schema(schema.name, schema.encoding, schema.data)
-                channels[channel.id] = w.register_channel(channel.topic, channel.message_encoding,
-                                                          schemas[schema.id], channel.metadata)
-            data = m.data
-            if channel.topic == "/frames" and m.sequence in damage:
-                img = CompressedImage.FromString(data)
-                img.data = damage[m.sequence](img.data)
-                data = img.SerializeToString()
-            w.add_message(channels[channel.id], m.log_time, data, m.publish_time, m.sequence)
-        w.finish()
+    rewrite_frames(rec, bad, CompressedImage, damage)
     res = runner.run("hubtrack", "replay", bad, "--into", "detect", "-o", tmp_path / "rb.mcap", timeout=300)
     assert res.returncode == 0, res.stderr[-3000:]
     assert "panicked" not in res.stderr
@@ -316,8 +326,6 @@ def test_h264_frames_decode_in_order_close_to_the_renderer(runner, tmp_path, cam
 
 def test_replay_decodes_h264_and_resumes_at_the_next_keyframe(runner, tmp_path):
     from foxglove_schemas_protobuf.CompressedVideo_pb2 import CompressedVideo
-    from mcap.reader import make_reader
-    from mcap.writer import Writer
 
     rec = run(runner, tmp_path, 30, *H264, "--set", "recorder.keyframe_interval=10")
     res = runner.run("hubtrack", "replay", rec, "--into", "detect", "--compare", "-o", tmp_path / "r.mcap", timeout=300)
@@ -332,26 +340,7 @@ def test_replay_decodes_h264_and_resumes_at_the_next_keyframe(runner, tmp_path):
     # damaged one is skipped up to the next keyframe (10, 20), then replay resumes.
     bad = tmp_path / "bad.mcap"
     damage = {3: lambda d: d[: len(d) // 4], 12: lambda d: b"\0\0\0\1" + bytes(range(7, 250))}
-    with open(rec, "rb") as f, open(bad, "wb") as out:
-        reader = make_reader(f)
-        w = Writer(out)
-        w.start()
-        schemas, channels = {}, {}
-        for schema, channel, m in reader.iter_messages(log_time_order=False):
-            if channel.id not in channels:
-                if schema.id not in schemas:
-                    schemas[schema.id] = w.register_schema(schema.name, schema.encoding, schema.data)
-                channels[channel.id] = w.register_channel(channel.topic, channel.message_encoding,
-                                                          schemas[schema.id], channel.metadata)
-            data = m.data
-            if channel.topic == "/frames" and m.sequence == 25:
-                continue
-            if channel.topic == "/frames" and m.sequence in damage:
-                v = CompressedVideo.FromString(data)
-                v.data = damage[m.sequence](v.data)
-                data = v.SerializeToString()
-            w.add_message(channels[channel.id], m.log_time, data, m.publish_time, m.sequence)
-        w.finish()
+    rewrite_frames(rec, bad, CompressedVideo, damage, drop={25})
     res = runner.run("hubtrack", "replay", bad, "--into", "detect", "-o", tmp_path / "rb.mcap", timeout=300)
     assert res.returncode == 0, res.stderr[-3000:]
     assert "panicked" not in res.stderr

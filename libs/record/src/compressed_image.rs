@@ -1,10 +1,9 @@
 //! `foxglove.CompressedImage` as protobuf: the schema and the message (JPEG frames on `/frames`).
 //! The JPEG bytes already sit in their own buffer, so prost encodes the message with one copy.
 
-use crate::raw_image::{field, timestamp_file};
+use crate::raw_image::{foxglove_descriptor_set, timestamp};
 use prost::Message;
 use prost_types::field_descriptor_proto::Type;
-use prost_types::{DescriptorProto, FileDescriptorProto, FileDescriptorSet};
 
 /// Schema name of the compressed frames channel.
 pub const SCHEMA_NAME: &str = "foxglove.CompressedImage";
@@ -29,41 +28,20 @@ pub struct CompressedImage {
 /// The serialized `FileDescriptorSet` of `foxglove.CompressedImage` and
 /// `google.protobuf.Timestamp`.
 pub fn descriptor_set() -> Vec<u8> {
-    let image = FileDescriptorProto {
-        name: Some("foxglove/CompressedImage.proto".into()),
-        package: Some("foxglove".into()),
-        dependency: vec!["google/protobuf/timestamp.proto".into()],
-        message_type: vec![DescriptorProto {
-            name: Some("CompressedImage".into()),
-            field: vec![
-                field(
-                    "timestamp",
-                    1,
-                    Type::Message,
-                    Some(".google.protobuf.Timestamp"),
-                ),
-                field("frame_id", 4, Type::String, None),
-                field("data", 2, Type::Bytes, None),
-                field("format", 3, Type::String, None),
-            ],
-            ..Default::default()
-        }],
-        syntax: Some("proto3".into()),
-        ..Default::default()
-    };
-    FileDescriptorSet {
-        file: vec![timestamp_file(), image],
-    }
-    .encode_to_vec()
+    foxglove_descriptor_set(
+        "CompressedImage",
+        &[
+            ("frame_id", 4, Type::String),
+            ("data", 2, Type::Bytes),
+            ("format", 3, Type::String),
+        ],
+    )
 }
 
 /// Encodes a compressed image into `out` (cleared first).
 pub fn encode(timestamp_ns: u64, frame_id: &str, format: &str, data: Vec<u8>, out: &mut Vec<u8>) {
     let msg = CompressedImage {
-        timestamp: Some(prost_types::Timestamp {
-            seconds: (timestamp_ns / 1_000_000_000) as i64,
-            nanos: (timestamp_ns % 1_000_000_000) as i32,
-        }),
+        timestamp: Some(timestamp(timestamp_ns)),
         frame_id: frame_id.into(),
         data,
         format: format.into(),
@@ -75,6 +53,7 @@ pub fn encode(timestamp_ns: u64, frame_id: &str, format: &str, data: Vec<u8>, ou
 #[cfg(test)]
 mod tests {
     use super::*;
+    use prost_types::FileDescriptorSet;
 
     #[test]
     fn round_trip_and_descriptor() {

@@ -2,10 +2,9 @@
 //! `/frames`, one Annex B access unit per message). Field numbers of
 //! foxglove/CompressedVideo.proto: timestamp 1, frame_id 2, data 3, format 4.
 
-use crate::raw_image::{field, timestamp_file};
+use crate::raw_image::{foxglove_descriptor_set, timestamp};
 use prost::Message;
 use prost_types::field_descriptor_proto::Type;
-use prost_types::{DescriptorProto, FileDescriptorProto, FileDescriptorSet};
 
 /// Schema name of the video frames channel.
 pub const SCHEMA_NAME: &str = "foxglove.CompressedVideo";
@@ -30,41 +29,20 @@ pub struct CompressedVideo {
 /// The serialized `FileDescriptorSet` of `foxglove.CompressedVideo` and
 /// `google.protobuf.Timestamp`.
 pub fn descriptor_set() -> Vec<u8> {
-    let video = FileDescriptorProto {
-        name: Some("foxglove/CompressedVideo.proto".into()),
-        package: Some("foxglove".into()),
-        dependency: vec!["google/protobuf/timestamp.proto".into()],
-        message_type: vec![DescriptorProto {
-            name: Some("CompressedVideo".into()),
-            field: vec![
-                field(
-                    "timestamp",
-                    1,
-                    Type::Message,
-                    Some(".google.protobuf.Timestamp"),
-                ),
-                field("frame_id", 2, Type::String, None),
-                field("data", 3, Type::Bytes, None),
-                field("format", 4, Type::String, None),
-            ],
-            ..Default::default()
-        }],
-        syntax: Some("proto3".into()),
-        ..Default::default()
-    };
-    FileDescriptorSet {
-        file: vec![timestamp_file(), video],
-    }
-    .encode_to_vec()
+    foxglove_descriptor_set(
+        "CompressedVideo",
+        &[
+            ("frame_id", 2, Type::String),
+            ("data", 3, Type::Bytes),
+            ("format", 4, Type::String),
+        ],
+    )
 }
 
 /// Encodes a video frame into `out` (cleared first).
 pub fn encode(timestamp_ns: u64, frame_id: &str, format: &str, data: Vec<u8>, out: &mut Vec<u8>) {
     let msg = CompressedVideo {
-        timestamp: Some(prost_types::Timestamp {
-            seconds: (timestamp_ns / 1_000_000_000) as i64,
-            nanos: (timestamp_ns % 1_000_000_000) as i32,
-        }),
+        timestamp: Some(timestamp(timestamp_ns)),
         frame_id: frame_id.into(),
         data,
         format: format.into(),
@@ -76,6 +54,7 @@ pub fn encode(timestamp_ns: u64, frame_id: &str, format: &str, data: Vec<u8>, ou
 #[cfg(test)]
 mod tests {
     use super::*;
+    use prost_types::FileDescriptorSet;
 
     #[test]
     fn round_trip_and_descriptor() {

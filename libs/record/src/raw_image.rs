@@ -59,6 +59,42 @@ pub(crate) fn timestamp_file() -> FileDescriptorProto {
     }
 }
 
+/// The serialized `FileDescriptorSet` of `foxglove.<message>`, a `timestamp` (field 1) and the
+/// scalar `fields` (name, number, type), with its dependency `google.protobuf.Timestamp`.
+pub(crate) fn foxglove_descriptor_set(message: &str, fields: &[(&str, i32, Type)]) -> Vec<u8> {
+    let mut all = vec![field(
+        "timestamp",
+        F_TIMESTAMP as i32,
+        Type::Message,
+        Some(".google.protobuf.Timestamp"),
+    )];
+    all.extend(fields.iter().map(|&(name, n, ty)| field(name, n, ty, None)));
+    let file = FileDescriptorProto {
+        name: Some(format!("foxglove/{message}.proto")),
+        package: Some("foxglove".into()),
+        dependency: vec!["google/protobuf/timestamp.proto".into()],
+        message_type: vec![DescriptorProto {
+            name: Some(message.into()),
+            field: all,
+            ..Default::default()
+        }],
+        syntax: Some("proto3".into()),
+        ..Default::default()
+    };
+    FileDescriptorSet {
+        file: vec![timestamp_file(), file],
+    }
+    .encode_to_vec()
+}
+
+/// A time in nanoseconds as a `google.protobuf.Timestamp`.
+pub(crate) fn timestamp(ns: u64) -> prost_types::Timestamp {
+    prost_types::Timestamp {
+        seconds: (ns / 1_000_000_000) as i64,
+        nanos: (ns % 1_000_000_000) as i32,
+    }
+}
+
 /// The serialized `FileDescriptorSet` of `foxglove.RawImage` and its dependency
 /// `google.protobuf.Timestamp`: the MCAP schema data for encoding `protobuf`.
 pub fn descriptor_set() -> Vec<u8> {
