@@ -1,5 +1,6 @@
 """Foundation: capture -> iceoryx2 -> recorder -> MCAP, across real processes (issue 2)."""
 
+import json
 import signal
 import time
 
@@ -86,6 +87,7 @@ def test_recorder_killed_mid_run_leaves_readable_file(runner, tmp_path):
     wait_until(lambda: "publishing at" in capture.stderr(), what="capture start")
     time.sleep(3.0)
     recorder.signal(signal.SIGKILL)
+    killed_at_ns = time.time_ns()
     killed_after = time.monotonic() - t0
     recorder.wait()
     time.sleep(0.3)
@@ -95,8 +97,14 @@ def test_recorder_killed_mid_run_leaves_readable_file(runner, tmp_path):
     frames = read_mcap_messages(rec, topics={"/frames"}, tolerate_truncation=True)
     seqs = [m.sequence for _, m in frames]
     assert seqs == list(range(len(seqs))), "frames up to the cut, none missing"
-    # 30 fps; allow start-up and the last flush interval (200 ms) plus queue latency.
-    assert len(seqs) >= int((killed_after - 1.0) * 30), (len(seqs), killed_after)
+    assert len(seqs) >= 15, (len(seqs), killed_after)
+    # What the cut may cost is the last flush interval (200 ms) plus queue latency, whatever
+    # rate the camera reached on a loaded machine: the newest frame in the file was captured
+    # within a second of the kill.
+    headers = [json.loads(m.data) for _, m in read_mcap_messages(rec, topics={"/frames/header"},
+                                                                 tolerate_truncation=True)]
+    newest_s = (killed_at_ns - max(h["capture_realtime_ns"] for h in headers)) / 1e9
+    assert newest_s <= 1.0, (newest_s, len(seqs), killed_after)
 
     fixed = tmp_path / "fixed.mcap"
     res = runner.run("hubtrack", "recover", rec, fixed)
