@@ -6,6 +6,7 @@ decoded by OpenCV's Python build against the renderer's frames.
 """
 
 import json
+import time
 
 import pytest
 from conftest import read_mcap_messages
@@ -194,6 +195,45 @@ def test_raw_copies_beside_jpeg_are_the_captured_pixels(runner, tmp_path):
     assert res.returncode == 0, res.stderr
     assert raws[1][1].data == out.read_bytes()
     assert len(read_mcap_messages(rec, topics={"/frames"})) == 12
+
+
+def test_a_raw_window_on_request_records_every_frame_raw_for_its_length(runner, tmp_path):
+    """`hubtrack raw-window --seconds 1` while the pipeline runs: every frame of one second of
+    capture time also goes raw to /frames/raw (10 frames at 10 fps, consecutive, bit-exact),
+    none before or after; the recorder counts them; asking with no recorder is an error."""
+    from foxglove_schemas_protobuf.RawImage_pb2 import RawImage
+    from mcap.reader import make_reader
+
+    res = runner.run("hubtrack", "raw-window", "--wait", "0.3")
+    assert res.returncode != 0 and "no recorder is running" in res.stderr, res.stderr
+
+    rec = tmp_path / "window.mcap"
+    pipeline = runner.start("hubtrack", "run", "--record", rec, "--duration", "120",
+                            "--set", 'run.stages=["capture","detect","track","recorder"]',
+                            "--set", "capture.fps=10", "--set", "capture.max_frames=60", *USB)
+    time.sleep(2.0)
+    res = runner.run("hubtrack", "raw-window", "--seconds", "1", "--wait", "20")
+    assert res.returncode == 0, res.stderr
+    assert pipeline.wait(timeout=120) == 0, pipeline.stderr()[-3000:]
+
+    raws = [(m.sequence, m) for _, m in read_mcap_messages(rec, topics={"/frames/raw"})]
+    seqs = [s for s, _ in raws]
+    assert seqs, "no raw frames"
+    # One second of capture time at 10 fps: 10 or 11 frames (both ends), consecutive.
+    assert 10 <= len(seqs) <= 11 and seqs == list(range(seqs[0], seqs[0] + len(seqs))), seqs
+    assert 0 < seqs[0] and seqs[-1] < 59, seqs
+    assert len(read_mcap_messages(rec, topics={"/frames"})) == 60
+    with open(rec, "rb") as f:
+        summary = make_reader(f).get_summary()
+    schemas = {c.topic: summary.schemas[c.schema_id].name for c in summary.channels.values()}
+    assert schemas["/frames/raw"] == "foxglove.RawImage" and schemas["/frames"] == "foxglove.CompressedImage"
+    out = tmp_path / "expected.raw"
+    seq = seqs[len(seqs) // 2]
+    res = runner.run("hubtrack", "render", "--seq", seq, "-o", out, *USB, "--set", "capture.fps=10")
+    assert res.returncode == 0, res.stderr
+    assert RawImage.FromString(dict(raws)[seq].data).data == out.read_bytes()
+    stats = [json.loads(m.data) for _, m in read_mcap_messages(rec, topics={"/recorder"})]
+    assert stats[-1]["frames_raw_copies"] == len(seqs), stats[-1]
 
 
 def rewrite_frames(src, dst, message_type, damage, drop=()):

@@ -748,6 +748,21 @@ pub struct SupervisorStatus {
     pub stages: [SupervisedStage; MAX_STAGES],
 }
 
+/// A request to the recorder: record the camera's frames raw as well (`/frames/raw`, bit-exact,
+/// beside the compressed `/frames`) for a window of capture time starting at the next frame
+/// (`hubtrack raw-window`). A request while a window is open extends it.
+#[repr(C)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
+#[type_name("hubtrack::RawWindowRequest")]
+pub struct RawWindowRequest {
+    /// Length of the window, seconds of capture time (0: the recorder's `recorder.raw_window_s`).
+    pub seconds: f64,
+    /// When the request was sent (monotonic ns).
+    pub publish_ns: u64,
+}
+
 /// The simulator's clock (published by the `sim` stage only).
 ///
 /// In a simulated flight the pipeline clock — the clock of every `capture_ns` — is simulated

@@ -155,5 +155,22 @@ pub const CLOCK: ServiceSpec = ServiceSpec {
     qos: RESULT_QOS,
 };
 
+/// [`crate::RawWindowRequest`]s to the recorder (`hubtrack raw-window`). No history: a
+/// recorder started later must not act on an old request.
+pub const RAW_WINDOW: ServiceSpec = ServiceSpec {
+    channel: "recorder/raw_window",
+    name: "hubtrack/recorder/raw_window",
+    event_name: "hubtrack/recorder/raw_window/event",
+    qos: Qos {
+        history_size: 0,
+        subscriber_max_buffer_size: 4,
+        subscriber_max_borrowed_samples: 2,
+        max_subscribers: 4,
+        max_publishers: 4,
+        max_nodes: 24,
+        safe_overflow: true,
+    },
+};
+
 /// All fixed-size result services, in pipeline order (frames excluded).
 pub const RESULT_SERVICES: [ServiceSpec; 5] = [DETECTIONS, TRACK, SETPOINTS, VEHICLE, STATUS];

@@ -38,11 +38,13 @@
 #![forbid(unsafe_code)]
 
 mod params;
+mod shrink_check;
 
 pub use hubtrack_types::params::ParamError;
 pub use params::ApproachConfig;
 
 use hubtrack_types::{ApproachTask, TrackMode, TrackState, VehicleState};
+use shrink_check::{Contradiction, ShrinkCheck};
 
 /// Longest reason text, bytes (it travels as a [`hubtrack_types::Text64`]).
 pub const MAX_REASON_BYTES: usize = 64;
@@ -115,8 +117,11 @@ struct Cues {
     remembered: Option<f64>,
     /// Distance minus the target, m.
     derr: Option<f64>,
-    /// A valid distance in this very track state: forward motion is allowed.
+    /// A valid distance in this very track state that the odometry does not contradict:
+    /// forward motion is allowed.
     forward_ok: bool,
+    /// The distance did not shrink as the vehicle closed in (see `shrink_check_m`).
+    not_shrinking: Option<Contradiction>,
     /// All three errors within their inner tolerances.
     at_target: bool,
 }
@@ -199,6 +204,8 @@ pub struct Approach {
     /// When the current track was re-acquired after a loss, while the remembered hub still
     /// bounds its distance.
     reacquired_ns: Option<u64>,
+    /// Closing in must make the distance shrink (see `shrink_check_m`); kept through losses.
+    shrink: ShrinkCheck,
 }
 
 /// The hub's horizontal position in the autopilot's local frame, from one track state.
@@ -348,6 +355,7 @@ impl Approach {
             probe_dir: 1.0,
             hub_fix: None,
             reacquired_ns: None,
+            shrink: ShrinkCheck::default(),
         })
     }
 
@@ -679,6 +687,13 @@ impl Approach {
         self.update_filters(t);
         let yaw = self.heading_yaw(t, vehicle, new_track_state).or(self.yaw_f);
         let (dist, remembered) = self.bounded_distance(now, t, vehicle);
+        let reading = self.dist_f.filter(|_| t.distance_valid);
+        let not_shrinking = self.shrink.update(&self.config, now, reading, t, vehicle);
+        // Contradicted, the odometry's distance bounds the reading (backing away stays allowed).
+        let dist = match (dist, not_shrinking) {
+            (Some(d), Some(n)) => Some(d.min(n.odometry_m)),
+            (d, _) => d,
+        };
         let c = &self.config;
         // The distance reads at the target again: a fresh backing-off allowance.
         if dist.is_some_and(|d| d >= c.target_distance_m - c.distance_tolerance_outer_m) {
@@ -688,7 +703,8 @@ impl Approach {
         let at_target = ex.abs() <= c.box_inner_x
             && ey.abs() <= c.box_inner_y
             && yaw.is_some_and(|y| y.abs() <= c.yaw_tolerance_deg)
-            && derr.is_some_and(|e| e.abs() <= c.distance_tolerance_m);
+            && derr.is_some_and(|e| e.abs() <= c.distance_tolerance_m)
+            && not_shrinking.is_none();
         Cues {
             ex,
             ey,
@@ -696,7 +712,8 @@ impl Approach {
             dist,
             remembered,
             derr,
-            forward_ok: t.distance_valid && dist.is_some(),
+            forward_ok: t.distance_valid && dist.is_some() && not_shrinking.is_none(),
+            not_shrinking,
             at_target,
         }
     }
@@ -940,6 +957,14 @@ impl Approach {
                 self.at_target_since_ns.map_or(0.0, |s| secs(s, now)),
                 c.done_hold_s
             ),
+            (Some(d), true) if cues.not_shrinking.is_some() => {
+                let (excess, flown) = cues
+                    .not_shrinking
+                    .map_or((0.0, 0.0), |n| (n.excess_m, n.flown_m));
+                format!(
+                    "T3: {d:.1} m by odometry; the track reads {excess:.1} m more after {flown:.1} m closer: no forward"
+                )
+            }
             (Some(d), true) if backoff_spent => format!(
                 "T3: still {d:.1} m after backing {:.1} m: no further back",
                 self.t3_backoff_m

@@ -45,6 +45,25 @@ hubtrack_types::params! {
         /// the distance reads at the target or a new track starts. Range (0, 1000]; default 6 (a
         /// reading at `min_distance_m` needs 2 m).
         pub max_backoff_m: f64 = 6.0, open_closed(0.0, 1000.0);
+        /// Closing in must make the distance shrink (`shrink_check.rs`): a reading more than
+        /// `shrink_check_noise_m` plus `shrink_check_frac` of the distance flown above what the
+        /// autopilot's position says is left to the hub (from a reading taken within
+        /// `shrink_check_range_m`) blocks forward motion until the readings agree with the
+        /// position again. The readings are judged against one anchor over this much flight,
+        /// m (0 = no check). Range [0, 100]; default 1.
+        pub shrink_check_m: f64 = 1.0, closed(0.0, 100.0);
+        /// How long an anchor lasts in a hover before the next reading that agrees replaces it,
+        /// s. Range (0, 600]; default 2.
+        pub shrink_check_window_s: f64 = 2.0, open_closed(0.0, 600.0);
+        /// Noise a reading may show above the odometry, m. Range [0, 100]; default 0.5.
+        pub shrink_check_noise_m: f64 = 0.5, closed(0.0, 100.0);
+        /// Share of the distance flown a reading may fail to shrink by: the distance filter's lag
+        /// grows while the vehicle speeds up and the detector's bias changes with the distance
+        /// (−10 % at 20 m, ~0 at 5 m is 0.17 m per metre). Range [0, 1]; default 0.35.
+        pub shrink_check_frac: f64 = 0.35, closed(0.0, 1.0);
+        /// Readings farther than this start no anchor, m: the check guards the last metres,
+        /// where the view is filled by rotor parts. Range [0, 1000]; default 15.
+        pub shrink_check_range_m: f64 = 15.0, closed(0.0, 1000.0);
         /// Relative yaw counted as "in front of the rotor", degrees: T2 is satisfied and Done may
         /// begin below it. Range (0, 45]; default 3.
         pub yaw_tolerance_deg: f64 = 3.0, open_closed(0.0, 45.0);

@@ -997,7 +997,12 @@ fn vehicle_at(north: f64) -> VehicleState {
 fn a_reacquired_track_that_reads_too_far_is_bounded_by_the_remembered_hub() {
     let c = ApproachConfig::default();
     let mut rig = Rig::new();
-    rig.vehicle = Some(vehicle_at(0.0));
+    // Closing in from 8 m to 3.5 m, the readings agreeing with the odometry.
+    for i in 0..=45 {
+        let north = f64::from(i) * 0.1;
+        rig.vehicle = Some(vehicle_at(north));
+        rig.step(Some(track(0.0, 0.0, Some(8.0 - north), Some(0.0))));
+    }
     rig.run(Some(track(0.0, 0.0, Some(3.5), Some(0.0))), 3.0);
     rig.run(Some(track_mode(TrackMode::Lost, 2.0)), 1.0);
     assert_eq!(rig.ap.task(), ApproachTask::Hold);
@@ -1013,11 +1018,34 @@ fn a_reacquired_track_that_reads_too_far_is_bounded_by_the_remembered_hub() {
         .iter()
         .filter(|o| {
             o.reason
+                .starts_with("T3: 3.5 m by odometry; the track reads 18.5 m more")
+        })
+        .count();
+    assert!(bounded > 10, "{:?}", rig.log.last());
+    // Past the check time too: the odometry still contradicts the track.
+    let out = rig.run(Some(far), c.reacquire_check_s);
+    assert!(out.vx_m_s <= EPS, "{out:?}");
+
+    // Without the odometry check, the remembered hub alone bounds it until the check time.
+    let unchecked = ApproachConfig {
+        shrink_check_m: 0.0,
+        ..c.clone()
+    };
+    let mut rig = Rig::with(unchecked);
+    rig.vehicle = Some(vehicle_at(0.0));
+    rig.run(Some(track(0.0, 0.0, Some(3.5), Some(0.0))), 3.0);
+    rig.run(Some(track_mode(TrackMode::Lost, 2.0)), 1.0);
+    let mark = rig.log.len();
+    rig.run(Some(far), 3.0);
+    assert!(rig.log[mark..].iter().all(|o| o.vx_m_s <= EPS));
+    let bounded = rig.log[mark..]
+        .iter()
+        .filter(|o| {
+            o.reason
                 .contains("3.5 m to the remembered hub (track 22.0 m)")
         })
         .count();
     assert!(bounded > 10, "{:?}", rig.log.last());
-    // Past the check time the new track stands alone.
     let out = rig.run(Some(far), c.reacquire_check_s);
     assert!(
         out.vx_m_s > 0.1 && out.reason.starts_with("T3: 22.0 m"),
@@ -1036,9 +1064,11 @@ fn a_reacquired_track_that_reads_too_far_is_bounded_by_the_remembered_hub() {
         "{out:?}"
     );
 
-    // Without the memory the first re-acquired track flies forward at once.
+    // Without the memory (nor the odometry check) the first re-acquired track flies forward
+    // at once.
     let mut rig = Rig::with(ApproachConfig {
         reacquire_memory_s: 0.0,
+        shrink_check_m: 0.0,
         ..c
     });
     rig.vehicle = Some(vehicle_at(0.0));
@@ -1620,11 +1650,26 @@ impl Sim {
             } else {
                 [f64::from(W) / 2.0, f64::from(H) / 2.0]
             },
+            hub_bearing_deg: [
+                right.atan2(fwd).to_degrees(),
+                (-down).atan2(fwd).to_degrees(),
+            ],
             distance_valid: visible,
             distance_m: dist,
             yaw_valid: visible,
             yaw_deg: y.atan2(x).to_degrees(),
             ..TrackState::default()
+        }
+    }
+
+    /// The autopilot's view: position in a local north-east-down frame with north along +X
+    /// and east along −Y, heading clockwise from north.
+    fn vehicle(&self) -> VehicleState {
+        let [x, y, z] = self.pos;
+        VehicleState {
+            position_ned_m: [x, -y, -z],
+            yaw_rad: -self.h,
+            ..vehicle_at(0.0)
         }
     }
 
@@ -1667,9 +1712,52 @@ fn fly_with(
     heading_err_deg: f64,
     noise: Option<u64>,
 ) -> (Option<f64>, f64, f64, f64, Vec<ApproachTask>) {
+    let flight = fly_reading(
+        ApproachConfig::default(),
+        [start, lateral, below, heading_err_deg],
+        noise,
+        |d| d,
+    );
+    assert_eq!(flight.left_image, None, "the hub left the image");
+    let (tasks, last) = (flight.tasks, flight.last);
+    assert_eq!(
+        last.task,
+        ApproachTask::Done,
+        "ends in Done; tasks {tasks:?}, {last:?}"
+    );
+    (
+        flight.done_at,
+        flight.d_done,
+        flight.y_done,
+        flight.closest,
+        tasks,
+    )
+}
+
+/// What [`fly_reading`] saw.
+struct Flight {
+    done_at: Option<f64>,
+    d_done: f64,
+    y_done: f64,
+    closest: f64,
+    tasks: Vec<ApproachTask>,
+    /// Every reason given, in order, without repeats.
+    reasons: Vec<String>,
+    last: ApproachOutput,
+    /// When and where the hub left the image (the flight ends there).
+    left_image: Option<String>,
+}
+
+/// Two minutes of closed-loop flight from `[start, lateral, below, heading_err_deg]` (see
+/// [`fly_with`]) with the autopilot's odometry, the distance reading `reading(true distance)`.
+fn fly_reading(
+    c: ApproachConfig,
+    [start, lateral, below, heading_err_deg]: [f64; 4],
+    noise: Option<u64>,
+    reading: impl Fn(f64) -> f64,
+) -> Flight {
     let mut rng = Rng(noise.unwrap_or(1));
     let mut delayed: Option<TrackState> = None;
-    let c = ApproachConfig::default();
     let mut ap = Approach::new(c.clone()).unwrap();
     let (x, y) = (start, lateral);
     let mut sim = Sim {
@@ -1684,16 +1772,20 @@ fn fly_with(
     let mut done_at = None;
     let (mut d_done, mut y_done) = (f64::NAN, f64::NAN);
     let steps = (120.0 / dt) as usize;
+    let mut reasons: Vec<String> = Vec::new();
+    let mut last = None;
+    let mut left_image = None;
     for i in 0..steps {
         let truth = sim.track(now);
-        assert_eq!(
-            truth.mode,
-            TrackMode::Tracking,
-            "hub left the image at {:.1} s: {:?}",
-            i as f64 * dt,
-            sim.pos
-        );
         closest = closest.min(truth.distance_m);
+        if truth.mode != TrackMode::Tracking {
+            left_image = Some(format!("at {:.1} s: {:?}", i as f64 * dt, sim.pos));
+            break;
+        }
+        let truth = TrackState {
+            distance_m: reading(truth.distance_m),
+            ..truth
+        };
         let t = if noise.is_some() {
             let mut m = truth;
             m.hub_px[0] += rng.uniform(-3.0, 3.0);
@@ -1713,11 +1805,14 @@ fn fly_with(
         let out = ap.step(&ApproachInput {
             now_ns: now,
             track: Some(&t),
-            vehicle: None,
+            vehicle: Some(&sim.vehicle()),
         });
         check_output(&out, &c);
         if tasks.last() != Some(&out.task) {
             tasks.push(out.task);
+        }
+        if reasons.last() != Some(&out.reason) {
+            reasons.push(out.reason.clone());
         }
         if out.task == ApproachTask::Done && done_at.is_none() {
             done_at = Some(i as f64 * dt);
@@ -1726,10 +1821,104 @@ fn fly_with(
         }
         sim.advance(&out, dt);
         now += FRAME_NS;
+        last = Some(out);
     }
-    let last = ap.task();
-    assert_eq!(last, ApproachTask::Done, "ends in Done; tasks {tasks:?}");
-    (done_at, d_done, y_done, closest, tasks)
+    Flight {
+        done_at,
+        d_done,
+        y_done,
+        closest,
+        tasks,
+        reasons,
+        last: last.expect("the hub starts in view"),
+        left_image,
+    }
+}
+
+/// A reading taken in a hover establishes nothing: the tracker's first distance after an
+/// acquisition read 10.4 m at 29.4 m and grew over 1.5 s (`fly` seed 19); the approach must
+/// not take the growth for a contradiction.
+#[test]
+fn readings_that_grow_in_a_hover_do_not_stop_the_approach() {
+    let mut rig = Rig::new();
+    rig.vehicle = Some(vehicle_at(0.0));
+    for d in [10.4, 11.9, 13.0, 17.0, 22.0, 27.5, 29.0] {
+        rig.run(Some(track(0.0, 0.0, Some(d), Some(0.0))), 0.6);
+    }
+    let out = rig.run(Some(track(0.0, 0.0, Some(29.0), Some(0.0))), 3.0);
+    assert!(
+        out.vx_m_s > 0.5 && out.reason.starts_with("T3: 29.0 m"),
+        "{out:?}"
+    );
+}
+
+/// A run of readings far below what the odometry leaves (`fly` seed 20: 1.3–2.6 m at 5 m) is
+/// acted on but does not become the reference: the right readings after it are no jump.
+#[test]
+fn readings_far_too_close_do_not_become_the_reference() {
+    let mut rig = Rig::new();
+    // Closing in from 12 m to 6 m with agreeing readings.
+    for i in 0..=60 {
+        let north = f64::from(i) * 0.1;
+        rig.vehicle = Some(vehicle_at(north));
+        rig.step(Some(track(0.0, 0.0, Some(12.0 - north), Some(0.0))));
+    }
+    // Reading 2 m while the vehicle backs away from 6 m to 7.5 m.
+    for i in 0..=15 {
+        rig.vehicle = Some(vehicle_at(6.0 - f64::from(i) * 0.1));
+        rig.step(Some(track(0.0, 0.0, Some(2.0), Some(0.0))));
+    }
+    // Right again: 7.5 m, then closing in.
+    rig.vehicle = Some(vehicle_at(4.5));
+    let out = rig.run(Some(track(0.0, 0.0, Some(7.5), Some(0.0))), 3.0);
+    assert!(
+        out.vx_m_s > 0.1 && out.reason.starts_with("T3: 7.5 m"),
+        "{out:?}"
+    );
+}
+
+/// Close in, the distance reads more the closer the vehicle comes (a narrow lens filled by the
+/// rotor: a simulated flight read 7.6 m at 7.0 m and 8.1 m at 5.5 m, then flew past the rotor
+/// plane). The autopilot's odometry contradicts it and forward motion stops short of
+/// `min_distance_m`; without the check the same flight goes below it.
+#[test]
+fn a_distance_that_grows_while_closing_in_stops_the_approach() {
+    // True below 7 m, then 3 m more for every metre closer.
+    let reading = |d: f64| if d < 7.0 { d + 3.0 * (7.0 - d) } else { d };
+    let start = [25.0, 2.0, 1.0, 5.0];
+    let c = ApproachConfig::default();
+    let checked = fly_reading(c.clone(), start, Some(3), reading);
+    println!(
+        "checked: closest {:.2} m, last {:?}",
+        checked.closest, checked.last
+    );
+    assert!(
+        checked.closest >= c.min_distance_m + 1.0,
+        "closest {:.2} m; reasons {:?}",
+        checked.closest,
+        checked.reasons
+    );
+    assert!(
+        checked.reasons.iter().any(|r| r.contains("by odometry")),
+        "{:?}",
+        checked.reasons
+    );
+    assert_ne!(checked.last.task, ApproachTask::Done);
+    let unchecked = fly_reading(
+        ApproachConfig {
+            shrink_check_m: 0.0,
+            ..c.clone()
+        },
+        start,
+        Some(3),
+        reading,
+    );
+    println!("unchecked: closest {:.2} m", unchecked.closest);
+    assert!(
+        unchecked.closest < c.min_distance_m,
+        "{:.2}",
+        unchecked.closest
+    );
 }
 
 #[test]

@@ -4,9 +4,15 @@
 //! Prints, per mode and OpenCV thread count, median and p99 of the whole `detect` call and the
 //! median of each step. `DETECT_BENCH_ROWS=default,thesis` limits the run to those rows. Rows
 //! `+d` pass the tracker's distance, `+t` its predicted hub too (the detect stage's steady state).
+//! The `pipeline` row runs on the frames `hubtrack bench pipeline`'s camera plays (the first 30
+//! of the synthetic path at 30 fps, `capture.synthetic.cache_frames`) with the hints the detect
+//! stage has there (the tracker's hub and distance, no roll: no autopilot): its median is the
+//! solo figure the pipeline's detect median compares with.
 
 use std::time::Instant;
 
+use hubtrack_capture::config::SyntheticConfig;
+use hubtrack_capture::synthetic::SyntheticSource;
 use hubtrack_detect::params::{DetectConfig, Mode};
 use hubtrack_detect::{Detector, Hints, ImageView};
 use hubtrack_render::dataset::{synth_case, CLASSES};
@@ -15,6 +21,12 @@ use hubtrack_types::PixelFormat;
 
 const FRAMES: usize = 100;
 const REPEATS: usize = 3;
+/// Frames `hubtrack bench pipeline`'s camera loops over, and its rate.
+const PIPELINE_FRAMES: u64 = 30;
+const PIPELINE_FPS: f64 = 30.0;
+
+/// One frame, its roll hint (radians), distance and hub in view.
+type Frame = (Vec<u8>, Option<f64>, f64, Option<[f64; 2]>);
 
 /// What a row tells the detector besides the roll.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,7 +47,7 @@ fn pct(v: &mut [f64], q: f64) -> f64 {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cam = Camera::gopro_hero3();
     let mut r = Renderer::new(cam);
-    let mut frames = Vec::new();
+    let mut frames: Vec<Frame> = Vec::new();
     // The project's evaluation set (`hubtrack eval`): every distance class, every 8th a negative.
     for k in 0..FRAMES {
         let case = synth_case(5000, k % CLASSES.len(), k as u64, k % 8 == 7);
@@ -43,10 +55,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut buf = vec![0u8; cam.frame_bytes()];
         let truth = r.render(&scene, &pose, &mut buf)?;
         let hub = truth.hub_px.filter(|_| truth.turbine_in_view);
-        frames.push((buf, pose.roll_deg.to_radians(), pose.distance_m, hub));
+        frames.push((buf, Some(pose.roll_deg.to_radians()), pose.distance_m, hub));
+    }
+    let mut path = SyntheticSource::new(&SyntheticConfig::default(), PIPELINE_FPS)?;
+    let mut pipeline_frames: Vec<Frame> = Vec::new();
+    for index in 0..PIPELINE_FRAMES {
+        let mut buf = vec![0u8; cam.frame_bytes()];
+        let truth = path.render_index(index, &mut buf)?;
+        let hub = truth.hub_px.filter(|_| truth.turbine_in_view);
+        pipeline_frames.push((buf, None, truth.distance_m, hub));
     }
     let default_threads = opencv::core::get_num_threads()?;
-    println!("{FRAMES} rendered 1920x1080 BGR frames x {REPEATS} repeats; times in ms (wall clock of detect(), per-step medians from Detection.timings)");
+    println!("{FRAMES} rendered 1920x1080 BGR frames x {REPEATS} repeats (`pipeline`: the {PIPELINE_FRAMES} frames of `hubtrack bench pipeline`'s camera); times in ms (wall clock of detect(), per-step medians from Detection.timings)");
     println!(
         "{:<9} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
         "mode", "threads", "median", "p99", "pyramid", "edges", "hough", "geometry"
@@ -87,19 +107,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ..DetectConfig::default()
             },
             Hinted::No,
+            &frames,
         ),
-        ("default", default.clone(), Hinted::No),
-        ("no-crop", no_crop, Hinted::No),
-        ("no-yaw", no_yaw.clone(), Hinted::No),
-        ("default+d", default.clone(), Hinted::Distance),
-        ("no-yaw+d", no_yaw, Hinted::Distance),
-        ("default+t", default, Hinted::Tracking),
+        ("default", default.clone(), Hinted::No, &frames),
+        ("no-crop", no_crop, Hinted::No, &frames),
+        ("no-yaw", no_yaw.clone(), Hinted::No, &frames),
+        ("default+d", default.clone(), Hinted::Distance, &frames),
+        ("no-yaw+d", no_yaw, Hinted::Distance, &frames),
+        ("default+t", default.clone(), Hinted::Tracking, &frames),
+        ("pipeline", default, Hinted::Tracking, &pipeline_frames),
     ];
     // `DETECT_BENCH_ROWS=default,no-crop` runs only those rows (e.g. under a profiler).
     let only: Option<Vec<String>> = std::env::var("DETECT_BENCH_ROWS")
         .ok()
         .map(|v| v.split(',').map(|s| s.trim().to_string()).collect());
-    for (name, config, hinted) in variants {
+    for (name, config, hinted, frames) in variants {
         if only.as_ref().is_some_and(|o| !o.iter().any(|r| r == name)) {
             continue;
         }
@@ -108,8 +130,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut det = Detector::new(config.clone())?;
             let (mut tot, mut py, mut ed, mut ho, mut ge) =
                 (vec![], vec![], vec![], vec![], vec![]);
+            // About as many calls per repeat whatever the set's size.
+            let passes = (FRAMES / frames.len()).max(1);
             for rep in 0..=REPEATS {
-                for (buf, roll, distance, hub) in &frames {
+                for (buf, roll, distance, hub) in frames.iter().cycle().take(passes * frames.len())
+                {
                     let view = ImageView {
                         width: cam.width,
                         height: cam.height,
@@ -119,7 +144,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     };
                     let t = Instant::now();
                     let hints = Hints {
-                        roll_rad: Some(*roll),
+                        roll_rad: *roll,
                         hub_distance_m: (hinted != Hinted::No).then_some(*distance),
                         predicted_hub_px: hub.filter(|_| hinted == Hinted::Tracking),
                     };

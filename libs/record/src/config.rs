@@ -62,6 +62,13 @@ params! {
         /// With `jpeg` or `h264`: also record every N-th frame raw on `/frames/raw` (1: every frame,
         /// 0: none), for bit-exact replay of those frames.
         pub raw_every: u64 = 0, closed(0, 1_000_000);
+        /// With `jpeg` or `h264`: length of a raw window, seconds of capture time — every frame
+        /// also raw on `/frames/raw` from the next frame on, when `hubtrack raw-window` asks
+        /// without a length.
+        pub raw_window_s: f64 = 10.0, open_closed(0.0, 3600.0);
+        /// The longest raw window a request may open, s (0: requests are refused). At
+        /// 1920x1080 30 fps a raw second is 187 MB.
+        pub raw_window_max_s: f64 = 60.0, closed(0.0, 3600.0);
         /// JPEG quality (libjpeg's 1..100 scale). 65 keeps 1920x1080 with the synthetic camera's
         /// sensor noise under 300 MB per minute at 30 fps, at a PSNR above 32 dB.
         pub jpeg_quality: u32 = 65, closed(1, 100);

@@ -1,7 +1,10 @@
 //! hubtrack's recording format, in one place for the recorder, replay, latency and recovery.
 //!
 //! One MCAP file per run: chunked, indexed, lz4/zstd compressed, schemas embedded.
-//! - `/frames`: `foxglove.RawImage` (protobuf), so Foxglove and Lichtblick show the video;
+//! - `/frames`: the video as `foxglove.CompressedImage` (JPEG, the default),
+//!   `foxglove.CompressedVideo` (H.264) or `foxglove.RawImage` (protobuf), so Foxglove and
+//!   Lichtblick show it; `/frames/raw`: raw copies of some frames beside compressed ones
+//!   (`recorder.raw_every`, raw windows: [`raw_window`]);
 //! - `/frames/overlay`: what the detector saw (`foxglove.ImageAnnotations`, JSON), drawn over the video;
 //! - `/frames/header`: the [`hubtrack_types::FrameHeader`] of each frame (stamps and truth), JSON;
 //! - `/detections`, `/track`, `/setpoints`, `/vehicle`, `/status`: the stage messages, JSON with
@@ -25,6 +28,7 @@ pub mod frame_payload;
 pub mod jpeg;
 pub mod latency;
 pub mod raw_image;
+pub mod raw_window;
 pub mod reader;
 pub mod video;
 pub mod viewer_schema;

@@ -134,6 +134,10 @@ pub struct RecorderStats {
     /// Frames recorded as the camera's own JPEG, without encoding (V4L2 MJPG, JPEG files).
     #[serde(default)]
     pub frames_camera_jpeg: u64,
+    /// Raw copies written to `/frames/raw` beside the compressed frames (`recorder.raw_every`
+    /// and raw windows, `hubtrack raw-window`).
+    #[serde(default)]
+    pub frames_raw_copies: u64,
     /// Result messages written.
     pub messages_recorded: u64,
     /// Bytes written so far (approximate until the file is finished).
@@ -149,7 +153,9 @@ pub struct RecordingOptions {
     pub chunk_size: u64,
     /// How `/frames` holds the pixels.
     pub frame_encoding: FrameEncoding,
-    /// With JPEG frames: whether raw copies of some frames go to `/frames/raw`.
+    /// With compressed frames: whether `/frames/raw` is announced at the start for raw copies
+    /// of some frames (`recorder.raw_every`); without it the channel starts with its first raw
+    /// copy (a raw window).
     pub raw_copies: bool,
 }
 
@@ -200,6 +206,24 @@ pub fn foxglove_encoding(f: PixelFormat) -> &'static str {
         PixelFormat::Bgr8 => "bgr8",
         PixelFormat::Gray8 => "mono8",
     }
+}
+
+/// Registers a `foxglove.RawImage` channel on `topic`.
+fn add_raw_channel(
+    writer: &mut mcap::Writer<BufWriter<File>>,
+    path: &Path,
+    topic: &str,
+) -> Result<u16, RecordError> {
+    let schema = writer
+        .add_schema(
+            raw_image::SCHEMA_NAME,
+            "protobuf",
+            &raw_image::descriptor_set(),
+        )
+        .map_err(|e| mcap_err(path, e))?;
+    writer
+        .add_channel(schema, topic, "protobuf", &BTreeMap::new())
+        .map_err(|e| mcap_err(path, e))
 }
 
 impl Recording {
@@ -257,20 +281,7 @@ impl Recording {
             None => None,
         };
         let raw_channel = match raw_topic {
-            Some(topic) => {
-                let schema = writer
-                    .add_schema(
-                        raw_image::SCHEMA_NAME,
-                        "protobuf",
-                        &raw_image::descriptor_set(),
-                    )
-                    .map_err(|e| mcap_err(path, e))?;
-                Some(
-                    writer
-                        .add_channel(schema, topic, "protobuf", &no_meta)
-                        .map_err(|e| mcap_err(path, e))?,
-                )
-            }
+            Some(topic) => Some(add_raw_channel(&mut writer, path, topic)?),
             None => None,
         };
         let overlay_schema = writer
@@ -393,10 +404,16 @@ impl Recording {
                 encoding: foxglove_encoding(header.format),
                 step: header.stride,
             };
-            let channel_id = self.raw_channel.ok_or_else(|| RecordError::Encode {
-                channel: RAW_FRAMES_TOPIC.into(),
-                message: "this recording has no channel for raw frames".into(),
-            })?;
+            let channel_id = match self.raw_channel {
+                Some(id) => id,
+                // Raw copies beside compressed frames that were not announced at the start (a
+                // raw window, `hubtrack raw-window`): the channel starts with its first frame.
+                None => {
+                    let id = add_raw_channel(&mut self.writer, &self.path, RAW_FRAMES_TOPIC)?;
+                    self.raw_channel = Some(id);
+                    id
+                }
+            };
             raw_image::encode(&meta, pixels, &mut self.scratch);
             let h = MessageHeader {
                 channel_id,

@@ -355,13 +355,15 @@ impl<T: Debug + ZeroCopySend + Copy + 'static> MsgPublisher<T> {
         })
     }
 
-    /// Sends a copy of `value` (these messages are small) and notifies subscribers.
-    pub fn publish(&self, value: T) -> Result<(), IpcError> {
-        self.publisher
+    /// Sends a copy of `value` (these messages are small) and notifies subscribers; returns how
+    /// many subscribers it reached.
+    pub fn publish(&self, value: T) -> Result<usize, IpcError> {
+        let reached = self
+            .publisher
             .send_copy(value)
             .map_err(|e| xfer_err("send", &self.spec, e))?;
         let _ = self.notifier.notify();
-        Ok(())
+        Ok(reached)
     }
 }
 

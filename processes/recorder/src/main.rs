@@ -15,17 +15,21 @@
 
 use anyhow::Context;
 use clap::Parser;
-use hubtrack_record::config::{Compression, RecorderConfig};
+use hubtrack_record::config::{Compression, FrameEncoding, RecorderConfig};
 use hubtrack_record::encoder::{EncodedFormat, EncodedFrame, FrameEncoder};
+use hubtrack_record::raw_window::RawWindow;
 use hubtrack_record::writer::{ChannelKind, RecorderStats};
 use hubtrack_record::{Recording, RecordingOptions};
 use hubtrack_runtime::ipc::{FrameSubscriber, MsgSubscriber};
 use hubtrack_runtime::stage::{Stage, StageArgs};
 use hubtrack_runtime::status::StatusReporter;
-use hubtrack_types::services::{DETECTIONS, FRAMES, OVERLAY, SETPOINTS, STATUS, TRACK, VEHICLE};
+use hubtrack_types::services::{
+    DETECTIONS, FRAMES, OVERLAY, RAW_WINDOW, SETPOINTS, STATUS, TRACK, VEHICLE,
+};
 use hubtrack_types::time::{monotonic_ns, realtime_ns};
 use hubtrack_types::{
-    DetectOverlay, Detection, FrameHeader, Setpoint, StageStatus, TrackState, VehicleState,
+    DetectOverlay, Detection, FrameHeader, RawWindowRequest, Setpoint, StageStatus, TrackState,
+    VehicleState,
 };
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
@@ -57,6 +61,8 @@ enum Item {
     Frame {
         header: FrameHeader,
         pixels: Option<Vec<u8>>,
+        /// A raw copy goes to `/frames/raw` as well (`raw_every`, a raw window).
+        raw_copy: bool,
         log_time: u64,
     },
     Json {
@@ -120,6 +126,14 @@ fn run() -> anyhow::Result<()> {
     let setpoints = MsgSubscriber::<Setpoint>::polling(&node, &SETPOINTS, RESULT_BUFFER)?;
     let vehicle = MsgSubscriber::<VehicleState>::polling(&node, &VEHICLE, RESULT_BUFFER)?;
     let status_in = MsgSubscriber::<StageStatus>::polling(&node, &STATUS, RESULT_BUFFER)?;
+    let raw_requests = MsgSubscriber::<RawWindowRequest>::polling(
+        &node,
+        &RAW_WINDOW,
+        RAW_WINDOW.qos.subscriber_max_buffer_size,
+    )?;
+    let mut raw_window = RawWindow::new(cfg.raw_window_s, cfg.raw_window_max_s);
+    let compressed = cfg.frame_encoding != FrameEncoding::Raw;
+    let raw_every = cfg.raw_every;
     let overlays = MsgSubscriber::<DetectOverlay>::polling(
         &node,
         &OVERLAY,
@@ -160,9 +174,24 @@ fn run() -> anyhow::Result<()> {
             break;
         }
         frames.wait(READER_WAIT);
+        while let Some(r) = raw_requests.receive()? {
+            match raw_window.request(r.seconds) {
+                Ok(s) if compressed => log::info!(
+                    "raw window: every frame of the next {s:.1} s also raw on /frames/raw"
+                ),
+                Ok(_) => log::info!("raw window: /frames is raw already"),
+                Err(why) => {
+                    log::warn!("raw window refused: {why}");
+                    status.error(&format!("raw window refused: {why}"));
+                }
+            }
+        }
         while let Some(sample) = frames.receive()? {
             stats.frames_received += 1;
             let header = *sample.user_header();
+            let raw_copy = compressed
+                && (raw_window.take(header.capture_ns)
+                    || (raw_every > 0 && header.seq.is_multiple_of(raw_every)));
             let log_time = realtime_ns();
             let pixels = if config.recorder.record_frames {
                 match free_rx.try_recv() {
@@ -186,6 +215,7 @@ fn run() -> anyhow::Result<()> {
                 Item::Frame {
                     header,
                     pixels,
+                    raw_copy,
                     log_time,
                 },
                 &mut stats,
@@ -275,6 +305,7 @@ fn run() -> anyhow::Result<()> {
             stats.frames_dropped_disk = s.frames_dropped_disk;
             stats.frames_encode_failed = s.frames_encode_failed;
             stats.frames_camera_jpeg = s.frames_camera_jpeg;
+            stats.frames_raw_copies = s.frames_raw_copies;
             stats.messages_recorded = s.messages_recorded;
             stats.bytes_written = s.bytes_written;
         }
@@ -319,12 +350,13 @@ fn run() -> anyhow::Result<()> {
     stats.frames_dropped_disk = final_stats.frames_dropped_disk;
     stats.frames_encode_failed = final_stats.frames_encode_failed;
     stats.frames_camera_jpeg = final_stats.frames_camera_jpeg;
+    stats.frames_raw_copies = final_stats.frames_raw_copies;
     stats.messages_recorded = final_stats.messages_recorded;
     stats.bytes_written = final_stats.bytes_written;
     status.status.outputs = stats.frames_recorded;
     status.publish_now();
     log::info!(
-        "recorded {} frames ({} received, {} dropped: disk behind, {} lost: overwritten before read, {} without pixels: disk nearly full, {} without pixels: not encodable, {} as the camera's own JPEG), {} messages, {} bytes",
+        "recorded {} frames ({} received, {} dropped: disk behind, {} lost: overwritten before read, {} without pixels: disk nearly full, {} without pixels: not encodable, {} as the camera's own JPEG, {} raw copies), {} messages, {} bytes",
         stats.frames_recorded,
         stats.frames_received,
         stats.frames_dropped_queue,
@@ -332,6 +364,7 @@ fn run() -> anyhow::Result<()> {
         stats.frames_dropped_disk,
         stats.frames_encode_failed,
         stats.frames_camera_jpeg,
+        stats.frames_raw_copies,
         stats.messages_recorded,
         stats.bytes_written
     );
@@ -442,6 +475,7 @@ fn merged(reader: &RecorderStats, writer: &RecorderStats) -> RecorderStats {
         frames_dropped_disk: writer.frames_dropped_disk,
         frames_encode_failed: writer.frames_encode_failed,
         frames_camera_jpeg: writer.frames_camera_jpeg,
+        frames_raw_copies: writer.frames_raw_copies,
         frames_recorded: writer.frames_recorded,
         messages_recorded: writer.messages_recorded,
         bytes_written: writer.bytes_written,
@@ -512,6 +546,7 @@ fn write_items(
             Some(Item::Frame {
                 header,
                 pixels,
+                raw_copy,
                 log_time,
             }) => {
                 let keep_pixels = pixels.is_some() && !disk.low;
@@ -520,7 +555,7 @@ fn write_items(
                 }
                 let written = if keep_pixels { pixels.as_deref() } else { None };
                 frames
-                    .write(rec, &header, written, log_time, stats)
+                    .write(rec, &header, written, raw_copy, log_time, stats)
                     .context("writing a frame")?;
                 stats.frames_recorded += 1;
                 last_frame = header;
@@ -594,12 +629,11 @@ fn write_items(
     Ok(())
 }
 
-/// Writes each frame's pixels the configured way: compressed (JPEG or H.264) on `/frames` with a
-/// raw copy of every `raw_every`-th frame, or raw on `/frames`. Recording JPEG, a frame that
+/// Writes each frame's pixels the configured way: compressed (JPEG or H.264) on `/frames` with
+/// raw copies of the frames the reader chose, or raw on `/frames`. Recording JPEG, a frame that
 /// came with the camera's own JPEG is stored as those bytes, not encoded again.
 struct FrameWriter {
     encoder: Option<FrameEncoder>,
-    raw_every: u64,
 }
 
 impl FrameWriter {
@@ -608,10 +642,7 @@ impl FrameWriter {
             Some(s) => Some(FrameEncoder::new(&s).context("starting the frame encoder")?),
             None => None,
         };
-        Ok(FrameWriter {
-            encoder,
-            raw_every: cfg.raw_every,
-        })
+        Ok(FrameWriter { encoder })
     }
 
     fn write(
@@ -619,6 +650,7 @@ impl FrameWriter {
         rec: &mut Recording,
         header: &FrameHeader,
         pixels: Option<&[u8]>,
+        raw_copy: bool,
         log_time: u64,
         stats: &mut RecorderStats,
     ) -> Result<(), hubtrack_record::RecordError> {
@@ -653,9 +685,9 @@ impl FrameWriter {
                 log::warn!("frame not encoded, header kept: {e}");
             }
         }
-        let raw_copy = self.raw_every > 0 && header.seq.is_multiple_of(self.raw_every);
         if raw_copy {
             stats.bytes_written += px.len() as u64;
+            stats.frames_raw_copies += 1;
         }
         rec.write_frame(header, raw_copy.then_some(px), log_time)
     }

@@ -80,6 +80,17 @@ enum Command {
     },
     /// Replay a recording's inputs through chosen stages and record their new outputs.
     Replay(hubtrack_supervisor::replay::ReplayArgs),
+    /// Ask the running recorder to record every frame raw as well (`/frames/raw`, bit-exact,
+    /// beside the compressed video) for a while, from the next frame on.
+    RawWindow {
+        /// Length of the window, seconds of capture time (default: `recorder.raw_window_s`,
+        /// capped at `recorder.raw_window_max_s`).
+        #[arg(long, value_parser = hubtrack_runtime::cli::seconds)]
+        seconds: Option<f64>,
+        /// How long to wait for a running recorder, seconds.
+        #[arg(long, default_value_t = 3.0, value_parser = hubtrack_runtime::cli::seconds)]
+        wait: f64,
+    },
     /// Write a MAVLink 2 signing key file (mode 0600) from a passphrase read from standard
     /// input: the key is SHA-256 of the passphrase, as MAVProxy's `signing setup PASSPHRASE`
     /// gives the autopilot. Never replaces a file.
@@ -104,6 +115,7 @@ fn main() {
         Command::Recover { input, output } => tools::recover(&input, output),
         Command::Latency { file, json } => tools::latency(&file, json),
         Command::Replay(a) => hubtrack_supervisor::replay::run(a),
+        Command::RawWindow { seconds, wait } => tools::raw_window(seconds, wait),
         Command::SigningKey { file } => tools::signing_key(&file),
         Command::Lab(args) => hand_over_to_lab(&args),
     };

@@ -1,14 +1,14 @@
 //! The operator's commands on a running pipeline and on recordings: `status`, `tap`, `echo`,
-//! `recover`, `latency`, `config`.
+//! `raw-window`, `recover`, `latency`, `config`.
 
 use crate::config_check;
 use anyhow::bail;
 use hubtrack_runtime::config::ConfigArgs;
-use hubtrack_runtime::ipc::{open_node, FrameSubscriber, MsgSubscriber};
+use hubtrack_runtime::ipc::{open_node, FrameSubscriber, MsgPublisher, MsgSubscriber};
 use hubtrack_runtime::shutdown::Shutdown;
-use hubtrack_types::services::{STATUS, SUPERVISOR};
+use hubtrack_types::services::{RAW_WINDOW, STATUS, SUPERVISOR};
 use hubtrack_types::time::monotonic_ns;
-use hubtrack_types::{StageStatus, SupervisorStatus};
+use hubtrack_types::{RawWindowRequest, StageStatus, SupervisorStatus};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -348,4 +348,41 @@ pub fn signing_key(file: &Path) -> anyhow::Result<()> {
         file.display()
     );
     Ok(())
+}
+
+/// How often `raw-window` tries to reach a recorder while it waits for one.
+const RAW_WINDOW_RETRY: Duration = Duration::from_millis(100);
+/// How long `raw-window` keeps its request alive after sending it.
+const RAW_WINDOW_HOLD: Duration = Duration::from_millis(500);
+
+/// `hubtrack raw-window`: sends one request to the running recorder (its log and `/recorder`'s
+/// `frames_raw_copies` show the window); an error when no recorder listens within `wait_s`.
+pub fn raw_window(seconds: Option<f64>, wait_s: f64) -> anyhow::Result<()> {
+    let node = open_node("raw-window")?;
+    let publisher = MsgPublisher::<RawWindowRequest>::new(&node, &RAW_WINDOW)?;
+    let deadline = Instant::now() + Duration::from_secs_f64(wait_s);
+    loop {
+        let request = RawWindowRequest {
+            seconds: seconds.unwrap_or(0.0),
+            publish_ns: monotonic_ns(),
+        };
+        if publisher.publish(request)? > 0 {
+            // A sample lives in its publisher's memory: held until the recorder, which polls
+            // every few milliseconds, has taken it.
+            std::thread::sleep(RAW_WINDOW_HOLD);
+            match seconds {
+                Some(s) => println!("asked the recorder for a raw window of {s} s"),
+                None => println!("asked the recorder for a raw window (recorder.raw_window_s)"),
+            }
+            return Ok(());
+        }
+        if Instant::now() >= deadline {
+            bail!(
+                "no recorder is running (nothing subscribed to {} within {wait_s} s): start the \
+                 pipeline with `hubtrack run` and recording on",
+                RAW_WINDOW.name
+            );
+        }
+        std::thread::sleep(RAW_WINDOW_RETRY);
+    }
 }

@@ -143,7 +143,9 @@ impl InputPublishers {
     fn publish(&mut self, input: Input) -> anyhow::Result<Option<u64>> {
         let seq = input.driver_seq();
         match input {
-            Input::Vehicle(v) => self.vehicle.publish(v)?,
+            Input::Vehicle(v) => {
+                self.vehicle.publish(v)?;
+            }
             Input::Frame(mut h, pixels) => {
                 let publisher = match &self.frames {
                     Some(p) => p,
