@@ -52,6 +52,11 @@ hubtrack_types::params! {
         /// position again. The readings are judged against one anchor over this much flight,
         /// m (0 = no check). Range [0, 100]; default 1.
         pub shrink_check_m: f64 = 1.0, closed(0.0, 100.0);
+        /// The judging window grows with the distance: this share of the anchor's reading, if
+        /// longer than `shrink_check_m`. Readings confirm an anchor (only a confirmed one can
+        /// latch) when over a whole window they shrank by the distance flown within
+        /// `shrink_check_frac` of it. Range [0, 1]; default 0.15.
+        pub shrink_check_window_frac: f64 = 0.15, closed(0.0, 1.0);
         /// How long an anchor lasts in a hover before the next reading that agrees replaces it,
         /// s. Range (0, 600]; default 2.
         pub shrink_check_window_s: f64 = 2.0, open_closed(0.0, 600.0);

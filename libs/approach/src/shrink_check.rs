@@ -131,13 +131,21 @@ impl ShrinkCheck {
         // Agreed: the next window starts here once this one is judged (flown far enough either
         // way, or long enough in a hover). Re-anchoring on every step would let a reading creep
         // up by the noise allowance each step.
-        let window_done =
-            flown.abs() >= c.shrink_check_m || secs(a.at_ns, now) >= c.shrink_check_window_s;
+        // The window is long enough that a reading proportional to the truth but off by a
+        // factor shows it: `--autopilot ardupilot` seed 4 read 12.5 m at 37.8 m and shrank by
+        // 0.5 m over 1.3 m flown, inside the noise allowance of a 1 m window.
+        let window_m = c
+            .shrink_check_m
+            .max(c.shrink_check_window_frac * a.distance_m);
+        let window_done = flown.abs() >= window_m || secs(a.at_ns, now) >= c.shrink_check_window_s;
+        // Confirmed by flight: the reading shrank by the distance flown, within `frac` of it
+        // and without the noise allowance.
+        let shrank_as_flown = flown >= window_m && excess.abs() <= c.shrink_check_frac * flown;
         self.anchor = if d > c.shrink_check_range_m {
             None
         } else if window_done {
             Some(Anchor {
-                confirmed: a.confirmed || flown >= c.shrink_check_m,
+                confirmed: a.confirmed || shrank_as_flown,
                 ..anchor_here
             })
         } else {
