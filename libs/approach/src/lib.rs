@@ -686,9 +686,14 @@ impl Approach {
         let new_track_state = self.filter_capture_ns != Some(t.stamps.capture_ns);
         self.update_filters(t);
         let yaw = self.heading_yaw(t, vehicle, new_track_state).or(self.yaw_f);
-        let (dist, remembered) = self.bounded_distance(now, t, vehicle);
+        // This step's reading and where it puts the hub, for the remembered hub and the
+        // odometry check.
         let reading = self.dist_f.filter(|_| t.distance_valid);
-        let not_shrinking = self.shrink.update(&self.config, now, reading, t, vehicle);
+        let fix = reading
+            .zip(vehicle)
+            .and_then(|(d, v)| HubFix::from(t, v, d, now));
+        let (dist, remembered) = self.bounded_distance(now, fix, vehicle);
+        let not_shrinking = self.shrink.update(&self.config, now, reading, fix, vehicle);
         // Contradicted, the odometry's distance bounds the reading (backing away stays allowed).
         let dist = match (dist, not_shrinking) {
             (Some(d), Some(n)) => Some(d.min(n.odometry_m)),
@@ -988,7 +993,7 @@ impl Approach {
     fn bounded_distance(
         &mut self,
         now: u64,
-        t: &TrackState,
+        fix: Option<HubFix>,
         vehicle: Option<&VehicleState>,
     ) -> (Option<f64>, Option<f64>) {
         let c = &self.config;
@@ -1018,10 +1023,8 @@ impl Approach {
                 (Some(_), None) => return (None, None),
             }
         }
-        if let (Some(d), Some(v), true) = (dist, vehicle, t.distance_valid) {
-            if let Some(fix) = HubFix::from(t, v, d, now) {
-                self.hub_fix = Some(fix);
-            }
+        if fix.is_some() {
+            self.hub_fix = fix;
         }
         (dist, None)
     }

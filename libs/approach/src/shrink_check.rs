@@ -19,7 +19,7 @@
 
 use super::{secs, HubFix};
 use crate::ApproachConfig;
-use hubtrack_types::{TrackState, VehicleState};
+use hubtrack_types::VehicleState;
 
 /// A reading the later ones are checked against.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,23 +56,20 @@ pub(crate) struct ShrinkCheck {
 }
 
 impl ShrinkCheck {
-    /// Feeds one step's distance reading (`None`: no valid reading) with the track state it came
-    /// from and the vehicle state; returns the contradiction while forward motion is blocked.
+    /// Feeds one step's distance reading (`None`: no valid reading), where it puts the hub and
+    /// the vehicle state; returns the contradiction while forward motion is blocked.
     pub(crate) fn update(
         &mut self,
         c: &ApproachConfig,
         now: u64,
         reading: Option<f64>,
-        t: &TrackState,
+        fix: Option<HubFix>,
         vehicle: Option<&VehicleState>,
     ) -> Option<Contradiction> {
         if c.shrink_check_m <= 0.0 {
             return None;
         }
-        let (Some(d), Some(v)) = (reading, vehicle) else {
-            return self.latched;
-        };
-        let Some(fix) = HubFix::from(t, v, d, now) else {
+        let (Some(d), Some(fix), Some(v)) = (reading, fix, vehicle) else {
             return self.latched;
         };
         let anchor_here = Anchor {

@@ -990,6 +990,20 @@ fn vehicle_at(north: f64) -> VehicleState {
     }
 }
 
+impl Rig {
+    /// One step per 0.1 m along north from `from` to `to` (either way), the track reading
+    /// `reading(north)`, centred and level.
+    fn fly_north(&mut self, from: f64, to: f64, reading: impl Fn(f64) -> f64) {
+        let steps = ((to - from).abs() / 0.1).round() as u32;
+        let dir = (to - from).signum();
+        for i in 0..=steps {
+            let north = from + dir * f64::from(i) * 0.1;
+            self.vehicle = Some(vehicle_at(north));
+            self.step(Some(track(0.0, 0.0, Some(reading(north)), Some(0.0))));
+        }
+    }
+}
+
 /// Lost at 5 m, a track re-acquired on something that reads 22 m does not fly the vehicle
 /// forward: the hub remembered from the last confirmed track bounds its distance until the
 /// two agree or `reacquire_check_s` passes (`fly` seed 176 flew into the rotor that way).
@@ -998,11 +1012,7 @@ fn a_reacquired_track_that_reads_too_far_is_bounded_by_the_remembered_hub() {
     let c = ApproachConfig::default();
     let mut rig = Rig::new();
     // Closing in from 8 m to 3.5 m, the readings agreeing with the odometry.
-    for i in 0..=45 {
-        let north = f64::from(i) * 0.1;
-        rig.vehicle = Some(vehicle_at(north));
-        rig.step(Some(track(0.0, 0.0, Some(8.0 - north), Some(0.0))));
-    }
+    rig.fly_north(0.0, 4.5, |north| 8.0 - north);
     rig.run(Some(track(0.0, 0.0, Some(3.5), Some(0.0))), 3.0);
     rig.run(Some(track_mode(TrackMode::Lost, 2.0)), 1.0);
     assert_eq!(rig.ap.task(), ApproachTask::Hold);
@@ -1858,16 +1868,9 @@ fn readings_that_grow_in_a_hover_do_not_stop_the_approach() {
 fn readings_far_too_close_do_not_become_the_reference() {
     let mut rig = Rig::new();
     // Closing in from 12 m to 6 m with agreeing readings.
-    for i in 0..=60 {
-        let north = f64::from(i) * 0.1;
-        rig.vehicle = Some(vehicle_at(north));
-        rig.step(Some(track(0.0, 0.0, Some(12.0 - north), Some(0.0))));
-    }
+    rig.fly_north(0.0, 6.0, |north| 12.0 - north);
     // Reading 2 m while the vehicle backs away from 6 m to 7.5 m.
-    for i in 0..=15 {
-        rig.vehicle = Some(vehicle_at(6.0 - f64::from(i) * 0.1));
-        rig.step(Some(track(0.0, 0.0, Some(2.0), Some(0.0))));
-    }
+    rig.fly_north(6.0, 4.5, |_| 2.0);
     // Right again: 7.5 m, then closing in.
     rig.vehicle = Some(vehicle_at(4.5));
     let out = rig.run(Some(track(0.0, 0.0, Some(7.5), Some(0.0))), 3.0);
@@ -1883,11 +1886,7 @@ fn readings_far_too_close_do_not_become_the_reference() {
 #[test]
 fn a_reading_off_by_a_factor_is_not_confirmed_by_flight() {
     let mut rig = Rig::new();
-    for i in 0..=45 {
-        let north = f64::from(i) * 0.1;
-        rig.vehicle = Some(vehicle_at(north));
-        rig.step(Some(track(0.0, 0.0, Some((37.8 - north) / 3.0), Some(0.0))));
-    }
+    rig.fly_north(0.0, 4.5, |north| (37.8 - north) / 3.0);
     rig.vehicle = Some(vehicle_at(4.5));
     let out = rig.run(Some(track(0.0, 0.0, Some(33.3), Some(0.0))), 3.0);
     assert!(

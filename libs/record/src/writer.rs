@@ -151,12 +151,9 @@ pub struct RecordingOptions {
     pub compression: Option<mcap::Compression>,
     /// Target chunk size, bytes.
     pub chunk_size: u64,
-    /// How `/frames` holds the pixels.
+    /// How `/frames` holds the pixels. Beside compressed frames, `/frames/raw` starts with the
+    /// first raw copy (`recorder.raw_every`, a raw window).
     pub frame_encoding: FrameEncoding,
-    /// With compressed frames: whether `/frames/raw` is announced at the start for raw copies
-    /// of some frames (`recorder.raw_every`); without it the channel starts with its first raw
-    /// copy (a raw window).
-    pub raw_copies: bool,
 }
 
 impl Default for RecordingOptions {
@@ -165,7 +162,6 @@ impl Default for RecordingOptions {
             compression: Some(mcap::Compression::Lz4),
             chunk_size: 4 << 20,
             frame_encoding: FrameEncoding::Raw,
-            raw_copies: false,
         }
     }
 }
@@ -249,14 +245,8 @@ impl Recording {
         let no_meta = BTreeMap::new();
         let (compressed, raw_topic) = match options.frame_encoding {
             FrameEncoding::Raw => (None, Some(FRAMES_TOPIC)),
-            FrameEncoding::Jpeg => (
-                Some(EncodedFormat::Jpeg),
-                options.raw_copies.then_some(RAW_FRAMES_TOPIC),
-            ),
-            FrameEncoding::H264 => (
-                Some(EncodedFormat::H264),
-                options.raw_copies.then_some(RAW_FRAMES_TOPIC),
-            ),
+            FrameEncoding::Jpeg => (Some(EncodedFormat::Jpeg), None),
+            FrameEncoding::H264 => (Some(EncodedFormat::H264), None),
         };
         let compressed_channel = match compressed {
             Some(format) => {

@@ -380,7 +380,6 @@ fn options(cfg: &RecorderConfig) -> RecordingOptions {
         },
         chunk_size: cfg.chunk_size_kib * 1024,
         frame_encoding: cfg.frame_encoding,
-        raw_copies: cfg.raw_every > 0,
     }
 }
 
