@@ -1,22 +1,23 @@
 //! `hubtrack-recorder`: subscribes to every service and writes one MCAP file.
 //!
-//! Two threads: the reader takes samples from shared memory as soon as they arrive and copies
-//! frames into a fixed pool of buffers; the writer compresses and writes. When the disk falls
-//! behind and the pool is empty, frames are dropped and counted: the recorder never slows the
-//! camera (the camera never waits for anyone anyway: safe overflow). On SIGINT/SIGTERM the writer
-//! drains the queue and finishes the file; after `kill -9` the file is readable up to its last
-//! flushed chunk (see `hubtrack recover`).
-//!
-//! Frames are compressed by the writer thread through `FrameEncoder` (JPEG through libjpeg-turbo
-//! by default, or H.264: `recorder.frame_encoding`): in this process, which the supervisor starts
-//! at a lower priority than the camera and detect, behind the same bounded pool, so encoding can
-//! fall behind only into counted drops, never into the camera's or detect's time. A frame that does not encode keeps its header and
-//! is counted (`frames_encode_failed`).
+//! Two threads: the reader takes samples from shared memory as soon as they arrive and, once
+//! detect is done with a frame, compresses it straight from shared memory (JPEG through libjpeg-turbo by default, or H.264:
+//! `recorder.frame_encoding`; see `frames`); the writer writes. Each frame in flight holds one
+//! buffer of a fixed pool: when the disk falls behind and the pool is empty, frames are dropped
+//! and counted: the recorder never slows the camera (the camera never waits for anyone anyway:
+//! safe overflow). The supervisor starts this process at a lower priority than the camera and
+//! detect, so encoding can fall behind only into counted losses, never into the camera's or
+//! detect's time. A frame that does not encode keeps its header and is counted
+//! (`frames_encode_failed`). On SIGINT/SIGTERM the writer drains the queue and finishes the
+//! file; after `kill -9` the file is readable up to its last flushed chunk (see
+//! `hubtrack recover`).
+
+mod frames;
 
 use anyhow::Context;
 use clap::Parser;
+use frames::{FramePacker, HeldFrame, Pixels};
 use hubtrack_record::config::{Compression, FrameEncoding, RecorderConfig};
-use hubtrack_record::encoder::{EncodedFormat, EncodedFrame, FrameEncoder};
 use hubtrack_record::raw_window::RawWindow;
 use hubtrack_record::writer::{ChannelKind, RecorderStats};
 use hubtrack_record::{Recording, RecordingOptions};
@@ -38,6 +39,9 @@ use std::time::{Duration, Instant};
 
 /// Sleep of the reader between checks for frames, shutdown and the other services.
 const READER_WAIT: Duration = Duration::from_millis(5);
+/// Longest a frame waits for detect to be done with it before it is compressed anyway (detect
+/// not running, or skipping frames); a frame is never held past the next one's arrival either.
+const DETECT_WAIT: Duration = Duration::from_millis(25);
 /// Result-service receive buffer (messages are small; a generous buffer loses none).
 const RESULT_BUFFER: usize = 64;
 /// How often the recorder writes its counters to `/recorder`.
@@ -60,9 +64,7 @@ struct Args {
 enum Item {
     Frame {
         header: FrameHeader,
-        pixels: Option<Vec<u8>>,
-        /// A raw copy goes to `/frames/raw` as well (`raw_every`, a raw window).
-        raw_copy: bool,
+        pixels: Pixels,
         log_time: u64,
     },
     Json {
@@ -145,6 +147,7 @@ fn run() -> anyhow::Result<()> {
     for _ in 0..cfg.queue_frames {
         free_tx.send(Vec::new()).expect("pool fits its channel");
     }
+    let mut packer = FramePacker::new(&cfg, free_rx)?;
     let (queue_tx, queue_rx) = mpsc::sync_channel::<Item>(cfg.queue_frames + RESULT_BUFFER * 5);
     let (stats_tx, stats_rx) = mpsc::channel::<RecorderStats>();
     // Set once by the writer when the file can no longer be written (e.g. the disk is full).
@@ -163,6 +166,9 @@ fn run() -> anyhow::Result<()> {
     let mut stats = RecorderStats::default();
     let mut stats_at = Instant::now();
     let (mut lost_unlogged, mut lost_logged_at) = (0u64, None::<Instant>);
+    // The newest frame, until detect is done with it; the newest frame seq detect has reported.
+    let mut held: Option<HeldFrame> = None;
+    let mut detected_seq: Option<u64> = None;
     while !shutdown.requested() {
         if let Some(why) = writer_failed.get() {
             // Nothing more can be recorded: say why, count it, and end (the supervisor restarts
@@ -192,35 +198,9 @@ fn run() -> anyhow::Result<()> {
             let raw_copy = compressed
                 && (raw_window.take(header.capture_ns)
                     || (raw_every > 0 && header.seq.is_multiple_of(raw_every)));
-            let log_time = realtime_ns();
-            let pixels = if config.recorder.record_frames {
-                match free_rx.try_recv() {
-                    Ok(mut buf) => {
-                        buf.clear();
-                        buf.extend_from_slice(sample.payload());
-                        Some(buf)
-                    }
-                    Err(_) => {
-                        stats.frames_dropped_queue += 1;
-                        status.status.dropped += 1;
-                        continue;
-                    }
-                }
-            } else {
-                None
-            };
-            drop(sample); // release shared memory before the (possibly slow) hand-off
-            enqueue(
-                &queue_tx,
-                Item::Frame {
-                    header,
-                    pixels,
-                    raw_copy,
-                    log_time,
-                },
-                &mut stats,
-                &mut status,
-            );
+            if let Some(older) = held.replace(HeldFrame::new(sample, raw_copy, realtime_ns())) {
+                pack(older, &mut packer, &queue_tx, &mut stats, &mut status);
+            }
         }
         if frames.lost > stats.frames_lost {
             lost_unlogged += frames.lost - stats.frames_lost;
@@ -253,13 +233,24 @@ fn run() -> anyhow::Result<()> {
                 }
             };
         }
-        drain!(
-            detections,
-            ChannelKind::Detection,
-            Detection,
-            |m: &Detection| m.stamps.seq,
-            |m: &Detection| m.stamps.publish_ns
-        );
+        while let Some(m) = detections.receive()? {
+            detected_seq = detected_seq.max(Some(m.stamps.seq));
+            let item = Item::Json {
+                kind: ChannelKind::Detection,
+                seq: m.stamps.seq,
+                publish_ns: m.stamps.publish_ns,
+                log_time: now,
+                json: JsonMsg::Detection(m),
+            };
+            enqueue(&queue_tx, item, &mut stats, &mut status);
+        }
+        if held
+            .as_ref()
+            .is_some_and(|h| h.due(detected_seq, DETECT_WAIT))
+        {
+            let due = held.take().expect("checked");
+            pack(due, &mut packer, &queue_tx, &mut stats, &mut status);
+        }
         drain!(
             track,
             ChannelKind::Track,
@@ -326,6 +317,9 @@ fn run() -> anyhow::Result<()> {
     }
 
     log::info!("stopping: finishing {}", output.display());
+    if let Some(last) = held.take() {
+        pack(last, &mut packer, &queue_tx, &mut stats, &mut status);
+    }
     // Final reader counts go into the file's last `/recorder` message.
     let _ = queue_tx.send(Item::Json {
         kind: ChannelKind::Recorder,
@@ -381,6 +375,30 @@ fn options(cfg: &RecorderConfig) -> RecordingOptions {
         chunk_size: cfg.chunk_size_kib * 1024,
         frame_encoding: cfg.frame_encoding,
     }
+}
+
+/// Compresses a held frame from shared memory (or copies what is written raw), releases the
+/// sample and hands the frame to the writer; without a free pool buffer it drops the frame.
+fn pack(
+    frame: HeldFrame,
+    packer: &mut FramePacker,
+    queue: &SyncSender<Item>,
+    stats: &mut RecorderStats,
+    status: &mut StatusReporter,
+) {
+    let header = *frame.sample.user_header();
+    let Some(pixels) = packer.pack(&header, frame.sample.payload(), frame.raw_copy) else {
+        stats.frames_dropped_queue += 1;
+        status.status.dropped += 1;
+        return;
+    };
+    drop(frame.sample); // release shared memory before the (possibly slow) hand-off
+    let item = Item::Frame {
+        header,
+        pixels,
+        log_time: frame.log_time,
+    };
+    enqueue(queue, item, stats, status);
 }
 
 /// Hands an item to the writer without ever blocking the reader; a full queue drops it.
@@ -528,7 +546,6 @@ fn write_items(
 ) -> anyhow::Result<()> {
     let flush_interval = Duration::from_millis(cfg.flush_interval_ms);
     let mut disk = DiskGuard::new(rec.path(), cfg.min_free_mib);
-    let mut frames = FrameWriter::new(cfg)?;
     let mut flushed_at = Instant::now();
     let mut reported = RecorderStats::default();
     let mut last_frame = FrameHeader::default();
@@ -545,16 +562,9 @@ fn write_items(
             Some(Item::Frame {
                 header,
                 pixels,
-                raw_copy,
                 log_time,
             }) => {
-                let keep_pixels = pixels.is_some() && !disk.low;
-                if pixels.is_some() && disk.low {
-                    stats.frames_dropped_disk += 1;
-                }
-                let written = if keep_pixels { pixels.as_deref() } else { None };
-                frames
-                    .write(rec, &header, written, raw_copy, log_time, stats)
+                frames::write_frame(rec, &header, pixels, disk.low, log_time, stats, free)
                     .context("writing a frame")?;
                 stats.frames_recorded += 1;
                 last_frame = header;
@@ -562,9 +572,6 @@ fn write_items(
                     image_times.pop_front();
                 }
                 image_times.push_back((header.seq, header.capture_realtime_ns));
-                if let Some(buf) = pixels {
-                    let _ = free.try_send(buf);
-                }
             }
             Some(Item::Json {
                 kind,
@@ -626,68 +633,4 @@ fn write_items(
         &merged(&reader_stats, stats),
     )?;
     Ok(())
-}
-
-/// Writes each frame's pixels the configured way: compressed (JPEG or H.264) on `/frames` with
-/// raw copies of the frames the reader chose, or raw on `/frames`. Recording JPEG, a frame that
-/// came with the camera's own JPEG is stored as those bytes, not encoded again.
-struct FrameWriter {
-    encoder: Option<FrameEncoder>,
-}
-
-impl FrameWriter {
-    fn new(cfg: &RecorderConfig) -> anyhow::Result<FrameWriter> {
-        let encoder = match cfg.encoder_settings() {
-            Some(s) => Some(FrameEncoder::new(&s).context("starting the frame encoder")?),
-            None => None,
-        };
-        Ok(FrameWriter { encoder })
-    }
-
-    fn write(
-        &mut self,
-        rec: &mut Recording,
-        header: &FrameHeader,
-        pixels: Option<&[u8]>,
-        raw_copy: bool,
-        log_time: u64,
-        stats: &mut RecorderStats,
-    ) -> Result<(), hubtrack_record::RecordError> {
-        // The sample holds the pixels, then the camera's JPEG if the header announces one.
-        let camera_jpeg = pixels.and_then(|p| header.camera_jpeg(p));
-        let pixels = pixels.map(|p| &p[..header.payload_len().min(p.len())]);
-        let Some(encoder) = self.encoder.as_mut() else {
-            stats.bytes_written += pixels.map_or(0, |p| p.len() as u64);
-            return rec.write_frame(header, pixels, log_time);
-        };
-        let Some(px) = pixels else {
-            return rec.write_frame(header, None, log_time);
-        };
-        let encoded = match camera_jpeg {
-            Some(jpeg) if encoder.format() == EncodedFormat::Jpeg => {
-                stats.frames_camera_jpeg += 1;
-                Ok(EncodedFrame {
-                    data: jpeg.to_vec(),
-                    format: EncodedFormat::Jpeg,
-                    keyframe: true,
-                })
-            }
-            _ => encoder.encode(header, px),
-        };
-        match encoded {
-            Ok(frame) => {
-                stats.bytes_written += frame.data.len() as u64;
-                rec.write_encoded(header, frame, log_time)?;
-            }
-            Err(e) => {
-                stats.frames_encode_failed += 1;
-                log::warn!("frame not encoded, header kept: {e}");
-            }
-        }
-        if raw_copy {
-            stats.bytes_written += px.len() as u64;
-            stats.frames_raw_copies += 1;
-        }
-        rec.write_frame(header, raw_copy.then_some(px), log_time)
-    }
 }
