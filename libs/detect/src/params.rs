@@ -411,9 +411,16 @@ hubtrack_types::params! {
         /// `tower_taper · rows / w`: ~30 % at 30 m with the wide-angle camera, up to ~2x when the
         /// whole tower is in view. 0 = the tower keeps its width.
         pub tower_taper: f64 = 0.03, closed(0.0, 1.0);
-        /// When a detected blade, or the strongest blade at 120° steps, is within this of straight
-        /// down, degrees, that blade hides the tower ...
+        /// When a detected blade, the strongest blade at 120° steps, or the third blade two
+        /// detected ones about 120° apart imply is within this of straight down, degrees, that
+        /// blade hides the tower ...
         pub tower_blade_down_tol_deg: f64 = 12.0, closed(0.0, 60.0);
+        /// The third blade two detected ones imply counts only with the tracker's hub distance
+        /// at most this, m: close in, that blade hides the tower (AP `fly` seed 19 at 10 m: a
+        /// band 1.3x the tower's width read 5 m at 8.9 m); farther out a band through the hub is
+        /// often the tower below the blade's tip, and rejecting it costs the yaw (AP `fly` seed
+        /// 11 at 36 m: no yaw for 90 s with the rule at every distance). 0 = never.
+        pub tower_blade_implied_max_distance_m: f64 = 20.0, closed(0.0, 1000.0);
         /// A tower band whose axis, halfway down, lies on the ray of a blade (detected, or placed
         /// 120° or 240° from a detected one) within this of straight down, degrees, is that blade,
         /// or that blade merged with one tower edge (within `tower_blade_axis_tol_frac` of the

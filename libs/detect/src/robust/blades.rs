@@ -189,12 +189,29 @@ pub(super) fn rotor_geometry_ok(p: &DefaultParams, blades: &[Blade]) -> bool {
 /// The rotor's third blade, not seen, would point straight down (`down`, degrees from up
 /// clockwise): opposite the bisector of the two seen blades, which are about 120° apart.
 pub(super) fn hidden_blade_down(p: &DefaultParams, blades: &[Blade], down: f64) -> bool {
-    let [a, b] = [blades[0].angle_deg, blades[1].angle_deg];
-    if p.hidden_blade_tol_deg <= 0.0
-        || (geometry::ang_dist(a, b) - p.blade_target_deg).abs() > p.blade_sep_tol_deg
-    {
-        return false;
+    p.hidden_blade_tol_deg > 0.0
+        && implied_third_blade(p, blades[0].angle_deg, blades[1].angle_deg)
+            .is_some_and(|third| geometry::ang_dist(third, down) <= p.hidden_blade_tol_deg)
+}
+
+/// The direction of a rotor's third blade (degrees from up, clockwise) that two blades seen at
+/// `a` and `b` imply: opposite their bisector, when they are about 120° apart.
+pub(super) fn implied_third_blade(p: &DefaultParams, a: f64, b: f64) -> Option<f64> {
+    ((geometry::ang_dist(a, b) - p.blade_target_deg).abs() <= p.blade_sep_tol_deg)
+        .then(|| geometry::circular_mean_deg(&[a, b], None) + 180.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn two_blades_about_120_degrees_apart_imply_the_third() {
+        let p = DefaultParams::default();
+        // AP `fly` seed 19 at 10 m: blades 304° and 64° seen, the third hangs at 184°.
+        let third = implied_third_blade(&p, 304.0, 64.0).unwrap();
+        assert!(geometry::ang_dist(third, 184.0) < 1e-9, "{third}");
+        // Stray lines 172° apart imply nothing.
+        assert_eq!(implied_third_blade(&p, 268.0, 96.0), None);
     }
-    let third = geometry::circular_mean_deg(&[a, b], None) + 180.0;
-    geometry::ang_dist(third, down) <= p.hidden_blade_tol_deg
 }
