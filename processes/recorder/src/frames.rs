@@ -13,6 +13,7 @@
 //! encoding a 1080p frame reads 6 MB, and doing it while detect works on the same frame on the
 //! other core slows detect down; a frame period later the memory bus is free.
 
+use anyhow::Context;
 use hubtrack_record::config::RecorderConfig;
 use hubtrack_record::encoder::{EncodedFormat, EncodedFrame, FrameEncoder};
 use hubtrack_record::writer::RecorderStats;
@@ -90,13 +91,11 @@ pub struct FramePacker {
 impl FramePacker {
     /// A packer drawing buffers from `free` (the writer gives them back).
     pub fn new(cfg: &RecorderConfig, free: Receiver<Vec<u8>>) -> anyhow::Result<FramePacker> {
-        let encoder = match cfg.encoder_settings() {
-            Some(s) => Some(
-                FrameEncoder::new(&s)
-                    .map_err(|e| anyhow::anyhow!("starting the frame encoder: {e}"))?,
-            ),
-            None => None,
-        };
+        let encoder = cfg
+            .encoder_settings()
+            .map(|s| FrameEncoder::new(&s))
+            .transpose()
+            .context("starting the frame encoder")?;
         Ok(FramePacker {
             encoder,
             record_frames: cfg.record_frames,

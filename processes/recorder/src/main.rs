@@ -219,36 +219,35 @@ fn run() -> anyhow::Result<()> {
         }
         stats.frames_lost = frames.lost;
         let now = realtime_ns();
+        // Queues every message of one service for the writer; evaluates to the highest seq
+        // among them.
         macro_rules! drain {
-            ($sub:expr, $kind:expr, $variant:ident, $seq:expr, $pub_ns:expr) => {
+            ($sub:expr, $kind:expr, $variant:ident, $seq:expr, $pub_ns:expr) => {{
+                let mut newest: Option<u64> = None;
                 while let Some(m) = $sub.receive()? {
+                    let seq = $seq(&m);
+                    newest = newest.max(Some(seq));
                     let item = Item::Json {
                         kind: $kind,
-                        seq: $seq(&m),
+                        seq,
                         publish_ns: $pub_ns(&m),
                         log_time: now,
                         json: JsonMsg::$variant(m),
                     };
                     enqueue(&queue_tx, item, &mut stats, &mut status);
                 }
-            };
+                newest
+            }};
         }
-        while let Some(m) = detections.receive()? {
-            detected_seq = detected_seq.max(Some(m.stamps.seq));
-            let item = Item::Json {
-                kind: ChannelKind::Detection,
-                seq: m.stamps.seq,
-                publish_ns: m.stamps.publish_ns,
-                log_time: now,
-                json: JsonMsg::Detection(m),
-            };
-            enqueue(&queue_tx, item, &mut stats, &mut status);
-        }
-        if held
-            .as_ref()
-            .is_some_and(|h| h.due(detected_seq, DETECT_WAIT))
-        {
-            let due = held.take().expect("checked");
+        let newest_detection = drain!(
+            detections,
+            ChannelKind::Detection,
+            Detection,
+            |m: &Detection| m.stamps.seq,
+            |m: &Detection| m.stamps.publish_ns
+        );
+        detected_seq = detected_seq.max(newest_detection);
+        if let Some(due) = held.take_if(|h| h.due(detected_seq, DETECT_WAIT)) {
             pack(due, &mut packer, &queue_tx, &mut stats, &mut status);
         }
         drain!(

@@ -94,18 +94,20 @@ fn measure_tower(
     // 304°, 64° and 184°, the band below the hub 1.3x the tower's width); the last only close
     // in (`tower_blade_implied_max_distance_m`).
     let close_in = hub_distance_m.is_some_and(|d| d <= p.tower_blade_implied_max_distance_m);
-    let implied_down = close_in
-        && b.blades.iter().enumerate().any(|(i, x)| {
-            b.blades[i + 1..].iter().any(|y| {
-                super::blades::implied_third_blade(p, x.angle_deg, y.angle_deg)
-                    .is_some_and(near_down)
+    let implied_down = || {
+        close_in
+            && b.blades.iter().enumerate().any(|(i, x)| {
+                b.blades[i + 1..].iter().any(|y| {
+                    super::blades::implied_third_blade(p, x.angle_deg, y.angle_deg)
+                        .is_some_and(near_down)
+                })
             })
-        });
+    };
     let blade_down = b.blades.iter().any(|bl| near_down(bl.angle_deg))
         || b.blades
             .first()
             .is_some_and(|bl| (0..3).any(|k| near_down(bl.angle_deg + 120.0 * k as f64)))
-        || implied_down;
+        || implied_down();
     // Rays of blades `tower_blade_ray_min_deg`..`tower_blade_ray_tol_deg` from down: detected, or placed at 120°
     // steps from any detected blade (the first may be a stray line: `fly` seed 279 at 19 m,
     // blades 268°, 48°, 90° for a rotor at 288°, 48°, 168°).
