@@ -50,16 +50,21 @@ const RESULT_QOS: Qos = Qos {
 /// Camera frames: `[u8]` pixels with a [`crate::FrameHeader`] user header.
 ///
 /// Every subscriber buffer holds whole frames in shared memory, so the frame QoS is small: the
-/// detector keeps 1 (newest), the recorder up to `subscriber_max_buffer_size`, then copies out.
+/// detector keeps 1 (newest); the recorder, which encodes each frame straight from shared memory
+/// at a low priority, up to `subscriber_max_buffer_size` (267 ms at 30 fps: what it may fall
+/// behind in a stall of the machine without losing a frame). The camera's pool holds
+/// `max_subscribers × (buffer + borrowed) + 2` frames: 52, 322 MB of shared memory at 1920x1080.
+/// The subscribers: detect, recorder, live view, one tool (`hubtrack tap`), one spare
+/// for a stage restarting before its dead predecessor is cleaned up.
 pub const FRAMES: ServiceSpec = ServiceSpec {
     channel: "frames",
     name: "hubtrack/frames",
     event_name: "hubtrack/frames/event",
     qos: Qos {
         history_size: 0,
-        subscriber_max_buffer_size: 4,
+        subscriber_max_buffer_size: 8,
         subscriber_max_borrowed_samples: 2,
-        max_subscribers: 6,
+        max_subscribers: 5,
         max_publishers: 2,
         max_nodes: 24,
         safe_overflow: true,

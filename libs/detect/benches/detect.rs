@@ -6,8 +6,10 @@
 //! `+d` pass the tracker's distance, `+t` its predicted hub too (the detect stage's steady state).
 //! The `pipeline` row runs on the frames `hubtrack bench pipeline`'s camera plays (the first 30
 //! of the synthetic path at 30 fps, `capture.synthetic.cache_frames`) with the hints the detect
-//! stage has there (the tracker's hub and distance, no roll: no autopilot): its median is the
-//! solo figure the pipeline's detect median compares with.
+//! stage has there (the tracker's hub and distance, no roll: no autopilot), with the default
+//! detect config. `hubtrack bench pipeline` compares the detect stage with `hubtrack bench
+//! detect-alone` instead, which runs these frames with the stage's whole config (lens and
+//! turbine included), paced and pinned like the stage, in the same sitting.
 
 use std::time::Instant;
 

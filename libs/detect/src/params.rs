@@ -508,6 +508,11 @@ hubtrack_types::params! {
         pub spinner_min_radius_px: f64 = 4.0, closed(1.0, 1000.0);
         /// Spinner step: largest circle radius searched, fraction of image height.
         pub spinner_max_radius_frac: f64 = 0.32, closed(0.01, 1.0);
+        /// ... and with the tracker's distance, when the radius it expects asks for more: a
+        /// narrow lens at the approach's end sees the spinner larger than that (a 3.6 m spinner
+        /// at 5 m is 0.33 of the height through a 100° lens at 16:9, 0.5–0.7 through a 60° one),
+        /// its rim then partly outside the frame.
+        pub spinner_hint_max_radius_frac: f64 = 0.75, closed(0.01, 2.0);
         /// Spinner step with the tracker's distance: only radii from this times the radius expected
         /// at that distance (`detect.camera.spinner_diameter_m`) are searched, within the two
         /// limits above. The window allows the distance to be off by a factor of two either way

@@ -31,6 +31,28 @@ pub(crate) struct CircleSearch {
     pub max_peaks: usize,
     /// Every this-many-th point votes for centres (at least 1); all of them count on the rims.
     pub vote_every: usize,
+    /// The image's size `[w, h]` (working px) when a rim's coverage is to count only its part
+    /// inside the image, no less than [`MIN_VISIBLE_RIM`] of it: close in the spinner overflows
+    /// the frame, and its rim outside cannot have edges. Only where its size is known (the
+    /// tracker's distance): a small arc in a corner must not pass for a whole spinner.
+    pub visible_in: Option<[f64; 2]>,
+}
+
+/// The least share of a rim counted as its visible part (see [`CircleSearch::visible_in`]).
+pub(crate) const MIN_VISIBLE_RIM: f64 = 0.5;
+/// Points along a rim sampled for its visible share.
+const VISIBLE_RIM_SAMPLES: usize = 64;
+
+/// The share of the circle `(c, r)` inside `[0, w) × [0, h)`, at least [`MIN_VISIBLE_RIM`].
+fn visible_rim(c: P2, r: f64, [w, h]: [f64; 2]) -> f64 {
+    let inside = (0..VISIBLE_RIM_SAMPLES)
+        .filter(|k| {
+            let a = *k as f64 * std::f64::consts::TAU / VISIBLE_RIM_SAMPLES as f64;
+            let (x, y) = (c[0] + r * a.cos(), c[1] + r * a.sin());
+            (0.0..w).contains(&x) && (0.0..h).contains(&y)
+        })
+        .count();
+    (inside as f64 / VISIBLE_RIM_SAMPLES as f64).max(MIN_VISIBLE_RIM)
 }
 
 /// The interior whose edge density is limited, fraction of the radius (the nose highlight and
@@ -235,7 +257,10 @@ fn rim(points: &[EdgePoint], sorted: bool, c: P2, cs: &CircleSearch) -> Option<[
     let (mut best_r, mut best_cov) = (0.0, 0.0);
     for r in (cs.min_r.ceil() as usize)..=(cs.max_r.floor() as usize).min(nb - 2) {
         let n = hist[r - 1] + hist[r] + hist[r + 1];
-        let cov = n as f64 / (2.0 * std::f64::consts::PI * r as f64);
+        let seen = cs
+            .visible_in
+            .map_or(1.0, |size| visible_rim(c, r as f64, size));
+        let cov = n as f64 / (2.0 * std::f64::consts::PI * r as f64 * seen);
         if cov > best_cov {
             (best_r, best_cov) = (r as f64, cov);
         }
@@ -566,6 +591,7 @@ mod tests {
             max_interior_density: 0.05,
             max_peaks: 3,
             vote_every: 1,
+            visible_in: None,
         }
     }
 
@@ -593,6 +619,42 @@ mod tests {
             },
         );
         assert_eq!(half.first(), Some(&f), "{half:?}");
+    }
+
+    #[test]
+    fn a_rim_overflowing_the_image_is_covered_over_its_visible_part() {
+        // Centre 20 px above the bottom of a 120 px image, radius 40: the rim below the image
+        // (a third of it) cannot have edges; blades hide half of the rest. 120° of edges: a
+        // third of the whole rim (below `min_coverage` 0.4), half of the visible part.
+        let (c, r) = ([60.0, 100.0], 40.0);
+        let pts = rim_points(c, r, &[(160.0, 220.0), (260.0, 320.0)]);
+        assert!(pts.iter().all(|e| e.p[1] < 120.0));
+        let cs = CircleSearch {
+            max_r: 45.0,
+            ..search()
+        };
+        assert!(find_circles(&pts, &cs)
+            .iter()
+            .all(|f| (f[2] - r).abs() > 2.0));
+        let seen = find_circles(
+            &pts,
+            &CircleSearch {
+                visible_in: Some([120.0, 120.0]),
+                ..cs
+            },
+        );
+        let f = seen.first().expect("found on its visible part");
+        assert!(crate::geometry::dist([f[0], f[1]], c) < 1.5, "{f:?}");
+        assert!(
+            (f[2] - r).abs() < 1.5 && (0.4..0.6).contains(&f[3]),
+            "{f:?}"
+        );
+        // The visible share is bounded below: an arc in a corner stays a small part of a rim.
+        assert_eq!(
+            visible_rim([0.0, 0.0], 50.0, [120.0, 120.0]),
+            MIN_VISIBLE_RIM
+        );
+        assert!((visible_rim(c, r, [120.0, 120.0]) - 2.0 / 3.0).abs() < 0.03);
     }
 
     #[test]

@@ -56,6 +56,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 settings(Codec::JpegRust, 65, 0, fps),
             ),
             (
+                "turbojpeg q50".to_string(),
+                settings(Codec::Jpeg, 50, 0, fps),
+            ),
+            (
+                "turbojpeg q55".to_string(),
+                settings(Codec::Jpeg, 55, 0, fps),
+            ),
+            (
+                "turbojpeg q60".to_string(),
+                settings(Codec::Jpeg, 60, 0, fps),
+            ),
+            (
                 "turbojpeg q65".to_string(),
                 settings(Codec::Jpeg, 65, 0, fps),
             ),

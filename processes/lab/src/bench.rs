@@ -291,6 +291,12 @@ const SYNTHETIC_CAMERA_NICE: i32 = 10;
 /// Frames the benchmark's camera renders and then plays in a loop (one second at 30 fps; 190 MB
 /// at 1920x1080), unless `--render-every-frame`.
 const BENCH_CAMERA_CACHED_FRAMES: u32 = 30;
+/// Linux's clock tick for the CPU times in /proc (USER_HZ).
+const USER_HZ: f64 = 100.0;
+/// The detect stage's process name in /proc (`comm`, 15 characters).
+const DETECT_PROCESS: &str = "hubtrack-detect";
+/// Longest solo detect measurement around each pipeline run (a third of the run otherwise).
+const DETECT_ALONE_MAX_SECONDS: f64 = 20.0;
 
 /// Arguments of `hubtrack bench pipeline`.
 #[derive(clap::Args)]
@@ -301,6 +307,11 @@ pub struct PipelineBenchArgs {
     /// Only the 1920x1080 at 30 fps configuration (skip 640x480 at 60 fps).
     #[arg(long)]
     pub only_hd: bool,
+    /// Pipeline runs per configuration, each followed by detect alone on the same frames; the
+    /// comparison's median over rounds is printed (this machine's pace moves by a quarter from
+    /// one minute to the next: more rounds, steadier figure).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub rounds: u32,
     /// CPU list to pin the pipeline to (taskset syntax).
     #[arg(long, default_value = "0,1")]
     pub cpus: String,
@@ -313,6 +324,181 @@ pub struct PipelineBenchArgs {
     /// `--set recorder.compression="none"` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+}
+
+/// Arguments of `hubtrack bench detect-alone`.
+#[derive(clap::Args)]
+pub struct DetectAloneArgs {
+    /// Lens / frame size: gopro (1920x1080) or usb (640x480).
+    #[arg(long, default_value = "gopro", value_parser = ["gopro", "usb"])]
+    pub camera: String,
+    /// Frame rate the detector is paced at (as the camera paces the detect stage).
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f64,
+    /// Seconds of detection, after one warm-up pass over the frames.
+    #[arg(long, default_value_t = 20.0, value_parser = hubtrack_runtime::cli::seconds)]
+    pub seconds: f64,
+    /// One JSON object instead of the table line.
+    #[arg(long)]
+    pub json: bool,
+    /// Override one key of the config, after the benchmark camera's, as for the pipeline
+    /// (`bench pipeline` passes its own `--set` on; repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+/// Detect alone: its time per frame on the frames the pipeline benchmark's camera plays.
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
+pub struct DetectAlone {
+    /// Median, ms.
+    pub p50_ms: f64,
+    /// 90th percentile, ms.
+    pub p90_ms: f64,
+    /// CPU time of the process per frame, ms (all its threads; on a virtual machine without
+    /// the time its virtual CPUs were stolen by the host, which the wall clock includes).
+    pub cpu_ms_per_frame: f64,
+    /// Frames timed.
+    pub frames: usize,
+}
+
+/// The config overrides that make `hubtrack run` (and the solo detector) use the benchmark's
+/// camera: the same lens, rate and looped frames.
+fn bench_camera_overrides(camera: &str, fps: f64, cached_frames: u32) -> Vec<String> {
+    vec![
+        format!("capture.synthetic.camera={camera}"),
+        format!("capture.fps={fps}"),
+        format!("capture.synthetic.cache_frames={cached_frames}"),
+    ]
+}
+
+/// `hubtrack bench detect-alone`: the detector with the detect stage's config on the frames the
+/// pipeline benchmark's camera plays, paced at the camera's rate, with the hints the stage has
+/// there (the tracker's hub and distance, here the truth; no roll: no autopilot). The solo
+/// figure that detect's time inside the pipeline compares with; `bench pipeline` runs it pinned
+/// to the same cores before and after each configuration.
+pub fn detect_alone(args: DetectAloneArgs) -> anyhow::Result<()> {
+    let r = detect_alone_measure(&args)?;
+    if args.json {
+        println!("{}", serde_json::to_string(&r)?);
+    } else {
+        println!(
+            "detect alone: {} at {} fps, {} frames: p50 {:.2} ms, p90 {:.2} ms, CPU {:.2} ms per frame",
+            args.camera, args.fps, r.frames, r.p50_ms, r.p90_ms, r.cpu_ms_per_frame
+        );
+    }
+    Ok(())
+}
+
+fn detect_alone_measure(args: &DetectAloneArgs) -> anyhow::Result<DetectAlone> {
+    use hubtrack_detect::{Detector, Hints, ImageView};
+    // The pipeline's camera overrides first, as `bench pipeline` gives them to `hubtrack run`.
+    let mut overrides = bench_camera_overrides(&args.camera, args.fps, BENCH_CAMERA_CACHED_FRAMES);
+    overrides.extend(args.set.iter().cloned());
+    let config = crate::config::load(&hubtrack_runtime::config::ConfigArgs {
+        overrides,
+        ..Default::default()
+    })?;
+    let mut source = SyntheticSource::new(&config.capture.synthetic, args.fps)?;
+    let (width, height) = source.size();
+    let bytes = width as usize * height as usize * 3;
+    let mut frames = Vec::new();
+    for index in 0..u64::from(BENCH_CAMERA_CACHED_FRAMES) {
+        let mut pixels = vec![0u8; bytes];
+        let truth = source.render_index(index, &mut pixels)?;
+        let hints = Hints {
+            roll_rad: None,
+            predicted_hub_px: truth.hub_px.filter(|_| truth.turbine_in_view),
+            hub_distance_m: Some(truth.distance_m),
+        };
+        frames.push((pixels, hints));
+    }
+    let mut detector = Detector::new(config.detect.clone())?;
+    let period = Duration::from_secs_f64(1.0 / args.fps);
+    let warm_up = frames.len();
+    let total = warm_up + (args.seconds * args.fps).ceil() as usize;
+    let mut ms = Vec::with_capacity(total);
+    let mut cpu_ticks_at_warm = None;
+    let start = Instant::now();
+    for (i, (pixels, hints)) in frames.iter().cycle().take(total).enumerate() {
+        if i == warm_up {
+            cpu_ticks_at_warm = proc_sample(std::process::id()).map(|s| s.cpu_ticks);
+        }
+        if let Some(wait) = (start + period * i as u32).checked_duration_since(Instant::now()) {
+            std::thread::sleep(wait);
+        }
+        let image = ImageView {
+            width,
+            height,
+            stride: width as usize * 3,
+            format: hubtrack_types::PixelFormat::Bgr8,
+            data: pixels,
+        };
+        let t = Instant::now();
+        detector.detect(&image, hints)?;
+        if i >= warm_up {
+            ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    let cpu_ticks = cpu_ticks_at_warm
+        .zip(proc_sample(std::process::id()))
+        .map_or(0, |(t0, s)| s.cpu_ticks.saturating_sub(t0));
+    ms.sort_by(f64::total_cmp);
+    let at = |q: f64| ms[((ms.len() - 1) as f64 * q).round() as usize];
+    Ok(DetectAlone {
+        p50_ms: at(0.5),
+        p90_ms: at(0.9),
+        cpu_ms_per_frame: cpu_ticks as f64 * 1e3 / USER_HZ / ms.len() as f64,
+        frames: ms.len(),
+    })
+}
+
+/// Runs `hubtrack bench detect-alone` pinned to `cpus` (a child, so that the pinning and the
+/// detector's threads are exactly the detect stage's).
+fn detect_alone_pinned(
+    taskset: Option<&str>,
+    bench: &PipelineBenchArgs,
+    camera: &str,
+    fps: f64,
+    seconds: f64,
+) -> anyhow::Result<DetectAlone> {
+    let lab = std::env::current_exe()?;
+    let sets = bench
+        .set
+        .iter()
+        .flat_map(|kv| ["--set".to_string(), kv.clone()]);
+    let args = [
+        "bench".to_string(),
+        "detect-alone".into(),
+        "--camera".into(),
+        camera.into(),
+        "--fps".into(),
+        fps.to_string(),
+        "--seconds".into(),
+        seconds.to_string(),
+        "--json".into(),
+    ]
+    .into_iter()
+    .chain(sets);
+    let mut cmd = match taskset {
+        Some(ts) => {
+            let mut c = Command::new(ts);
+            c.arg("-c").arg(&bench.cpus).arg(&lab);
+            c
+        }
+        None => Command::new(&lab),
+    };
+    let out = cmd
+        .args(args)
+        .stderr(Stdio::inherit())
+        .output()
+        .context("running bench detect-alone")?;
+    anyhow::ensure!(
+        out.status.success(),
+        "bench detect-alone failed: {}",
+        out.status
+    );
+    let line = String::from_utf8_lossy(&out.stdout);
+    serde_json::from_str(line.trim()).context("reading bench detect-alone's result")
 }
 
 /// CPU time and peak memory of one process, from /proc.
@@ -371,15 +557,87 @@ pub fn pipeline(args: PipelineBenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// One configuration: `--rounds` pipeline runs, detect alone on the same frames and cores
+/// before the first and after each (the machine's pace drifts: each run is compared with the
+/// solo runs on either side of it), then detect's median inside the pipeline against alone.
 fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Result<()> {
+    let taskset = ["/usr/bin/taskset", "/bin/taskset"]
+        .into_iter()
+        .find(|p| Path::new(p).exists());
+    let solo_seconds = (args.seconds / 3.0).clamp(5.0, DETECT_ALONE_MAX_SECONDS);
+    let alone = |when: &str| {
+        eprintln!("[bench] detect alone on the same frames for {solo_seconds:.0} s ({when}) ...");
+        detect_alone_pinned(taskset, args, camera, fps, solo_seconds)
+    };
+    let mut before = alone("before round 1")?;
+    let (mut wall_ratios, mut cpu_ratios) = (Vec::new(), Vec::new());
+    let mut rows = Vec::new();
+    for round in 1..=args.rounds {
+        let last = round == args.rounds;
+        let inside = pipeline_round(args, camera, fps, taskset, last)?;
+        let after = alone(&format!("after round {round}"))?;
+        let wall = inside.p50_ms / ((before.p50_ms + after.p50_ms) / 2.0);
+        let cpu =
+            inside.cpu_ms_per_frame / ((before.cpu_ms_per_frame + after.cpu_ms_per_frame) / 2.0);
+        wall_ratios.extend(Some(wall).filter(|r| r.is_finite()));
+        cpu_ratios.extend(Some(cpu).filter(|r| r.is_finite()));
+        rows.push((round, inside, before, after, wall, cpu));
+        before = after;
+    }
+    println!(
+        "\ndetect, {camera} at {fps} fps: in the pipeline against alone (same frames, config, hints, pace and cores; `hubtrack bench detect-alone`); wall = median time per frame, CPU = the process's CPU time per frame"
+    );
+    println!(
+        "  {:<7}{:>17}{:>18}{:>18}{:>11}{:>11}",
+        "round", "pipeline wall/CPU", "alone before", "alone after", "wall", "CPU"
+    );
+    let pair = |w: f64, c: f64| format!("{w:.2} / {c:.2} ms");
+    for (round, inside, b, a, wall, cpu) in rows {
+        println!(
+            "  {round:<7}{:>17}{:>18}{:>18}{:>+10.0}%{:>+10.0}%",
+            pair(inside.p50_ms, inside.cpu_ms_per_frame),
+            pair(b.p50_ms, b.cpu_ms_per_frame),
+            pair(a.p50_ms, a.cpu_ms_per_frame),
+            (wall - 1.0) * 100.0,
+            (cpu - 1.0) * 100.0
+        );
+    }
+    if let (Some(wall), Some(cpu)) = (median(&mut wall_ratios), median(&mut cpu_ratios)) {
+        println!(
+            "  median over {} round(s): pipeline against alone, wall {:+.0} %, CPU {:+.0} %",
+            wall_ratios.len(),
+            (wall - 1.0) * 100.0,
+            (cpu - 1.0) * 100.0
+        );
+    }
+    Ok(())
+}
+
+/// The median (the mean of the middle two of an even count); `None` when empty.
+fn median(v: &mut [f64]) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(v[n / 2]),
+        _ => Some((v[n / 2 - 1] + v[n / 2]) / 2.0),
+    }
+}
+
+/// One pipeline run of one configuration, its table printed; returns detect's time inside the
+/// pipeline (NaN without detections).
+fn pipeline_round(
+    args: &PipelineBenchArgs,
+    camera: &str,
+    fps: f64,
+    taskset: Option<&str>,
+    with_socket_baseline: bool,
+) -> anyhow::Result<DetectInside> {
     let domain = format!("bench-pipe-{}", std::process::id());
     let dir = std::env::temp_dir().join(&domain);
     std::fs::create_dir_all(&dir)?;
     let rec = dir.join("pipeline.mcap");
     let exe = flight_binary()?;
-    let taskset = ["/usr/bin/taskset", "/bin/taskset"]
-        .into_iter()
-        .find(|p| Path::new(p).exists());
     let run_args: Vec<String> = vec![
         "run".into(),
         "--record".into(),
@@ -392,30 +650,23 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
         // on a port the OS picks, so it cannot collide with a live pipeline's autopilot link.
         "--set".into(),
         format!("control.link=\"{BENCH_CONTROL_LINK}\""),
-        "--set".into(),
-        format!("capture.synthetic.camera={camera}"),
-        "--set".into(),
-        format!("capture.fps={fps}"),
-        // The synthetic camera renders every frame in software (about 60 % of a core at
-        // 1920x1080, 30 fps), work a real camera does in hardware. It runs at the recorder's
-        // niceness: it loads the machine without standing in front of the flight stages.
+        // The synthetic camera renders frames in software, work a real camera does in
+        // hardware. It runs at the recorder's niceness: it loads the machine without standing
+        // in front of the flight stages.
         "--set".into(),
         format!("run.nice.capture={SYNTHETIC_CAMERA_NICE}"),
-        "--set".into(),
-        format!(
-            "capture.synthetic.cache_frames={}",
-            if args.render_every_frame {
-                0
-            } else {
-                BENCH_CAMERA_CACHED_FRAMES
-            }
-        ),
     ];
+    let cached = if args.render_every_frame {
+        0
+    } else {
+        BENCH_CAMERA_CACHED_FRAMES
+    };
     let run_args: Vec<String> = run_args
         .into_iter()
         .chain(
-            args.set
+            bench_camera_overrides(camera, fps, cached)
                 .iter()
+                .chain(&args.set)
                 .flat_map(|kv| ["--set".to_string(), kv.clone()]),
         )
         .collect();
@@ -492,20 +743,27 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
     }
     // The copying baseline: the same frames at the same rate over a Unix socket, alone after
     // the run, so that neither measurement loads the other.
-    eprintln!(
-        "[bench] Unix-socket copy of the same frames for {:.0} s ...",
-        (args.seconds - 3.0).max(1.0)
-    );
-    let uds = socket_hop(&frame, fps, (args.seconds - 3.0).max(1.0))?;
-    let tick = 100.0; // USER_HZ on Linux
+    let uds = if with_socket_baseline {
+        eprintln!(
+            "[bench] Unix-socket copy of the same frames for {:.0} s ...",
+            (args.seconds - 3.0).max(1.0)
+        );
+        Some(socket_hop(&frame, fps, (args.seconds - 3.0).max(1.0))?)
+    } else {
+        None
+    };
     let mut per_name: BTreeMap<String, (f64, u64)> = BTreeMap::new();
+    let mut detect_cpu_s = 0.0;
     for (pid, (name, s0, t0)) in &first {
         if let Some((s1, t1)) = last.get(pid) {
             let secs = t1.duration_since(*t0).as_secs_f64().max(1e-3);
-            let cpu = (s1.cpu_ticks - s0.cpu_ticks) as f64 / tick / secs * 100.0;
+            let cpu_s = (s1.cpu_ticks - s0.cpu_ticks) as f64 / USER_HZ;
             let e = per_name.entry(name.clone()).or_insert((0.0, 0));
-            e.0 += cpu;
+            e.0 += cpu_s / secs * 100.0;
             e.1 = e.1.max(s1.peak_rss_kb);
+            if name == DETECT_PROCESS {
+                detect_cpu_s += cpu_s;
+            }
         }
     }
     let report = hubtrack_record::latency::analyze(&rec)?;
@@ -536,9 +794,12 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
         }
     }
     println!("  flight stages (all but the synthetic camera): {flight:.1} % of one core");
-    let mut l = uds.latency_us.clone();
-    let (u50, u99, _) = percentiles(&mut l);
-    if let Some(hop) = report.hops.iter().find(|h| h.name == "capture->detect") {
+    if let (Some(uds), Some(hop)) = (
+        &uds,
+        report.hops.iter().find(|h| h.name == "capture->detect"),
+    ) {
+        let mut l = uds.latency_us.clone();
+        let (u50, u99, _) = percentiles(&mut l);
         println!(
             "frames hop capture->detect: iceoryx2 p50 {:.0} us, p99 {:.0} us | Unix-socket copy (after the run): p50 {:.0} us, p99 {:.0} us | ratio p50 {:.1}x",
             hop.p50_us, hop.p99_us, u50, u99, u50 / hop.p50_us
@@ -565,7 +826,19 @@ fn pipeline_one(args: &PipelineBenchArgs, camera: &str, fps: f64) -> anyhow::Res
     }
     let _ = std::fs::remove_file(&rec);
     let _ = std::fs::remove_dir(&dir);
-    Ok(())
+    let detect = report.stages.iter().find(|s| s.name == "detect");
+    Ok(DetectInside {
+        p50_ms: detect.map_or(f64::NAN, |s| s.p50_us / 1e3),
+        cpu_ms_per_frame: detect.map_or(f64::NAN, |s| detect_cpu_s * 1e3 / s.count as f64),
+    })
+}
+
+/// Detect's time inside one pipeline run.
+struct DetectInside {
+    /// Median time in the stage (receive to publish), ms.
+    p50_ms: f64,
+    /// CPU time of the detect process over the run per frame it detected, ms.
+    cpu_ms_per_frame: f64,
 }
 
 /// The flight command `hubtrack` beside this binary: the benchmarks drive it as an operator would.
@@ -577,4 +850,18 @@ fn flight_binary() -> anyhow::Result<std::path::PathBuf> {
         exe.display()
     );
     Ok(exe)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&mut []), None);
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), Some(2.0));
+        // Two rounds, -5 % and +37 %: their mean, not the upper one.
+        let two = median(&mut [1.37, 0.95]).unwrap();
+        assert!((two - 1.16).abs() < 1e-12, "{two}");
+    }
 }

@@ -74,6 +74,9 @@ enum BenchCommand {
     Frames(bench::FramesBenchArgs),
     /// The whole pipeline pinned to 2 cores with the recorder on: latency, CPU and memory per process.
     Pipeline(bench::PipelineBenchArgs),
+    /// Detect alone on the pipeline benchmark's frames, paced at the camera's rate: the solo
+    /// figure for detect's time inside the pipeline.
+    DetectAlone(bench::DetectAloneArgs),
 }
 
 #[derive(clap::Args)]
@@ -101,6 +104,7 @@ fn main() {
         Command::Fly(a) => fly::run(a),
         Command::Bench(BenchCommand::Frames(a)) => bench::frames(a),
         Command::Bench(BenchCommand::Pipeline(a)) => bench::pipeline(a),
+        Command::Bench(BenchCommand::DetectAlone(a)) => bench::detect_alone(a),
         Command::Dataset(a) => dataset::run(a),
         Command::TrainRanker(a) => train_ranker::run(a),
         Command::Render(a) => render(a),

@@ -107,7 +107,11 @@ pub(super) fn search_circles(
     let FrameCtx { p, h, .. } = *f;
     let (min_r, max_r) = spinner_radii(p, h, expected);
     let off = p.spinner_max_offset_frac * h;
-    let half = (p.spinner_search_frac * h).min(off + max_r + p.spinner_cell_px);
+    // The box holds the rim of a circle of the largest radius centred on the candidate (a
+    // larger one than `spinner_search_frac` only close in, with a tracker's distance).
+    let half = (p.spinner_search_frac * h)
+        .max(max_r + p.spinner_cell_px)
+        .min(off + max_r + p.spinner_cell_px);
     let (cols, rows) = (img.width as i32, img.height as i32);
     let x0 = ((c[0] - half).floor() as i32).clamp(0, cols);
     let y0 = ((c[1] - half).floor() as i32).clamp(0, rows);
@@ -140,6 +144,7 @@ pub(super) fn search_circles(
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: p.spinner_peaks as usize,
         vote_every: p.spinner_vote_every as usize,
+        visible_in: expected.map(|_| [cols as f64, rows as f64]),
     };
     find_circles(pts, &cs)
 }
@@ -246,6 +251,7 @@ fn search_close_circles(
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: p.close_spinner_peaks as usize,
         vote_every: p.close_spinner_vote_every as usize,
+        visible_in: expected.map(|_| [img.width as f64, img.height as f64]),
     };
     find_circles(pts, &cs)
 }
@@ -259,16 +265,20 @@ fn close_spinner_radii(p: &DefaultParams, h: f64, expected: Option<f64>) -> (f64
 }
 
 /// Radii `[min, max]` the spinner step searches (working px): the configured limits, narrowed
-/// to the `spinner_hint_radius_*` window around an `expected` radius. An empty range (min ≥ max)
-/// means the expected spinner is too small or too large to search for.
+/// to the `spinner_hint_radius_*` window around an `expected` radius (whose upper limit is
+/// `spinner_hint_max_radius_frac`: close in through a narrow lens the spinner is larger than
+/// `spinner_max_radius_frac`). An empty range (min ≥ max) means the expected spinner is too
+/// small or too large to search for.
 pub(super) fn spinner_radii(p: &DefaultParams, h: f64, expected: Option<f64>) -> (f64, f64) {
-    let (lo, hi) = (p.spinner_min_radius_px, p.spinner_max_radius_frac * h);
+    let lo = p.spinner_min_radius_px;
     match expected.filter(|r| p.spinner_hint_radius_lo > 0.0 && r.is_finite() && *r > 0.0) {
         Some(r) => (
             lo.max(p.spinner_hint_radius_lo * r),
-            hi.min(p.spinner_hint_radius_hi * r),
+            (p.spinner_hint_max_radius_frac * h)
+                .max(p.spinner_max_radius_frac * h)
+                .min(p.spinner_hint_radius_hi * r),
         ),
-        None => (lo, hi),
+        None => (lo, p.spinner_max_radius_frac * h),
     }
 }
 

@@ -544,6 +544,11 @@ fn tracker_distance_narrows_the_spinner_radii() {
     );
     // Expected 20 px: 10..40 px, inside the configured limits.
     assert_eq!(spinner_radii(&p, 270.0, Some(20.0)), (10.0, 40.0));
+    // Close in (expected 0.4 h): beyond the blind limit, up to `spinner_hint_max_radius_frac`.
+    assert_eq!(
+        spinner_radii(&p, 270.0, Some(108.0)),
+        (54.0, p.spinner_hint_max_radius_frac * 270.0)
+    );
     // Far away (expected 3 px): clipped to the limits, and empty: nothing to search.
     let (lo, hi) = spinner_radii(&p, 270.0, Some(1.5));
     assert!(lo >= hi, "{lo} {hi}");
@@ -562,32 +567,66 @@ fn tracker_distance_narrows_the_spinner_radii() {
     );
 }
 
+/// The edge and gradient maps of an image, owned (an [`EdgeImage`] borrows them).
+struct EdgeMaps {
+    edges: Vec<u8>,
+    dx: Vec<i16>,
+    dy: Vec<i16>,
+    width: usize,
+    height: usize,
+}
+
+impl EdgeMaps {
+    fn image(&self) -> EdgeImage<'_> {
+        EdgeImage {
+            edges: &self.edges,
+            dx: &self.dx,
+            dy: &self.dy,
+            width: self.width,
+            height: self.height,
+        }
+    }
+}
+
+/// The edge maps of a `[w, h]` image holding the arc of the circle `(c, r)` from `from_deg`
+/// over `span_deg` (points every `step_deg`, radial gradients), where it lies inside the image.
+fn rim_edge_maps(
+    [w, h]: [usize; 2],
+    c: [f64; 2],
+    r: f64,
+    (from_deg, span_deg): (f64, f64),
+    step_deg: f64,
+) -> EdgeMaps {
+    let (mut edges, mut dx, mut dy) = (vec![0u8; w * h], vec![0i16; w * h], vec![0i16; w * h]);
+    let mut a = from_deg;
+    while a < from_deg + span_deg {
+        let (s, co) = a.to_radians().sin_cos();
+        let (x, y) = (c[0] + r * co, c[1] + r * s);
+        if (0.0..w as f64 - 0.5).contains(&x) && (0.0..h as f64 - 0.5).contains(&y) {
+            let i = y.round() as usize * w + x.round() as usize;
+            edges[i] = 255;
+            dx[i] = (200.0 * co).round() as i16;
+            dy[i] = (200.0 * s).round() as i16;
+        }
+        a += step_deg;
+    }
+    EdgeMaps {
+        edges,
+        dx,
+        dy,
+        width: w,
+        height: h,
+    }
+}
+
 #[test]
 fn a_spinner_rim_partly_seen_is_enough_at_the_expected_size() {
     // 30 % of a spinner's rim in the edges (the rest grey on grey blades): below
     // `spinner_min_coverage`, above `spinner_hint_min_coverage`.
     let p = DefaultParams::default();
     let (w, h, c, r) = (480usize, 270usize, [240.0, 135.0], 40.0);
-    let (mut edges, mut dx, mut dy) = (vec![0u8; w * h], vec![0i16; w * h], vec![0i16; w * h]);
-    let mut a = 200.0f64;
-    while a < 200.0 + 0.3 * 360.0 {
-        let (s, co) = a.to_radians().sin_cos();
-        let (x, y) = (
-            (c[0] + r * co).round() as usize,
-            (c[1] + r * s).round() as usize,
-        );
-        edges[y * w + x] = 255;
-        dx[y * w + x] = (200.0 * co).round() as i16;
-        dy[y * w + x] = (200.0 * s).round() as i16;
-        a += 0.25;
-    }
-    let img = EdgeImage {
-        edges: &edges,
-        dx: &dx,
-        dy: &dy,
-        width: w,
-        height: h,
-    };
+    let maps = rim_edge_maps([w, h], c, r, (200.0, 0.3 * 360.0), 0.25);
+    let img = maps.image();
     assert!(p.spinner_hint_min_coverage < 0.3 && 0.3 < p.spinner_min_coverage);
     let blind = search_circles(
         &frame(&p, w as f64, h as f64),
@@ -630,6 +669,29 @@ fn a_spinner_rim_partly_seen_is_enough_at_the_expected_size() {
             Some(&all)
         ),
         hinted
+    );
+}
+
+#[test]
+fn a_spinner_larger_than_the_blind_limit_is_found_at_the_expected_size() {
+    // Close in through a narrow lens: a spinner of radius 0.45 h, the top and bottom of its rim
+    // outside the frame. Beyond `spinner_max_radius_frac` blind; found with the tracker's
+    // expected radius (up to `spinner_hint_max_radius_frac`).
+    let p = DefaultParams::default();
+    let (w, h) = (480usize, 270usize);
+    let (c, r) = ([240.0, 135.0], 0.45 * h as f64);
+    assert!(r > p.spinner_max_radius_frac * h as f64);
+    assert!(r < p.spinner_hint_max_radius_frac * h as f64);
+    let maps = rim_edge_maps([w, h], c, r, (0.0, 360.0), 0.1);
+    let img = maps.image();
+    let f = frame(&p, w as f64, h as f64);
+    let blind = search_circles(&f, &img, c, None, &mut Vec::new(), None);
+    assert!(blind.iter().all(|k| (k[2] - r).abs() > 5.0), "{blind:?}");
+    let hinted = search_circles(&f, &img, c, Some(r * 0.9), &mut Vec::new(), None);
+    let k = hinted.first().expect("found with the expected radius");
+    assert!(
+        geometry::dist([k[0], k[1]], c) < 2.0 && (k[2] - r).abs() < 2.0,
+        "{k:?}"
     );
 }
 
