@@ -100,8 +100,10 @@ class GroundStation:
         self.mavutil = mavutil
         # SITL opens its TCP ports a moment after it starts (longer on a loaded machine).
         wait_until(self.port_open, timeout=60, interval=0.2, what="SITL's SERIAL1 (TCP 5762)")
+        # When the autopilot restarts, the link reconnects for as long as the first connection may
+        # wait (pymavlink's default gives up after 3 s, shorter than a restart on a loaded machine).
         self.m = mavutil.mavlink_connection("tcp:127.0.0.1:5762", source_system=255, source_component=190,
-                                            autoreconnect=True)
+                                            autoreconnect=True, retries=60, reconnect_delay=1)
         self.last = {}
         self.texts = []
         # The pilot's throttle stick: centred once airborne (in LOITER a low stick descends).

@@ -45,14 +45,29 @@ const VISIBLE_RIM_SAMPLES: usize = 64;
 
 /// The share of the circle `(c, r)` inside `[0, w) × [0, h)`, at least [`MIN_VISIBLE_RIM`].
 fn visible_rim(c: P2, r: f64, [w, h]: [f64; 2]) -> f64 {
-    let inside = (0..VISIBLE_RIM_SAMPLES)
-        .filter(|k| {
-            let a = *k as f64 * std::f64::consts::TAU / VISIBLE_RIM_SAMPLES as f64;
-            let (x, y) = (c[0] + r * a.cos(), c[1] + r * a.sin());
+    // Most circles lie wholly inside: no sampling.
+    if c[0] - r >= 0.0 && c[0] + r < w && c[1] - r >= 0.0 && c[1] + r < h {
+        return 1.0;
+    }
+    let inside = rim_directions()
+        .iter()
+        .filter(|u| {
+            let (x, y) = (c[0] + r * u[0], c[1] + r * u[1]);
             (0.0..w).contains(&x) && (0.0..h).contains(&y)
         })
         .count();
     (inside as f64 / VISIBLE_RIM_SAMPLES as f64).max(MIN_VISIBLE_RIM)
+}
+
+/// The unit directions of the [`VISIBLE_RIM_SAMPLES`] rim samples, computed once.
+fn rim_directions() -> &'static [P2; VISIBLE_RIM_SAMPLES] {
+    static DIRECTIONS: std::sync::OnceLock<[P2; VISIBLE_RIM_SAMPLES]> = std::sync::OnceLock::new();
+    DIRECTIONS.get_or_init(|| {
+        std::array::from_fn(|k| {
+            let a = k as f64 * std::f64::consts::TAU / VISIBLE_RIM_SAMPLES as f64;
+            [a.cos(), a.sin()]
+        })
+    })
 }
 
 /// The interior whose edge density is limited, fraction of the radius (the nose highlight and
@@ -655,6 +670,7 @@ mod tests {
             MIN_VISIBLE_RIM
         );
         assert!((visible_rim(c, r, [120.0, 120.0]) - 2.0 / 3.0).abs() < 0.03);
+        assert_eq!(visible_rim([60.0, 60.0], 30.0, [120.0, 120.0]), 1.0);
     }
 
     #[test]
