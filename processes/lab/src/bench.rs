@@ -36,8 +36,12 @@ fn percentiles(v: &mut [f64]) -> (f64, f64, f64) {
         return (f64::NAN, f64::NAN, f64::NAN);
     }
     v.sort_by(|a, b| a.total_cmp(b));
-    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
-    (at(0.5), at(0.99), v[v.len() - 1])
+    (quantile(v, 0.5), quantile(v, 0.99), v[v.len() - 1])
+}
+
+/// The `q` quantile of a sorted, non-empty sample (nearest rank).
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    sorted[((sorted.len() - 1) as f64 * q).round() as usize]
 }
 
 struct HopResult {
@@ -443,10 +447,9 @@ fn detect_alone_measure(args: &DetectAloneArgs) -> anyhow::Result<DetectAlone> {
         .zip(proc_sample(std::process::id()))
         .map_or(0, |(t0, s)| s.cpu_ticks.saturating_sub(t0));
     ms.sort_by(f64::total_cmp);
-    let at = |q: f64| ms[((ms.len() - 1) as f64 * q).round() as usize];
     Ok(DetectAlone {
-        p50_ms: at(0.5),
-        p90_ms: at(0.9),
+        p50_ms: quantile(&ms, 0.5),
+        p90_ms: quantile(&ms, 0.9),
         cpu_ms_per_frame: cpu_ticks as f64 * 1e3 / USER_HZ / ms.len() as f64,
         frames: ms.len(),
     })
