@@ -211,7 +211,11 @@ def test_live_view_serves_video_and_track_and_costs_detect_nothing(runner, tmp_p
     for name, (frames, skipped, p50) in windows.items():
         assert frames >= 0.9 * CAMERA_FPS * WINDOW_S, f"{name}: {frames} frames captured"
         assert skipped <= base_skipped + 1, f"{name}: detect skipped {skipped} frames, {base_skipped} without client"
-        assert p50 <= 1.25 * base_p50 + 0.5, f"{name}: detect p50 {p50:.2f} ms, {base_p50:.2f} ms without client"
+        # A gross bound only: wall-clock medians on a shared 2-core machine swing by a third
+        # between windows with nothing changed (`hubtrack bench pipeline` measures the cost in
+        # ratios within one run). Work moved into detect's process (encoding the video there)
+        # would cost it several times its own time.
+        assert p50 <= 2.0 * base_p50 + 1.0, f"{name}: detect p50 {p50:.2f} ms, {base_p50:.2f} ms without client"
     assert rss_stalled - rss_before < 64 * 1024, "a stalled client does not grow the live view's memory"
 
 

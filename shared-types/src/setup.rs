@@ -185,11 +185,48 @@ impl TurbineSetup {
             self.hub_height_m,
         )
     }
+
+    /// How much wider the tower gets per metre below its top, m/m: the linear taper from
+    /// `tower_top_diameter_m` to `tower_base_diameter_m` over the hub height (the tower top lies a
+    /// metre or two under the hub, which makes this a few per cent low).
+    pub fn tower_taper(&self) -> f64 {
+        ((self.tower_base_diameter_m - self.tower_top_diameter_m) / self.hub_height_m).max(0.0)
+    }
+}
+
+/// The tower's width at its top, px, from its width `width_px` measured `rows_below_top_px` image
+/// rows under the top of a tower widening `taper` m per metre down.
+///
+/// At depth `d` a height `Δz` below the top appears `Δrow = f·Δz/d` rows lower, where the tower is
+/// `taper·Δz` wider, which is `f·taper·Δz/d = taper·Δrow` px: the correction is independent of the
+/// focal length and the distance. Without it a width measured a few metres down reads the
+/// distance several per cent short.
+pub fn tower_top_width_px(width_px: f64, rows_below_top_px: f64, taper: f64) -> f64 {
+    width_px - taper * rows_below_top_px.max(0.0)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tower_width_is_taken_back_to_the_top() {
+        // Thesis turbine: 2.2 m at the top, 4.3 m at the base, 64 m hub: 2.1/64 m per metre.
+        let t = TurbineSetup::default();
+        assert!((t.tower_taper() - 2.1 / 64.0).abs() < 1e-12);
+        // f = 1000 px, 30 m: 3 m under the top is 100 rows down, where the tower is
+        // 2.2 + 3·2.1/64 m wide = 1000·that/30 px; back at the top it is 1000·2.2/30 px.
+        let measured = 1000.0 * (2.2 + 3.0 * t.tower_taper()) / 30.0;
+        let top = tower_top_width_px(measured, 100.0, t.tower_taper());
+        assert!((top - 1000.0 * 2.2 / 30.0).abs() < 1e-9, "{top}");
+        // A row above the top (noise) takes nothing off; a cylinder has no taper.
+        assert_eq!(tower_top_width_px(50.0, -4.0, t.tower_taper()), 50.0);
+        let cylinder = TurbineSetup {
+            tower_base_diameter_m: 2.2,
+            ..TurbineSetup::default()
+        };
+        assert_eq!(cylinder.tower_taper(), 0.0);
+    }
 
     #[test]
     fn the_defaults_are_the_shipped_thesis_profile() {

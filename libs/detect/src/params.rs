@@ -50,6 +50,7 @@ impl DetectConfig {
                 focal_length_per_width: lens.focal_length_per_width(),
                 lens: lens.clone(),
                 tower_top_diameter_m: turbine.tower_top_diameter_m,
+                tower_taper: turbine.tower_taper(),
                 hub_tower_gap_m: turbine.hub_overhang_m,
                 spinner_diameter_m: turbine.spinner_diameter_m,
             },
@@ -83,6 +84,11 @@ hubtrack_types::params! {
         /// Tower diameter at the top, metres (2.2 m on the thesis's ~1.5 MW turbines); the distance
         /// estimate divides it by the measured tower width.
         pub tower_top_diameter_m: f64 = 2.2, closed(0.1, 30.0);
+        /// How much wider the tower gets per metre below its top, m/m: the width, measured a
+        /// little under the top, is taken back to the top before it gives a distance. From
+        /// `[turbine]` (see [`TurbineSetup::tower_taper`]); default: the thesis turbine's.
+        #[serde(skip)]
+        pub tower_taper: f64 = 2.1 / 64.0, closed(0.0, 1.0);
         /// Distance from the hub centre to the tower axis along the rotor axis, metres (~4 m); the
         /// yaw estimate (thesis eq. 7.14) divides the image gap by it.
         pub hub_tower_gap_m: f64 = 4.2, closed(0.1, 50.0);
@@ -506,8 +512,16 @@ hubtrack_types::params! {
         /// Spinner step: smallest circle radius searched, working px (below this the spinner is a
         /// few pixels and edge convergence is accurate enough).
         pub spinner_min_radius_px: f64 = 4.0, closed(1.0, 1000.0);
-        /// Spinner step: largest circle radius searched, fraction of image height.
+        /// Spinner step: largest circle radius searched, fraction of image height (without a
+        /// tracker's distance, at least; see `spinner_closest_m`).
         pub spinner_max_radius_frac: f64 = 0.32, closed(0.01, 1.0);
+        /// Spinner step without a tracker's distance: circles are searched up to the radius the
+        /// spinner has this close through the camera's lens (`detect.camera`), when that is more
+        /// than `spinner_max_radius_frac` (up to `spinner_hint_max_radius_frac`): a still photo or
+        /// the first frame through a narrow lens at the end of an approach shows the spinner half
+        /// the height or more across, its rim cut by the frame. Metres; the approach's target is
+        /// 5 m, and 4 m leaves room for its tolerance.
+        pub spinner_closest_m: f64 = 4.0, closed(0.5, 100.0);
         /// ... and with the tracker's distance, when the radius it expects asks for more: a
         /// narrow lens at the approach's end sees the spinner larger than that (a 3.6 m spinner
         /// at 5 m is 0.33 of the height through a 100° lens at 16:9, 0.5–0.7 through a 60° one),

@@ -252,6 +252,12 @@ hubtrack_types::params! {
         /// [`TrackConfig::with_setup`].
         #[serde(skip)]
         pub tower_diameter_m: f64 = 2.2, open_closed(0.0, MAX_SIZE_M);
+        /// How much wider the tower gets per metre below its top, m/m: a width measured under
+        /// the top is taken back to the top (see [`hubtrack_types::setup::tower_top_width_px`]).
+        /// From the `[turbine]` section (`tower_base_diameter_m` with the top diameter and the hub
+        /// height), not a key of its own. Default: the thesis turbine's 2.1 m over 64 m.
+        #[serde(skip)]
+        pub tower_taper: f64 = 2.1 / 64.0, closed(0.0, 1.0);
         /// Standard deviation of the measured tower width, px at the reference width (the thesis:
         /// one pixel moved the estimate from 35 m to 40 m).
         pub tower_width_std_px: f64 = 1.0, open_closed(0.0, MAX_PX);
@@ -568,6 +574,7 @@ impl TrackConfig {
         self.camera.focal_length_per_width = lens.focal_length_per_width();
         self.camera.lens = lens.clone();
         self.distance.tower_diameter_m = turbine.tower_top_diameter_m;
+        self.distance.tower_taper = turbine.tower_taper();
         self.distance.spinner_diameter_m = turbine.spinner_diameter_m;
         self.yaw.hub_tower_offset_m = turbine.hub_overhang_m;
         self

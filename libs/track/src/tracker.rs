@@ -1,6 +1,7 @@
 //! [`Tracker`] (gated, attitude-aided, with filtered distance and yaw) and [`BaselineTracker`]
 //! (the thesis filter), sharing one implementation.
 
+use hubtrack_types::setup::tower_top_width_px;
 use hubtrack_types::{Detection, TrackMode, TrackState, VehicleState};
 use nalgebra::Rotation3;
 
@@ -582,10 +583,15 @@ impl Core {
         if !det.tower_found || det.tower_width_px < d.min_size_px * s {
             return None;
         }
+        let width_at_top = tower_top_width_px(
+            det.tower_width_px,
+            det.tower_width_row - det.tower_top_px[1],
+            d.tower_taper,
+        );
         distance_from_tower_width(
             self.camera().focal_at(det.hub_px),
             d.tower_diameter_m,
-            det.tower_width_px,
+            width_at_top,
             d.tower_width_std_px * s,
         )
     }

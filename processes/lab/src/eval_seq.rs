@@ -211,13 +211,15 @@ fn trace_line(
     serde_json::json!({
         "flight": flight,
         "frame": frame,
-        "truth": {"hub": truth.hub_px, "nose": truth.nose_px, "distance_m": truth.distance_m, "yaw_deg": truth.relative_yaw_deg, "tower_width": truth.tower_width_px},
+        "truth": {"hub": truth.hub_px, "nose": truth.nose_px, "distance_m": truth.distance_m, "yaw_deg": truth.relative_yaw_deg, "tower_width": truth.tower_width_px, "tower_width_row": truth.tower_width_row, "tower_top": truth.tower_top_px},
         "detection": {
             "detected": det.detected,
             "hub": det.detected.then_some(det.hub_px),
             "confidence": det.confidence,
             "spinner_radius": det.circle_found.then_some(det.circle[2]),
             "tower_width": det.tower_found.then_some(det.tower_width_px),
+            "tower_width_row": det.tower_found.then_some(det.tower_width_row),
+            "tower_top": det.tower_found.then_some(det.tower_top_px),
         },
         "ours": track(ours),
         "thesis": track(thesis),

@@ -60,6 +60,33 @@ pub(super) struct FrameCtx<'a> {
     pub h: f64,
     /// Roll, predicted hub (working px) and distance from the IMU and the tracker.
     pub hints: &'a Hints,
+    /// The largest spinner radius searched without a tracker's distance, working px (see
+    /// [`blind_spinner_max_r`]).
+    pub spinner_max_r: f64,
+}
+
+/// The largest spinner radius the spinner step searches without a tracker's distance, working px.
+/// Without a predicted hub either (a still photo, a lost track), the radius the spinner has
+/// `spinner_closest_m` away through the frame's lens (`optics`), at least
+/// `spinner_max_radius_frac` and at most `spinner_hint_max_radius_frac` of the height `h`: a
+/// wide lens (the GoPro: 0.31 of the height at 4 m) keeps the fixed limit; a narrow one sees the
+/// spinner at the end of the approach half the height or more across. A track without a
+/// distance yet is far away: `spinner_max_radius_frac` (larger radii searched around its hub
+/// let a larger circle of clutter outscore the spinner's own rim there).
+pub(crate) fn blind_spinner_max_r(
+    p: &DefaultParams,
+    h: f64,
+    optics: Option<&Optics>,
+    hints: &Hints,
+) -> f64 {
+    let floor = p.spinner_max_radius_frac * h;
+    if hints.predicted_hub_px.is_some() {
+        return floor;
+    }
+    let at_closest = optics.map_or(0.0, |o| {
+        o.focal_px * o.spinner_radius_m / p.spinner_closest_m
+    });
+    floor.max(at_closest.min(p.spinner_hint_max_radius_frac * h))
 }
 
 /// A blade seen by one edge: its axis from the partner edge in the gradient image, when found
@@ -78,6 +105,8 @@ pub(super) struct SceneCtx<'a> {
     pub h: f64,
     /// Roll, predicted hub (working px) and distance from the IMU and the tracker.
     pub hints: &'a Hints,
+    /// The largest spinner radius searched without a tracker's distance, working px.
+    pub spinner_max_r: f64,
     /// The merged Hough lines, longest first.
     pub segs: &'a [Segment],
     /// Per line: may it be a blade or tower edge (not a horizon, step 4).
@@ -98,6 +127,7 @@ impl<'a> SceneCtx<'a> {
             w: self.w,
             h: self.h,
             hints: self.hints,
+            spinner_max_r: self.spinner_max_r,
         }
     }
 }

@@ -100,6 +100,12 @@ pub(crate) fn run(
         w: img.width as f64,
         h: img.height as f64,
         hints,
+        spinner_max_r: context::blind_spinner_max_r(
+            p,
+            img.height as f64,
+            expected.optics.as_ref(),
+            hints,
+        ),
     };
     let settings = lines::hough_settings(p, frame.h);
     let (hough, segments) = (&mut s.hough, &mut s.segments);
@@ -176,7 +182,7 @@ fn recognise(
     grad: Option<&Gradients<'_>>,
     expected: Expected<'_>,
 ) -> Result<Found, DetectError> {
-    let FrameCtx { p, w, h, hints } = *frame;
+    let FrameCtx { p, w, h, hints, .. } = *frame;
     let partner_search = PartnerSearch {
         min_width: p.blade_partner_min_width_px,
         max_width: p.blade_partner_max_width_frac * h,
@@ -205,6 +211,7 @@ fn recognise(
         w,
         h,
         hints,
+        spinner_max_r: frame.spinner_max_r,
         segs,
         usable: &usable,
         axes: &axes,

@@ -16,7 +16,7 @@ const MAX_PEAKS: usize = 6;
 /// proposed near it.
 pub(super) fn centres(sc: &SceneCtx<'_>, heat: Option<&Heatmap>) -> Vec<P2> {
     let f = sc.frame();
-    let FrameCtx { p, w, h, hints } = f;
+    let FrameCtx { p, w, h, hints, .. } = f;
     let mut props = proposals(&f, sc.segs, sc.usable);
     let axis_props = axis_proposals(&f, sc.axes);
     log::trace!(

@@ -49,8 +49,8 @@ impl<'a> EdgePointCache<'a> {
         expected: Option<f64>,
         points: &'a mut Vec<EdgePoint>,
     ) -> EdgePointCache<'a> {
-        let FrameCtx { p, h, hints, .. } = *f;
-        let (close_min_r, close_max_r) = close_spinner_radii(p, h, expected);
+        let FrameCtx { p, hints, .. } = *f;
+        let (close_min_r, close_max_r) = close_spinner_radii(f, expected);
         let share =
             hints.predicted_hub_px.is_none() && p.close_spinner_always && close_max_r > close_min_r;
         EdgePointCache {
@@ -105,7 +105,7 @@ pub(super) fn search_circles(
     all: Option<&[EdgePoint]>,
 ) -> Vec<[f64; 4]> {
     let FrameCtx { p, h, .. } = *f;
-    let (min_r, max_r) = spinner_radii(p, h, expected);
+    let (min_r, max_r) = spinner_radii(f, expected);
     let off = p.spinner_max_offset_frac * h;
     // The box holds the rim of a circle of the largest radius centred on the candidate (a
     // larger one than `spinner_search_frac` only close in, with a tracker's distance).
@@ -144,7 +144,7 @@ pub(super) fn search_circles(
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: p.spinner_peaks as usize,
         vote_every: p.spinner_vote_every as usize,
-        visible_in: expected.map(|_| [cols as f64, rows as f64]),
+        visible_in: rims_may_leave(f, expected, max_r).then_some([cols as f64, rows as f64]),
     };
     find_circles(pts, &cs)
 }
@@ -208,7 +208,7 @@ fn search_close_circles(
     pts: &mut Vec<EdgePoint>,
 ) -> Vec<[f64; 4]> {
     let FrameCtx { p, h, .. } = *f;
-    let (min_r, max_r) = close_spinner_radii(p, h, expected);
+    let (min_r, max_r) = close_spinner_radii(f, expected);
     if max_r <= min_r {
         return Vec::new();
     }
@@ -251,7 +251,8 @@ fn search_close_circles(
         max_interior_density: p.spinner_max_interior_density,
         max_peaks: p.close_spinner_peaks as usize,
         vote_every: p.close_spinner_vote_every as usize,
-        visible_in: expected.map(|_| [img.width as f64, img.height as f64]),
+        visible_in: rims_may_leave(f, expected, max_r)
+            .then_some([img.width as f64, img.height as f64]),
     };
     find_circles(pts, &cs)
 }
@@ -259,26 +260,34 @@ fn search_close_circles(
 /// Radii `[min, max]` the close-range search looks for (working px): at least
 /// `close_spinner_radius_frac · h`, and with a tracker's distance only the radii it allows (none
 /// when the hub is far).
-fn close_spinner_radii(p: &DefaultParams, h: f64, expected: Option<f64>) -> (f64, f64) {
-    let (lo, max_r) = spinner_radii(p, h, expected);
-    (lo.max(p.close_spinner_radius_frac * h), max_r)
+fn close_spinner_radii(f: &FrameCtx<'_>, expected: Option<f64>) -> (f64, f64) {
+    let (lo, max_r) = spinner_radii(f, expected);
+    (lo.max(f.p.close_spinner_radius_frac * f.h), max_r)
 }
 
-/// Radii `[min, max]` the spinner step searches (working px): the configured limits, narrowed
-/// to the `spinner_hint_radius_*` window around an `expected` radius (whose upper limit is
-/// `spinner_hint_max_radius_frac`: close in through a narrow lens the spinner is larger than
-/// `spinner_max_radius_frac`). An empty range (min ≥ max) means the expected spinner is too
-/// small or too large to search for.
-pub(super) fn spinner_radii(p: &DefaultParams, h: f64, expected: Option<f64>) -> (f64, f64) {
+/// Whether a circle's rim is scored over the part inside the frame only: with a tracker's
+/// distance, or when the radii searched reach beyond `spinner_max_radius_frac` (a narrow lens
+/// close in, whose spinner is cut by the frame's edges). Otherwise the whole rim must show.
+fn rims_may_leave(f: &FrameCtx<'_>, expected: Option<f64>, max_r: f64) -> bool {
+    expected.is_some() || max_r > f.p.spinner_max_radius_frac * f.h
+}
+
+/// Radii `[min, max]` the spinner step searches (working px): up to the frame's blind limit
+/// ([`FrameCtx::spinner_max_r`]), narrowed to the `spinner_hint_radius_*` window around an
+/// `expected` radius (whose upper limit is `spinner_hint_max_radius_frac`: close in through a
+/// narrow lens the spinner is larger than `spinner_max_radius_frac`). An empty range
+/// (min ≥ max) means the expected spinner is too small or too large to search for.
+pub(super) fn spinner_radii(f: &FrameCtx<'_>, expected: Option<f64>) -> (f64, f64) {
+    let FrameCtx { p, h, .. } = *f;
     let lo = p.spinner_min_radius_px;
     match expected.filter(|r| p.spinner_hint_radius_lo > 0.0 && r.is_finite() && *r > 0.0) {
         Some(r) => (
             lo.max(p.spinner_hint_radius_lo * r),
             (p.spinner_hint_max_radius_frac * h)
-                .max(p.spinner_max_radius_frac * h)
+                .max(f.spinner_max_r)
                 .min(p.spinner_hint_radius_hi * r),
         ),
-        None => (lo, p.spinner_max_radius_frac * h),
+        None => (lo, f.spinner_max_r),
     }
 }
 

@@ -5,6 +5,7 @@ use crate::geometry::{self, dir_from_up_cw};
 use crate::params::Ranking;
 
 use super::blades::{continues_beyond, support_lines, Blade};
+use super::context::blind_spinner_max_r;
 use super::horizon::{is_horizon, search_roll, usable_lines};
 use super::lines::{merge_collinear, merge_collinear_once};
 use super::proposals::axis_proposals;
@@ -27,6 +28,7 @@ fn frame(p: &DefaultParams, w: f64, h: f64) -> FrameCtx<'_> {
         w,
         h,
         hints: &NO_HINTS,
+        spinner_max_r: p.spinner_max_radius_frac * h,
     }
 }
 
@@ -42,6 +44,7 @@ fn scene<'a>(p: &'a DefaultParams, segs: &'a [Segment], usable: &'a [bool]) -> S
         w: 480.0,
         h: 270.0,
         hints: &NO_HINTS,
+        spinner_max_r: p.spinner_max_radius_frac * 270.0,
         segs,
         usable,
         axes: &[],
@@ -63,6 +66,7 @@ fn recognise_at(
         w: 480.0,
         h: 270.0,
         hints,
+        spinner_max_r: p.spinner_max_radius_frac * 270.0,
     };
     recognise(&f, segs, search, None, expected)
 }
@@ -537,33 +541,65 @@ fn close_range_hub_from_blade_axes_not_edge_crossings() {
 #[test]
 fn tracker_distance_narrows_the_spinner_radii() {
     let p = DefaultParams::default();
-    let all = spinner_radii(&p, 270.0, None);
+    let f = frame(&p, 480.0, 270.0);
+    let all = spinner_radii(&f, None);
     assert_eq!(
         all,
         (p.spinner_min_radius_px, p.spinner_max_radius_frac * 270.0)
     );
     // Expected 20 px: 10..40 px, inside the configured limits.
-    assert_eq!(spinner_radii(&p, 270.0, Some(20.0)), (10.0, 40.0));
+    assert_eq!(spinner_radii(&f, Some(20.0)), (10.0, 40.0));
     // Close in (expected 0.4 h): beyond the blind limit, up to `spinner_hint_max_radius_frac`.
     assert_eq!(
-        spinner_radii(&p, 270.0, Some(108.0)),
+        spinner_radii(&f, Some(108.0)),
         (54.0, p.spinner_hint_max_radius_frac * 270.0)
     );
     // Far away (expected 3 px): clipped to the limits, and empty: nothing to search.
-    let (lo, hi) = spinner_radii(&p, 270.0, Some(1.5));
+    let (lo, hi) = spinner_radii(&f, Some(1.5));
     assert!(lo >= hi, "{lo} {hi}");
     // Nonsense distances and a disabled window fall back to all radii.
-    assert_eq!(spinner_radii(&p, 270.0, Some(f64::NAN)), all);
+    assert_eq!(spinner_radii(&f, Some(f64::NAN)), all);
+    let no_window = DefaultParams {
+        spinner_hint_radius_lo: 0.0,
+        ..p.clone()
+    };
     assert_eq!(
-        spinner_radii(
-            &DefaultParams {
-                spinner_hint_radius_lo: 0.0,
-                ..p.clone()
-            },
-            270.0,
-            Some(20.0)
-        ),
+        spinner_radii(&frame(&no_window, 480.0, 270.0), Some(20.0)),
         all
+    );
+}
+
+#[test]
+fn the_lens_sets_how_large_a_spinner_is_searched_blind() {
+    let p = DefaultParams::default();
+    let optics = |focal_px| Optics {
+        focal_px,
+        spinner_radius_m: 1.6,
+        tower_top_diameter_m: 2.2,
+        hub_tower_gap_m: 4.2,
+    };
+    // The GoPro at 480 × 270 working px (f = 0.4343 · 480 = 208.5 px): 83 px at 4 m, under the
+    // fixed 0.32 · 270 = 86.4 px, which stays.
+    let gopro = blind_spinner_max_r(&p, 270.0, Some(&optics(208.5)), &NO_HINTS);
+    assert_eq!(gopro, p.spinner_max_radius_frac * 270.0);
+    // A 60° lens at 16:9 (f = 0.866 · 480 = 415.7 px): 166 px at 4 m, 0.62 of the height.
+    let narrow = blind_spinner_max_r(&p, 270.0, Some(&optics(415.7)), &NO_HINTS);
+    assert!((narrow - 415.7 * 1.6 / 4.0).abs() < 1e-9, "{narrow}");
+    // Capped where a tracker's distance would be capped; no lens, the fixed limit.
+    let tele = blind_spinner_max_r(&p, 270.0, Some(&optics(2000.0)), &NO_HINTS);
+    assert_eq!(tele, p.spinner_hint_max_radius_frac * 270.0);
+    assert_eq!(
+        blind_spinner_max_r(&p, 270.0, None, &NO_HINTS),
+        p.spinner_max_radius_frac * 270.0
+    );
+    // A track without a distance is far away: the fixed limit.
+    let tracked = Hints {
+        predicted_hub_px: Some([240.0, 135.0]),
+        ..NO_HINTS
+    };
+    assert_eq!(
+        blind_spinner_max_r(&p, 270.0, Some(&optics(415.7)), &tracked),
+        p.spinner_max_radius_frac * 270.0
     );
 }
 
