@@ -542,6 +542,15 @@ impl Approach {
             self.reset_tasks();
         }
         let c = &self.config;
+        // A tentative hub (not yet confirmed) says which way to turn: `track` is checked
+        // (finite, non-zero size) by check_inputs.
+        if let Some(t) = track.filter(|t| t.mode == TrackMode::Acquiring) {
+            let half = f64::from(t.image_width) / 2.0;
+            let ex = (t.hub_px[0] - half) / half;
+            if ex.abs() >= c.search_side_min_offset {
+                self.last_seen_right = Some(ex > 0.0);
+            }
+        }
         let lost_s = self.unusable_since_ns.map_or(0.0, |s| secs(s, now));
         let requested = track.is_some_and(|t| t.search_requested);
         let want_search = (requested || lost_s >= c.search_after_s) && c.search_max_turn_deg > 0.0;

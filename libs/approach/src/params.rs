@@ -269,6 +269,11 @@ hubtrack_types::params! {
         /// Total rotation of one search, degrees; afterwards the vehicle holds until a track
         /// returns (0 = never search). Range [0, 3600]; default 360.
         pub search_max_turn_deg: f64 = 360.0, closed(0.0, 3600.0);
+        /// A hub the tracker has seen but not yet confirmed (acquiring) sets the search's side
+        /// when it lies at least this far off the image centre, in half image widths: a start
+        /// with the hub at the frame's edge, where it is too cut to confirm, turns towards it
+        /// instead of the long way round. Range [0, 1]; default 0.1.
+        pub search_side_min_offset: f64 = 0.1, closed(0.0, 1.0);
         /// Time the inputs must be good (link up, finite numbers, time running forward) before an
         /// abort clears by itself, s. Range [0, 3600]; default 2.
         pub abort_recover_s: f64 = 2.0, closed(0.0, MAX_TIME_S);

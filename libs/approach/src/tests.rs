@@ -763,6 +763,31 @@ fn lost_holds_then_searches_bounded_then_holds() {
 }
 
 #[test]
+fn a_tentative_hub_off_centre_sets_the_search_side() {
+    let c = ApproachConfig::default();
+    // Never confirmed, glimpsed at the left edge: the search turns left.
+    let mut rig = Rig::new();
+    let glimpsed = TrackState {
+        mode: TrackMode::Acquiring,
+        search_requested: true,
+        ..track(-0.9, -0.8, None, None)
+    };
+    let out = rig.run(Some(glimpsed), 0.5);
+    assert_eq!(out.task, ApproachTask::Search);
+    assert!(out.yaw_rate_rad_s < 0.0, "{}", out.reason);
+    assert!(out.reason.starts_with("search left"), "{}", out.reason);
+    // At the centre (no tentative track reports the principal point): the default side.
+    let mut rig = Rig::new();
+    let centred = TrackState {
+        mode: TrackMode::Acquiring,
+        search_requested: true,
+        ..track(-0.5 * c.search_side_min_offset, 0.0, None, None)
+    };
+    let out = rig.run(Some(centred), 0.5);
+    assert!(out.yaw_rate_rad_s > 0.0, "{}", out.reason);
+}
+
+#[test]
 fn search_requested_searches_at_once() {
     let mut rig = Rig::new();
     rig.run(Some(track(0.02, 0.0, Some(20.0), Some(0.0))), 1.0);
