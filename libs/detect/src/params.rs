@@ -348,16 +348,6 @@ hubtrack_types::params! {
         /// the strongest single cue at close range; blade lines meeting near it can still outscore
         /// it).
         pub spinner_size_match_bonus: f64 = 0.15, closed(0.0, 1.0);
-        /// Close in through a narrow lens the spinner fills the frame and no blade is left to
-        /// see: at the tracker's predicted hub, a circle of at least this fraction of the image
-        /// height in radius, of the size the tracker's distance expects
-        /// (`spinner_size_match_tol`), centred within `spinner_max_offset_frac`, is the spinner
-        /// without blades at its rim ... (a 4.35 m spinner at 5 m through the 640x480 USB lens
-        /// is 0.59 of the height; the GoPro's 3.2 m one 0.25). 0 = never.
-        pub spinner_alone_min_radius_frac: f64 = 0.3, zero_or_closed(0.01, 2.0);
-        /// ... when this much of its rim inside the frame shows (the blades' roots, which cover
-        /// part of it when they show, are out of the frame).
-        pub spinner_alone_min_coverage: f64 = 0.45, closed(0.0, 1.0);
         /// Confidence weight of having 2 blades.
         pub conf_two_blades: f64 = 0.3, closed(0.0, 1.0);
         /// Confidence weight of having 3 blades.

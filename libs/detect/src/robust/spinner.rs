@@ -59,12 +59,7 @@ pub(super) fn around_candidates(
             }
         };
         log::trace!("spinner search at {:?}: {:?}", cand.centre, circles);
-        let spun = spinner_candidate(sc, cand, cands, &circles).or_else(|| {
-            expected_r
-                .filter(|_| predicted(cand))
-                .and_then(|e| spinner_alone(sc, cand.centre, &circles, e))
-        });
-        if let Some(mut spun) = spun {
+        if let Some(mut spun) = spinner_candidate(sc, cand, cands, &circles) {
             // A circle of the size the tracker's distance expects is the spinner with more
             // certainty than blade lines meeting somewhere near it: at close range under an
             // overcast sky the lines of two blades met at the tower top, 0.15 h below the
@@ -87,37 +82,6 @@ pub(super) fn around_candidates(
         }
     }
     Ok(extra)
-}
-
-/// The spinner alone at the tracker's `predicted` hub (see `spinner_alone_min_radius_frac`): the
-/// best-covered of `circles` that is large, of the `expected` radius (working px), near the
-/// prediction and well covered, evaluated as a candidate centred on it. At the end of an
-/// approach through a narrow lens the spinner fills the frame, its blades' roots outside it,
-/// and without this the track was lost at the target.
-fn spinner_alone(
-    sc: &SceneCtx<'_>,
-    predicted: P2,
-    circles: &[[f64; 4]],
-    expected: f64,
-) -> Option<Candidate> {
-    let SceneCtx { p, h, .. } = *sc;
-    if p.spinner_alone_min_radius_frac <= 0.0 {
-        return None;
-    }
-    let k = circles.iter().find(|k| {
-        k[2] >= p.spinner_alone_min_radius_frac * h
-            && k[2] >= expected / p.spinner_size_match_tol
-            && k[2] <= expected * p.spinner_size_match_tol
-            && k[3] >= p.spinner_alone_min_coverage
-            && geometry::dist([k[0], k[1]], predicted) <= p.spinner_max_offset_frac * h
-    })?;
-    let mut c = evaluate(sc, [k[0], k[1]], Some([k[0], k[1], k[2]]));
-    c.features[crate::ranker::SPINNER_COVERAGE] = k[3];
-    log::trace!(
-        "spinner alone {k:?} at the prediction: conf {:.2}",
-        c.confidence
-    );
-    Some(c)
 }
 
 /// The close-range spinner step: a close spinner anywhere in the image with two blades at its

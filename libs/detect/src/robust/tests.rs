@@ -788,48 +788,6 @@ fn spinner_circle_accepted_only_near_the_candidate_with_blades_at_its_rim() {
 }
 
 #[test]
-fn a_spinner_filling_the_frame_is_the_hub_at_the_prediction_without_blades() {
-    // Close in through a narrow lens: no line at all, the spinner's rim 0.45 h around the
-    // tracker's predicted hub, at the size its distance expects.
-    let p = DefaultParams::default();
-    let (hub, r) = ([240.0, 135.0], 0.45 * 270.0);
-    let tracked = Hints {
-        roll_rad: Some(0.0),
-        predicted_hub_px: Some(hub),
-        hub_distance_m: Some(5.0),
-    };
-    let run = |hints: &Hints, circle: [f64; 4], expected_r: Option<f64>| {
-        let mut search =
-            move |_: CircleQuery| -> Result<Vec<[f64; 4]>, DetectError> { Ok(vec![circle]) };
-        let expected = Expected {
-            spinner_radius: expected_r,
-            ..Expected::default()
-        };
-        recognise_at(&p, &[], hints, &mut search, expected).unwrap()
-    };
-    let rim = [hub[0] + 3.0, hub[1] - 2.0, r, 0.6];
-    let f = run(&tracked, rim, Some(r * 1.1));
-    assert!(f.detected && f.circle.is_some(), "{f:?}");
-    assert!(
-        geometry::dist(f.hub, [rim[0], rim[1]]) < 1e-9,
-        "{:?}",
-        f.hub
-    );
-    // Not without the distance, not without the prediction, not at another size, not with
-    // too little rim, not small.
-    assert!(!run(&tracked, rim, None).detected);
-    let untracked = Hints {
-        predicted_hub_px: None,
-        ..tracked
-    };
-    assert!(!run(&untracked, rim, Some(r)).detected);
-    assert!(!run(&tracked, rim, Some(r * 1.5)).detected);
-    assert!(!run(&tracked, [rim[0], rim[1], r, 0.3], Some(r)).detected);
-    let small = [rim[0], rim[1], 0.2 * 270.0, 0.9];
-    assert!(!run(&tracked, small, Some(small[2])).detected);
-}
-
-#[test]
 fn an_enclosing_circle_replaces_the_best_covered_one_only_with_a_rim_as_well_covered() {
     let p = DefaultParams::default();
     let hub = [240.0, 120.0];
