@@ -88,7 +88,7 @@ hubtrack_types::params! {
         /// little under the top, is taken back to the top before it gives a distance. From
         /// `[turbine]` (see [`TurbineSetup::tower_taper`]); default: the thesis turbine's.
         #[serde(skip)]
-        pub tower_taper: f64 = 2.1 / 64.0, closed(0.0, 1.0);
+        pub tower_taper: f64 = TurbineSetup::default().tower_taper(), closed(0.0, 1.0);
         /// Distance from the hub centre to the tower axis along the rotor axis, metres (~4 m); the
         /// yaw estimate (thesis eq. 7.14) divides the image gap by it.
         pub hub_tower_gap_m: f64 = 4.2, closed(0.1, 50.0);

@@ -255,9 +255,10 @@ hubtrack_types::params! {
         /// How much wider the tower gets per metre below its top, m/m: a width measured under
         /// the top is taken back to the top (see [`hubtrack_types::setup::tower_top_width_px`]).
         /// From the `[turbine]` section (`tower_base_diameter_m` with the top diameter and the hub
-        /// height), not a key of its own. Default: the thesis turbine's 2.1 m over 64 m.
+        /// height), not a key of its own. Default: the thesis turbine's (`[turbine]`'s defaults).
         #[serde(skip)]
-        pub tower_taper: f64 = 2.1 / 64.0, closed(0.0, 1.0);
+        pub tower_taper: f64 = hubtrack_types::setup::TurbineSetup::default().tower_taper(),
+            closed(0.0, 1.0);
         /// Standard deviation of the measured tower width, px at the reference width (the thesis:
         /// one pixel moved the estimate from 35 m to 40 m).
         pub tower_width_std_px: f64 = 1.0, open_closed(0.0, MAX_PX);
