@@ -60,6 +60,12 @@ params! {
         /// Horizontal distance from the tower axis to the hub centre along the rotor axis, m; the
         /// yaw estimate (thesis eq. 7.14) divides the hub–tower gap in the image by it.
         pub hub_overhang_m: f64 = 4.2, closed(0.1, 50.0);
+        /// Height of the hub centre above the tower top (the flange under the nacelle), m: with
+        /// the camera below or above the hub, where the tower's width is measured lies this much
+        /// (and the rows down to the measured one) off the hub's height. Default: half the
+        /// thesis turbine's 3.5 m nacelle. A metre off moves the distance by about 1 % at
+        /// 12–30 m from 5–10 m below the hub, nothing when level with it.
+        pub hub_above_tower_top_m: f64 = 1.75, closed(0.0, 20.0);
         /// Spinner (nose cone) diameter at the blade roots, m: a second distance cue close in,
         /// and the size of circle the detector searches for.
         pub spinner_diameter_m: f64 = 3.2, closed(0.1, 30.0);
@@ -259,6 +265,7 @@ mod tests {
                 "tower_top_diameter_m" => t.tower_top_diameter_m = f(),
                 "tower_base_diameter_m" => t.tower_base_diameter_m = f(),
                 "hub_overhang_m" => t.hub_overhang_m = f(),
+                "hub_above_tower_top_m" => t.hub_above_tower_top_m = f(),
                 "spinner_diameter_m" => t.spinner_diameter_m = f(),
                 other => panic!("unknown key {other}"),
             }

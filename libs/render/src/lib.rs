@@ -533,7 +533,8 @@ fn validate(scene: &Scene, pose: &CameraPose) -> Result<(), RenderError> {
     }
     if !(0.5..=20.0).contains(&scene.hub_overhang_m)
         || !(0.5..=15.0).contains(&scene.spinner_diameter_m)
-        || !(0.3..=4.0).contains(&scene.nacelle_scale)
+        || !(scene::NACELLE_SCALE_RANGE.0..=scene::NACELLE_SCALE_RANGE.1)
+            .contains(&scene.nacelle_scale)
     {
         return Err(RenderError::InvalidInput(
             "hub_overhang_m must be within 0.5..20 m, spinner_diameter_m within 0.5..15 m, nacelle_scale within 0.3..4",

@@ -24,6 +24,8 @@ pub const HUB_OVERHANG_M: f64 = 4.2;
 pub const NACELLE_LENGTH_M: f64 = 10.0;
 /// Default nacelle body height (m); the rotor axis runs through its mid-height.
 pub const NACELLE_HEIGHT_M: f64 = 3.5;
+/// Nacelle sizes the renderer draws, as [`Scene::nacelle_scale`] (smallest, largest).
+pub const NACELLE_SCALE_RANGE: (f64, f64) = (0.3, 4.0);
 /// Default nacelle body width (m).
 pub const NACELLE_WIDTH_M: f64 = 3.4;
 /// Default position of the nacelle's front face ahead of the tower axis (m).

@@ -27,6 +27,8 @@
 //! sign: the foreshortening is symmetric). [`blade_skew_yaw`] fits both by least squares in the
 //! measured angles and returns |ψ| with its Cramér–Rao standard deviation.
 
+use nalgebra::Vector3;
+
 /// A scalar estimate with its standard deviation (same unit as the value).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Estimate {
@@ -124,6 +126,74 @@ pub fn fuse(estimates: &[Estimate]) -> Option<Estimate> {
         value: wx_sum / w_sum,
         std: (1.0 / w_sum).sqrt(),
     })
+}
+
+/// Where the hub sits relative to the tower point whose depth the tower width measures, seen
+/// from the camera (camera frame: x right, y down, z forward).
+///
+/// The width gives the depth `z_t` (along the optical axis) of the tower axis point on the
+/// measured row, not the hub's distance. That point lies `L` behind the hub along the rotor axis
+/// (horizontal unit `b`, from the hub toward the tower) and `Δ` below it, so with the hub at
+/// distance `s` along its unit ray `u`: `z_t = s·(ẑ·u) + L·(ẑ·b) − Δ·(ẑ·up)`. Looked at level
+/// and head-on this is the thesis's `s = z_t − L`; from 5–10 m below the hub, camera pitched up
+/// toward it, the `Δ·(ẑ·up)` term and the hub ray's slant make that read 4–8 % short of the
+/// distance to the hub at 12–30 m. Without the attitude the camera is taken as level.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HubFromTower {
+    /// A ray through the hub, any length (e.g. the undistorted `[x, y, 1]`).
+    pub hub_ray: Vector3<f64>,
+    /// World up in the camera frame (`[0, −1, 0]` for a level camera).
+    pub up: Vector3<f64>,
+    /// Relative yaw ψ, radians (sign as in the module docs), with its std.
+    pub yaw: Estimate,
+    /// `L`: horizontal distance from the tower axis to the hub along the rotor axis, m.
+    pub overhang_m: f64,
+    /// `Δ`: height of the hub above the measured tower point, m.
+    pub hub_above_m: f64,
+}
+
+/// `sin β`, β the angle between the line of sight to the hub (`hub_ray`, camera frame) and the
+/// horizontal rotor axis at relative yaw `psi`, with world up `up` in the camera frame:
+/// `cos β = cos(elevation)·cos ψ`.
+pub fn off_axis_sin(hub_ray: Vector3<f64>, up: Vector3<f64>, psi: f64) -> Option<f64> {
+    let u = hub_ray.try_normalize(1e-12)?;
+    let up = up.try_normalize(1e-12)?;
+    let cos_elevation = (1.0 - u.dot(&up).powi(2)).max(0.0).sqrt();
+    let c = cos_elevation * psi.cos();
+    Some((1.0 - c * c).max(0.0).sqrt())
+}
+
+impl HubFromTower {
+    /// `(ẑ·u, ẑ·b, ẑ·∂b/∂ψ, ẑ·up)`; `None` for a hub straight above or below the camera.
+    fn depth_terms(&self) -> Option<(f64, f64, f64, f64)> {
+        let u = self.hub_ray.try_normalize(1e-12)?;
+        let up = self.up.try_normalize(1e-12)?;
+        // The rotor axis is horizontal: `b` turns the hub ray's horizontal part by ψ. A
+        // positive ψ puts the tower to the right of the hub (`e`, camera right when level).
+        let h = (u - up * u.dot(&up)).try_normalize(1e-9)?;
+        let e = h.cross(&up);
+        let (s, c) = self.yaw.value.sin_cos();
+        let b = h * c + e * s;
+        let db = e * c - h * s;
+        (u.z > 0.0).then_some((u.z, b.z, db.z, up.z))
+    }
+
+    /// The hub's distance from the tower point's depth:
+    /// `s = (z_t − L·(ẑ·b) + Δ·(ẑ·up)) / (ẑ·u)`. The std carries the depth's and the yaw's
+    /// (through `L·∂(ẑ·b)/∂ψ`). `None` for a non-positive result.
+    pub fn hub_distance(&self, tower_depth: Estimate) -> Option<Estimate> {
+        let (zu, zb, zdb, zup) = self.depth_terms()?;
+        let value = (tower_depth.value - self.overhang_m * zb + self.hub_above_m * zup) / zu;
+        let std = tower_depth.std.hypot(self.overhang_m * zdb * self.yaw.std) / zu;
+        (value.is_finite() && value > 0.0).then_some(Estimate { value, std })
+    }
+
+    /// The inverse: the depth the tower point has with the hub at `hub_distance_m`.
+    pub fn tower_depth(&self, hub_distance_m: f64) -> Option<f64> {
+        let (zu, zb, _, zup) = self.depth_terms()?;
+        let depth = hub_distance_m * zu + self.overhang_m * zb - self.hub_above_m * zup;
+        (depth.is_finite() && depth > 0.0).then_some(depth)
+    }
 }
 
 /// Relative yaw from the hub–tower gap (eq. 7.14 with the project sign, see the module docs):
@@ -271,6 +341,124 @@ mod tests {
         let fused = fuse(&[e(20.0, 1.0).unwrap(), e(22.0, 2.0).unwrap()]).unwrap();
         assert!((fused.value - (0.8 * 20.0 + 0.2 * 22.0)).abs() < 1e-12);
         assert_eq!(fusion_shares::<2>([None, e(1.0, f64::NAN)]), None);
+    }
+
+    /// A camera `d` m from the hub (horizontally), `below` m under it, on the turbine's left
+    /// at relative yaw ψ (the rotor faces +x, up is +z, the hub at the origin), looking at the
+    /// hub turned by `(pan, tilt)` radians: the hub ray, world up and the tower point (`L` behind
+    /// the hub, `Δ` below) in its camera frame (x right, y down, z forward), and the hub's true
+    /// distance. Built from the scene, not from [`HubFromTower`]'s formula.
+    fn view(
+        d: f64,
+        below: f64,
+        psi: f64,
+        pan: f64,
+        tilt: f64,
+        l: f64,
+        delta: f64,
+    ) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>, f64) {
+        let up_w = Vector3::z();
+        let cam = Vector3::new(d * psi.cos(), d * psi.sin(), -below);
+        let look = (-cam).normalize();
+        let turn = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), pan);
+        let fwd = turn * look;
+        let right0 = fwd.cross(&up_w).normalize();
+        let fwd =
+            nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(right0), tilt)
+                * fwd;
+        let right = fwd.cross(&up_w).normalize();
+        let cam_up = right.cross(&fwd);
+        let to_cam = |v: Vector3<f64>| Vector3::new(v.dot(&right), -v.dot(&cam_up), v.dot(&fwd));
+        let tower = Vector3::new(-l, 0.0, -delta);
+        (to_cam(-cam), to_cam(up_w), to_cam(tower - cam), cam.norm())
+    }
+
+    #[test]
+    fn hub_distance_from_the_tower_point_in_any_view() {
+        let (l, delta) = (4.2, 3.4);
+        for &(d, below, psi_deg, pan_deg, tilt_deg) in &[
+            (25.0, 0.0, 0.0, 0.0, 0.0),
+            (25.0, 8.0, 0.0, 0.0, 0.0),
+            (25.0, 8.0, 20.0, 12.0, -3.0),
+            (12.0, 3.0, -30.0, -15.0, 5.0),
+            (40.0, -5.0, 10.0, 5.0, 8.0),
+        ] {
+            let psi: f64 = f64::to_radians(psi_deg);
+            let (hub, up, tower, truth) = view(
+                d,
+                below,
+                psi,
+                f64::to_radians(pan_deg),
+                f64::to_radians(tilt_deg),
+                l,
+                delta,
+            );
+            let g = HubFromTower {
+                hub_ray: hub / hub.z,
+                up,
+                yaw: Estimate {
+                    value: psi,
+                    std: 0.0,
+                },
+                overhang_m: l,
+                hub_above_m: delta,
+            };
+            let s = g
+                .hub_distance(Estimate {
+                    value: tower.z,
+                    std: 0.5,
+                })
+                .unwrap();
+            assert!(
+                (s.value - truth).abs() < 1e-9,
+                "{d} {below} {psi_deg}: {} vs {truth}",
+                s.value
+            );
+            // The depth's std scales by 1/(ẑ·u) ≥ 1; the inverse gives the depth back.
+            assert!(s.std >= 0.5 - 1e-12);
+            assert!((g.tower_depth(truth).unwrap() - tower.z).abs() < 1e-9);
+            // Level and head-on it is the thesis's depth minus the overhang.
+            if below == 0.0 && psi_deg == 0.0 && pan_deg == 0.0 && tilt_deg == 0.0 {
+                assert!((s.value - (tower.z - l)).abs() < 1e-9);
+            }
+        }
+        // From 8 m below at 25 m, looking up at the hub, depth minus overhang reads about 5 %
+        // short.
+        let (hub, up, tower, truth) = view(25.0, 8.0, 0.0, 0.0, 0.0, l, delta);
+        assert!(hub.x.abs() < 1e-9 && up.z > 0.3);
+        assert!((tower.z - l) / truth < 0.96, "{}", (tower.z - l) / truth);
+        // A yaw error moves the result by L·∂(ẑ·b)/∂ψ: the std says so when ψ is uncertain.
+        let g = HubFromTower {
+            hub_ray: Vector3::new(0.0, 0.0, 1.0),
+            up: Vector3::new(0.0, -1.0, 0.0),
+            yaw: Estimate {
+                value: 0.5,
+                std: 0.1,
+            },
+            overhang_m: l,
+            hub_above_m: delta,
+        };
+        let s = g
+            .hub_distance(Estimate {
+                value: 30.0,
+                std: 0.0,
+            })
+            .unwrap();
+        assert!((s.std - l * 0.5f64.sin() * 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn off_axis_angle_of_the_line_of_sight() {
+        let level = Vector3::new(0.0, -1.0, 0.0);
+        let ahead = Vector3::new(0.0, 0.0, 1.0);
+        assert!(off_axis_sin(ahead, level, 0.0).unwrap() < 1e-12);
+        let psi = 0.4f64;
+        assert!((off_axis_sin(ahead, level, psi).unwrap() - psi.sin()).abs() < 1e-12);
+        // 8 m below the hub at 25 m (camera pitched up at it), head-on: β is the elevation.
+        let (_, up, _, _) = view(25.0, 8.0, 0.0, 0.0, 0.0, 4.2, 3.4);
+        let elevation = (8.0f64).atan2(25.0);
+        assert!((off_axis_sin(ahead, up, 0.0).unwrap() - elevation.sin()).abs() < 1e-9);
+        assert_eq!(off_axis_sin(Vector3::zeros(), level, 0.0), None);
     }
 
     #[test]

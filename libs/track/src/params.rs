@@ -240,6 +240,12 @@ hubtrack_types::params! {
         /// Standard deviation of the predicted ego-motion shift as a fraction of the shift (added
         /// to the position process noise), dimensionless.
         pub shift_std_fraction: f64 = 0.1, closed(0.0, 10.0);
+        /// A filtered distance under this does not predict the image shift of the vehicle's
+        /// translation (the rotation still does), m: nothing the vehicle approaches is that
+        /// close, and a distance read far too short (a merged tower band read 1.5 m at 10 m)
+        /// had the predicted hub pass through the camera within a second of coasting
+        /// (`eval --sequence --seed 500`, flight 6: filtered hub RMS 65 % of the height).
+        pub min_range_m: f64 = 2.0, closed(0.0, 100.0);
     }
 }
 
@@ -259,6 +265,12 @@ hubtrack_types::params! {
         #[serde(skip)]
         pub tower_taper: f64 = hubtrack_types::setup::TurbineSetup::default().tower_taper(),
             closed(0.0, 1.0);
+        /// Height of the hub centre above the tower top, m: where the tower's width is measured
+        /// relative to the hub (see [`crate::estimate::HubFromTower`]). From the `[turbine]`
+        /// section (`hub_above_tower_top_m`), not a key of its own.
+        #[serde(skip)]
+        pub hub_above_tower_top_m: f64 = hubtrack_types::setup::TurbineSetup::default().hub_above_tower_top_m,
+            closed(0.0, MAX_SIZE_M);
         /// Standard deviation of the measured tower width, px at the reference width (the thesis:
         /// one pixel moved the estimate from 35 m to 40 m).
         pub tower_width_std_px: f64 = 1.0, open_closed(0.0, MAX_PX);
@@ -269,6 +281,17 @@ hubtrack_types::params! {
         pub spinner_diameter_m: f64 = 3.2, open_closed(0.0, MAX_SIZE_M);
         /// Standard deviation of the detected spinner radius, px at the reference width.
         pub spinner_radius_std_px: f64 = 1.0, open_closed(0.0, MAX_PX);
+        /// The spinner seen from below or above: a further radius std of this fraction of the
+        /// radius times `sin²β`, β the line of sight's elevation from the (horizontal) rotor
+        /// axis, from the attitude (none without one). A spinner is a circle only head-on: seen
+        /// from 10–20° below its axis, its nose and the hub cover behind it stick out of the
+        /// rim, and a circle fitted to the silhouette is too large (on the GoPro's rendered
+        /// flights +3 % at `sin β` 0.2, +11 % at 0.3: about `sin²β`). So large a std lets the
+        /// tower carry the distance there, yet still lets the spinner overrule a tower band
+        /// 1.3x too wide (see `consistency_chi2`). The yaw is left out: an estimate 20° off
+        /// close in would take the distance from the spinner where the tower's bands are least
+        /// sure. 0 = trust it the same from any side.
+        pub spinner_oblique_std: f64 = 1.0, closed(0.0, 100.0);
         /// Tower widths and spinner diameters smaller than this are not used, px at the reference
         /// width.
         pub min_size_px: f64 = 2.0, closed(0.0, MAX_PX);
@@ -576,6 +599,7 @@ impl TrackConfig {
         self.camera.lens = lens.clone();
         self.distance.tower_diameter_m = turbine.tower_top_diameter_m;
         self.distance.tower_taper = turbine.tower_taper();
+        self.distance.hub_above_tower_top_m = turbine.hub_above_tower_top_m;
         self.distance.spinner_diameter_m = turbine.spinner_diameter_m;
         self.yaw.hub_tower_offset_m = turbine.hub_overhang_m;
         self

@@ -3,7 +3,7 @@
 
 use hubtrack_types::setup::tower_top_width_px;
 use hubtrack_types::{Detection, TrackMode, TrackState, VehicleState};
-use nalgebra::Rotation3;
+use nalgebra::{Rotation3, Vector3};
 
 use crate::camera::{
     camera_pose_at, camera_position_at, camera_to_body, dt_s, ego_motion, focal_length_px,
@@ -11,7 +11,7 @@ use crate::camera::{
 };
 use crate::estimate::{
     distance_from_spinner, distance_from_tower_width, fuse, fusion_shares, nacelle_excess_sigma,
-    yaw_from_gap, yaw_from_nacelle, Estimate,
+    off_axis_sin, yaw_from_gap, yaw_from_nacelle, Estimate, HubFromTower,
 };
 use crate::filter::{CvModel, HubFilter, ScalarFilter};
 use crate::parallax::{ParallaxRanger, Sighting};
@@ -68,6 +68,8 @@ struct Candidate {
 struct SizeDistances {
     /// Depth of the tower axis from the band's width; `None` when absent or dropped.
     tower: Option<Estimate>,
+    /// Where the hub sits relative to the measured tower point (its yaw is set where used).
+    tower_view: Option<HubFromTower>,
     /// Hub distance from the spinner circle; `None` when absent or dropped.
     spinner: Option<Estimate>,
     /// The spinner distance before any check (the gap's fallback depth).
@@ -279,7 +281,11 @@ impl Core {
             self.cfg.filter.reference_rate_hz,
             self.scale(),
         );
-        let range = self.distance.estimate().map(|e| e.value);
+        let range = self
+            .distance
+            .estimate()
+            .map(|e| e.value)
+            .filter(|d| *d >= self.cfg.ego_motion.min_range_m);
         let frac2 = self.cfg.ego_motion.shift_std_fraction.powi(2);
         let pose0 = self.pose;
         let warp = move |px: [f64; 2], range: Option<f64>| match (pose0.as_ref(), pose1.as_ref()) {
@@ -589,11 +595,47 @@ impl Core {
             d.tower_taper,
         );
         distance_from_tower_width(
-            self.camera().focal_at(det.hub_px),
+            self.camera().focal_at(Self::tower_point(det)),
             d.tower_diameter_m,
             width_at_top,
             d.tower_width_std_px * s,
         )
+    }
+
+    /// The tower axis point whose width a detection measured, px (the tower top for a row
+    /// above it, as in detections that do not say the row).
+    fn tower_point(det: &Detection) -> [f64; 2] {
+        [
+            det.tower_top_px[0],
+            det.tower_width_row.max(det.tower_top_px[1]),
+        ]
+    }
+
+    /// World up in the camera frame: from the attitude at this frame, else a level camera.
+    fn up_in_camera(&self) -> Vector3<f64> {
+        self.pose
+            .as_ref()
+            .map_or(Vector3::new(0.0, -1.0, 0.0), |p| {
+                p.r_wc.inverse() * Vector3::new(0.0, 0.0, -1.0)
+            })
+    }
+
+    /// How the hub sits relative to the tower point a detection measured at depth `depth_m`,
+    /// at relative yaw 0 (set `yaw` where it is used).
+    fn tower_view(&self, det: &Detection, depth_m: f64) -> HubFromTower {
+        let cam = self.camera();
+        let rows_below_top = (det.tower_width_row - det.tower_top_px[1]).max(0.0);
+        HubFromTower {
+            hub_ray: cam.ray(det.hub_px),
+            up: self.up_in_camera(),
+            yaw: Estimate {
+                value: 0.0,
+                std: 0.0,
+            },
+            overhang_m: self.cfg.yaw.hub_tower_offset_m,
+            hub_above_m: self.cfg.distance.hub_above_tower_top_m
+                + rows_below_top * depth_m / cam.focal_at(Self::tower_point(det)),
+        }
     }
 
     /// The thesis's per-frame estimates: distance from the tower width (depth of the tower, eq.
@@ -629,11 +671,18 @@ impl Core {
         let dc = &self.cfg.distance;
         let s = self.scale();
         if det.circle_found && 2.0 * det.circle[2] >= dc.min_size_px * s {
+            let centre = [det.circle[0], det.circle[1]];
+            // Only the elevation, which the attitude knows: a yaw estimate 20° off close in
+            // would hand the distance to the tower exactly where its bands are least sure.
+            let oblique = off_axis_sin(self.camera().ray(centre), self.up_in_camera(), 0.0)
+                .map_or(0.0, |sin_b| {
+                    dc.spinner_oblique_std * sin_b * sin_b * det.circle[2]
+                });
             distance_from_spinner(
-                self.camera().focal_at([det.circle[0], det.circle[1]]),
+                self.camera().focal_at(centre),
                 dc.spinner_diameter_m,
                 det.circle[2],
-                dc.spinner_radius_std_px * s,
+                (dc.spinner_radius_std_px * s).hypot(oblique),
             )
         } else {
             None
@@ -643,30 +692,45 @@ impl Core {
     /// The tower depth and the spinner distance of a detection, checked against each other.
     fn size_distances(&self, det: &Detection) -> SizeDistances {
         let dc = &self.cfg.distance;
-        let offset = self.cfg.yaw.hub_tower_offset_m;
         let spinner = self.spinner_distance(det);
+        let tower = self.tower_depth(det);
         // A tower whose width disagrees with the spinner's size is a wrong band (a blade beside
         // the tower, tower and blade together): it gives neither distance nor yaw. Which of the
         // two is wrong? The one farther from the filtered distance; without one, both.
         let mut sizes = SizeDistances {
-            tower: self.tower_depth(det),
+            tower,
+            tower_view: tower.map(|td| self.tower_view(det, td.value)),
             spinner,
             spinner_seen: spinner,
             tower_rejected: false,
             tower_disputed: false,
             rejected_width_ratio: None,
         };
-        let (Some(td), Some(sp)) = (sizes.tower, sizes.spinner) else {
+        let (Some(td), Some(sp), Some(view)) = (sizes.tower, sizes.spinner, sizes.tower_view)
+        else {
             return sizes;
         };
-        let tower_hub = td.value - offset;
-        let chi2 = (tower_hub - sp.value).powi(2) / (td.std.powi(2) + sp.std.powi(2)).max(1e-12);
+        let psi = self.yaw.estimate().map_or(0.0, |e| e.value);
+        let view = HubFromTower {
+            yaw: Estimate {
+                value: psi,
+                std: 0.0,
+            },
+            ..view
+        };
+        let Some(tower_hub) = view.hub_distance(td) else {
+            return sizes;
+        };
+        let chi2 =
+            (tower_hub.value - sp.value).powi(2) / (tower_hub.var() + sp.std.powi(2)).max(1e-12);
         if chi2 <= dc.consistency_chi2 {
             return sizes;
         }
         sizes.tower_disputed = true;
         match self.distance.estimate() {
-            Some(prior) if (sp.value - prior.value).abs() < (tower_hub - prior.value).abs() => {
+            Some(prior)
+                if (sp.value - prior.value).abs() < (tower_hub.value - prior.value).abs() =>
+            {
                 sizes.tower = None
             }
             Some(_) => sizes.spinner = None,
@@ -674,13 +738,15 @@ impl Core {
         }
         sizes.tower_rejected = sizes.tower.is_none();
         if sizes.tower_rejected {
-            let psi = self.yaw.estimate().map_or(0.0, |e| e.value);
-            let expected_px = self.camera().focal_at(det.hub_px) * dc.tower_diameter_m
-                / (sp.value + offset * psi.cos());
-            sizes.rejected_width_ratio = Some(det.tower_width_px / expected_px);
+            sizes.rejected_width_ratio = view.tower_depth(sp.value).map(|depth| {
+                let expected_px =
+                    self.camera().focal_at(Self::tower_point(det)) * dc.tower_diameter_m / depth;
+                det.tower_width_px / expected_px
+            });
         }
         log::debug!(
-            "tower {tower_hub:.1} m and spinner {:.1} m disagree (chi2 {chi2:.0}): kept {}",
+            "tower {:.1} m and spinner {:.1} m disagree (chi2 {chi2:.0}): kept {}",
+            tower_hub.value,
             sp.value,
             match (sizes.tower, sizes.spinner) {
                 (Some(_), _) => "tower",
@@ -699,21 +765,26 @@ impl Core {
         t: u64,
         sizes: &mut SizeDistances,
     ) -> Option<Estimate> {
-        let offset = self.cfg.yaw.hub_tower_offset_m;
         let p = self.parallax_distance(det, t)?;
         let disagrees = |m: Estimate| {
             (m.value - p.value).powi(2) / (m.var() + p.var()).max(1e-12)
                 > self.cfg.parallax.consistency_chi2
         };
-        if sizes.tower.is_some_and(|td| {
-            disagrees(Estimate {
-                value: td.value - offset,
-                std: td.std,
-            })
-        }) {
+        let psi = self.yaw.estimate().map_or(0.0, |e| e.value);
+        let tower_hub = sizes.tower.zip(sizes.tower_view).and_then(|(td, view)| {
+            HubFromTower {
+                yaw: Estimate {
+                    value: psi,
+                    std: 0.0,
+                },
+                ..view
+            }
+            .hub_distance(td)
+        });
+        if tower_hub.is_some_and(disagrees) {
             log::debug!(
                 "tower {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped",
-                sizes.tower.map_or(0.0, |td| td.value - offset),
+                tower_hub.map_or(0.0, |e| e.value),
                 p.value,
                 p.std
             );
@@ -746,9 +817,15 @@ impl Core {
         let offset = yc.hub_tower_offset_m;
         let tower_depth = sizes.tower.or_else(|| {
             let d = self.distance.estimate().or(sizes.spinner_seen)?;
-            let psi = yaw_prior.map_or(0.0, |e| e.value);
+            let view = HubFromTower {
+                yaw: yaw_prior.unwrap_or(Estimate {
+                    value: 0.0,
+                    std: 0.0,
+                }),
+                ..self.tower_view(det, d.value + offset)
+            };
             Some(Estimate {
-                value: d.value + offset * psi.cos(),
+                value: view.tower_depth(d.value)?,
                 std: d.std,
             })
         });
@@ -975,20 +1052,18 @@ impl Core {
         }
     }
 
-    /// The distance filter from this frame's hub distances: tower depth minus the overhang
-    /// (with the updated yaw), the spinner, and the parallax.
+    /// The distance filter from this frame's hub distances: the tower's (its depth taken to the
+    /// hub with the updated yaw, see [`HubFromTower`]), the spinner's and the parallax's.
     fn update_distance(&mut self, t: u64, sizes: &SizeDistances, parallax: Option<Estimate>) {
         let dc = &self.cfg.distance;
-        let offset = self.cfg.yaw.hub_tower_offset_m;
-        let yaw_now = self.yaw.estimate();
-        let tower_hub = sizes.tower.and_then(|td| {
-            let (psi, sig) = yaw_now.map_or((0.0, 0.0), |e| (e.value, e.std));
-            let value = td.value - offset * psi.cos();
-            (value > 0.0).then(|| Estimate {
-                value,
-                std: td.std.hypot(offset * psi.sin() * sig),
-            })
+        let yaw = self.yaw.estimate().unwrap_or(Estimate {
+            value: 0.0,
+            std: 0.0,
         });
+        let tower_hub = sizes
+            .tower
+            .zip(sizes.tower_view)
+            .and_then(|(td, view)| HubFromTower { yaw, ..view }.hub_distance(td));
         let cues = [tower_hub, sizes.spinner, parallax];
         let Some(m) = fuse(&cues.into_iter().flatten().collect::<Vec<_>>()) else {
             return;

@@ -21,6 +21,9 @@ const SPINNER_M: (f64, f64) = (2.4, 4.6);
 const OVERHANG_M: (f64, f64) = (3.0, 7.0);
 /// Hub height over the rotor radius (the rotor clears the ground), metres, and its spread.
 const HUB_ABOVE_ROTOR_M: (f64, f64) = (25.0, 45.0);
+/// Hub heights above the tower top drawn, metres (the simulator scales its nacelle to match:
+/// 0.8–1.5 times the thesis turbine's).
+const HUB_ABOVE_TOWER_TOP_M: (f64, f64) = (1.4, 2.6);
 
 /// One seed's camera and turbine, as files.
 pub struct FlightSetup {
@@ -58,8 +61,9 @@ pub fn draw(seed: u64, dir: &Path) -> anyhow::Result<FlightSetup> {
     let hub_height = rotor + uniform(&mut r, HUB_ABOVE_ROTOR_M);
     let spinner = uniform(&mut r, SPINNER_M);
     let overhang = uniform(&mut r, OVERHANG_M);
+    let above_top = uniform(&mut r, HUB_ABOVE_TOWER_TOP_M);
     let turbine = format!(
-        "rotor {rotor:.1} m, hub {hub_height:.0} m, tower {top:.2}-{base:.2} m, spinner {spinner:.2} m, overhang {overhang:.2} m"
+        "rotor {rotor:.1} m, hub {hub_height:.0} m, tower {top:.2}-{base:.2} m, spinner {spinner:.2} m, overhang {overhang:.2} m, hub {above_top:.2} m above the tower"
     );
     let profile = format!(
         "# Drawn by `hubtrack fly --random-setup` for seed {seed}.\n\
@@ -69,6 +73,7 @@ pub fn draw(seed: u64, dir: &Path) -> anyhow::Result<FlightSetup> {
          tower_top_diameter_m = {top}\n\
          tower_base_diameter_m = {base}\n\
          hub_overhang_m = {overhang}\n\
+         hub_above_tower_top_m = {above_top}\n\
          spinner_diameter_m = {spinner}\n"
     );
     let write = |name: String, text: String| -> anyhow::Result<PathBuf> {
