@@ -179,6 +179,8 @@ pub struct Approach {
     done: bool,
     /// Since when all inner tolerances have held (for `done_hold_s`).
     at_target_since_ns: Option<u64>,
+    /// Since when the track has been lost while settling or done (see `settle_through_loss_s`).
+    settle_lost_since_ns: Option<u64>,
     /// Since when there has been no usable track (None while tracking).
     unusable_since_ns: Option<u64>,
     /// Search rotation so far, degrees.
@@ -343,6 +345,7 @@ impl Approach {
             t3_active: true,
             done: false,
             at_target_since_ns: None,
+            settle_lost_since_ns: None,
             unusable_since_ns: None,
             search_turned_deg: 0.0,
             search_exhausted: false,
@@ -524,8 +527,59 @@ impl Approach {
             input.track,
         ) {
             (None, Some(t)) => self.tasks(now, dt, t, input.vehicle),
-            (why, _) => self.no_track(now, dt, input.track, why.unwrap_or_default()),
+            (why, _) => {
+                let why = why.unwrap_or_default();
+                match self.settle_through_loss(now, input.vehicle, &why) {
+                    Some(out) => out,
+                    None => self.no_track(now, dt, input.track, why),
+                }
+            }
         }
+    }
+
+    /// A track lost while settling at the target or done (see `settle_through_loss_s`): the
+    /// settling goes on, to Done, and Done holds, on the odometry's distance from the hub the
+    /// last confirmed track fixed, with zero commands. `None` when that does not apply (the
+    /// loss is handled by [`Approach::no_track`] from then on).
+    fn settle_through_loss(
+        &mut self,
+        now: u64,
+        vehicle: Option<&VehicleState>,
+        why: &str,
+    ) -> Option<(ApproachTask, Command, String)> {
+        let c = &self.config;
+        let since = self.at_target_since_ns?;
+        let lost_at = *self.settle_lost_since_ns.get_or_insert(now);
+        let lost_s = secs(lost_at, now);
+        let d = self
+            .hub_fix
+            .zip(vehicle)
+            .and_then(|(f, v)| f.distance_from(v));
+        let within = d.is_some_and(|d| (d - c.target_distance_m).abs() <= c.distance_tolerance_m);
+        if !(c.settle_through_loss_s > 0.0 && lost_s <= c.settle_through_loss_s && within) {
+            return None;
+        }
+        let d = d.unwrap_or(f64::NAN);
+        if !self.done && secs(since, now) >= c.done_hold_s {
+            self.done = true;
+        }
+        Some(if self.done {
+            (
+                ApproachTask::Done,
+                Command::default(),
+                format!("done: {d:.2} m by odometry, {why} {lost_s:.1} s"),
+            )
+        } else {
+            (
+                ApproachTask::Approach,
+                Command::default(),
+                format!(
+                    "T3: at {d:.2} m by odometry, settling {:.1}/{:.1} s, {why} {lost_s:.1} s",
+                    secs(since, now),
+                    c.done_hold_s
+                ),
+            )
+        })
     }
 
     /// Hold, or a bounded search rotation, while there is no usable track.
@@ -634,7 +688,10 @@ impl Approach {
         t: &TrackState,
         vehicle: Option<&VehicleState>,
     ) -> (ApproachTask, Command, String) {
-        if self.unusable_since_ns.take().is_some() {
+        // Back after a loss, also one settled through: a re-acquisition like any other.
+        let was_unusable = self.unusable_since_ns.take().is_some();
+        let was_lost_settling = self.settle_lost_since_ns.take().is_some();
+        if was_unusable || was_lost_settling {
             self.restart_after_loss(now);
         }
         let cues = self.cues(now, t, vehicle);

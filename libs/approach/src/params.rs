@@ -97,6 +97,16 @@ hubtrack_types::params! {
         /// Time all three tasks must be within their inner tolerances before Done, s. Range
         /// [0, 60]; default 1.5.
         pub done_hold_s: f64 = 1.5, closed(0.0, 60.0);
+        /// A track lost while the vehicle settles at the target (every task within its inner
+        /// tolerance, `done_hold_s` running) or is done does not end that for this long, s, as
+        /// long as the odometry keeps the vehicle within `distance_tolerance_m` of the target
+        /// distance from the hub fixed by the last confirmed track: settling goes on to Done, and
+        /// Done holds, with zero commands. Close in, a narrow lens's view fills with the spinner
+        /// right at 5 m and the track drops out there; re-acquired in that view it was often
+        /// something else, and T2 flew the vehicle 7 m aside (`fly --random-setup` seed 14, the
+        /// 640×480 USB lens). Past it, or out of tolerance, the loss is handled as any other.
+        /// Range [0, 60]; default 5 (0 = a loss always restarts the tasks).
+        pub settle_through_loss_s: f64 = 5.0, closed(0.0, 60.0);
 
         // ---- gains ----
         /// T1 yaw-rate gain, deg/s per normalised unit of horizontal error (beyond the deadband).
