@@ -233,6 +233,17 @@ def test_photo_like_views_are_rendered_for_training_and_scored_as_stills(runner,
     assert rows["photo-like"][1] == "12" and rows["negatives"][1] == "1", res.stdout
 
 
+def test_eval_negatives_sets_the_frames_without_a_turbine(runner):
+    """`hubtrack eval --negatives N`: N frames without a turbine (spread over the distance
+    classes' scenes) instead of a quarter of `--synthetic`, enough to state a false-positive
+    rate of a few per cent."""
+    res = runner.run("hubtrack", "eval", "--no-photos", "--synthetic", 3, "--negatives", 6, "--seed", 3)
+    assert res.returncode == 0, res.stderr
+    rows = {l.split()[0]: l.split() for l in res.stdout.splitlines() if l.strip()}
+    assert [rows[f"distance:{c}"][1] for c in ("far", "medium", "close")] == ["3"] * 3, res.stdout
+    assert rows["negatives"][1] == "6", res.stdout
+
+
 def test_synthetic_frames_can_be_scored_as_stills(runner):
     """`hubtrack eval --as-stills` scores the `--synthetic` frames as `hubtrack detect` sees an
     image (no attitude, both pyramid levels): the path outside evaluation takes on renders."""

@@ -36,6 +36,11 @@ pub struct EvalArgs {
     /// filmed through the `--camera` calibration if one is given, else the GoPro and USB lenses.
     #[arg(long, default_value_t = 200)]
     pub synthetic: u64,
+    /// Negatives (frames without a turbine) per synthetic set instead of a quarter of
+    /// `--synthetic`: enough of them to state a false-positive rate of a few per cent (each
+    /// cross-domain set gets as many).
+    #[arg(long, value_name = "N")]
+    pub negatives: Option<u64>,
     /// Photo-like rendered views (0: none; 12–250 m, from below and above, relative yaw to ±70°,
     /// shrubland and wind farms), plus a twelfth as many negatives, detected as still photos:
     /// the renderer's stand-in for the photos' domain, in the table `photo-like` (categories
@@ -135,6 +140,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         let table = eval_synthetic(
             &Synthetic {
                 per_class: args.synthetic,
+                negatives_per_class: negatives_per_class(&args),
                 seed: args.seed,
                 still: args.as_stills,
                 lenses: calibrated
@@ -383,12 +389,21 @@ fn eval_truth_file(
 /// cases, `[1]` for the narrow ones), and whether the turbines are of the held-out family.
 struct Synthetic {
     per_class: u64,
+    /// Negatives per distance class's scenes (a third of the set's).
+    negatives_per_class: u64,
     seed: u64,
     still: bool,
     lenses: [Camera; 2],
     held_out_turbines: bool,
     /// The category label of a single held-out camera.
     camera_label: Option<&'static str>,
+}
+
+/// Negatives per distance class: `--negatives` spread over the classes, else a twelfth of
+/// `--synthetic` (a quarter over the three classes).
+fn negatives_per_class(args: &EvalArgs) -> u64 {
+    args.negatives
+        .map_or(args.synthetic / 12, |n| n.div_ceil(CLASSES.len() as u64))
 }
 
 fn eval_synthetic(
@@ -400,7 +415,7 @@ fn eval_synthetic(
     let mut table = Table::new();
     let per_class = set.per_class;
     for (class, class_def) in CLASSES.iter().enumerate() {
-        let cases = (0..per_class + per_class / 12).map(|i| {
+        let cases = (0..per_class + set.negatives_per_class).map(|i| {
             let mut case = synth_case(set.seed, class, i, i >= per_class);
             if set.held_out_turbines {
                 let seed = case.scene.seed;
@@ -450,6 +465,7 @@ fn eval_cross_domain(
         let table = eval_synthetic(
             &Synthetic {
                 per_class: args.synthetic,
+                negatives_per_class: negatives_per_class(args),
                 seed: args.seed,
                 still: args.as_stills,
                 lenses: [camera, camera],
@@ -472,6 +488,7 @@ fn eval_cross_domain(
     let table = eval_synthetic(
         &Synthetic {
             per_class: args.synthetic,
+            negatives_per_class: negatives_per_class(args),
             seed: args.seed,
             still: args.as_stills,
             lenses: [Camera::gopro_hero3(), Camera::usb_narrow()],
