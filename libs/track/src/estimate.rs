@@ -39,6 +39,11 @@ pub struct Estimate {
 }
 
 impl Estimate {
+    /// A value taken as known exactly (std 0).
+    pub fn exact(value: f64) -> Estimate {
+        Estimate { value, std: 0.0 }
+    }
+
     /// Variance `std²`.
     pub fn var(&self) -> f64 {
         self.std * self.std
@@ -164,6 +169,11 @@ pub fn off_axis_sin(hub_ray: Vector3<f64>, up: Vector3<f64>, psi: f64) -> Option
 }
 
 impl HubFromTower {
+    /// The same view at relative yaw `yaw`.
+    pub fn with_yaw(self, yaw: Estimate) -> HubFromTower {
+        HubFromTower { yaw, ..self }
+    }
+
     /// `(ẑ·u, ẑ·b, ẑ·∂b/∂ψ, ẑ·up)`; `None` for a hub straight above or below the camera.
     fn depth_terms(&self) -> Option<(f64, f64, f64, f64)> {
         let u = self.hub_ray.try_normalize(1e-12)?;

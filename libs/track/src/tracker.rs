@@ -83,6 +83,14 @@ struct SizeDistances {
     rejected_width_ratio: Option<f64>,
 }
 
+impl SizeDistances {
+    /// The hub's distance from the tower band, at relative yaw `yaw`; `None` without a band.
+    fn tower_hub(&self, yaw: Estimate) -> Option<Estimate> {
+        let (td, view) = self.tower.zip(self.tower_view)?;
+        view.with_yaw(yaw).hub_distance(td)
+    }
+}
+
 /// The shared implementation.
 #[derive(Debug, Clone)]
 struct Core {
@@ -620,18 +628,20 @@ impl Core {
             })
     }
 
+    /// The filtered relative yaw as an exact value (0 before there is one).
+    fn yaw_now(&self) -> Estimate {
+        Estimate::exact(self.yaw.estimate().map_or(0.0, |e| e.value))
+    }
+
     /// How the hub sits relative to the tower point a detection measured at depth `depth_m`,
-    /// at relative yaw 0 (set `yaw` where it is used).
+    /// at relative yaw 0 (see [`HubFromTower::with_yaw`]).
     fn tower_view(&self, det: &Detection, depth_m: f64) -> HubFromTower {
         let cam = self.camera();
         let rows_below_top = (det.tower_width_row - det.tower_top_px[1]).max(0.0);
         HubFromTower {
             hub_ray: cam.ray(det.hub_px),
             up: self.up_in_camera(),
-            yaw: Estimate {
-                value: 0.0,
-                std: 0.0,
-            },
+            yaw: Estimate::exact(0.0),
             overhang_m: self.cfg.yaw.hub_tower_offset_m,
             hub_above_m: self.cfg.distance.hub_above_tower_top_m
                 + rows_below_top * depth_m / cam.focal_at(Self::tower_point(det)),
@@ -706,21 +716,14 @@ impl Core {
             tower_disputed: false,
             rejected_width_ratio: None,
         };
-        let (Some(td), Some(sp), Some(view)) = (sizes.tower, sizes.spinner, sizes.tower_view)
-        else {
+        let (Some(sp), Some(view), Some(tower_hub)) = (
+            sizes.spinner,
+            sizes.tower_view,
+            sizes.tower_hub(self.yaw_now()),
+        ) else {
             return sizes;
         };
-        let psi = self.yaw.estimate().map_or(0.0, |e| e.value);
-        let view = HubFromTower {
-            yaw: Estimate {
-                value: psi,
-                std: 0.0,
-            },
-            ..view
-        };
-        let Some(tower_hub) = view.hub_distance(td) else {
-            return sizes;
-        };
+        let view = view.with_yaw(self.yaw_now());
         let chi2 =
             (tower_hub.value - sp.value).powi(2) / (tower_hub.var() + sp.std.powi(2)).max(1e-12);
         if chi2 <= dc.consistency_chi2 {
@@ -770,17 +773,7 @@ impl Core {
             (m.value - p.value).powi(2) / (m.var() + p.var()).max(1e-12)
                 > self.cfg.parallax.consistency_chi2
         };
-        let psi = self.yaw.estimate().map_or(0.0, |e| e.value);
-        let tower_hub = sizes.tower.zip(sizes.tower_view).and_then(|(td, view)| {
-            HubFromTower {
-                yaw: Estimate {
-                    value: psi,
-                    std: 0.0,
-                },
-                ..view
-            }
-            .hub_distance(td)
-        });
+        let tower_hub = sizes.tower_hub(self.yaw_now());
         if tower_hub.is_some_and(disagrees) {
             log::debug!(
                 "tower {:.1} m disagrees with parallax {:.1}±{:.1} m: dropped",
@@ -817,13 +810,9 @@ impl Core {
         let offset = yc.hub_tower_offset_m;
         let tower_depth = sizes.tower.or_else(|| {
             let d = self.distance.estimate().or(sizes.spinner_seen)?;
-            let view = HubFromTower {
-                yaw: yaw_prior.unwrap_or(Estimate {
-                    value: 0.0,
-                    std: 0.0,
-                }),
-                ..self.tower_view(det, d.value + offset)
-            };
+            let view = self
+                .tower_view(det, d.value + offset)
+                .with_yaw(yaw_prior.unwrap_or(Estimate::exact(0.0)));
             Some(Estimate {
                 value: view.tower_depth(d.value)?,
                 std: d.std,
@@ -1056,14 +1045,7 @@ impl Core {
     /// hub with the updated yaw, see [`HubFromTower`]), the spinner's and the parallax's.
     fn update_distance(&mut self, t: u64, sizes: &SizeDistances, parallax: Option<Estimate>) {
         let dc = &self.cfg.distance;
-        let yaw = self.yaw.estimate().unwrap_or(Estimate {
-            value: 0.0,
-            std: 0.0,
-        });
-        let tower_hub = sizes
-            .tower
-            .zip(sizes.tower_view)
-            .and_then(|(td, view)| HubFromTower { yaw, ..view }.hub_distance(td));
+        let tower_hub = sizes.tower_hub(self.yaw.estimate().unwrap_or(Estimate::exact(0.0)));
         let cues = [tower_hub, sizes.spinner, parallax];
         let Some(m) = fuse(&cues.into_iter().flatten().collect::<Vec<_>>()) else {
             return;
