@@ -32,7 +32,7 @@ use std::time::Instant;
 use opencv::core::{Mat, Vec4i, Vector};
 
 use geometry::{Segment, P2};
-use hubtrack_types::setup::tower_top_width_px;
+use hubtrack_types::setup::{tower_top_width_px, CameraModel, Distortion};
 use hubtrack_types::{Detection, PixelFormat, TrackMode, TrackState, MAX_BLADES};
 use params::{DetectConfig, Mode, StillMirror};
 
@@ -774,6 +774,7 @@ impl Detector {
                 spinner_radius_m: self.config.camera.spinner_diameter_m / 2.0,
                 tower_top_diameter_m: self.config.camera.tower_top_diameter_m,
                 hub_tower_gap_m: self.config.camera.hub_tower_gap_m,
+                bending_lens: self.bending_lens(image, k),
             }),
             heat: None,
         };
@@ -905,6 +906,27 @@ impl Detector {
     }
 
     /// Focal length in full-resolution px.
+    /// The calibrated camera in working px (full-resolution px / `k`, as the hints), when its
+    /// lens bends straight lines (see `robust::FrameCtx::camera`).
+    fn bending_lens(&self, image: &ImageView<'_>, k: f64) -> Option<CameraModel> {
+        let c = self
+            .config
+            .camera
+            .lens
+            .calibration()?
+            .scaled_to(image.width, image.height)
+            .ok()?;
+        (!matches!(c.distortion, Distortion::None)).then(|| CameraModel {
+            width: (f64::from(c.width) / k).round() as u32,
+            height: (f64::from(c.height) / k).round() as u32,
+            fx: c.fx / k,
+            fy: c.fy / k,
+            cx: c.cx / k,
+            cy: c.cy / k,
+            distortion: c.distortion,
+        })
+    }
+
     fn focal_px(&self, width: u32) -> f64 {
         let c = &self.config.camera;
         if c.focal_length_per_width > 0.0 {

@@ -242,6 +242,13 @@ hubtrack_types::params! {
         pub horizon_min_length_frac: f64 = 0.4, closed(0.0, 2.0);
         /// See `horizon_min_length_frac`, degrees from horizontal.
         pub horizon_max_tilt_deg: f64 = 8.0, closed(0.0, 45.0);
+        /// Through a calibrated lens that bends lines (fisheye, plumb_bob), the Hough lines are
+        /// judged undistorted, and level pieces within this of one straight line (fraction of
+        /// the image height) count together toward `horizon_min_length_frac`: the lens bends
+        /// the horizon into an arc that the Hough transform cuts into pieces, each too short to
+        /// be a horizon, and the pieces beside a mast passed for blades (fisheye negatives:
+        /// 5.5 % false positives). 0: each line on its own, as through a pinhole.
+        pub horizon_piece_tol_frac: f64 = 0.01, closed(0.0, 0.2);
         /// A horizon candidate whose edge pairs with another into a slender band (`pair_*`) that
         /// narrows by at least this ratio from one end to the other is a blade lying level, not a
         /// horizon, and stays usable. A horizon is a single line; a road or a field strip is a

@@ -3,6 +3,8 @@
 //! roll, usable flags and band axes ([`SceneCtx`]). Steps take one of these instead of the
 //! same half-dozen loose arguments each.
 
+use hubtrack_types::setup::CameraModel;
+
 use crate::geometry::{Segment, P2};
 use crate::params::DefaultParams;
 use crate::Hints;
@@ -35,6 +37,9 @@ pub(crate) struct Optics {
     pub tower_top_diameter_m: f64,
     /// Horizontal distance from the hub back to the tower axis, m.
     pub hub_tower_gap_m: f64,
+    /// The calibrated camera at the working size, when its lens bends straight lines (see
+    /// [`FrameCtx::camera`]).
+    pub bending_lens: Option<CameraModel>,
 }
 
 impl Optics {
@@ -63,6 +68,10 @@ pub(super) struct FrameCtx<'a> {
     /// The largest spinner radius searched without a tracker's distance, working px (see
     /// [`blind_spinner_max_r`]).
     pub spinner_max_r: f64,
+    /// The calibrated camera at the working size when its lens bends straight lines (fisheye,
+    /// plumb_bob): a horizon is judged straight and level where a pinhole would have imaged it
+    /// (see `horizon::usable_lines`).
+    pub camera: Option<CameraModel>,
 }
 
 /// The largest spinner radius the spinner step searches without a tracker's distance, working px.
@@ -107,6 +116,8 @@ pub(super) struct SceneCtx<'a> {
     pub hints: &'a Hints,
     /// The largest spinner radius searched without a tracker's distance, working px.
     pub spinner_max_r: f64,
+    /// The calibrated camera at the working size when its lens bends straight lines.
+    pub camera: Option<CameraModel>,
     /// The merged Hough lines, longest first.
     pub segs: &'a [Segment],
     /// Per line: may it be a blade or tower edge (not a horizon, step 4).
@@ -128,6 +139,7 @@ impl<'a> SceneCtx<'a> {
             h: self.h,
             hints: self.hints,
             spinner_max_r: self.spinner_max_r,
+            camera: self.camera,
         }
     }
 }

@@ -106,6 +106,7 @@ pub(crate) fn run(
             expected.optics.as_ref(),
             hints,
         ),
+        camera: expected.optics.and_then(|o| o.bending_lens),
     };
     let settings = lines::hough_settings(p, frame.h);
     let (hough, segments) = (&mut s.hough, &mut s.segments);
@@ -212,6 +213,7 @@ fn recognise(
         h,
         hints,
         spinner_max_r: frame.spinner_max_r,
+        camera: frame.camera,
         segs,
         usable: &usable,
         axes: &axes,

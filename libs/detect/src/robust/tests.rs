@@ -29,6 +29,7 @@ fn frame(p: &DefaultParams, w: f64, h: f64) -> FrameCtx<'_> {
         h,
         hints: &NO_HINTS,
         spinner_max_r: p.spinner_max_radius_frac * h,
+        camera: None,
     }
 }
 
@@ -45,6 +46,7 @@ fn scene<'a>(p: &'a DefaultParams, segs: &'a [Segment], usable: &'a [bool]) -> S
         h: 270.0,
         hints: &NO_HINTS,
         spinner_max_r: p.spinner_max_radius_frac * 270.0,
+        camera: None,
         segs,
         usable,
         axes: &[],
@@ -67,6 +69,7 @@ fn recognise_at(
         h: 270.0,
         hints,
         spinner_max_r: p.spinner_max_radius_frac * 270.0,
+        camera: None,
     };
     recognise(&f, segs, search, None, expected)
 }
@@ -235,6 +238,7 @@ fn a_spinner_implies_the_tower_width_from_its_own_distance() {
         spinner_radius_m: 1.6,
         tower_top_diameter_m: 2.2,
         hub_tower_gap_m: 4.2,
+        bending_lens: None,
     };
     let r_at = |d: f64| o.focal_px * 1.6 / d;
     // 38 m: the tower top, 42.2 m away, is 1.24 spinner radii wide; 5 m: 0.75.
@@ -577,6 +581,7 @@ fn the_lens_sets_how_large_a_spinner_is_searched_blind() {
         spinner_radius_m: 1.6,
         tower_top_diameter_m: 2.2,
         hub_tower_gap_m: 4.2,
+        bending_lens: None,
     };
     // The GoPro at 480 × 270 working px (f = 0.4343 · 480 = 208.5 px): 83 px at 4 m, under the
     // fixed 0.32 · 270 = 86.4 px, which stays.
@@ -1007,4 +1012,61 @@ fn horizon_bent_by_the_lens_still_continues_behind_the_candidate() {
         Segment::new([203.0, 135.0], [210.0, 265.0]),
     ];
     assert!(!continues_beyond(&scene(&p, &up, &[true, true]), 0, c));
+}
+
+/// Through a fisheye the level horizon is an arc, cut by the Hough transform into pieces each
+/// too short (and, beside the centre, too tilted) to be a horizon; judged undistorted, the
+/// pieces lie on one level line and together are one. A pinhole judges each piece on its own,
+/// as before; a piece of a line that is not level stays usable through either.
+#[test]
+fn a_horizon_bent_into_pieces_by_a_fisheye_is_still_a_horizon() {
+    use hubtrack_types::setup::{CameraModel, Distortion};
+    let p = DefaultParams::default();
+    // The cross-domain fisheye at a 480 × 270 working size.
+    let fisheye = CameraModel::centred(
+        480,
+        270,
+        175.0,
+        Distortion::Equidistant {
+            k1: -0.03,
+            k2: 0.008,
+            k3: -0.002,
+            k4: 0.0003,
+        },
+    );
+    // A level horizon 0.35 (normalised) above the centre, seen in four pieces of the arc, and
+    // a line rising at 30° through the same region (a blade).
+    let at = |x: f64, y: f64| fisheye.project([x, y, 1.0]).unwrap();
+    let mut segs: Vec<Segment> = [(-1.6, -0.8), (-0.7, -0.05), (0.05, 0.7), (0.8, 1.6)]
+        .iter()
+        .map(|&(x0, x1)| Segment::new(at(x0, -0.35), at(x1, -0.35)))
+        .collect();
+    segs.push(Segment::new(at(0.2, -0.1), at(0.6, -0.33)));
+    for s in &segs {
+        assert!(
+            !is_horizon(&p, s, 480.0, 0.0),
+            "no piece is a horizon on its own: {s:?}"
+        );
+    }
+    let f = FrameCtx {
+        camera: Some(fisheye),
+        ..frame(&p, 480.0, 270.0)
+    };
+    assert_eq!(
+        usable_lines(&f, &segs, 0.0),
+        vec![false, false, false, false, true]
+    );
+    // Without the calibration (or with the rule off) every piece stays usable.
+    assert!(usable_lines(&frame(&p, 480.0, 270.0), &segs, 0.0)
+        .iter()
+        .all(|u| *u));
+    let off = DefaultParams {
+        horizon_piece_tol_frac: 0.0,
+        ..p.clone()
+    };
+    let f = FrameCtx {
+        camera: Some(fisheye),
+        ..frame(&off, 480.0, 270.0)
+    };
+    assert!(usable_lines(&f, &segs, 0.0).iter().all(|u| *u));
 }
