@@ -75,8 +75,9 @@ pub struct EvalArgs {
     #[arg(long, default_value_t = 300)]
     pub frames: u64,
     /// Write an overlay PNG (truth in red) of every `default`-mode miss and false positive to
-    /// this folder, with `misses.jsonl` listing them; with --sequence, of every frame whose
-    /// detection lies off the truth (named `f<flight>_<frame>`).
+    /// this folder, with `misses.jsonl` listing them (each --cross-domain set in a subfolder
+    /// `cross-domain-<set>`); with --sequence, of every frame whose detection lies off the truth
+    /// (named `f<flight>_<frame>`).
     #[arg(long, value_name = "DIR")]
     pub misses: Option<PathBuf>,
     /// With --sequence: write one JSON line per frame (flight, frame, truth, detection, both
@@ -93,9 +94,7 @@ pub struct EvalArgs {
 pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     let config = crate::config::load(&args.config)?;
     if let Some(dir) = &args.misses {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        std::fs::write(dir.join("misses.jsonl"), "")
-            .with_context(|| format!("writing {}", dir.display()))?;
+        start_misses_dir(dir)?;
     }
     if args.sequence {
         let out = crate::eval_seq::Outputs {
@@ -292,6 +291,13 @@ pub(crate) fn write_miss(
     Ok(true)
 }
 
+/// Creates `dir` with an empty `misses.jsonl` (see `--misses`).
+fn start_misses_dir(dir: &Path) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    std::fs::write(dir.join("misses.jsonl"), "")
+        .with_context(|| format!("writing {}", dir.display()))
+}
+
 /// Where `--candidates` lines go.
 pub(crate) type CandidateSink = std::io::BufWriter<std::fs::File>;
 
@@ -455,7 +461,17 @@ fn eval_cross_domain(
     names: &[&str],
     in_domain_detectors: &mut [hubtrack_detect::Detector],
 ) -> anyhow::Result<()> {
+    // Each held-out set's misses in a folder of its own (the sets reuse the frame names).
+    let misses_of = |set: &str| -> anyhow::Result<Option<PathBuf>> {
+        let Some(dir) = &args.misses else {
+            return Ok(None);
+        };
+        let dir = dir.join(format!("cross-domain-{set}"));
+        start_misses_dir(&dir)?;
+        Ok(Some(dir))
+    };
     for (name, camera) in held_out_cameras() {
+        let misses = misses_of(name)?;
         let lens = Lens::from_model(camera);
         let detect = config.detect.clone().with_setup(&lens, &config.turbine);
         let mut detectors = MODES
@@ -473,7 +489,7 @@ fn eval_cross_domain(
                 camera_label: Some(name),
             },
             &mut detectors,
-            None,
+            misses.as_deref(),
             None,
         )?;
         print_table(
@@ -485,6 +501,7 @@ fn eval_cross_domain(
             &table,
         );
     }
+    let misses = misses_of("turbines")?;
     let table = eval_synthetic(
         &Synthetic {
             per_class: args.synthetic,
@@ -496,7 +513,7 @@ fn eval_cross_domain(
             camera_label: None,
         },
         in_domain_detectors,
-        None,
+        misses.as_deref(),
         None,
     )?;
     print_table(
