@@ -940,17 +940,24 @@ impl Approach {
                 c.max_forward_m_s,
             )
         });
-        let vy = slew(self.cmd.vy, vy_t, c.accel_xy_m_s2, dt);
-        let vx = slew(self.cmd.vx, vx_t, c.accel_xy_m_s2, dt);
         (
             ApproachTask::Done,
-            Command {
-                vx,
-                vy,
-                ..Command::default()
-            },
+            self.hover_towards(vx_t, vy_t, dt),
             reason,
         )
+    }
+
+    /// A hover that moves forward at `vx_t` and sideways at `vy_t` (limited), through the rate
+    /// limit: the station keeping of Done and settling.
+    fn hover_towards(&self, vx_t: f64, vy_t: f64, dt: f64) -> Command {
+        let c = &self.config;
+        let vx_t = limit(vx_t, -c.max_backward_m_s, c.max_forward_m_s);
+        let vy_t = limit_abs(vy_t, c.max_lateral_m_s);
+        Command {
+            vx: slew(self.cmd.vx, vx_t, c.accel_xy_m_s2, dt),
+            vy: slew(self.cmd.vy, vy_t, c.accel_xy_m_s2, dt),
+            ..Command::default()
+        }
     }
 
     /// The command while settling or done with the image errors out of their tolerances, while
@@ -989,22 +996,7 @@ impl Approach {
                 ),
             )
         };
-        let cmd = Command {
-            vx: slew(
-                self.cmd.vx,
-                limit(vx_t, -c.max_backward_m_s, c.max_forward_m_s),
-                c.accel_xy_m_s2,
-                dt,
-            ),
-            vy: slew(
-                self.cmd.vy,
-                limit_abs(vy_t, c.max_lateral_m_s),
-                c.accel_xy_m_s2,
-                dt,
-            ),
-            ..Command::default()
-        };
-        (task, cmd, reason)
+        (task, self.hover_towards(vx_t, vy_t, dt), reason)
     }
 
     /// T1 vertical: always on.

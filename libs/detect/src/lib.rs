@@ -905,7 +905,6 @@ impl Detector {
         })
     }
 
-    /// Focal length in full-resolution px.
     /// The calibrated camera in working px (full-resolution px / `k`, as the hints), when its
     /// lens bends straight lines (see `robust::FrameCtx::camera`).
     fn bending_lens(&self, image: &ImageView<'_>, k: f64) -> Option<CameraModel> {
@@ -927,6 +926,7 @@ impl Detector {
         })
     }
 
+    /// Focal length in full-resolution px.
     fn focal_px(&self, width: u32) -> f64 {
         let c = &self.config.camera;
         if c.focal_length_per_width > 0.0 {

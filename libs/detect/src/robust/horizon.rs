@@ -37,8 +37,12 @@ pub(super) fn search_roll(p: &DefaultParams, segs: &[Segment]) -> f64 {
 /// Horizon/ridge candidates: long and near horizontal after roll compensation (through a lens
 /// that bends lines, see [`horizon_in_pieces`]).
 pub(super) fn is_horizon(p: &DefaultParams, s: &Segment, w: f64, roll_deg: f64) -> bool {
-    s.length() >= p.horizon_min_length_frac * w
-        && (90.0 - geometry::roll_compensated_tilt_deg(s, roll_deg).abs()) <= p.horizon_max_tilt_deg
+    s.length() >= p.horizon_min_length_frac * w && is_level(p, s, roll_deg)
+}
+
+/// Within `horizon_max_tilt_deg` of horizontal after roll compensation.
+fn is_level(p: &DefaultParams, s: &Segment, roll_deg: f64) -> bool {
+    (90.0 - geometry::roll_compensated_tilt_deg(s, roll_deg).abs()) <= p.horizon_max_tilt_deg
 }
 
 /// Per line: a horizon candidate seen through a lens that bends lines (see
@@ -56,13 +60,7 @@ fn horizon_in_pieces(
         .iter()
         .map(|s| Segment::new(camera.undistort_pixel(s.a), camera.undistort_pixel(s.b)))
         .collect();
-    let level: Vec<bool> = straight
-        .iter()
-        .map(|s| {
-            (90.0 - geometry::roll_compensated_tilt_deg(s, roll_deg).abs())
-                <= p.horizon_max_tilt_deg
-        })
-        .collect();
+    let level: Vec<bool> = straight.iter().map(|s| is_level(p, s, roll_deg)).collect();
     let tol = p.horizon_piece_tol_frac * h;
     (0..straight.len())
         .map(|i| {
