@@ -69,6 +69,16 @@ params! {
         /// Spinner (nose cone) diameter at the blade roots, m: a second distance cue close in,
         /// and the size of circle the detector searches for.
         pub spinner_diameter_m: f64 = 3.2, closed(0.1, 30.0);
+        /// Nacelle width, m: the nacelle yaw cue reads how far the nacelle's far rear corner
+        /// sticks out beside the spinner, and the detector looks for that corner beyond the wider
+        /// of the spinner and the nacelle's front corners. Default: the thesis turbine's 3.4 m.
+        pub nacelle_width_m: f64 = 3.4, closed(0.3, 20.0);
+        /// Nacelle length along the rotor axis, front face to rear face, m. Default 10.
+        pub nacelle_length_m: f64 = 10.0, closed(1.0, 50.0);
+        /// Distance from the hub centre (the blade-root plane) back to the nacelle's front face
+        /// along the rotor axis, m; less than `hub_overhang_m`, as the nacelle sits on the tower.
+        /// Default 1.2.
+        pub nacelle_front_behind_hub_m: f64 = 1.2, closed(0.0, 20.0);
     }
 }
 
@@ -189,7 +199,25 @@ impl TurbineSetup {
             self.rotor_radius_m,
             "hub_height_m",
             self.hub_height_m,
+        )?;
+        // The nacelle sits on the tower: its front ahead of the tower axis, its rear behind it.
+        check.less(
+            "nacelle_front_behind_hub_m",
+            self.nacelle_front_behind_hub_m,
+            "hub_overhang_m",
+            self.hub_overhang_m,
+        )?;
+        check.less(
+            "hub_overhang_m",
+            self.hub_overhang_m,
+            "nacelle_front_behind_hub_m + nacelle_length_m",
+            self.nacelle_rear_behind_hub_m(),
         )
+    }
+
+    /// Distance from the hub centre back to the nacelle's rear face along the rotor axis, m.
+    pub fn nacelle_rear_behind_hub_m(&self) -> f64 {
+        self.nacelle_front_behind_hub_m + self.nacelle_length_m
     }
 
     /// How much wider the tower gets per metre below its top, m/m: the linear taper from
@@ -267,6 +295,9 @@ mod tests {
                 "hub_overhang_m" => t.hub_overhang_m = f(),
                 "hub_above_tower_top_m" => t.hub_above_tower_top_m = f(),
                 "spinner_diameter_m" => t.spinner_diameter_m = f(),
+                "nacelle_width_m" => t.nacelle_width_m = f(),
+                "nacelle_length_m" => t.nacelle_length_m = f(),
+                "nacelle_front_behind_hub_m" => t.nacelle_front_behind_hub_m = f(),
                 other => panic!("unknown key {other}"),
             }
         }

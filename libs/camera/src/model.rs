@@ -114,6 +114,20 @@ impl CameraModel {
         self.distortion.undistort(pd)
     }
 
+    /// Field of view across the image's narrower direction through the principal point,
+    /// radians: the angle between the rays through the outer edges of the two border pixels.
+    pub fn narrow_fov_rad(&self) -> f64 {
+        let (a, b) = if self.height <= self.width {
+            ([self.cx, -0.5], [self.cx, f64::from(self.height) - 0.5])
+        } else {
+            ([-0.5, self.cy], [f64::from(self.width) - 0.5, self.cy])
+        };
+        let (a, b) = (self.ray(a), self.ray(b));
+        let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        let cos = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (norm(a) * norm(b));
+        cos.clamp(-1.0, 1.0).acos()
+    }
+
     /// Pixel → viewing ray in the camera frame with `z = 1`.
     pub fn ray(&self, px: [f64; 2]) -> [f64; 3] {
         let [x, y] = self.unproject(px);
@@ -280,6 +294,30 @@ mod tests {
         let centre = gopro.local_focal_px([gopro.cx, gopro.cy]);
         assert!((centre - gopro.fx).abs() < 1e-3 * gopro.fx);
         assert!(gopro.local_focal_px([1800.0, gopro.cy]) < 0.8 * centre);
+    }
+
+    #[test]
+    fn the_narrow_field_of_view_is_across_the_shorter_side() {
+        // A 90° × 73.7° pinhole (640 × 480): 2·atan(240 / 320).
+        let pin = CameraModel::pinhole(640, 480, 90.0);
+        let expected = 2.0 * (240.0f64 / 320.0).atan();
+        assert!((pin.narrow_fov_rad() - expected).abs() < 1e-9);
+        // Portrait: across the width, 90°.
+        let portrait = CameraModel::centred(480, 640, 240.0, Distortion::None);
+        assert!((portrait.narrow_fov_rad() - 90f64.to_radians()).abs() < 1e-9);
+        // An equidistant fisheye sees θ = r / f: 540 px at f = 700 is 0.771 rad each side.
+        let fish = CameraModel::centred(
+            1920,
+            1080,
+            700.0,
+            Distortion::Equidistant {
+                k1: 0.0,
+                k2: 0.0,
+                k3: 0.0,
+                k4: 0.0,
+            },
+        );
+        assert!((fish.narrow_fov_rad() - 2.0 * 540.0 / 700.0).abs() < 1e-6);
     }
 
     #[test]

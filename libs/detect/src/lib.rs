@@ -774,6 +774,8 @@ impl Detector {
                 spinner_radius_m: self.config.camera.spinner_diameter_m / 2.0,
                 tower_top_diameter_m: self.config.camera.tower_top_diameter_m,
                 hub_tower_gap_m: self.config.camera.hub_tower_gap_m,
+                nacelle_width_m: self.config.camera.nacelle_width_m,
+                nacelle_rear_m: self.config.camera.nacelle_rear_m,
                 bending_lens: self.bending_lens(image, k),
             }),
             heat: None,

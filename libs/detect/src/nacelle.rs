@@ -12,13 +12,38 @@
 
 use crate::geometry::P2;
 use crate::params::DefaultParams;
+use crate::robust::Optics;
 use crate::tower::GradPlane;
+
+/// How far beside the hub the nacelle's far end is searched, metres at the hub's depth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct NacelleReach {
+    /// Nearest: `nacelle_clearance_m` beyond the wider of the spinner and the nacelle's front
+    /// corners, which stick out on both sides whatever the yaw (a 4.3 m spinner's rim lies 2.15
+    /// m out, where a fixed 2 m band would take it for the nacelle's end).
+    pub near_m: f64,
+    /// Farthest: the rear corner at `nacelle_max_yaw_deg`, `Lr·sin ψ + w·cos ψ`.
+    pub far_m: f64,
+}
+
+impl NacelleReach {
+    /// The reach for the turbine of `optics`.
+    pub fn of(p: &DefaultParams, optics: &Optics) -> NacelleReach {
+        let half_width = optics.nacelle_width_m / 2.0;
+        let (sin, cos) = p.nacelle_max_yaw_deg.to_radians().sin_cos();
+        NacelleReach {
+            near_m: optics.spinner_radius_m.max(half_width) + p.nacelle_clearance_m,
+            far_m: optics.nacelle_rear_m * sin + half_width * cos,
+        }
+    }
+}
 
 /// Signed offset, working px, from the hub to the nacelle's far end along the image row
 /// (positive: to the right), or `None` when neither side shows a clear vertical edge or both
 /// do. `px_per_m`: image scale at the hub's depth (working px per metre).
 pub(crate) fn nacelle_end(
     p: &DefaultParams,
+    reach: NacelleReach,
     gx: &GradPlane<'_>,
     hub: P2,
     px_per_m: f64,
@@ -34,8 +59,8 @@ pub(crate) fn nacelle_end(
     if rows.len() < 3 {
         return None;
     }
-    let near = (p.nacelle_min_offset_m * px_per_m).ceil().max(1.0) as i64;
-    let far = (p.nacelle_max_offset_m * px_per_m).floor() as i64;
+    let near = (reach.near_m * px_per_m).ceil().max(1.0) as i64;
+    let far = (reach.far_m * px_per_m).floor() as i64;
     // Median signed horizontal gradient down one column: a vertical edge keeps its sign over
     // all rows; texture cancels and an inclined edge (a blade beside the hub, however strong)
     // crosses a few rows only.
@@ -72,6 +97,64 @@ pub(crate) fn nacelle_end(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The thesis turbine's reach: 2 m (its 1.7 m half width + 0.3) to ~10 m.
+    const THESIS: NacelleReach = NacelleReach {
+        near_m: 2.0,
+        far_m: 10.0,
+    };
+
+    /// The reach of a turbine with the thesis turbine's nacelle and a spinner of `diameter_m`.
+    fn reach_with_spinner(diameter_m: f64) -> NacelleReach {
+        NacelleReach::of(
+            &DefaultParams::default(),
+            &Optics {
+                focal_px: 500.0,
+                spinner_radius_m: diameter_m / 2.0,
+                tower_top_diameter_m: 2.2,
+                hub_tower_gap_m: 4.2,
+                nacelle_width_m: 3.4,
+                nacelle_rear_m: 11.2,
+                bending_lens: None,
+            },
+        )
+    }
+
+    #[test]
+    fn the_reach_follows_the_turbines_spinner_and_nacelle() {
+        let thesis = reach_with_spinner(3.2);
+        assert!((thesis.near_m - 2.0).abs() < 1e-9, "{thesis:?}");
+        // 11.2·sin 55° + 1.7·cos 55°.
+        assert!((thesis.far_m - 10.15).abs() < 0.01, "{thesis:?}");
+        // A spinner wider than the nacelle sets the near end.
+        assert!((reach_with_spinner(4.3).near_m - 2.45).abs() < 1e-9);
+    }
+
+    /// A large spinner (4.3 m, `fly --random-setup` seed 10) lit from one side: its bright rim
+    /// lies 2.15 m out, beyond a fixed 2 m band, where it reads as a nacelle end 6–9° of yaw
+    /// long; the turbine's own reach starts beyond it.
+    #[test]
+    fn a_large_spinners_rim_is_not_the_nacelles_end() {
+        let p = DefaultParams::default();
+        let (w, h) = (200usize, 100usize);
+        let hub = [100.0, 50.0];
+        let s = 5.0; // px per m: spinner radius 10.75 px
+        let data = sobel_x(w, h, |x, y| {
+            let (dx, dy) = (x as f64 - hub[0], y as f64 - hub[1]);
+            match (dx * dx + dy * dy <= 10.75 * 10.75, dx >= 0.0) {
+                (true, true) => 200.0,
+                (true, false) => 125.0,
+                _ => 120.0,
+            }
+        });
+        let g = GradPlane {
+            data: &data,
+            width: w,
+            height: h,
+        };
+        assert!(nacelle_end(&p, THESIS, &g, hub, s).is_some());
+        assert_eq!(nacelle_end(&p, reach_with_spinner(4.3), &g, hub, s), None);
+    }
 
     /// Sobel-x of a `w × h` image given per pixel.
     fn sobel_x(w: usize, h: usize, img: impl Fn(usize, usize) -> f64) -> Vec<i16> {
@@ -111,7 +194,7 @@ mod tests {
             width: w,
             height: h,
         };
-        let dx = nacelle_end(&p, &g, hub, s).expect("nacelle found");
+        let dx = nacelle_end(&p, THESIS, &g, hub, s).expect("nacelle found");
         assert!((dx - 30.0).abs() <= 1.5, "{dx}");
         // Mirrored: to the left.
         let data = sobel_x(w, h, |x, y| img(w - 1 - x, y));
@@ -120,7 +203,8 @@ mod tests {
             width: w,
             height: h,
         };
-        let dx = nacelle_end(&p, &g, [w as f64 - 1.0 - hub[0], hub[1]], s).expect("nacelle found");
+        let dx = nacelle_end(&p, THESIS, &g, [w as f64 - 1.0 - hub[0], hub[1]], s)
+            .expect("nacelle found");
         assert!((dx + 30.0).abs() <= 1.5, "{dx}");
     }
 
@@ -139,6 +223,7 @@ mod tests {
         assert_eq!(
             nacelle_end(
                 &p,
+                THESIS,
                 &GradPlane {
                     data: &spinner_only,
                     width: w,
@@ -159,6 +244,7 @@ mod tests {
         assert_eq!(
             nacelle_end(
                 &p,
+                THESIS,
                 &GradPlane {
                     data: &both,
                     width: w,

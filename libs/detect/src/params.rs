@@ -53,6 +53,8 @@ impl DetectConfig {
                 tower_taper: turbine.tower_taper(),
                 hub_tower_gap_m: turbine.hub_overhang_m,
                 spinner_diameter_m: turbine.spinner_diameter_m,
+                nacelle_width_m: turbine.nacelle_width_m,
+                nacelle_rear_m: turbine.nacelle_rear_behind_hub_m(),
             },
             ..self
         }
@@ -95,6 +97,15 @@ hubtrack_types::params! {
         /// Spinner (nose cone) diameter at the blade roots, metres (3.2 m on the modelled turbine):
         /// with the tracker's distance it gives the spinner radius to search for.
         pub spinner_diameter_m: f64 = 3.2, closed(0.1, 30.0);
+        /// Nacelle width, metres: its front corners stick out beside the spinner whatever the
+        /// yaw, so the nacelle's far end is searched beyond them. From `[turbine]`
+        /// (`nacelle_width_m`); default: the thesis turbine's.
+        #[serde(skip)]
+        pub nacelle_width_m: f64 = TurbineSetup::default().nacelle_width_m, closed(0.3, 20.0);
+        /// Distance from the hub back to the nacelle's rear face, metres: how far out its rear
+        /// corner can appear. From `[turbine]` (see [`TurbineSetup::nacelle_rear_behind_hub_m`]).
+        #[serde(skip)]
+        pub nacelle_rear_m: f64 = TurbineSetup::default().nacelle_rear_behind_hub_m(), closed(1.0, 70.0);
         /// The camera (from `[camera]`): frames of a size its calibration cannot describe are
         /// refused.
         #[serde(skip)]
@@ -466,12 +477,14 @@ hubtrack_types::params! {
         /// the hub's row, metres at the hub's depth. The nacelle is 3.5 m high and its rear, 11 m
         /// behind the hub, looks smaller: ±1 m stays on its side face at 10–40 m.
         pub nacelle_band_half_m: f64 = 1.0, closed(0.0, 20.0);
-        /// ... columns from this far beside the hub, m at the hub's depth: past the spinner
-        /// (radius 1.6 m) and the nacelle's front corners (half width 1.7 m), which show on both
-        /// sides whatever the yaw.
-        pub nacelle_min_offset_m: f64 = 2.0, closed(0.0, 100.0);
-        /// ... to this far, m at the hub's depth (the rear corner of an 11 m nacelle at 60° yaw).
-        pub nacelle_max_offset_m: f64 = 10.0, closed(0.0, 100.0);
+        /// ... columns from this far beyond the wider of the spinner and the nacelle's front
+        /// corners (the turbine's `spinner_diameter_m` and `nacelle_width_m`), m at the hub's
+        /// depth: those show on both sides whatever the yaw. 0.3: 2 m beside the hub for the
+        /// thesis turbine (1.6 m spinner radius, 1.7 m half width).
+        pub nacelle_clearance_m: f64 = 0.3, closed(0.0, 20.0);
+        /// ... to where the nacelle's rear corner appears at this relative yaw, degrees (55: 10.2
+        /// m beside the hub for the thesis turbine's 11.2 m from hub to rear face).
+        pub nacelle_max_yaw_deg: f64 = 55.0, closed(1.0, 90.0);
         /// ... the best column's median signed horizontal Sobel response must be at least this
         /// (8-bit 3×3 Sobel: a step of `c` grey levels gives `4c`; 40 = a 10-level step) ...
         pub nacelle_min_response: f64 = 40.0, closed(0.0, 4080.0);
@@ -846,12 +859,6 @@ impl DefaultParams {
             self.tower_min_width_ratio,
             "tower_max_width_ratio",
             self.tower_max_width_ratio,
-        )?;
-        c.less(
-            "nacelle_min_offset_m",
-            self.nacelle_min_offset_m,
-            "nacelle_max_offset_m",
-            self.nacelle_max_offset_m,
         )?;
         c.less(
             "tower_min_width_frac",

@@ -95,7 +95,7 @@ mod raster;
 mod texture;
 
 pub use camera::{Camera, CameraPose};
-pub use scene::{Distractor, Ground, Scene, Sky};
+pub use scene::{Distractor, Ground, NacelleSize, Scene, Sky};
 
 use background::Background;
 use effects::Effects;
@@ -538,6 +538,11 @@ fn validate(scene: &Scene, pose: &CameraPose) -> Result<(), RenderError> {
     {
         return Err(RenderError::InvalidInput(
             "hub_overhang_m must be within 0.5..20 m, spinner_diameter_m within 0.5..15 m, nacelle_scale within 0.3..4",
+        ));
+    }
+    if scene.nacelle_size.is_some_and(|n| !n.is_drawable()) {
+        return Err(RenderError::InvalidInput(
+            "nacelle_size must be 1..50 m long, 0.3..20 m wide and high, its front 0..20 m behind the blade roots",
         ));
     }
     if scene.noise_sigma < 0.0 || scene.noise_sigma > 100.0 {

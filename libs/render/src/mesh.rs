@@ -6,10 +6,7 @@
 //! rasterised in distorted pixel space.
 
 use crate::math::{add, cross, deg, dot, lerp3, normalize, scale, sub, Rng, V3};
-use crate::scene::{
-    Scene, HUB_OVERHANG_M, NACELLE_FRONT_X_M, NACELLE_HEIGHT_M, NACELLE_LENGTH_M, NACELLE_WIDTH_M,
-    SPINNER_RADIUS_M,
-};
+use crate::scene::{NacelleSize, Scene, NACELLE_HEIGHT_M, NACELLE_WIDTH_M, SPINNER_RADIUS_M};
 
 /// Turbine paint (RAL 7035-like light grey), linear 0..1 albedo per RGB channel.
 pub(crate) const TURBINE_ALBEDO: [f32; 3] = [0.86, 0.87, 0.86];
@@ -207,8 +204,8 @@ pub(crate) struct TurbineSpec {
     pub hub_overhang_m: f64,
     /// Spinner radius at the blade-root plane (m); the nose length scales with it.
     pub spinner_radius_m: f64,
-    /// Nacelle size over the default nacelle's (length, height, width alike).
-    pub nacelle_scale: f64,
+    /// The nacelle body.
+    pub nacelle: NacelleSize,
     pub rotor_angle_deg: f64,
     pub nacelle_yaw_deg: f64,
     pub blade_pitch_deg: f64,
@@ -228,7 +225,7 @@ impl TurbineSpec {
             blade_length_m: scene.blade_length_m,
             hub_overhang_m: scene.hub_overhang_m,
             spinner_radius_m: scene.spinner_diameter_m / 2.0,
-            nacelle_scale: scene.nacelle_scale,
+            nacelle: scene.nacelle(),
             rotor_angle_deg: scene.rotor_angle_deg,
             nacelle_yaw_deg: scene.nacelle_yaw_deg,
             blade_pitch_deg: scene.blade_pitch_deg,
@@ -291,8 +288,8 @@ fn ray_hits_box(p: V3, d: V3, lo: V3, hi: V3) -> bool {
     true
 }
 
-/// The nacelle body of a turbine in its local frame (m): the default box scaled by
-/// `nacelle_scale`, its front the default (scaled) distance behind the blade-root plane.
+/// The nacelle body of a turbine in its local frame (m): its front face `front_behind_hub_m`
+/// behind the blade-root plane.
 struct NacelleBox {
     front_x: f64,
     length: f64,
@@ -302,12 +299,12 @@ struct NacelleBox {
 
 impl NacelleBox {
     fn of(s: &TurbineSpec) -> NacelleBox {
-        let k = s.nacelle_scale;
+        let n = s.nacelle;
         NacelleBox {
-            front_x: s.hub_overhang_m - (HUB_OVERHANG_M - NACELLE_FRONT_X_M) * k,
-            length: NACELLE_LENGTH_M * k,
-            height: NACELLE_HEIGHT_M * k,
-            width: NACELLE_WIDTH_M * k,
+            front_x: s.hub_overhang_m - n.front_behind_hub_m,
+            length: n.length_m,
+            height: n.height_m,
+            width: n.width_m,
         }
     }
 }
@@ -324,7 +321,6 @@ pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
     let tag_tower = if high { Tag::Tower } else { Tag::Other };
     let alb = TURBINE_ALBEDO;
     let hub_z = s.hub_height_m;
-    // The nacelle keeps its front the default distance (scaled) behind the blade-root plane.
     let nacelle = NacelleBox::of(s);
     let top_z = hub_z - nacelle.height / 2.0;
 
@@ -384,7 +380,9 @@ pub(crate) fn build_turbine(mesh: &mut Mesh, s: &TurbineSpec) {
     let (hw, hh, c) = (
         nacelle.width / 2.0,
         nacelle.height / 2.0,
-        NACELLE_CHAMFER_M * s.nacelle_scale,
+        // The default body's chamfer, scaled with the smaller of its height and width.
+        NACELLE_CHAMFER_M
+            * (nacelle.height / NACELLE_HEIGHT_M).min(nacelle.width / NACELLE_WIDTH_M),
     );
     // Cross-section outline (y, z offsets from the axis), counter-clockwise seen from the front.
     let outline: [[f64; 2]; 8] = [

@@ -42,6 +42,41 @@ pub fn spinner_nose_length_m(radius_m: f64) -> f64 {
     SPINNER_NOSE_LENGTH_M * radius_m / SPINNER_RADIUS_M
 }
 
+/// A nacelle body's dimensions, metres: a box along the rotor axis, which runs through its
+/// mid-height.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NacelleSize {
+    /// Along the rotor axis, front face to rear face.
+    pub length_m: f64,
+    /// Across the rotor axis.
+    pub width_m: f64,
+    /// Vertical: the hub sits half of it above the tower top.
+    pub height_m: f64,
+    /// From the blade-root plane back to the front face.
+    pub front_behind_hub_m: f64,
+}
+
+impl NacelleSize {
+    /// The default body scaled by `k` (length, width, height and the front's setback alike).
+    pub fn default_scaled(k: f64) -> NacelleSize {
+        NacelleSize {
+            length_m: NACELLE_LENGTH_M * k,
+            width_m: NACELLE_WIDTH_M * k,
+            height_m: NACELLE_HEIGHT_M * k,
+            front_behind_hub_m: (HUB_OVERHANG_M - NACELLE_FRONT_X_M) * k,
+        }
+    }
+
+    /// Every dimension finite and within what the renderer draws: 1–50 m long, 0.3–20 m wide
+    /// and high, the front 0–20 m behind the blade-root plane.
+    pub fn is_drawable(&self) -> bool {
+        (1.0..=50.0).contains(&self.length_m)
+            && (0.3..=20.0).contains(&self.width_m)
+            && (0.3..=20.0).contains(&self.height_m)
+            && (0.0..=20.0).contains(&self.front_behind_hub_m)
+    }
+}
+
 fn default_hub_overhang_m() -> f64 {
     HUB_OVERHANG_M
 }
@@ -106,9 +141,13 @@ pub struct Scene {
     /// Spinner diameter at the blade-root plane, metres (3.2).
     #[serde(default = "default_spinner_diameter_m")]
     pub spinner_diameter_m: f64,
-    /// Nacelle body size over the default 10 × 3.5 × 3.4 m body (1).
+    /// Nacelle body size over the default 10 × 3.5 × 3.4 m body (1); unused with `nacelle_size`.
     #[serde(default = "default_nacelle_scale")]
     pub nacelle_scale: f64,
+    /// The nacelle body's own dimensions (a turbine profile's), instead of the default body
+    /// scaled by `nacelle_scale`.
+    #[serde(default)]
+    pub nacelle_size: Option<NacelleSize>,
     /// Angle of blade 1 from vertical-up, clockwise as seen from the front (from the camera side);
     /// blades 2 and 3 at +120° and +240°.
     pub rotor_angle_deg: f64,
@@ -177,6 +216,7 @@ impl Scene {
             hub_overhang_m: HUB_OVERHANG_M,
             spinner_diameter_m: 2.0 * SPINNER_RADIUS_M,
             nacelle_scale: 1.0,
+            nacelle_size: None,
             rotor_angle_deg: 0.0,
             nacelle_yaw_deg: 0.0,
             blade_pitch_deg: 2.0,
@@ -230,6 +270,7 @@ impl Scene {
             hub_overhang_m: HUB_OVERHANG_M,
             spinner_diameter_m: 2.0 * SPINNER_RADIUS_M,
             nacelle_scale: 1.0,
+            nacelle_size: None,
             rotor_angle_deg: r.range(0.0, 120.0),
             nacelle_yaw_deg: 0.0,
             blade_pitch_deg: if parked {
@@ -292,7 +333,13 @@ impl Scene {
 
     /// Height of the tower top (flange under the nacelle) above the ground, metres.
     pub fn tower_top_height_m(&self) -> f64 {
-        self.hub_height_m - self.nacelle_scale * NACELLE_HEIGHT_M / 2.0
+        self.hub_height_m - self.nacelle().height_m / 2.0
+    }
+
+    /// The nacelle body drawn: `nacelle_size`, else the default body scaled by `nacelle_scale`.
+    pub fn nacelle(&self) -> NacelleSize {
+        self.nacelle_size
+            .unwrap_or_else(|| NacelleSize::default_scaled(self.nacelle_scale))
     }
 
     /// Tower axis point at the top of the tower, world frame.

@@ -3,7 +3,7 @@
 use hubtrack_render::camera::Distortion;
 use hubtrack_render::scene::{HUB_OVERHANG_M, SPINNER_NOSE_LENGTH_M};
 use hubtrack_render::{
-    Camera, CameraPose, Distractor, Ground, RenderError, Renderer, Scene, Sky, Truth,
+    Camera, CameraPose, Distractor, Ground, NacelleSize, RenderError, Renderer, Scene, Sky, Truth,
 };
 
 fn render(cam: Camera, scene: &Scene, pose: &CameraPose) -> (Vec<u8>, Truth) {
@@ -207,6 +207,27 @@ fn a_turbines_own_spinner_overhang_and_nacelle_reach_the_truth() {
     let nose = t.nose_px.expect("nose");
     let expected = cam.cx - cam.fx * 1.5 * SPINNER_NOSE_LENGTH_M / 50.0;
     assert!((nose[0] - expected).abs() < 1e-6, "{nose:?} vs {expected}");
+    // A nacelle of its own dimensions (a turbine profile's): the tower top half its height under
+    // the hub, and the body drawn that wide.
+    let own = NacelleSize {
+        length_m: 12.0,
+        width_m: 5.0,
+        height_m: 4.9,
+        front_behind_hub_m: 1.0,
+    };
+    let sized = quiet(Scene {
+        nacelle_size: Some(own),
+        ..scene.clone()
+    });
+    let (img, t) = render(cam, &sized, &pose);
+    let top = t.tower_top_px.expect("tower top");
+    let expected_v = cam.cy + cam.fy * (4.9 / 2.0) / (100.0 + 6.0);
+    assert!(
+        (top[1] - expected_v).abs() < 1e-6,
+        "{top:?} vs {expected_v}"
+    );
+    let (plain, _) = render(cam, &scene, &pose);
+    assert_ne!(img, plain, "the nacelle's own size is drawn");
     // Out of range: refused, not drawn.
     let mut renderer = Renderer::new(cam);
     let mut out = vec![0u8; cam.frame_bytes()];
@@ -221,6 +242,13 @@ fn a_turbines_own_spinner_overhang_and_nacelle_reach_the_truth() {
         },
         Scene {
             nacelle_scale: 9.0,
+            ..Scene::default_clear()
+        },
+        Scene {
+            nacelle_size: Some(NacelleSize {
+                width_m: f64::NAN,
+                ..NacelleSize::default_scaled(1.0)
+            }),
             ..Scene::default_clear()
         },
     ] {

@@ -16,8 +16,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use hubtrack_render::scene::{NACELLE_HEIGHT_M, NACELLE_SCALE_RANGE};
-use hubtrack_render::{Camera, CameraPose, Distractor, Scene};
+use hubtrack_render::{Camera, CameraPose, Distractor, NacelleSize, Scene};
 use hubtrack_types::setup::TurbineSetup;
 
 use crate::math::{body_to_ned, dot, mat_vec, norm, sub, wrap_deg, wrap_pi};
@@ -185,11 +184,15 @@ fn axes(h: f64) -> ([f64; 3], [f64; 3]) {
 }
 
 /// Gives a rendered scene the dimensions of a turbine profile: tower diameters, rotor, hub
-/// height, overhang and spinner, and the nacelle body (the renderer's shape) scaled so that the
-/// hub sits `hub_above_tower_top_m` above the tower top.
+/// height, overhang, spinner and the nacelle body (its height twice the hub's height above the
+/// tower top: the rotor axis runs through its mid-height).
 pub fn show_turbine(scene: &mut Scene, t: &TurbineSetup) {
-    scene.nacelle_scale = (t.hub_above_tower_top_m / (NACELLE_HEIGHT_M / 2.0))
-        .clamp(NACELLE_SCALE_RANGE.0, NACELLE_SCALE_RANGE.1);
+    scene.nacelle_size = Some(NacelleSize {
+        length_m: t.nacelle_length_m,
+        width_m: t.nacelle_width_m,
+        height_m: 2.0 * t.hub_above_tower_top_m,
+        front_behind_hub_m: t.nacelle_front_behind_hub_m,
+    });
     scene.tower_top_diameter_m = t.tower_top_diameter_m;
     scene.tower_base_diameter_m = t.tower_base_diameter_m;
     scene.blade_length_m = t.rotor_radius_m;

@@ -404,10 +404,13 @@ hubtrack_types::params! {
         /// owns the yaw (`fly` seed 37: a distance read 1.8× long shrank the detector's window
         /// onto the spinner's own edge, and the vehicle came within 2.1 m of the rotor plane).
         pub use_nacelle: bool = true;
-        /// Distance from the hub back to the nacelle's rear face along the rotor axis, m (modelled
-        /// turbine: 4.2 m overhang + 7 m of nacelle behind the tower axis).
+        /// Distance from the hub back to the nacelle's rear face along the rotor axis, m. From
+        /// `[turbine]` (`nacelle_front_behind_hub_m` + `nacelle_length_m`), not a key of its own:
+        /// see [`TrackConfig::with_setup`]. Default: the thesis turbine's 11.2.
+        #[serde(skip)]
         pub nacelle_rear_m: f64 = 11.2, open_closed(0.0, MAX_SIZE_M);
-        /// Half the nacelle's width, m (modelled turbine: 3.4 m wide).
+        /// Half the nacelle's width, m. From `[turbine]` (`nacelle_width_m`). Default 1.7.
+        #[serde(skip)]
         pub nacelle_half_width_m: f64 = 1.7, closed(0.0, MAX_SIZE_M);
         /// Standard deviation of the nacelle end's image position, px at the reference width (the
         /// detector finds it on its working image, about as wide: the edge column within ±1 px,
@@ -449,8 +452,9 @@ hubtrack_types::params! {
         /// was right for 94 % of those with a circle and 75 % of those without in six successful
         /// flights, 74 % and 48 % in the 28 that failed. Default true.
         pub nacelle_needs_spinner: bool = true;
-        /// Distance from the hub back to the nacelle's front face along the rotor axis, m
-        /// (modelled turbine: 4.2 m overhang − 3 m of nacelle ahead of the tower axis).
+        /// Distance from the hub back to the nacelle's front face along the rotor axis, m. From
+        /// `[turbine]` (`nacelle_front_behind_hub_m`). Default 1.2.
+        #[serde(skip)]
         pub nacelle_front_m: f64 = 1.2, closed(0.0, 50.0);
         /// A nacelle end is used only when it sticks out at least this many standard deviations
         /// beyond the front corners' head-on offset `f·nacelle_half_width_m / (d +
@@ -602,6 +606,9 @@ impl TrackConfig {
         self.distance.hub_above_tower_top_m = turbine.hub_above_tower_top_m;
         self.distance.spinner_diameter_m = turbine.spinner_diameter_m;
         self.yaw.hub_tower_offset_m = turbine.hub_overhang_m;
+        self.yaw.nacelle_rear_m = turbine.nacelle_rear_behind_hub_m();
+        self.yaw.nacelle_half_width_m = turbine.nacelle_width_m / 2.0;
+        self.yaw.nacelle_front_m = turbine.nacelle_front_behind_hub_m;
         self
     }
 }

@@ -1684,6 +1684,54 @@ fn the_calibrated_lens_and_the_turbine_profile_reach_the_distance() {
     );
 }
 
+/// The turbine profile's nacelle reaches the nacelle yaw: the far end of a nacelle 1.4 times the
+/// thesis turbine's, seen at 30 m and +12° with the tower hidden, reads +12° with its profile and
+/// several degrees more with the thesis turbine's nacelle.
+#[test]
+fn the_turbine_profiles_nacelle_reaches_the_nacelle_yaw() {
+    use hubtrack_types::setup::{Lens, TurbineSetup};
+    let with_profile = |t: &TurbineSetup| {
+        let mut c = TrackConfig::default().with_setup(&Lens::default(), t);
+        c.camera = pinhole_config().camera;
+        c
+    };
+    let large = TurbineSetup {
+        nacelle_width_m: 4.8,
+        nacelle_length_m: 14.0,
+        nacelle_front_behind_hub_m: 1.7,
+        hub_overhang_m: 5.9,
+        hub_above_tower_top_m: 2.45,
+        ..TurbineSetup::default()
+    };
+    let profiled = with_profile(&large);
+    assert_eq!(
+        (
+            profiled.yaw.nacelle_rear_m,
+            profiled.yaw.nacelle_half_width_m,
+            profiled.yaw.nacelle_front_m
+        ),
+        (15.7, 2.4, 1.7)
+    );
+    let thesis_nacelle = with_profile(&TurbineSetup {
+        hub_overhang_m: 5.9,
+        ..TurbineSetup::default()
+    });
+    let (d_hub, psi) = (30.0, 12.0);
+    let dx = nacelle_dx(&profiled, d_hub, psi);
+    let yaw = |cfg: &TrackConfig| {
+        let s = track_turbine(cfg, 5, 150, d_hub, psi, |_, d, _| {
+            d.tower_found = false;
+            d.nacelle_found = true;
+            d.nacelle_end_dx_px = dx;
+        });
+        assert!(s.yaw_valid);
+        s.yaw_deg
+    };
+    let (right, wrong) = (yaw(&profiled), yaw(&thesis_nacelle));
+    assert!((right - psi).abs() < 1.5, "with the profile: {right:.1}°");
+    assert!(wrong - psi > 3.0, "with the thesis nacelle: {wrong:.1}°");
+}
+
 #[test]
 fn the_distance_cues_shares_say_which_cue_carried_the_distance() {
     let cfg = pinhole_config();

@@ -87,5 +87,9 @@ impl ControlConfig {
 
 hubtrack_runtime::sections! {
     /// What the control stage reads.
-    pub struct ControlSections { control: ControlConfig }
+    pub struct ControlSections {
+        camera: hubtrack_types::setup::CameraSetup,
+        turbine: hubtrack_types::setup::TurbineSetup,
+        control: ControlConfig,
+    }
 }

@@ -19,6 +19,7 @@ mod setpoint;
 
 use clap::Parser;
 use config::ControlSections;
+use hubtrack_control_stage::envelope::SpinnerFit;
 use hubtrack_runtime::stage::{Stage, StageArgs};
 
 #[derive(Parser)]
@@ -47,9 +48,34 @@ fn run() -> anyhow::Result<()> {
     let Some(stage) = Stage::<ControlSections>::start("control", &args.stage)? else {
         return Ok(());
     };
+    check_envelope(&stage.config);
     if args.replay {
         replay::run(stage)
     } else {
         live::run(stage)
+    }
+}
+
+/// Says at start-up whether the calibrated camera sees the turbine's spinner whole at the
+/// approach's target (see [`SpinnerFit`]); a warning when it does not. Without a calibration
+/// the frame's aspect is unknown and nothing is said (detect and track refuse a bad one).
+fn check_envelope(sections: &ControlSections) {
+    let Ok(Some(camera)) = sections.camera.calibrated() else {
+        log::debug!("no camera calibration: the spinner's fit at the target is not checked");
+        return;
+    };
+    let fit = SpinnerFit::of(
+        &camera,
+        &sections.turbine,
+        sections.control.approach.target_distance_m,
+    );
+    match fit.warning() {
+        Some(w) => log::warn!("camera and turbine: {w}"),
+        None => log::info!(
+            "camera and turbine: at the {:.1} m target the spinner spans {:.0}° of the camera's {:.0}° narrower field of view",
+            fit.target_m,
+            fit.spinner_deg,
+            fit.narrow_fov_deg
+        ),
     }
 }

@@ -21,9 +21,20 @@ const SPINNER_M: (f64, f64) = (2.4, 4.6);
 const OVERHANG_M: (f64, f64) = (3.0, 7.0);
 /// Hub height over the rotor radius (the rotor clears the ground), metres, and its spread.
 const HUB_ABOVE_ROTOR_M: (f64, f64) = (25.0, 45.0);
-/// Hub heights above the tower top drawn, metres (the simulator scales its nacelle to match:
-/// 0.8–1.5 times the thesis turbine's).
+/// Hub heights above the tower top drawn, metres (half the nacelle's height: 0.8–1.5 times the
+/// thesis turbine's).
 const HUB_ABOVE_TOWER_TOP_M: (f64, f64) = (1.4, 2.6);
+/// The thesis turbine's nacelle (width, length, front face behind the hub), metres: scaled by the
+/// drawn height over its own, then each dimension by its own factor below.
+const THESIS_NACELLE_M: (f64, f64, f64) = (3.4, 10.0, 1.2);
+/// The thesis turbine's hub height above its tower top, metres.
+const THESIS_HUB_ABOVE_TOWER_TOP_M: f64 = 1.75;
+/// Nacelle width, length and front setback factors drawn, each over the scaled thesis nacelle's.
+const NACELLE_WIDTH_FACTOR: (f64, f64) = (0.85, 1.2);
+const NACELLE_LENGTH_FACTOR: (f64, f64) = (0.8, 1.25);
+const NACELLE_FRONT_FACTOR: (f64, f64) = (0.6, 1.5);
+/// The drawn nacelle's rear face lies at least this far behind the tower axis, metres.
+const NACELLE_MIN_REAR_BEHIND_TOWER_M: f64 = 1.0;
 
 /// One seed's camera and turbine, as files.
 pub struct FlightSetup {
@@ -62,8 +73,13 @@ pub fn draw(seed: u64, dir: &Path) -> anyhow::Result<FlightSetup> {
     let spinner = uniform(&mut r, SPINNER_M);
     let overhang = uniform(&mut r, OVERHANG_M);
     let above_top = uniform(&mut r, HUB_ABOVE_TOWER_TOP_M);
+    let k = above_top / THESIS_HUB_ABOVE_TOWER_TOP_M;
+    let nacelle_width = THESIS_NACELLE_M.0 * k * uniform(&mut r, NACELLE_WIDTH_FACTOR);
+    let nacelle_front = THESIS_NACELLE_M.2 * k * uniform(&mut r, NACELLE_FRONT_FACTOR);
+    let nacelle_length = (THESIS_NACELLE_M.1 * k * uniform(&mut r, NACELLE_LENGTH_FACTOR))
+        .max(overhang - nacelle_front + NACELLE_MIN_REAR_BEHIND_TOWER_M);
     let turbine = format!(
-        "rotor {rotor:.1} m, hub {hub_height:.0} m, tower {top:.2}-{base:.2} m, spinner {spinner:.2} m, overhang {overhang:.2} m, hub {above_top:.2} m above the tower"
+        "rotor {rotor:.1} m, hub {hub_height:.0} m, tower {top:.2}-{base:.2} m, spinner {spinner:.2} m, overhang {overhang:.2} m, hub {above_top:.2} m above the tower, nacelle {nacelle_width:.2} x {nacelle_length:.1} m from {nacelle_front:.2} m behind the hub"
     );
     let profile = format!(
         "# Drawn by `hubtrack fly --random-setup` for seed {seed}.\n\
@@ -74,7 +90,10 @@ pub fn draw(seed: u64, dir: &Path) -> anyhow::Result<FlightSetup> {
          tower_base_diameter_m = {base}\n\
          hub_overhang_m = {overhang}\n\
          hub_above_tower_top_m = {above_top}\n\
-         spinner_diameter_m = {spinner}\n"
+         spinner_diameter_m = {spinner}\n\
+         nacelle_width_m = {nacelle_width}\n\
+         nacelle_length_m = {nacelle_length}\n\
+         nacelle_front_behind_hub_m = {nacelle_front}\n"
     );
     let write = |name: String, text: String| -> anyhow::Result<PathBuf> {
         let path = dir.join(name);
@@ -117,9 +136,18 @@ mod tests {
         let t: hubtrack_types::setup::TurbineSetup = toml::from_str(&text).unwrap();
         t.validate().unwrap();
         assert!(t.hub_height_m > t.rotor_radius_m);
-        // Over many seeds every camera comes up.
-        let names: std::collections::BTreeSet<String> =
-            (0..200).map(|s| draw(s, &dir).unwrap().camera).collect();
+        // Over many seeds every camera comes up, and every turbine drawn is a valid profile
+        // (the nacelle on its tower).
+        let names: std::collections::BTreeSet<String> = (0..200)
+            .map(|s| {
+                let setup = draw(s, &dir).unwrap();
+                let text = std::fs::read_to_string(dir.join(format!("turbine-seed{s}.toml")));
+                let t: hubtrack_types::setup::TurbineSetup =
+                    toml::from_str(&text.unwrap()).unwrap();
+                t.validate().unwrap_or_else(|e| panic!("seed {s}: {e}"));
+                setup.camera
+            })
+            .collect();
         assert_eq!(names.len(), cameras().len());
         std::fs::remove_dir_all(&dir).unwrap();
     }

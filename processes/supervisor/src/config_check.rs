@@ -12,8 +12,8 @@ pub const STAGE_SECTIONS: &[&str] = &[
 ];
 /// Sections several stages read, and the stages that read them.
 const SHARED_SECTIONS: &[(&str, &[&str])] = &[
-    ("camera", &["detect", "track"]),
-    ("turbine", &["detect", "track"]),
+    ("camera", &["detect", "track", "control"]),
+    ("turbine", &["detect", "track", "control"]),
 ];
 
 /// What to check beside `[run]`.

@@ -37,6 +37,10 @@ pub(crate) struct Optics {
     pub tower_top_diameter_m: f64,
     /// Horizontal distance from the hub back to the tower axis, m.
     pub hub_tower_gap_m: f64,
+    /// Nacelle width, m.
+    pub nacelle_width_m: f64,
+    /// Distance from the hub back to the nacelle's rear face, m.
+    pub nacelle_rear_m: f64,
     /// The calibrated camera at the working size, when its lens bends straight lines (see
     /// [`FrameCtx::camera`]).
     pub bending_lens: Option<CameraModel>,

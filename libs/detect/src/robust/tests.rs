@@ -238,6 +238,8 @@ fn a_spinner_implies_the_tower_width_from_its_own_distance() {
         spinner_radius_m: 1.6,
         tower_top_diameter_m: 2.2,
         hub_tower_gap_m: 4.2,
+        nacelle_width_m: 3.4,
+        nacelle_rear_m: 11.2,
         bending_lens: None,
     };
     let r_at = |d: f64| o.focal_px * 1.6 / d;
@@ -581,6 +583,8 @@ fn the_lens_sets_how_large_a_spinner_is_searched_blind() {
         spinner_radius_m: 1.6,
         tower_top_diameter_m: 2.2,
         hub_tower_gap_m: 4.2,
+        nacelle_width_m: 3.4,
+        nacelle_rear_m: 11.2,
         bending_lens: None,
     };
     // The GoPro at 480 × 270 working px (f = 0.4343 · 480 = 208.5 px): 83 px at 4 m, under the

@@ -227,9 +227,10 @@ pub(super) fn report_tower(
                 found.tower_width = fit.width_at(row).map(|wd| (wd, row));
             }
             if found.detected {
-                found.nacelle_end_dx = expected
-                    .px_per_m
-                    .and_then(|s| crate::nacelle::nacelle_end(p, &g.x, b.centre, s));
+                found.nacelle_end_dx = expected.px_per_m.zip(expected.optics).and_then(|(s, o)| {
+                    let reach = crate::nacelle::NacelleReach::of(p, &o);
+                    crate::nacelle::nacelle_end(p, reach, &g.x, b.centre, s)
+                });
             }
         }
         None if !b.tower.is_empty() => {
