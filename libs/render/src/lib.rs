@@ -542,7 +542,7 @@ fn validate(scene: &Scene, pose: &CameraPose) -> Result<(), RenderError> {
     }
     if scene.nacelle_size.is_some_and(|n| !n.is_drawable()) {
         return Err(RenderError::InvalidInput(
-            "nacelle_size must be 1..50 m long, 0.3..20 m wide and high, its front 0..20 m behind the blade roots",
+            "nacelle_size must be 1..50 m long, 0.3..20 m wide, 0.3..40 m high (twice a profile's hub_above_tower_top_m), its front 0..20 m behind the blade roots",
         ));
     }
     if scene.noise_sigma < 0.0 || scene.noise_sigma > 100.0 {

@@ -67,12 +67,12 @@ impl NacelleSize {
         }
     }
 
-    /// Every dimension finite and within what the renderer draws: 1–50 m long, 0.3–20 m wide
-    /// and high, the front 0–20 m behind the blade-root plane.
+    /// Every dimension finite and within what the renderer draws: 1–50 m long, 0.3–20 m wide,
+    /// 0.3–40 m high, the front 0–20 m behind the blade-root plane.
     pub fn is_drawable(&self) -> bool {
         (1.0..=50.0).contains(&self.length_m)
             && (0.3..=20.0).contains(&self.width_m)
-            && (0.3..=20.0).contains(&self.height_m)
+            && (0.3..=40.0).contains(&self.height_m)
             && (0.0..=20.0).contains(&self.front_behind_hub_m)
     }
 }
