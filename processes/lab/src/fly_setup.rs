@@ -5,6 +5,7 @@
 use hubtrack_render::dataset::held_out_cameras;
 use hubtrack_render::Camera;
 use hubtrack_types::mutate::Rng;
+use hubtrack_types::setup::TurbineSetup;
 use std::path::{Path, PathBuf};
 
 /// Seed mix of the setup draws (independent of the scenario's own draws).
@@ -24,12 +25,8 @@ const HUB_ABOVE_ROTOR_M: (f64, f64) = (25.0, 45.0);
 /// Hub heights above the tower top drawn, metres (half the nacelle's height: 0.8–1.5 times the
 /// thesis turbine's).
 const HUB_ABOVE_TOWER_TOP_M: (f64, f64) = (1.4, 2.6);
-/// The thesis turbine's nacelle (width, length, front face behind the hub), metres: scaled by the
-/// drawn height over its own, then each dimension by its own factor below.
-const THESIS_NACELLE_M: (f64, f64, f64) = (3.4, 10.0, 1.2);
-/// The thesis turbine's hub height above its tower top, metres.
-const THESIS_HUB_ABOVE_TOWER_TOP_M: f64 = 1.75;
-/// Nacelle width, length and front setback factors drawn, each over the scaled thesis nacelle's.
+/// Nacelle width, length and front setback factors drawn, each over the thesis turbine's (the
+/// profile defaults) scaled by the drawn hub height above the tower top over its own.
 const NACELLE_WIDTH_FACTOR: (f64, f64) = (0.85, 1.2);
 const NACELLE_LENGTH_FACTOR: (f64, f64) = (0.8, 1.25);
 const NACELLE_FRONT_FACTOR: (f64, f64) = (0.6, 1.5);
@@ -73,10 +70,12 @@ pub fn draw(seed: u64, dir: &Path) -> anyhow::Result<FlightSetup> {
     let spinner = uniform(&mut r, SPINNER_M);
     let overhang = uniform(&mut r, OVERHANG_M);
     let above_top = uniform(&mut r, HUB_ABOVE_TOWER_TOP_M);
-    let k = above_top / THESIS_HUB_ABOVE_TOWER_TOP_M;
-    let nacelle_width = THESIS_NACELLE_M.0 * k * uniform(&mut r, NACELLE_WIDTH_FACTOR);
-    let nacelle_front = THESIS_NACELLE_M.2 * k * uniform(&mut r, NACELLE_FRONT_FACTOR);
-    let nacelle_length = (THESIS_NACELLE_M.1 * k * uniform(&mut r, NACELLE_LENGTH_FACTOR))
+    let thesis = TurbineSetup::default();
+    let k = above_top / thesis.hub_above_tower_top_m;
+    let nacelle_width = thesis.nacelle_width_m * k * uniform(&mut r, NACELLE_WIDTH_FACTOR);
+    let nacelle_front =
+        thesis.nacelle_front_behind_hub_m * k * uniform(&mut r, NACELLE_FRONT_FACTOR);
+    let nacelle_length = (thesis.nacelle_length_m * k * uniform(&mut r, NACELLE_LENGTH_FACTOR))
         .max(overhang - nacelle_front + NACELLE_MIN_REAR_BEHIND_TOWER_M);
     let turbine = format!(
         "rotor {rotor:.1} m, hub {hub_height:.0} m, tower {top:.2}-{base:.2} m, spinner {spinner:.2} m, overhang {overhang:.2} m, hub {above_top:.2} m above the tower, nacelle {nacelle_width:.2} x {nacelle_length:.1} m from {nacelle_front:.2} m behind the hub"
@@ -133,7 +132,7 @@ mod tests {
         let cam = Camera::load(&dir.join("camera-seed7.yaml")).unwrap();
         assert!(cam.width > 0);
         let text = std::fs::read_to_string(dir.join("turbine-seed7.toml")).unwrap();
-        let t: hubtrack_types::setup::TurbineSetup = toml::from_str(&text).unwrap();
+        let t: TurbineSetup = toml::from_str(&text).unwrap();
         t.validate().unwrap();
         assert!(t.hub_height_m > t.rotor_radius_m);
         // Over many seeds every camera comes up, and every turbine drawn is a valid profile
