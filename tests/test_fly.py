@@ -12,7 +12,7 @@ import signal
 
 import pytest
 
-from conftest import wait_until, read_mcap_messages
+from conftest import ROOT, wait_until, read_mcap_messages
 
 KEYS = {"seed": int, "success": bool, "final_distance_m": float, "final_yaw_deg": float,
         "final_lateral_m": float, "time_s": float, "min_rotor_plane_m": float, "lockstep_misses": int}
@@ -96,6 +96,35 @@ def test_a_recorded_flight_has_every_channel_and_the_loop_is_closed(runner, tmp_
     # A recording without truth is refused with the cause named.
     bad = runner.run("hubtrack", "diagnose", str(path.parent / "missing.mcap"), timeout=60)
     assert bad.returncode != 0 and "missing.mcap" in bad.stderr
+
+
+def test_a_spinner_wider_than_a_narrow_lens_sees_flies_its_last_metres_on_the_odometry(runner, tmp_path):
+    # The shipped 640x480 USB calibration sees 38 degrees across its height; a 4.4 m spinner
+    # spans 47 degrees at the 5 m target. Control says so at start-up and flies the last metres
+    # on the autopilot's position (control.approach.odometry_leg_*, docs/control.md).
+    profile = tmp_path / "big_spinner.toml"
+    profile.write_text(
+        'name = "thesis turbine, 4.4 m spinner"\nhub_height_m = 64.0\nrotor_radius_m = 35.5\n'
+        'tower_top_diameter_m = 2.2\ntower_base_diameter_m = 4.3\nhub_overhang_m = 4.2\n'
+        'spinner_diameter_m = 4.4\n')
+    path = tmp_path / "overfill.mcap"
+    r = runner.run("hubtrack", "fly", "--json", "--seeds", "1", "--first-seed", "2",
+                   "--camera", ROOT / "config" / "cameras" / "usb_narrow_640x480.yaml",
+                   "--turbine", profile, "--record", str(path), timeout=600)
+    assert r.returncode == 0, r.stderr[-4000:]
+    run = json.loads(r.stdout)
+    warning = [l for l in r.stderr.splitlines() if "camera and turbine" in l]
+    assert warning and "WARN" in warning[0] and "on the autopilot's position" in warning[0], warning
+    setpoints = [json.loads(m.data) for _, m in read_mcap_messages(path, topics={"/setpoints"})]
+    reasons = [s["reason"] for s in setpoints]
+    leg = [i for i, why in enumerate(reasons) if "by odometry (spinner overfills view)" in why]
+    assert leg, sorted(set(reasons))[:20]
+    # Once on the leg, the track no longer steers: forward on the odometry, then done there.
+    after = setpoints[leg[0]:]
+    assert {s["task"] for s in after} <= {"approach", "done"}, {s["task"] for s in after}
+    assert after[-1]["task"] == "done" and "by odometry" in after[-1]["reason"], after[-1]
+    assert run["end_reason"] == "done", run
+    assert abs(run["final_distance_m"] - 5.0) <= 0.5 and run["min_distance_m"] >= 4.5, run
 
 
 def children(pid):

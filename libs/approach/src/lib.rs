@@ -24,7 +24,8 @@
 //! Safety: without a usable track (none, acquiring, lost, or older than `max_track_age_s`) it
 //! commands [`ApproachTask::Hold`] (all zero at once), then after `search_after_s` (or when the
 //! tracker asks) a bounded [`ApproachTask::Search`] rotation towards the side where the hub was
-//! last seen. Forward motion needs a valid distance estimate. Bad data (lost autopilot link,
+//! last seen. Forward motion needs a valid distance estimate (or, on the odometry leg, the
+//! autopilot's position). Bad data (lost autopilot link,
 //! non-finite numbers, a zero image size, time running backwards) gives a sticky
 //! [`ApproachTask::Abort`] with all zero, cleared by [`Approach::reset`] or after
 //! `abort_recover_s` of good inputs.
@@ -37,6 +38,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod odometry_leg;
 mod params;
 mod shrink_check;
 
@@ -44,6 +46,7 @@ pub use hubtrack_types::params::ParamError;
 pub use params::ApproachConfig;
 
 use hubtrack_types::{ApproachTask, TrackMode, TrackState, VehicleState};
+use odometry_leg::OdometryLeg;
 use shrink_check::{Contradiction, ShrinkCheck};
 
 /// Longest reason text, bytes (it travels as a [`hubtrack_types::Text64`]).
@@ -210,6 +213,8 @@ pub struct Approach {
     reacquired_ns: Option<u64>,
     /// Closing in must make the distance shrink (see `shrink_check_m`); kept through losses.
     shrink: ShrinkCheck,
+    /// The last metres on the odometry, while they run (see `odometry_leg_fit_margin`).
+    leg: Option<OdometryLeg>,
 }
 
 /// The hub's horizontal position in the autopilot's local frame, from one track state.
@@ -399,6 +404,7 @@ impl Approach {
             hub_fix: None,
             reacquired_ns: None,
             shrink: ShrinkCheck::default(),
+            leg: None,
         })
     }
 
@@ -437,6 +443,7 @@ impl Approach {
         self.at_target_since_ns = None;
         self.settle_anchor = None;
         self.t3_backoff_m = 0.0;
+        self.leg = None;
     }
 
     /// One controller step. Never panics; every output is finite and within the configured
@@ -559,6 +566,10 @@ impl Approach {
         dt: f64,
         input: &ApproachInput,
     ) -> (ApproachTask, Command, String) {
+        // On the odometry leg the track no longer decides (see `odometry_leg_fit_margin`).
+        if let Some(out) = self.odometry_leg(now, dt, input.vehicle) {
+            return out;
+        }
         // Age of the track = time since its last detection + how old the state itself is.
         let age_s = input.track.map_or(0.0, |t| {
             t.time_since_detection_s + secs(t.stamps.capture_ns, now)
@@ -740,6 +751,9 @@ impl Approach {
         }
         let cues = self.cues(now, t, vehicle);
         self.update_hysteresis(&cues);
+        if let Some(out) = self.start_odometry_leg(now, dt, &cues, vehicle) {
+            return out;
+        }
         self.update_done(now, &cues, vehicle);
         // Settling or done while the image errors are out (see `update_done`): hold the
         // station where settling began, on the odometry. With the image errors inside their
@@ -1055,8 +1069,10 @@ impl Approach {
     /// backing-off allowance is spent.
     fn forward_target(&self, cues: &Cues) -> (f64, bool) {
         let c = &self.config;
+        // On the image the approach closes in only to where the odometry leg begins.
+        let stop_m = c.odometry_leg_from_m().unwrap_or(c.target_distance_m);
         let t3_law = |d: f64| {
-            let v = c.forward_gain_per_s * (d - c.target_distance_m);
+            let v = c.forward_gain_per_s * (d - stop_m);
             let cap = c.slowdown_gain_per_s * (d - c.min_distance_m);
             limit(v.min(cap), -c.max_backward_m_s, c.max_forward_m_s)
         };
@@ -1174,6 +1190,109 @@ impl Approach {
             ),
             _ => "T3: no valid distance, not moving forward".into(),
         }
+    }
+
+    /// Starts the odometry leg (see `odometry_leg_fit_margin`) when the camera cannot see the
+    /// spinner whole at the target and the image has brought the vehicle to where the leg
+    /// begins: hub centred, yaw inside its tolerance, and this step's own distance reading, not
+    /// contradicted by the odometry nor bounded by a remembered hub, fixing the hub. Returns the
+    /// leg's first step.
+    fn start_odometry_leg(
+        &mut self,
+        now: u64,
+        dt: f64,
+        cues: &Cues,
+        vehicle: Option<&VehicleState>,
+    ) -> Option<(ApproachTask, Command, String)> {
+        let c = &self.config;
+        let from_m = c.odometry_leg_from_m()?;
+        let ready = !self.t1_active
+            && !self.t2_active
+            && cues.forward_ok
+            && cues.remembered.is_none()
+            && cues
+                .dist
+                .is_some_and(|d| d <= from_m + c.distance_tolerance_m);
+        let fix = self.hub_fix.filter(|f| ready && f.at_ns == now)?;
+        let leg = OdometryLeg::start(fix, vehicle?, c, now)?;
+        log::info!(
+            "approach: the spinner overfills the view below {from_m:.1} m: the last {:.1} m run \
+             on the odometry, towards the hub fixed {:.2} m ahead",
+            leg.start_distance_m() - c.target_distance_m,
+            leg.start_distance_m()
+        );
+        self.leg = Some(leg);
+        self.odometry_leg(now, dt, vehicle)
+    }
+
+    /// One step of the odometry leg while it runs; `None` when none runs or it ends here
+    /// (position or attitude lost, `odometry_leg_max_s` passed), after which the tasks start
+    /// afresh on the image.
+    fn odometry_leg(
+        &mut self,
+        now: u64,
+        dt: f64,
+        vehicle: Option<&VehicleState>,
+    ) -> Option<(ApproachTask, Command, String)> {
+        let c = &self.config;
+        let mut leg = self.leg?;
+        let v = vehicle.filter(|v| v.position_valid && v.attitude_valid);
+        let end = match v {
+            None => Some("no position and attitude from the autopilot"),
+            Some(_) if leg.overdue(c, now) => Some("not at the goal in time"),
+            Some(_) => None,
+        };
+        let (Some(v), None) = (v, end) else {
+            log::warn!(
+                "approach: odometry leg ends after {:.1} s ({}): back to the image",
+                leg.age_s(now),
+                end.unwrap_or_default()
+            );
+            self.reset_tasks();
+            return None;
+        };
+        let s = leg.step(c, now, v);
+        self.leg = Some(leg);
+        self.last_distance_m = Some(s.distance_m);
+        let cmd = if s.settling_s.is_some() {
+            self.hover_towards(s.vx, s.vy, dt)
+        } else {
+            Command {
+                vx: slew_forward(self.cmd.vx, s.vx, c.accel_xy_m_s2, c.brake_x_m_s2, dt),
+                vy: slew(self.cmd.vy, s.vy, c.accel_xy_m_s2, dt),
+                vz: slew(self.cmd.vz, 0.0, c.accel_z_m_s2, dt),
+                yaw_rate: slew(
+                    self.cmd.yaw_rate,
+                    s.yaw_rate,
+                    c.yaw_accel_deg_s2.to_radians(),
+                    dt,
+                ),
+            }
+        };
+        let d = s.distance_m;
+        Some(match s.settling_s {
+            _ if s.done => (
+                ApproachTask::Done,
+                cmd,
+                format!(
+                    "done: {d:.2} m by odometry, {:.2} m off the goal",
+                    s.off_goal_m
+                ),
+            ),
+            Some(settling) => (
+                ApproachTask::Approach,
+                cmd,
+                format!(
+                    "T3: at {d:.2} m by odometry, settling {settling:.1}/{:.1} s",
+                    c.done_hold_s
+                ),
+            ),
+            None => (
+                ApproachTask::Approach,
+                cmd,
+                format!("T3: {d:.1} m to hub by odometry (spinner overfills view)"),
+            ),
+        })
     }
 
     /// The filtered distance to act on, and the track's own reading when it is not that:

@@ -45,10 +45,13 @@ fn main() {
 
 fn run() -> anyhow::Result<()> {
     let args = Args::parse();
-    let Some(stage) = Stage::<ControlSections>::start("control", &args.stage)? else {
+    let Some(mut stage) = Stage::<ControlSections>::start("control", &args.stage)? else {
         return Ok(());
     };
-    check_envelope(&stage.config);
+    if let Some(fit) = check_envelope(&stage.config) {
+        let approach = &mut stage.config.control.approach;
+        *approach = approach.clone().with_spinner_fit(fit.closest_fit_m);
+    }
     if args.replay {
         replay::run(stage)
     } else {
@@ -57,25 +60,43 @@ fn run() -> anyhow::Result<()> {
 }
 
 /// Says at start-up whether the calibrated camera sees the turbine's spinner whole at the
-/// approach's target (see [`SpinnerFit`]); a warning when it does not. Without a calibration
-/// the frame's aspect is unknown and nothing is said (detect and track refuse a bad one).
-fn check_envelope(sections: &ControlSections) {
+/// approach's target (see [`SpinnerFit`]); a warning when it does not, and then the approach
+/// flies its last metres on the odometry (`control.approach.odometry_leg_fit_margin`). Without
+/// a calibration the frame's aspect is unknown and nothing is said (detect and track refuse a
+/// bad one).
+fn check_envelope(sections: &ControlSections) -> Option<SpinnerFit> {
     let Ok(Some(camera)) = sections.camera.calibrated() else {
         log::debug!("no camera calibration: the spinner's fit at the target is not checked");
-        return;
+        return None;
     };
     let fit = SpinnerFit::of(
         &camera,
         &sections.turbine,
         sections.control.approach.target_distance_m,
     );
+    // With the margin the detector needs, the leg may start even where the spinner just fits.
+    let approach = sections
+        .control
+        .approach
+        .clone()
+        .with_spinner_fit(fit.closest_fit_m);
+    let leg = approach
+        .odometry_leg_from_m()
+        .map(|from| {
+            format!(
+                "; the approach flies its last {:.1} m, from {from:.1} m, on the autopilot's position",
+                from - fit.target_m
+            )
+        })
+        .unwrap_or_default();
     match fit.warning() {
-        Some(w) => log::warn!("camera and turbine: {w}"),
+        Some(w) => log::warn!("camera and turbine: {w}{leg}"),
         None => log::info!(
-            "camera and turbine: at the {:.1} m target the spinner spans {:.0}° of the camera's {:.0}° narrower field of view",
+            "camera and turbine: at the {:.1} m target the spinner spans {:.0}° of the camera's {:.0}° narrower field of view{leg}",
             fit.target_m,
             fit.spinner_deg,
             fit.narrow_fov_deg
         ),
     }
+    Some(fit)
 }
