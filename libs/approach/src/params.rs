@@ -19,6 +19,8 @@ pub use hubtrack_types::params::ParamError;
 
 /// Upper bound for times, s.
 const MAX_TIME_S: f64 = 3600.0;
+/// Upper bound for the spinner's closest fit, m.
+const MAX_FIT_M: f64 = 1e4;
 
 hubtrack_types::params! {
     /// `[control.approach]`: the T1/T2/T3 approach controller (thesis section 7.1, algorithm 2).
@@ -145,7 +147,7 @@ hubtrack_types::params! {
         /// of view, m (0: not known, no odometry leg). Not a key: the control stage sets it from
         /// the camera calibration and the turbine profile ([`ApproachConfig::with_spinner_fit`]).
         #[serde(skip)]
-        pub spinner_fits_from_m: f64 = 0.0, closed(0.0, 1e4);
+        pub spinner_fits_from_m: f64 = 0.0, closed(0.0, MAX_FIT_M);
 
         // ---- gains ----
         /// T1 yaw-rate gain, deg/s per normalised unit of horizontal error (beyond the deadband).
@@ -331,9 +333,15 @@ hubtrack_types::params! {
 
 impl ApproachConfig {
     /// This config for a camera and turbine whose spinner fits the camera's narrower field of
-    /// view from `closest_fit_m` out (see `odometry_leg_fit_margin`).
+    /// view from `closest_fit_m` out (see `odometry_leg_fit_margin`). A distance that is no
+    /// number or not positive means not known (no leg); a telephoto's kilometres are cut to the
+    /// field's range (the leg is at most `odometry_leg_max_m` anyway).
     pub fn with_spinner_fit(mut self, closest_fit_m: f64) -> ApproachConfig {
-        self.spinner_fits_from_m = closest_fit_m;
+        self.spinner_fits_from_m = if closest_fit_m > 0.0 {
+            closest_fit_m.min(MAX_FIT_M)
+        } else {
+            0.0
+        };
         self
     }
 

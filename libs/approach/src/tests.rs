@@ -2251,3 +2251,33 @@ fn the_odometry_leg_ends_without_a_position() {
     // without a position: no faster forward.
     assert!(out.vx_m_s < last.vx_m_s, "{out:?} after {last:?}");
 }
+
+/// The spinner's fit as control computes it can be any number: not a number or not positive is
+/// "not known" (no leg), kilometres through a telephoto are cut, and the config stays valid.
+#[test]
+fn any_spinner_fit_leaves_a_valid_config() {
+    let c = ApproachConfig::default();
+    for (fit, leg) in [
+        (f64::NAN, None),
+        (-1.0, None),
+        (0.0, None),
+        (
+            f64::INFINITY,
+            Some(c.target_distance_m + c.odometry_leg_max_m),
+        ),
+        (8.6e3, Some(c.target_distance_m + c.odometry_leg_max_m)),
+        (6.0, Some(6.9)),
+        (4.0, None),
+    ] {
+        let with = c.clone().with_spinner_fit(fit);
+        assert!(with.validate().is_ok(), "{fit}: {:?}", with.validate());
+        let from = with.odometry_leg_from_m();
+        match leg {
+            None => assert_eq!(from, None, "{fit}"),
+            Some(l) => assert!(
+                from.is_some_and(|f| (f - l).abs() < 1e-9),
+                "{fit}: {from:?}"
+            ),
+        }
+    }
+}
