@@ -48,10 +48,7 @@ fn run() -> anyhow::Result<()> {
     let Some(mut stage) = Stage::<ControlSections>::start("control", &args.stage)? else {
         return Ok(());
     };
-    if let Some(fit) = check_envelope(&stage.config) {
-        let approach = &mut stage.config.control.approach;
-        *approach = approach.clone().with_spinner_fit(fit.closest_fit_m);
-    }
+    check_envelope(&mut stage.config);
     if args.replay {
         replay::run(stage)
     } else {
@@ -63,24 +60,23 @@ fn run() -> anyhow::Result<()> {
 /// approach's target (see [`SpinnerFit`]); a warning when it does not, and then the approach
 /// flies its last metres on the odometry (`control.approach.odometry_leg_fit_margin`). Without
 /// a calibration the frame's aspect is unknown and nothing is said (detect and track refuse a
-/// bad one).
-fn check_envelope(sections: &ControlSections) -> Option<SpinnerFit> {
+/// bad one). Gives the approach the spinner's closest fit.
+fn check_envelope(sections: &mut ControlSections) {
     let Ok(Some(camera)) = sections.camera.calibrated() else {
         log::debug!("no camera calibration: the spinner's fit at the target is not checked");
-        return None;
+        return;
     };
     let fit = SpinnerFit::of(
         &camera,
         &sections.turbine,
         sections.control.approach.target_distance_m,
     );
+    let approach = std::mem::take(&mut sections.control.approach);
+    sections.control.approach = approach.with_spinner_fit(fit.closest_fit_m);
     // With the margin the detector needs, the leg may start even where the spinner just fits.
-    let approach = sections
+    let leg = sections
         .control
         .approach
-        .clone()
-        .with_spinner_fit(fit.closest_fit_m);
-    let leg = approach
         .odometry_leg_from_m()
         .map(|from| {
             format!(
@@ -98,5 +94,4 @@ fn check_envelope(sections: &ControlSections) -> Option<SpinnerFit> {
             fit.narrow_fov_deg
         ),
     }
-    Some(fit)
 }
