@@ -288,6 +288,12 @@ impl SettleAnchor {
     }
 }
 
+/// A reason's note of the track's own distance where a remembered or settled hub bounds it.
+fn track_reads(cues: &Cues) -> String {
+    cues.remembered
+        .map_or(String::new(), |d| format!(" (track reads {d:.1} m)"))
+}
+
 /// Cuts a reason to [`MAX_REASON_BYTES`] at a char boundary.
 fn truncate_reason(mut s: String) -> String {
     if s.len() > MAX_REASON_BYTES {
@@ -824,7 +830,21 @@ impl Approach {
         // This step's reading and where it puts the hub, for the remembered hub and the
         // odometry check.
         let reading = self.dist_f.filter(|_| t.distance_valid);
+        // Settling or done, the hub fixed when settling began bounds a reading that jumps away
+        // from it (see `settle_distance_margin_m`), and such a reading fixes no hub.
+        let settled_for_s = self
+            .at_target_since_ns
+            .map_or(0.0, |since| secs(since, now));
+        let settled_m = self
+            .settle_anchor
+            .filter(|_| self.done || settled_for_s >= self.config.settle_distance_after_s)
+            .zip(vehicle)
+            .and_then(|(a, v)| a.hub.distance_from(v));
+        let jumped = reading
+            .zip(settled_m)
+            .is_some_and(|(d, s)| d > s + self.config.settle_distance_margin_m);
         let fix = reading
+            .filter(|_| !jumped)
             .zip(vehicle)
             .and_then(|(d, v)| HubFix::from(t, v, d, now));
         let (dist, remembered) = self.bounded_distance(now, fix, vehicle);
@@ -833,6 +853,10 @@ impl Approach {
         let dist = match (dist, not_shrinking) {
             (Some(d), Some(n)) => Some(d.min(n.odometry_m)),
             (d, _) => d,
+        };
+        let (dist, remembered) = match (dist, settled_m) {
+            (Some(_), Some(s)) if jumped => (Some(s), reading),
+            _ => (dist, remembered),
         };
         let c = &self.config;
         // The distance reads at the target again: a fresh backing-off allowance.
@@ -931,11 +955,12 @@ impl Approach {
         let c = &self.config;
         let (yaw, dist) = (cues.yaw, cues.dist);
         let reason = format!(
-            "done: {:.2} m, yaw {:.1} deg, hub {:+.2} {:+.2}",
+            "done: {:.2} m, yaw {:.1} deg, hub {:+.2} {:+.2}{}",
             dist.unwrap_or(f64::NAN),
             yaw.unwrap_or(f64::NAN),
             cues.ex,
-            cues.ey
+            cues.ey,
+            track_reads(cues)
         );
         // Hover, but hold the station sideways and at the distance: at 5 m a gust that
         // pushes the vehicle 1 m aside turns into ~11° of relative yaw, and one that pushes
@@ -1164,9 +1189,10 @@ impl Approach {
         let c = &self.config;
         match (cues.dist, t.distance_valid) {
             (Some(d), true) if !self.t3_active && cues.at_target => format!(
-                "T3: at {d:.2} m, settling {:.1}/{:.1} s",
+                "T3: at {d:.2} m, settling {:.1}/{:.1} s{}",
                 self.at_target_since_ns.map_or(0.0, |s| secs(s, now)),
-                c.done_hold_s
+                c.done_hold_s,
+                track_reads(cues)
             ),
             (Some(d), true) if cues.not_shrinking.is_some() => {
                 let (excess, flown) = cues

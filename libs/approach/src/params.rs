@@ -120,6 +120,22 @@ hubtrack_types::params! {
         /// At 5 m, 0.2 m aside is 2.3° of relative yaw. Range [0, 10]; default 0.2 (0 = the
         /// image errors alone decide).
         pub settle_hold_drift_m: f64 = 0.2, closed(0.0, 10.0);
+        /// While settling at the target or done, a distance reading farther than the odometry's
+        /// distance to the hub fixed when settling began by more than this, m, is held to that
+        /// distance (the careful side): at 5 m a tower band found on a blade's edge reads the
+        /// tower narrow and the hub far, and T3 would fly in on it. Seen on a variant of the
+        /// approach (`fly --random-setup` seed 35): hovering 5.07 m out, the track's distance
+        /// went 6.75 → 7.8 m within 0.5 s and T3 flew the vehicle to 2.6 m from the rotor plane.
+        /// A hub fixed short when settling began now holds the vehicle short of the target
+        /// instead of letting a later, longer reading bring it in; the vehicle's own drift still
+        /// shows, through the odometry. Within `distance_tolerance_outer_m`, so that a reading
+        /// growing through the filter is held before it ends settling. Range [0, 100]; default
+        /// 0.3 (0 = any longer reading is held).
+        pub settle_distance_margin_m: f64 = 0.3, closed(0.0, 100.0);
+        /// The settled hub bounds the distance once settling has run this long, s: a filtered
+        /// distance only passing through the target on its way from a wrong reading to a right
+        /// one must not fix the station. Range [0, 60]; default 0.5.
+        pub settle_distance_after_s: f64 = 0.5, closed(0.0, 60.0);
 
         // ---- the last metres on the odometry ----
         /// Where the camera cannot see the spinner whole at the target, the last metres run on
