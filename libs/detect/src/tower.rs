@@ -607,6 +607,15 @@ mod tests {
         out
     }
 
+    /// The gradient plane over `gx`, `w`×`h`.
+    fn plane(gx: &[i16], w: usize, h: usize) -> GradPlane<'_> {
+        GradPlane {
+            data: gx,
+            width: w,
+            height: h,
+        }
+    }
+
     #[test]
     fn finds_the_hidden_partner_edge_and_the_axis() {
         let (w, h) = (200, 160);
@@ -681,11 +690,7 @@ mod tests {
         let (left, width) = (80.0, 14.0);
         let img = side_lit_image(w, h, left, width);
         let gx = sobel_x(&img, w, h);
-        let g = GradPlane {
-            data: &gx,
-            width: w,
-            height: h,
-        };
+        let g = plane(&gx, w, h);
         let seed = Segment::new([left, 40.0], [left, 150.0]);
         let ramp = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH)
             .expect("tower with the ramp");
@@ -766,11 +771,7 @@ mod tests {
         let shade = |t: f64| if t < 0.55 { 170.0 } else { 40.0 };
         let img = shaded_tower_image(w, h, left, width, 120, shade);
         let gx = sobel_x(&img, w, h);
-        let g = GradPlane {
-            data: &gx,
-            width: w,
-            height: h,
-        };
+        let g = plane(&gx, w, h);
         let seed = Segment::new([left, 40.0], [left, 150.0]);
         let fit = fit_tower(&DefaultParams::default(), &g, &seed, ANY_WIDTH).expect("tower");
         let got = fit.width_at(100.0).unwrap();
