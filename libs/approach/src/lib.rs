@@ -830,21 +830,10 @@ impl Approach {
         // This step's reading and where it puts the hub, for the remembered hub and the
         // odometry check.
         let reading = self.dist_f.filter(|_| t.distance_valid);
-        // Settling or done, the hub fixed when settling began bounds a reading that jumps away
-        // from it (see `settle_distance_margin_m`), and such a reading fixes no hub.
-        let settled_for_s = self
-            .at_target_since_ns
-            .map_or(0.0, |since| secs(since, now));
-        let settled_m = self
-            .settle_anchor
-            .filter(|_| self.done || settled_for_s >= self.config.settle_distance_after_s)
-            .zip(vehicle)
-            .and_then(|(a, v)| a.hub.distance_from(v));
-        let jumped = reading
-            .zip(settled_m)
-            .is_some_and(|(d, s)| d > s + self.config.settle_distance_margin_m);
+        // A reading that jumped away from the settled hub fixes no hub.
+        let settled_m = self.settled_bound(now, reading, vehicle);
         let fix = reading
-            .filter(|_| !jumped)
+            .filter(|_| settled_m.is_none())
             .zip(vehicle)
             .and_then(|(d, v)| HubFix::from(t, v, d, now));
         let (dist, remembered) = self.bounded_distance(now, fix, vehicle);
@@ -855,7 +844,7 @@ impl Approach {
             (d, _) => d,
         };
         let (dist, remembered) = match (dist, settled_m) {
-            (Some(_), Some(s)) if jumped => (Some(s), reading),
+            (Some(_), Some(s)) => (Some(s), reading),
             _ => (dist, remembered),
         };
         let c = &self.config;
@@ -880,6 +869,27 @@ impl Approach {
             not_shrinking,
             at_target,
         }
+    }
+
+    /// Settling for `settle_distance_after_s` or done, the odometry's distance to the hub fixed
+    /// when settling began, when `reading` lies more than `settle_distance_margin_m` beyond it:
+    /// the distance to act on instead (see `settle_distance_margin_m`). `None` otherwise.
+    fn settled_bound(
+        &self,
+        now: u64,
+        reading: Option<f64>,
+        vehicle: Option<&VehicleState>,
+    ) -> Option<f64> {
+        let c = &self.config;
+        let settled_for_s = self.at_target_since_ns.map_or(0.0, |s| secs(s, now));
+        let settled_m = self
+            .settle_anchor
+            .filter(|_| self.done || settled_for_s >= c.settle_distance_after_s)
+            .zip(vehicle)
+            .and_then(|(a, v)| a.hub.distance_from(v))?;
+        reading
+            .is_some_and(|d| d > settled_m + c.settle_distance_margin_m)
+            .then_some(settled_m)
     }
 
     /// Hysteresis of T1, T2 and T3: unmet above the outer threshold, met below the inner one,
