@@ -452,6 +452,18 @@ hubtrack_types::params! {
         /// was right for 94 % of those with a circle and 75 % of those without in six successful
         /// flights, 74 % and 48 % in the 28 that failed. Default true.
         pub nacelle_needs_spinner: bool = true;
+        /// A nacelle end is used only when it lies at least this far beyond the spinner's rim,
+        /// m at the hub's depth: the rim is a vertical edge at the hub's rows too, and a spinner
+        /// wider than the nacelle (`[turbine]` `spinner_diameter_m` over `nacelle_width_m`)
+        /// hides the front corners, so an end at the rim is the rim, on either side whatever the
+        /// yaw. The rim is placed from the filtered distance and, larger if so, from the
+        /// detected spinner circle, so a distance read long does not pull it in. `fly
+        /// --random-setup` seeds 2 and 10 (4.27 m spinners, 3.3–3.6 m nacelles) read ends 1–3
+        /// px beyond the rim at 30–39 m as +8° for −2°, and T3 flew the approach 6° off; with
+        /// 0.3 m (the detector's `detect.default.nacelle_clearance_m`) seed 10 still took an end
+        /// 0.2 m beyond the rim for +8°. A true end of a 6° yaw (`nacelle_min_abs_deg`) lies
+        /// about `0.1·Lr` beyond the front corners. Default 0.5.
+        pub nacelle_rim_clearance_m: f64 = 0.5, closed(0.0, MAX_SIZE_M);
         /// Distance from the hub back to the nacelle's front face along the rotor axis, m. From
         /// `[turbine]` (`nacelle_front_behind_hub_m`). Default 1.2.
         #[serde(skip)]

@@ -869,6 +869,17 @@ impl Core {
             .estimate()
             .or(spinner)
             .filter(|d| d.value >= yc.nacelle_min_distance_m)?;
+        // Only an end beyond the spinner's rim (see `nacelle_rim_clearance_m`).
+        let spinner_radius_m = self.cfg.distance.spinner_diameter_m / 2.0;
+        let rim_factor = 1.0 + yc.nacelle_rim_clearance_m / spinner_radius_m;
+        let rim_px = (f * spinner_radius_m / d.value).max(if det.circle_found {
+            det.circle[2]
+        } else {
+            0.0
+        }) * rim_factor;
+        if det.nacelle_end_dx_px.abs() < rim_px {
+            return None;
+        }
         // Only an end well beyond the head-on front corners (see `nacelle_min_excess_sigma`).
         let hub_std = if det.circle_found {
             yc.gap_std_spinner_px

@@ -1454,6 +1454,51 @@ fn a_small_nacelle_yaw_of_the_wrong_side_is_not_used() {
     );
 }
 
+/// A spinner wider than the nacelle hides its front corners, and its own rim is a vertical edge
+/// at the hub's rows on both sides: an "end" just beyond the rim is the rim, whatever the yaw
+/// (`yaw.nacelle_rim_clearance_m`). Here a 4.3 m spinner and a 3.3 m wide nacelle at 31 m and
+/// −2°: the gaps set the yaw, then the tower is hidden and the end is read 2 px beyond the rim on
+/// the wrong side, which the nacelle model maps to about +7°.
+#[test]
+fn a_nacelle_end_at_a_wide_spinners_rim_is_not_used() {
+    let mut cfg = pinhole_config();
+    cfg.distance.spinner_diameter_m = 4.3;
+    cfg.yaw.nacelle_half_width_m = 1.65;
+    cfg.yaw.nacelle_front_m = 0.7;
+    cfg.yaw.nacelle_rear_m = 11.0;
+    let f = focal_length_px(W as f64, cfg.camera.hfov_deg);
+    let (d_hub, psi_deg) = (31.0, -2.0);
+    let rim = f * 2.15 / d_hub;
+    let run = |clearance_m: f64| {
+        let mut c = cfg.clone();
+        c.yaw.nacelle_rim_clearance_m = clearance_m;
+        track_turbine(&c, 17, 150, d_hub, psi_deg, |k, d, rng| {
+            if k >= 60 {
+                d.tower_found = false;
+                d.blade_count = 0;
+                d.nacelle_found = true;
+                d.nacelle_end_dx_px = rim + 2.0 + 0.5 * rng.normal();
+            }
+        })
+    };
+    assert!(
+        cfg.yaw.nacelle_rim_clearance_m > 2.5 * d_hub / f,
+        "the default clearance covers 2.5 px at {d_hub} m"
+    );
+    let kept = run(cfg.yaw.nacelle_rim_clearance_m);
+    assert!(
+        (kept.yaw_deg - psi_deg).abs() < 2.0,
+        "rim rule on, the gaps' yaw stays: {}",
+        kept.yaw_deg
+    );
+    let used = run(0.0);
+    assert!(
+        used.yaw_deg > 5.0,
+        "rim rule off, the rim owns the yaw: {}",
+        used.yaw_deg
+    );
+}
+
 /// When the tower band and the spinner disagree on the distance, one of them is wrong, and the
 /// band gives no hub–tower gap even when the filtered distance sides with it: a band widened by the blade pointing down
 /// in front of the tower has a gap that is not the tower's. Here, after a consistent start,
