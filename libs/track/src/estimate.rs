@@ -332,6 +332,21 @@ pub fn nacelle_excess_sigma(
     (dx_px.abs() - floor) / sigma
 }
 
+/// How far beside the hub, px, a nacelle end must lie to be more than the spinner's own rim:
+/// the rim (radius `spinner_radius_m` at hub distance `distance_m`, or the detected circle's
+/// `circle_radius_px` if that is wider, so a distance read long does not pull it in) plus
+/// `clearance_m` at the same scale.
+pub fn spinner_rim_reach_px(
+    f_px: f64,
+    spinner_radius_m: f64,
+    distance_m: f64,
+    circle_radius_px: Option<f64>,
+    clearance_m: f64,
+) -> f64 {
+    let rim = (f_px * spinner_radius_m / distance_m).max(circle_radius_px.unwrap_or(0.0));
+    rim * (1.0 + clearance_m / spinner_radius_m)
+}
+
 /// Apparent image angle (clockwise from up) of a blade at true angle `theta` in a rotor plane
 /// seen at relative yaw `psi`: `atan2(sin θ·cos ψ, cos θ)`.
 pub fn apparent_blade_angle(theta: f64, psi: f64) -> f64 {
@@ -615,6 +630,17 @@ mod tests {
             nacelle_excess_sigma(f64::NAN, 5.0, exact, 1000.0, 1.2, 1.7),
             f64::NEG_INFINITY
         );
+    }
+
+    #[test]
+    fn the_spinner_rim_reach_takes_the_wider_rim_and_scales_the_clearance_with_it() {
+        // 2 m spinner at 20 m through f 1000: rim 100 px; 0.5 m more is 25 px more.
+        assert!((spinner_rim_reach_px(1000.0, 2.0, 20.0, None, 0.5) - 125.0).abs() < 1e-9);
+        // A circle smaller than the rim changes nothing; a wider one (the distance read long)
+        // sets the rim, and the clearance scales with it.
+        assert!((spinner_rim_reach_px(1000.0, 2.0, 20.0, Some(80.0), 0.5) - 125.0).abs() < 1e-9);
+        assert!((spinner_rim_reach_px(1000.0, 2.0, 20.0, Some(120.0), 0.5) - 150.0).abs() < 1e-9);
+        assert!((spinner_rim_reach_px(1000.0, 2.0, 20.0, None, 0.0) - 100.0).abs() < 1e-9);
     }
 
     #[test]

@@ -461,8 +461,10 @@ hubtrack_types::params! {
         /// --random-setup` seeds 2 and 10 (4.27 m spinners, 3.3–3.6 m nacelles) read ends 1–3
         /// px beyond the rim at 30–39 m as +8° for −2°, and T3 flew the approach 6° off; with
         /// 0.3 m (the detector's `detect.default.nacelle_clearance_m`) seed 10 still took an end
-        /// 0.2 m beyond the rim for +8°. A true end of a 6° yaw (`nacelle_min_abs_deg`) lies
-        /// about `0.1·Lr` beyond the front corners. Default 0.5.
+        /// 0.2 m beyond the rim for +8°. On the thesis turbine (1.6 m spinner radius, 1.7 m half
+        /// width, rear face 11.2 m behind the hub) it leaves the ends of yaws from 6.5° at 30 m
+        /// (`nacelle_min_abs_deg` is 6°: at 6° the end reads 2.09 m beside the hub, the rim's
+        /// reach 2.1 m). Default 0.5.
         pub nacelle_rim_clearance_m: f64 = 0.5, closed(0.0, MAX_SIZE_M);
         /// Distance from the hub back to the nacelle's front face along the rotor axis, m. From
         /// `[turbine]` (`nacelle_front_behind_hub_m`). Default 1.2.

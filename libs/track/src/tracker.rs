@@ -11,7 +11,7 @@ use crate::camera::{
 };
 use crate::estimate::{
     distance_from_spinner, distance_from_tower_width, fuse, fusion_shares, nacelle_excess_sigma,
-    off_axis_sin, yaw_from_gap, yaw_from_nacelle, Estimate, HubFromTower,
+    off_axis_sin, spinner_rim_reach_px, yaw_from_gap, yaw_from_nacelle, Estimate, HubFromTower,
 };
 use crate::filter::{CvModel, HubFilter, ScalarFilter};
 use crate::parallax::{ParallaxRanger, Sighting};
@@ -870,14 +870,14 @@ impl Core {
             .or(spinner)
             .filter(|d| d.value >= yc.nacelle_min_distance_m)?;
         // Only an end beyond the spinner's rim (see `nacelle_rim_clearance_m`).
-        let spinner_radius_m = self.cfg.distance.spinner_diameter_m / 2.0;
-        let rim_factor = 1.0 + yc.nacelle_rim_clearance_m / spinner_radius_m;
-        let rim_px = (f * spinner_radius_m / d.value).max(if det.circle_found {
-            det.circle[2]
-        } else {
-            0.0
-        }) * rim_factor;
-        if det.nacelle_end_dx_px.abs() < rim_px {
+        let rim_reach_px = spinner_rim_reach_px(
+            f,
+            self.cfg.distance.spinner_diameter_m / 2.0,
+            d.value,
+            det.circle_found.then_some(det.circle[2]),
+            yc.nacelle_rim_clearance_m,
+        );
+        if det.nacelle_end_dx_px.abs() < rim_reach_px {
             return None;
         }
         // Only an end well beyond the head-on front corners (see `nacelle_min_excess_sigma`).

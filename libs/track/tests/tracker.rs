@@ -1431,8 +1431,9 @@ fn a_small_nacelle_yaw_of_the_wrong_side_is_not_used() {
     let run = |min_abs_deg: f64| {
         let mut c = cfg.clone();
         c.yaw.nacelle_min_abs_deg = min_abs_deg;
-        // This rule alone (the front-corner rule would also drop this reading).
+        // This rule alone (the front-corner and the rim rules would also drop this reading).
         c.yaw.nacelle_min_excess_sigma = 0.0;
+        c.yaw.nacelle_rim_clearance_m = 0.0;
         track_turbine(&c, 5, 150, d_hub, psi_deg, |_, d, rng| {
             d.blade_count = 0;
             d.nacelle_found = true;
