@@ -616,7 +616,7 @@ mod tests {
     /// The shipped models give the dnn module's outputs to float rounding.
     #[test]
     fn the_shipped_networks_match_opencv_dnn() {
-        let models: [(&str, &[u8], usize, usize); 6] = [
+        let models: [(&str, &[u8], usize, usize); 7] = [
             ("hubnet", include_bytes!("../models/hubnet.onnx"), 128, 192),
             (
                 "hubnet-still",
@@ -632,6 +632,12 @@ mod tests {
                 64,
             ),
             ("hubyaw", include_bytes!("../models/hubyaw.onnx"), 64, 64),
+            (
+                "hubyaw-thesis",
+                include_bytes!("../models/hubyaw-thesis.onnx"),
+                64,
+                64,
+            ),
             (
                 "hubyaw-close",
                 include_bytes!("../models/hubyaw-close.onnx"),

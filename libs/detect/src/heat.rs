@@ -194,9 +194,13 @@ pub const YAW_CLOSE_WINDOW_M: f64 = 8.0;
 pub const YAW_MAX_DEG: f64 = 40.0;
 /// ... evenly, this many.
 pub const YAW_BINS: usize = 33;
-/// The yaw model the build ships (`scripts/train-hubnet.sh yaw`; ONNX, input `1×1×64×64` grey in
-/// [0, 1], output `1×33×1×1` logits).
+/// The yaw model the build ships (`scripts/train-hubnet.sh yaw`: the thesis turbine and a
+/// training family of other proportions; ONNX, input `1×1×64×64` grey in [0, 1], output
+/// `1×33×1×1` logits).
 const YAW_MODEL: &[u8] = include_bytes!("../models/hubyaw.onnx");
+/// The same network trained on the thesis turbine alone (`scripts/train-hubnet.sh yaw-thesis`),
+/// for that turbine (see `detect.default.hub_yaw_thesis_tolerance`).
+const YAW_THESIS_MODEL: &[u8] = include_bytes!("../models/hubyaw-thesis.onnx");
 /// The close-range yaw model (`scripts/train-hubnet.sh yaw-close`: the same network trained on
 /// views from 3.5–14 m only, with a `YAW_CLOSE_WINDOW_M` window).
 const YAW_CLOSE_MODEL: &[u8] = include_bytes!("../models/hubyaw-close.onnx");
@@ -228,6 +232,15 @@ impl HubYawNet {
     pub fn new(direct: bool) -> Result<HubYawNet, DetectError> {
         Ok(HubYawNet {
             net: Runner::load(YAW_MODEL, direct)?,
+            window_m: YAW_WINDOW_M,
+            crop: Mat::default(),
+        })
+    }
+
+    /// Load the shipped model trained on the thesis turbine alone.
+    pub fn thesis_turbine(direct: bool) -> Result<HubYawNet, DetectError> {
+        Ok(HubYawNet {
+            net: Runner::load(YAW_THESIS_MODEL, direct)?,
             window_m: YAW_WINDOW_M,
             crop: Mat::default(),
         })

@@ -569,7 +569,13 @@ impl Detector {
             .then(|| heat::HubCropNet::for_stills(direct))
             .transpose()?;
         let hubyaw = on(d.hub_yaw)
-            .then(|| heat::HubYawNet::new(direct))
+            .then(|| {
+                if config.camera.is_thesis_turbine(d.hub_yaw_thesis_tolerance) {
+                    heat::HubYawNet::thesis_turbine(direct)
+                } else {
+                    heat::HubYawNet::new(direct)
+                }
+            })
             .transpose()?;
         let hubyaw_close = on(d.hub_yaw && d.hub_yaw_close)
             .then(|| heat::HubYawNet::close_range(direct))

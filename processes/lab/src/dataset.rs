@@ -1,6 +1,7 @@
 //! `hubtrack dataset`: rendered frames with their hub truth, as the learned hub heatmap's input
 //! (the detector's own preprocessing, `Detector::network_input`), for `scripts/train-hubnet.py`.
 
+use crate::turbine_family::{self, Family};
 use anyhow::Context;
 use hubtrack_detect::heat::{NET_HEIGHT, NET_WIDTH};
 use hubtrack_detect::ImageView;
@@ -64,7 +65,15 @@ pub struct DatasetArgs {
     /// training sets of the still photos' models.
     #[arg(long)]
     pub stills: bool,
+    /// The turbines the frames show: the thesis turbine (the scenes' own), or each scene a
+    /// turbine of the learned yaw networks' training family or of the fleet held out of it
+    /// (`processes/lab/src/turbine_family.rs`).
+    #[arg(long, value_enum, default_value_t = Family::Thesis)]
+    pub turbines: Family,
 }
+
+/// Seed mix of a scene's turbine draw (independent of the scene's other draws).
+const TURBINE_SEED_MIX: u64 = 0x7B1D_FA41_1E50_0047;
 
 /// Writes the set.
 pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
@@ -89,8 +98,12 @@ pub fn run(a: DatasetArgs) -> anyhow::Result<()> {
     // Lens: 0 GoPro, 1 USB, 2 the photo lens.
     let mut one =
         |name: String, scene: &Scene, pose: &CameraPose, k: usize| -> anyhow::Result<()> {
+            let mut scene = scene.clone();
+            if let Some(t) = turbine_family::for_scene(a.turbines, scene.seed ^ TURBINE_SEED_MIX) {
+                hubtrack_sim::show_turbine(&mut scene, &t);
+            }
             let truth = renderers[k]
-                .render(scene, pose, &mut buffers[k])
+                .render(&scene, pose, &mut buffers[k])
                 .map_err(|e| anyhow::anyhow!("{e}"))?;
             let cam = renderers[k].camera();
             let (w, h) = (cam.width as f64, cam.height as f64);

@@ -78,6 +78,10 @@ struct FlightLine<'a> {
     /// With `--random-setup`: the seed's turbine.
     #[serde(skip_serializing_if = "Option::is_none")]
     turbine: Option<String>,
+    /// With `--random-setup`: `"training"` when the turbine lies in the learned yaw networks'
+    /// training family, `"held-out"` when not.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    turbine_family: Option<&'static str>,
 }
 
 /// Runs the flights and prints the table (or JSON lines).
@@ -255,6 +259,7 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             autopilot: args.autopilot,
             camera: setup.as_ref().map(|s| s.camera.clone()),
             turbine: setup.as_ref().map(|s| s.turbine.clone()),
+            turbine_family: setup.as_ref().map(|s| s.turbine_family),
         };
         if outcome.lockstep_misses > 0 {
             log::warn!(

@@ -16,6 +16,7 @@ mod score;
 mod sitl;
 mod track_cmd;
 mod train_ranker;
+mod turbine_family;
 
 use anyhow::{bail, Context};
 use clap::{Parser, Subcommand};
