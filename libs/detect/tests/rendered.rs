@@ -22,6 +22,17 @@ fn gopro_renderer() -> (Renderer, Vec<u8>) {
     (Renderer::new(cam), vec![0u8; cam.frame_bytes()])
 }
 
+/// A rendered BGR frame of `cam` as the detector's input.
+fn bgr_view<'a>(cam: &Camera, buf: &'a [u8]) -> ImageView<'a> {
+    ImageView {
+        width: cam.width,
+        height: cam.height,
+        stride: cam.width as usize * 3,
+        format: PixelFormat::Bgr8,
+        data: buf,
+    }
+}
+
 /// Renders `scene` from `pose` (GoPro camera) and detects in it with `config` and `hints`.
 fn render_and_detect(
     r: &mut Renderer,
@@ -33,13 +44,7 @@ fn render_and_detect(
 ) -> (Detection, hubtrack_render::Truth) {
     let cam = Camera::gopro_hero3();
     let truth = r.render(scene, pose, buf).unwrap();
-    let view = ImageView {
-        width: cam.width,
-        height: cam.height,
-        stride: cam.width as usize * 3,
-        format: PixelFormat::Bgr8,
-        data: buf,
-    };
+    let view = bgr_view(&cam, buf);
     (
         Detector::new(config)
             .unwrap()
@@ -60,13 +65,7 @@ fn run(mode: Mode, pose: CameraPose) -> (hubtrack_detect::Output, hubtrack_rende
         ..DetectConfig::default()
     })
     .unwrap();
-    let view = ImageView {
-        width: cam.width,
-        height: cam.height,
-        stride: cam.width as usize * 3,
-        format: PixelFormat::Bgr8,
-        data: &buf,
-    };
+    let view = bgr_view(&cam, &buf);
     (
         det.detect(
             &view,
@@ -306,13 +305,7 @@ fn stills_are_also_detected_one_level_finer() {
         let truth = r
             .render(&sunlit_sea(), &CameraPose::front(d), &mut buf)
             .unwrap();
-        let view = ImageView {
-            width: cam.width,
-            height: cam.height,
-            stride: cam.width as usize * 3,
-            format: PixelFormat::Bgr8,
-            data: &buf,
-        };
+        let view = bgr_view(&cam, &buf);
         let mut det = Detector::new(levels_only.clone()).unwrap();
         let frame = det.detect(&view, &hints).unwrap().detection;
         let still = det.detect_still(&view, &hints).unwrap().detection;
@@ -391,13 +384,7 @@ fn stills_are_also_detected_in_their_mirror_image() {
             continue;
         };
         seen += 1;
-        let view = ImageView {
-            width: cam.width,
-            height: cam.height,
-            stride: cam.width as usize * 3,
-            format: PixelFormat::Bgr8,
-            data: &buf,
-        };
+        let view = bgr_view(&cam, &buf);
         let axis = Segment::new(hub, nose);
         let hit: Vec<bool> = dets
             .iter_mut()
@@ -465,13 +452,7 @@ fn the_hub_heatmap_peaks_at_the_hub_on_unseen_frames() {
     );
     let (mut frames, mut near) = (0, 0);
     for (buf, cam, hub, _) in unseen_frames(30, 3) {
-        let view = ImageView {
-            width: cam.width,
-            height: cam.height,
-            stride: cam.width as usize * 3,
-            format: PixelFormat::Bgr8,
-            data: &buf,
-        };
+        let view = bgr_view(&cam, &buf);
         let heat = net.run(&det.network_input(&view).unwrap()).unwrap();
         let (peak, _) = heat.peak().unwrap();
         let (fx, fy) = (hub[0] / cam.width as f64, hub[1] / cam.height as f64);
@@ -501,13 +482,7 @@ fn own_kernels_and_the_dnn_module_see_the_same() {
     let (mut own, mut dnn) = (HubNet::new(true).unwrap(), HubNet::new(false).unwrap());
     let mut frames = 0;
     for (buf, cam, _, _) in unseen_frames(12, 3) {
-        let view = ImageView {
-            width: cam.width,
-            height: cam.height,
-            stride: cam.width as usize * 3,
-            format: PixelFormat::Bgr8,
-            data: &buf,
-        };
+        let view = bgr_view(&cam, &buf);
         let input = det.network_input(&view).unwrap();
         let (a, b) = (own.run(&input).unwrap(), dnn.run(&input).unwrap());
         let worst =
@@ -546,13 +521,7 @@ fn the_hub_crop_network_moves_offset_candidates_onto_the_hub() {
     let (mut frames, mut hits, mut closer) = (0, 0, 0);
     for (i, (buf, cam, hub, _)) in unseen_frames(40, 2).into_iter().enumerate() {
         let i = i as u64;
-        let view = ImageView {
-            width: cam.width,
-            height: cam.height,
-            stride: cam.width as usize * 3,
-            format: PixelFormat::Bgr8,
-            data: &buf,
-        };
+        let view = bgr_view(&cam, &buf);
         let small = det.working_level(&view).unwrap();
         let scale = cam.height as f64 / opencv::prelude::MatTraitConst::rows(&small) as f64;
         // A start 2–5 % of the height away, in a direction that turns with the frame.
@@ -606,13 +575,7 @@ fn the_yaw_network_reads_the_relative_yaw_of_unseen_views() {
             .into_iter()
             .filter(|f| f.3.distance_m <= 45.0)
         {
-            let view = ImageView {
-                width: cam.width,
-                height: cam.height,
-                stride: cam.width as usize * 3,
-                format: PixelFormat::Bgr8,
-                data: &buf,
-            };
+            let view = bgr_view(&cam, &buf);
             let small = det.working_level(&view).unwrap();
             let scale = cam.height as f64 / opencv::prelude::MatTraitConst::rows(&small) as f64;
             let r = net
@@ -680,13 +643,7 @@ fn the_close_range_yaw_network_reads_the_hover_views() {
         let Some(hub) = truth.hub_px.filter(|_| truth.turbine_in_view) else {
             continue;
         };
-        let view = ImageView {
-            width: cam.width,
-            height: cam.height,
-            stride: cam.width as usize * 3,
-            format: PixelFormat::Bgr8,
-            data: &buf,
-        };
+        let view = bgr_view(&cam, &buf);
         let small = det.working_level(&view).unwrap();
         let scale = cam.height as f64 / opencv::prelude::MatTraitConst::rows(&small) as f64;
         let at = [hub[0] / scale, hub[1] / scale];
@@ -800,13 +757,7 @@ fn the_close_search_near_the_heatmap_peak_finds_hover_views() {
         let Some(hub) = truth.hub_px.filter(|_| truth.turbine_in_view) else {
             continue;
         };
-        let view = ImageView {
-            width: cam.width,
-            height: cam.height,
-            stride: cam.width as usize * 3,
-            format: PixelFormat::Bgr8,
-            data: &buf,
-        };
+        let view = bgr_view(&cam, &buf);
         let hints = Hints {
             roll_rad: Some(case.pose.roll_deg.to_radians()),
             ..Hints::default()
