@@ -93,6 +93,13 @@ impl ShrinkCheck {
         // flown (the filter's lag grows as the vehicle speeds up, and the detector's bias
         // changes with the distance).
         let allowed = c.shrink_check_noise_m + c.shrink_check_frac * flown.max(0.0);
+        log::trace!(
+            "shrink check: reading {d:.2} m, anchor {:.2} m (confirmed {}), flown {flown:.2} m, \
+             excess {excess:.2} m (allowed {allowed:.2}), latched {}",
+            a.distance_m,
+            a.confirmed,
+            self.latched.is_some()
+        );
         if let Some(latched) = self.latched {
             if excess <= c.shrink_check_noise_m {
                 self.latched = None;

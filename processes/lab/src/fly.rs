@@ -259,7 +259,7 @@ pub fn run(args: FlyArgs) -> anyhow::Result<()> {
             autopilot: args.autopilot,
             camera: setup.as_ref().map(|s| s.camera.clone()),
             turbine: setup.as_ref().map(|s| s.turbine.clone()),
-            turbine_family: setup.as_ref().map(|s| s.turbine_family),
+            turbine_family: setup.as_ref().map(|s| s.turbine_family.name()),
         };
         if outcome.lockstep_misses > 0 {
             log::warn!(

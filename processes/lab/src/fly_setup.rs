@@ -2,7 +2,7 @@
 //! seed, written as a calibration file and a turbine profile that every stage (the simulator's
 //! world, detect, track) is given, as an operator would give theirs.
 
-use crate::turbine_family;
+use crate::turbine_family::{self, Family};
 use hubtrack_render::dataset::held_out_cameras;
 use hubtrack_render::Camera;
 use hubtrack_types::mutate::Rng;
@@ -17,9 +17,9 @@ pub struct FlightSetup {
     pub camera: String,
     /// The turbine drawn, one line.
     pub turbine: String,
-    /// Whether the turbine lies in the learned yaw networks' training family (`"training"`) or
-    /// outside it (`"held-out"`): see [`turbine_family`].
-    pub turbine_family: &'static str,
+    /// Whether the turbine lies in the learned yaw networks' training family or outside it:
+    /// see [`turbine_family`].
+    pub turbine_family: Family,
     /// `--set` overrides that give the stages the two files.
     pub overrides: Vec<String>,
 }
@@ -41,11 +41,7 @@ pub fn draw(seed: u64, dir: &Path) -> anyhow::Result<FlightSetup> {
     let cams = cameras();
     let (cam_name, cam) = cams[r.below(cams.len())];
     let t = turbine_family::draw(&mut r, &turbine_family::FLEET);
-    let family = if turbine_family::in_training_family(&t) {
-        "training"
-    } else {
-        "held-out"
-    };
+    let family = Family::of_fleet_turbine(&t);
     let profile = format!(
         "# Drawn by `hubtrack fly --random-setup` for seed {seed}.\n\
          name = \"seed {seed}: {}\"\n\

@@ -117,6 +117,26 @@ pub fn in_training_family(t: &TurbineSetup) -> bool {
         && within(t.hub_overhang_m, TRAINING.overhang_m)
 }
 
+impl Family {
+    /// The family of a turbine of the fleet: the training family or the rest.
+    pub fn of_fleet_turbine(t: &TurbineSetup) -> Family {
+        if in_training_family(t) {
+            Family::Training
+        } else {
+            Family::HeldOut
+        }
+    }
+
+    /// The family's name, as `--turbines` spells it and fly results report it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Thesis => "thesis",
+            Family::Training => "training",
+            Family::HeldOut => "held-out",
+        }
+    }
+}
+
 /// The turbine of a set's scene `seed` (`None`: the thesis turbine, as drawn by the scene).
 pub fn for_scene(family: Family, seed: u64) -> Option<TurbineSetup> {
     let mut r = Rng::new(seed);
@@ -164,6 +184,11 @@ mod tests {
             assert!(within(h.hub_overhang_m, FLEET.overhang_m));
         }
         assert!(for_scene(Family::Thesis, 1).is_none());
+        // The names fly results report are those the command line accepts.
+        for f in [Family::Thesis, Family::Training, Family::HeldOut] {
+            let value = clap::ValueEnum::to_possible_value(&f).unwrap();
+            assert_eq!(f.name(), value.get_name());
+        }
         // The shipped held-out profiles lie outside the training family.
         for file in ["slim_1mw.toml", "tall_3mw.toml"] {
             let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/data/held-out/");
