@@ -244,6 +244,25 @@ def test_eval_negatives_sets_the_frames_without_a_turbine(runner):
     assert rows["negatives"][1] == "6", res.stdout
 
 
+def test_cross_domain_eval_prints_one_table_per_held_out_set(runner, tmp_path):
+    """`hubtrack eval --cross-domain`: the in-domain table, then one per held-out camera, the
+    held-out turbines and the held-out scenes (chimneys, motion blur), each with its frames
+    without a turbine; `--misses` writes each set's misses to a folder of its own."""
+    misses = tmp_path / "misses"
+    res = runner.run(
+        "hubtrack", "eval", "--no-photos", "--synthetic", 2, "--negatives", 3, "--seed", 3,
+        "--cross-domain", "--misses", misses,
+    )
+    assert res.returncode == 0, res.stderr
+    titles = [l for l in res.stdout.splitlines() if l.startswith("cross-domain ")]
+    assert len(titles) == 6, res.stdout
+    assert titles[-2].startswith("cross-domain turbines") and titles[-1].startswith("cross-domain scenes"), titles
+    assert "chimneys" in titles[-1] and "motion blur" in titles[-1], titles[-1]
+    assert (misses / "cross-domain-scenes" / "misses.jsonl").exists(), sorted(p.name for p in misses.iterdir())
+    negatives = [l.split() for l in res.stdout.splitlines() if l.startswith("negatives")]
+    assert len(negatives) == 7 and all(row[1] == "3" for row in negatives), negatives
+
+
 def test_synthetic_frames_can_be_scored_as_stills(runner):
     """`hubtrack eval --as-stills` scores the `--synthetic` frames as `hubtrack detect` sees an
     image (no attitude, both pyramid levels): the path outside evaluation takes on renders."""

@@ -2,7 +2,8 @@
 //!
 //! Usage: `cargo run -p hubtrack-render --release --example render_png -- OUT_DIR`
 //!
-//! Writes front_far, oblique_close, overcast_horizon, no_turbine (and a few more variants) and
+//! Writes front_far, oblique_close, overcast_horizon, no_turbine, a chimney with motion blur (and
+//! a few more variants) and
 //! prints each frame's truth. The truth hub is marked with a small red cross in `*_marked.png`.
 
 use std::fs::File;
@@ -102,6 +103,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ..base.clone()
             },
             CameraPose::looking_at_hub(80.0, -20.0, -10.0),
+        ),
+        (
+            "chimney_motion_blur",
+            gopro,
+            Scene {
+                distractor: Distractor::Chimney,
+                motion_blur_frac: 0.004,
+                seed: 9,
+                ..base.clone()
+            },
+            CameraPose::looking_at_hub(120.0, 15.0, -12.0),
+        ),
+        (
+            "chimney_no_turbine",
+            gopro,
+            Scene {
+                turbine_present: false,
+                distractor: Distractor::Chimney,
+                sky: Sky::Overcast,
+                seed: 4,
+                ..base.clone()
+            },
+            CameraPose::looking_at_hub(120.0, 10.0, -15.0),
         ),
         (
             "hills_powerlines",

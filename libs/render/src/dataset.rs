@@ -389,6 +389,27 @@ pub const HELD_OUT_OVERHANG_M: (f64, f64) = (3.0, 7.0);
 /// Nacelle sizes of the held-out family over the training family's one nacelle.
 pub const HELD_OUT_NACELLE_SCALE: (f64, f64) = (0.8, 1.5);
 
+const HELD_OUT_SCENE_SEED_MIX: u64 = 0x5CE7_E0FF_C0DE_0047;
+/// Share of the held-out scenes with a chimney standing near the turbine (every scene without
+/// a turbine has one).
+pub const HELD_OUT_CHIMNEY_SHARE: f64 = 0.5;
+/// Motion blur of the held-out scenes, share of the frame's width (0.1–0.6 %: 2–12 px at
+/// 1920 px, a 90° lens turning at 9–54°/s through a 1/100 s exposure).
+pub const HELD_OUT_MOTION_BLUR_FRAC: (f64, f64) = (0.001, 0.006);
+
+/// Gives `scene` what the training scenes never show: an industrial chimney (a smooth tapered
+/// column as tall as a tower, in every scene without a turbine and in
+/// `HELD_OUT_CHIMNEY_SHARE` of the others, instead of the mast or power line the scene drew)
+/// and horizontal motion blur. Detector and rankers never saw either.
+pub fn held_out_scene(scene: &mut Scene, seed: u64) {
+    let mut r = Rng(seed ^ HELD_OUT_SCENE_SEED_MIX);
+    if !scene.turbine_present || r.range(0.0, 1.0) < HELD_OUT_CHIMNEY_SHARE {
+        scene.distractor = Distractor::Chimney;
+    }
+    scene.motion_blur_frac =
+        r.range(HELD_OUT_MOTION_BLUR_FRAC.0, HELD_OUT_MOTION_BLUR_FRAC.1) as f32;
+}
+
 /// Gives `scene` turbine proportions outside the training family (which varies the tower by
 /// ±5 % around 2.2 m and keeps 33.5 m blades, one spinner, overhang and nacelle): tower top,
 /// taper, blade length, spinner, overhang and nacelle size drawn over what real fleets have.

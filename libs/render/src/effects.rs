@@ -1,4 +1,5 @@
-//! Image-space effects: sun disc, propeller blur, 3x3 blur, sensor noise, JPEG-like artefacts.
+//! Image-space effects: sun disc, propeller blur, 3x3 blur, motion blur, sensor noise, JPEG-like
+//! artefacts.
 //!
 //! All passes work in place on the caller's BGR8 buffer and use scratch owned by [`Effects`].
 
@@ -124,6 +125,37 @@ impl Effects {
             let neg = &self.noise_neg[off..off + row_len];
             for ((p, &a), &s) in row.iter_mut().zip(pos).zip(neg) {
                 *p = p.saturating_add(a).saturating_sub(s);
+            }
+        }
+    }
+
+    /// Horizontal motion blur, in place: each pixel becomes the mean of the `len_px` pixels
+    /// of its row centred on it (rounded to a whole number; borders replicated) — the smear of
+    /// a camera turning about its vertical axis during the exposure.
+    pub fn motion_blur(&mut self, out: &mut [u8], len_px: f32) {
+        let len = (len_px.round() as usize).clamp(1, self.w.max(1));
+        if len <= 1 {
+            return;
+        }
+        let (w, rl) = (self.w, self.w * 3);
+        let (before, after) = ((len - 1) / 2, len / 2);
+        // Prefix sums of one row, per channel, over the row extended by replicated borders.
+        let mut prefix = vec![0u32; (w + len) * 3 + 3];
+        for row in out.chunks_exact_mut(rl).take(self.h) {
+            let px = |i: isize| -> usize { i.clamp(0, w as isize - 1) as usize };
+            for k in 0..w + len {
+                let src = px(k as isize - before as isize) * 3;
+                for c in 0..3 {
+                    prefix[(k + 1) * 3 + c] = prefix[k * 3 + c] + u32::from(row[src + c]);
+                }
+            }
+            for x in 0..w {
+                // Pixels x − before ..= x + after sit at extended indices x ..= x + len − 1.
+                let (lo, hi) = (x, x + before + after + 1);
+                for c in 0..3 {
+                    let sum = prefix[hi * 3 + c] - prefix[lo * 3 + c];
+                    row[x * 3 + c] = ((sum + len as u32 / 2) / len as u32) as u8;
+                }
             }
         }
     }
@@ -444,6 +476,33 @@ fn dct_plane(p: &mut [f32], w: usize, h: usize, q: &[f32; 64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn motion_blur_smears_a_vertical_edge_over_its_length_only_along_rows() {
+        let (w, h) = (40, 3);
+        // Dark left half, bright right half, every row alike.
+        let img: Vec<u8> = (0..w * h * 3)
+            .map(|i| if (i / 3) % w < w / 2 { 20 } else { 220 })
+            .collect();
+        let mut out = img.clone();
+        Effects::new(w, h).motion_blur(&mut out, 8.0);
+        let row = |r: usize| &out[r * w * 3..(r + 1) * w * 3];
+        // Far from the edge, and at the replicated borders, nothing changes.
+        assert_eq!(row(1)[0], 20);
+        assert_eq!(row(1)[(w - 1) * 3], 220);
+        assert_eq!(row(1)[(w / 2 - 5) * 3], 20);
+        assert_eq!(row(1)[(w / 2 + 4) * 3], 220);
+        // Across the edge the level ramps in eighths: 8 pixels in between, rising.
+        let ramp: Vec<u8> = (w / 2 - 4..w / 2 + 4).map(|x| row(1)[x * 3]).collect();
+        assert!(ramp.windows(2).all(|p| p[0] < p[1]), "{ramp:?}");
+        assert_eq!(ramp[0], 20 + 25); // one bright pixel of eight: 20 + 200/8
+                                      // Rows stay rows: the blur does not mix them, all three are equal.
+        assert_eq!(row(0), row(2));
+        // Length 1 (or less) is no blur.
+        let mut same = img.clone();
+        Effects::new(w, h).motion_blur(&mut same, 0.6);
+        assert_eq!(same, img);
+    }
 
     #[test]
     fn dct_quantisation_with_unit_table_is_nearly_identity() {

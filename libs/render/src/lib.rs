@@ -100,7 +100,10 @@ pub use scene::{Distractor, Ground, NacelleSize, Scene, Sky};
 use background::Background;
 use effects::Effects;
 use math::{norm, wrap_deg, Rng};
-use mesh::{build_hills, build_mast, build_power_lines, build_turbine, Detail, Mesh, TurbineSpec};
+use mesh::{
+    build_chimney, build_hills, build_mast, build_power_lines, build_turbine, Detail, Mesh,
+    TurbineSpec,
+};
 use raster::{DepthMode, Lighting, Raster};
 
 /// The tower width truth is measured on the row through the tower axis this far below the
@@ -331,6 +334,7 @@ impl Renderer {
             Distractor::None => {}
             Distractor::Mast => build_mast(&mut self.mesh, scene, &mut layout),
             Distractor::PowerLines => build_power_lines(&mut self.mesh, &mut layout),
+            Distractor::Chimney => build_chimney(&mut self.mesh, scene, &mut layout),
         }
         if !self.mesh.tris.is_empty() || !self.mesh.wires.is_empty() {
             self.raster
@@ -341,6 +345,10 @@ impl Renderer {
 
         if scene.propellers_in_view {
             self.effects.propeller(out, scene.seed, scene.frame);
+        }
+        let motion_blur_px = scene.motion_blur_frac * self.camera.width as f32;
+        if motion_blur_px > 1.0 {
+            self.effects.motion_blur(out, motion_blur_px);
         }
         if scene.blur {
             self.effects.blur(out);

@@ -14,6 +14,8 @@ pub(crate) const TURBINE_ALBEDO: [f32; 3] = [0.86, 0.87, 0.86];
 pub(crate) const STEEL_ALBEDO: [f32; 3] = [0.55, 0.57, 0.58];
 /// Conductor cables (weathered aluminium, looks dark against the sky).
 pub(crate) const CABLE_ALBEDO: [f32; 3] = [0.30, 0.31, 0.32];
+/// Weathered concrete of a chimney.
+pub(crate) const CONCRETE_ALBEDO: [f32; 3] = [0.62, 0.60, 0.57];
 
 /// Tower ring spacing along the height (m) for the main turbine.
 const TOWER_RING_STEP_M: f64 = 3.0;
@@ -706,6 +708,23 @@ pub(crate) fn build_mast(mesh: &mut Mesh, scene: &Scene, rng: &mut Rng) {
             albedo: STEEL_ALBEDO,
         });
     }
+}
+
+/// An industrial chimney near the turbine (or where the turbine would be): a smooth tapered
+/// concrete column 60–130 m tall, 5–9 m across at the base and 2.5–4.5 m at the top — a
+/// turbine tower's proportions without its nacelle and rotor.
+pub(crate) fn build_chimney(mesh: &mut Mesh, scene: &Scene, rng: &mut Rng) {
+    let base = if scene.turbine_present {
+        let side = if rng.chance(0.5) { 1.0 } else { -1.0 };
+        [rng.range(-150.0, -30.0), side * rng.range(30.0, 120.0), 0.0]
+    } else {
+        [rng.range(-20.0, 10.0), rng.range(-15.0, 15.0), 0.0]
+    };
+    let h = rng.range(60.0, 130.0);
+    let r_top = rng.range(1.25, 2.25);
+    let r_base = r_top * rng.range(1.6, 2.2);
+    const CHIMNEY_SIDES: usize = 20;
+    build_pole(mesh, base, h, r_base, r_top, CHIMNEY_SIDES, CONCRETE_ALBEDO);
 }
 
 /// A lattice pylon (wireframe: legs, braces, cross arms). Returns the conductor attachment points.

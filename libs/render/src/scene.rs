@@ -120,6 +120,10 @@ pub enum Distractor {
     Mast,
     /// A line of lattice pylons with sagging conductors behind the turbine.
     PowerLines,
+    /// An industrial chimney: a smooth, tapered concrete column as tall as a turbine tower,
+    /// without a rotor. Never drawn by [`Scene::random`]: it belongs to the held-out scenes of
+    /// the cross-domain evaluation (`dataset::held_out_scene`).
+    Chimney,
 }
 
 /// Everything about the world except the camera pose.
@@ -189,6 +193,11 @@ pub struct Scene {
     pub noise_sigma: f32,
     /// Mild 3x3 blur.
     pub blur: bool,
+    /// Horizontal motion blur: how far the camera's turn smears each point during the
+    /// exposure, as a share of the frame's width (0 = off; one pixel or less is none). Never
+    /// set by [`Scene::random`]: the held-out scenes of the cross-domain evaluation use it.
+    #[serde(default)]
+    pub motion_blur_frac: f32,
     /// JPEG-like 8x8 block DCT quantisation artefacts at this quality 1..100 (None = off).
     pub jpeg_quality: Option<u8>,
     /// All randomness (texture placement, noise, clouds, distractor layout) comes from this.
@@ -232,6 +241,7 @@ impl Scene {
             distractor: Distractor::None,
             noise_sigma: 2.0,
             blur: false,
+            motion_blur_frac: 0.0,
             jpeg_quality: None,
             seed: 1,
             frame: 0,
@@ -290,6 +300,7 @@ impl Scene {
             distractor,
             noise_sigma: r.range(0.0, 4.0) as f32,
             blur: r.chance(0.3),
+            motion_blur_frac: 0.0,
             jpeg_quality: if r.chance(0.4) {
                 Some(r.range(55.0, 95.0) as u8)
             } else {

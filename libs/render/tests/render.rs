@@ -357,7 +357,12 @@ fn hub_pixel_is_turbine_not_sky() {
 #[test]
 fn scene_without_turbine_reports_nothing_in_view() {
     let cam = Camera::usb_narrow();
-    for distractor in [Distractor::None, Distractor::Mast, Distractor::PowerLines] {
+    for distractor in [
+        Distractor::None,
+        Distractor::Mast,
+        Distractor::PowerLines,
+        Distractor::Chimney,
+    ] {
         let scene = Scene {
             turbine_present: false,
             distractor,
@@ -367,6 +372,41 @@ fn scene_without_turbine_reports_nothing_in_view() {
         assert!(!t.turbine_in_view);
         assert!(t.hub_px.is_none() && t.tower_width_px.is_none());
     }
+}
+
+/// A chimney without a turbine stands where the turbine would be: a column of grey concrete
+/// across the sky above the image centre, several pixels wide, where the empty scene shows sky.
+#[test]
+fn a_chimney_stands_where_the_turbine_would_be() {
+    let cam = Camera::usb_narrow();
+    let empty = Scene {
+        turbine_present: false,
+        ..Scene::default_clear()
+    };
+    let pose = CameraPose::front(100.0);
+    let (sky, _) = render(cam, &empty, &pose);
+    let (chimney, _) = render(
+        cam,
+        &Scene {
+            distractor: Distractor::Chimney,
+            ..empty
+        },
+        &pose,
+    );
+    // The row a third of the way down: sky in the empty scene.
+    let y = cam.height as usize / 3;
+    let changed: Vec<usize> = (0..cam.width as usize)
+        .filter(|&x| {
+            let (a, b) = (px(&cam, &sky, x, y), px(&cam, &chimney, x, y));
+            a.iter().zip(&b).any(|(p, q)| p.abs_diff(*q) > 20)
+        })
+        .collect();
+    assert!(changed.len() >= 3, "{changed:?}");
+    // One column, not scattered pixels.
+    assert!(
+        changed.last().unwrap() - changed[0] < changed.len() + 2,
+        "{changed:?}"
+    );
 }
 
 #[test]

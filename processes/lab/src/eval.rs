@@ -8,8 +8,9 @@ use hubtrack_capture::images::read_image;
 use hubtrack_detect::params::Mode;
 use hubtrack_detect::{Hints, ImageView, Output};
 use hubtrack_render::dataset::{
-    held_out_cameras, held_out_turbine, photo_case, photo_case_close, photo_lenses, synth_case,
-    SynthCase, CLASSES, HELD_OUT_BLADE_M, HELD_OUT_TOWER_TOP_M,
+    held_out_cameras, held_out_scene, held_out_turbine, photo_case, photo_case_close, photo_lenses,
+    synth_case, SynthCase, CLASSES, HELD_OUT_BLADE_M, HELD_OUT_CHIMNEY_SHARE,
+    HELD_OUT_MOTION_BLUR_FRAC, HELD_OUT_TOWER_TOP_M,
 };
 use hubtrack_render::{Camera, Renderer};
 use hubtrack_runtime::config::ConfigArgs;
@@ -145,6 +146,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
                 lenses: calibrated
                     .map_or([Camera::gopro_hero3(), Camera::usb_narrow()], |c| [c, c]),
                 held_out_turbines: false,
+                held_out_scenes: false,
                 camera_label: calibrated.is_some().then_some("calibrated"),
             },
             &mut detectors,
@@ -401,6 +403,8 @@ struct Synthetic {
     still: bool,
     lenses: [Camera; 2],
     held_out_turbines: bool,
+    /// Chimneys and motion blur (`dataset::held_out_scene`).
+    held_out_scenes: bool,
     /// The category label of a single held-out camera.
     camera_label: Option<&'static str>,
 }
@@ -426,6 +430,10 @@ fn eval_synthetic(
             if set.held_out_turbines {
                 let seed = case.scene.seed;
                 held_out_turbine(&mut case.scene, seed);
+            }
+            if set.held_out_scenes {
+                let seed = case.scene.seed;
+                held_out_scene(&mut case.scene, seed);
             }
             if let Some(label) = set.camera_label {
                 // One camera for every case: its name, not the in-domain lens the case drew.
@@ -486,6 +494,7 @@ fn eval_cross_domain(
                 still: args.as_stills,
                 lenses: [camera, camera],
                 held_out_turbines: false,
+                held_out_scenes: false,
                 camera_label: Some(name),
             },
             &mut detectors,
@@ -510,6 +519,7 @@ fn eval_cross_domain(
             still: args.as_stills,
             lenses: [Camera::gopro_hero3(), Camera::usb_narrow()],
             held_out_turbines: true,
+            held_out_scenes: false,
             camera_label: None,
         },
         in_domain_detectors,
@@ -523,6 +533,35 @@ fn eval_cross_domain(
             HELD_OUT_TOWER_TOP_M.1,
             HELD_OUT_BLADE_M.0,
             HELD_OUT_BLADE_M.1,
+            args.synthetic,
+            args.seed
+        ),
+        names,
+        &table,
+    );
+    let misses = misses_of("scenes")?;
+    let table = eval_synthetic(
+        &Synthetic {
+            per_class: args.synthetic,
+            negatives_per_class: negatives_per_class(args),
+            seed: args.seed,
+            still: args.as_stills,
+            lenses: [Camera::gopro_hero3(), Camera::usb_narrow()],
+            held_out_turbines: false,
+            held_out_scenes: true,
+            camera_label: None,
+        },
+        in_domain_detectors,
+        misses.as_deref(),
+        None,
+    )?;
+    print_table(
+        &format!(
+            "cross-domain scenes (chimneys in {:.0} % of the scenes with a turbine and in all \
+             without, motion blur {:.1}-{:.1} % of the width): {} per distance class, seed {}",
+            100.0 * HELD_OUT_CHIMNEY_SHARE,
+            100.0 * HELD_OUT_MOTION_BLUR_FRAC.0,
+            100.0 * HELD_OUT_MOTION_BLUR_FRAC.1,
             args.synthetic,
             args.seed
         ),
