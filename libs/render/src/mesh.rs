@@ -666,14 +666,25 @@ fn add_cable(mesh: &mut Mesh, a: V3, b: V3, sag_m: f64, width_m: f64) {
     }
 }
 
-/// A guyed meteorological mast near the turbine (or where the turbine would be).
-pub(crate) fn build_mast(mesh: &mut Mesh, scene: &Scene, rng: &mut Rng) {
-    let base = if scene.turbine_present {
+/// Where a distractor stands: `x_m` along X (negative: behind the turbine, away from the usual
+/// camera positions at +X) and `sideways_m` to either side; without a turbine, near where it
+/// would be.
+fn distractor_base(scene: &Scene, rng: &mut Rng, x_m: (f64, f64), sideways_m: (f64, f64)) -> V3 {
+    if scene.turbine_present {
         let side = if rng.chance(0.5) { 1.0 } else { -1.0 };
-        [rng.range(-120.0, -40.0), side * rng.range(50.0, 110.0), 0.0]
+        [
+            rng.range(x_m.0, x_m.1),
+            side * rng.range(sideways_m.0, sideways_m.1),
+            0.0,
+        ]
     } else {
         [rng.range(-20.0, 10.0), rng.range(-15.0, 15.0), 0.0]
-    };
+    }
+}
+
+/// A guyed meteorological mast near the turbine (or where the turbine would be).
+pub(crate) fn build_mast(mesh: &mut Mesh, scene: &Scene, rng: &mut Rng) {
+    let base = distractor_base(scene, rng, (-120.0, -40.0), (50.0, 110.0));
     let h = rng.range(55.0, 85.0);
     // Lattice mast: thin triangular section, lattice drawn as wires on top of a faint body.
     const MAST_HALF_WIDTH_M: f64 = 0.35;
@@ -714,12 +725,7 @@ pub(crate) fn build_mast(mesh: &mut Mesh, scene: &Scene, rng: &mut Rng) {
 /// concrete column 60–130 m tall, 5–9 m across at the base and 2.5–4.5 m at the top — a
 /// turbine tower's proportions without its nacelle and rotor.
 pub(crate) fn build_chimney(mesh: &mut Mesh, scene: &Scene, rng: &mut Rng) {
-    let base = if scene.turbine_present {
-        let side = if rng.chance(0.5) { 1.0 } else { -1.0 };
-        [rng.range(-150.0, -30.0), side * rng.range(30.0, 120.0), 0.0]
-    } else {
-        [rng.range(-20.0, 10.0), rng.range(-15.0, 15.0), 0.0]
-    };
+    let base = distractor_base(scene, rng, (-150.0, -30.0), (30.0, 120.0));
     let h = rng.range(60.0, 130.0);
     let r_top = rng.range(1.25, 2.25);
     let r_base = r_top * rng.range(1.6, 2.2);

@@ -462,7 +462,8 @@ fn eval_synthetic(
 }
 
 /// The synthetic set through each held-out camera (detect configured with its calibration),
-/// then with held-out turbine proportions (in-domain cameras), one table each.
+/// then through the in-domain cameras with held-out turbine proportions and with held-out
+/// scenes, one table each.
 fn eval_cross_domain(
     args: &EvalArgs,
     config: &crate::config::LabConfig,
@@ -510,64 +511,59 @@ fn eval_cross_domain(
             &table,
         );
     }
-    let misses = misses_of("turbines")?;
-    let table = eval_synthetic(
-        &Synthetic {
-            per_class: args.synthetic,
-            negatives_per_class: negatives_per_class(args),
-            seed: args.seed,
-            still: args.as_stills,
-            lenses: [Camera::gopro_hero3(), Camera::usb_narrow()],
-            held_out_turbines: true,
-            held_out_scenes: false,
-            camera_label: None,
-        },
-        in_domain_detectors,
-        misses.as_deref(),
-        None,
-    )?;
-    print_table(
-        &format!(
-            "cross-domain turbines (tower top {}-{} m, blades {}-{} m): {} per distance class, seed {}",
-            HELD_OUT_TOWER_TOP_M.0,
-            HELD_OUT_TOWER_TOP_M.1,
-            HELD_OUT_BLADE_M.0,
-            HELD_OUT_BLADE_M.1,
-            args.synthetic,
-            args.seed
+    // The in-domain lenses on what their training never varied: turbine proportions, scenes.
+    let in_domain_lens_sets = [
+        (
+            "turbines",
+            true,
+            false,
+            format!(
+                "cross-domain turbines (tower top {}-{} m, blades {}-{} m)",
+                HELD_OUT_TOWER_TOP_M.0,
+                HELD_OUT_TOWER_TOP_M.1,
+                HELD_OUT_BLADE_M.0,
+                HELD_OUT_BLADE_M.1,
+            ),
         ),
-        names,
-        &table,
-    );
-    let misses = misses_of("scenes")?;
-    let table = eval_synthetic(
-        &Synthetic {
-            per_class: args.synthetic,
-            negatives_per_class: negatives_per_class(args),
-            seed: args.seed,
-            still: args.as_stills,
-            lenses: [Camera::gopro_hero3(), Camera::usb_narrow()],
-            held_out_turbines: false,
-            held_out_scenes: true,
-            camera_label: None,
-        },
-        in_domain_detectors,
-        misses.as_deref(),
-        None,
-    )?;
-    print_table(
-        &format!(
-            "cross-domain scenes (chimneys in {:.0} % of the scenes with a turbine and in all \
-             without, motion blur {:.1}-{:.1} % of the width): {} per distance class, seed {}",
-            100.0 * HELD_OUT_CHIMNEY_SHARE,
-            100.0 * HELD_OUT_MOTION_BLUR_FRAC.0,
-            100.0 * HELD_OUT_MOTION_BLUR_FRAC.1,
-            args.synthetic,
-            args.seed
+        (
+            "scenes",
+            false,
+            true,
+            format!(
+                "cross-domain scenes (chimneys in {:.0} % of the scenes with a turbine and in all \
+                 without, motion blur {:.1}-{:.1} % of the width)",
+                100.0 * HELD_OUT_CHIMNEY_SHARE,
+                100.0 * HELD_OUT_MOTION_BLUR_FRAC.0,
+                100.0 * HELD_OUT_MOTION_BLUR_FRAC.1,
+            ),
         ),
-        names,
-        &table,
-    );
+    ];
+    for (set, held_out_turbines, held_out_scenes, title) in in_domain_lens_sets {
+        let misses = misses_of(set)?;
+        let table = eval_synthetic(
+            &Synthetic {
+                per_class: args.synthetic,
+                negatives_per_class: negatives_per_class(args),
+                seed: args.seed,
+                still: args.as_stills,
+                lenses: [Camera::gopro_hero3(), Camera::usb_narrow()],
+                held_out_turbines,
+                held_out_scenes,
+                camera_label: None,
+            },
+            in_domain_detectors,
+            misses.as_deref(),
+            None,
+        )?;
+        print_table(
+            &format!(
+                "{title}: {} per distance class, seed {}",
+                args.synthetic, args.seed
+            ),
+            names,
+            &table,
+        );
+    }
     Ok(())
 }
 
