@@ -139,15 +139,8 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
         let calibrated = config.camera.calibrated()?;
         let table = eval_synthetic(
             &Synthetic {
-                per_class: args.synthetic,
-                negatives_per_class: negatives_per_class(&args),
-                seed: args.seed,
-                still: args.as_stills,
-                lenses: calibrated
-                    .map_or([Camera::gopro_hero3(), Camera::usb_narrow()], |c| [c, c]),
-                held_out_turbines: false,
-                held_out_scenes: false,
                 camera_label: calibrated.is_some().then_some("calibrated"),
+                ..Synthetic::of_args(&args, calibrated.map_or_else(in_domain_lenses, |c| [c, c]))
             },
             &mut detectors,
             misses,
@@ -409,6 +402,29 @@ struct Synthetic {
     camera_label: Option<&'static str>,
 }
 
+/// The lenses the learned parts were trained through: wide cases through the GoPro, the others
+/// through the narrow USB camera.
+fn in_domain_lenses() -> [Camera; 2] {
+    [Camera::gopro_hero3(), Camera::usb_narrow()]
+}
+
+impl Synthetic {
+    /// The set `args` asks for through `lenses`: in-domain scenes and turbines, each case
+    /// labelled with the lens it drew.
+    fn of_args(args: &EvalArgs, lenses: [Camera; 2]) -> Synthetic {
+        Synthetic {
+            per_class: args.synthetic,
+            negatives_per_class: negatives_per_class(args),
+            seed: args.seed,
+            still: args.as_stills,
+            lenses,
+            held_out_turbines: false,
+            held_out_scenes: false,
+            camera_label: None,
+        }
+    }
+}
+
 /// Negatives per distance class: `--negatives` spread over the classes, else a twelfth of
 /// `--synthetic` (a quarter over the three classes).
 fn negatives_per_class(args: &EvalArgs) -> u64 {
@@ -489,14 +505,8 @@ fn eval_cross_domain(
             .collect::<anyhow::Result<Vec<_>>>()?;
         let table = eval_synthetic(
             &Synthetic {
-                per_class: args.synthetic,
-                negatives_per_class: negatives_per_class(args),
-                seed: args.seed,
-                still: args.as_stills,
-                lenses: [camera, camera],
-                held_out_turbines: false,
-                held_out_scenes: false,
                 camera_label: Some(name),
+                ..Synthetic::of_args(args, [camera, camera])
             },
             &mut detectors,
             misses.as_deref(),
@@ -542,14 +552,9 @@ fn eval_cross_domain(
         let misses = misses_of(set)?;
         let table = eval_synthetic(
             &Synthetic {
-                per_class: args.synthetic,
-                negatives_per_class: negatives_per_class(args),
-                seed: args.seed,
-                still: args.as_stills,
-                lenses: [Camera::gopro_hero3(), Camera::usb_narrow()],
                 held_out_turbines,
                 held_out_scenes,
-                camera_label: None,
+                ..Synthetic::of_args(args, in_domain_lenses())
             },
             in_domain_detectors,
             misses.as_deref(),
