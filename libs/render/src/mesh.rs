@@ -722,7 +722,7 @@ pub(crate) fn build_mast(mesh: &mut Mesh, scene: &Scene, rng: &mut Rng) {
 }
 
 /// An industrial chimney near the turbine (or where the turbine would be): a smooth tapered
-/// concrete column 60–130 m tall, 5–9 m across at the base and 2.5–4.5 m at the top — a
+/// concrete column 60–130 m tall, 4–10 m across at the base and 2.5–4.5 m at the top — a
 /// turbine tower's proportions without its nacelle and rotor.
 pub(crate) fn build_chimney(mesh: &mut Mesh, scene: &Scene, rng: &mut Rng) {
     let base = distractor_base(scene, rng, (-150.0, -30.0), (30.0, 120.0));
