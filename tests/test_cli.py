@@ -263,6 +263,20 @@ def test_cross_domain_eval_prints_one_table_per_held_out_set(runner, tmp_path):
     assert len(negatives) == 7 and all(row[1] == "3" for row in negatives), negatives
 
 
+def test_sequence_eval_films_flights_in_held_out_scenes(runner):
+    """`hubtrack eval --sequence --held-out-scenes`: the rendered flights in the held-out scenes,
+    each flight's chimney and blur named on stderr; the option needs --sequence."""
+    res = runner.run(
+        "hubtrack", "eval", "--sequence", "--held-out-scenes", "--flights", 2, "--frames", 4, "--seed", 3,
+    )
+    assert res.returncode == 0, res.stderr
+    assert "held-out scenes (chimneys, motion blur)" in res.stdout, res.stdout
+    named = [l for l in res.stderr.splitlines() if l.startswith("[eval] flight ")]
+    assert len(named) == 2 and all("chimney" in l and "motion blur" in l for l in named), res.stderr
+    res = runner.run("hubtrack", "eval", "--held-out-scenes", "--no-photos", "--synthetic", 1)
+    assert res.returncode != 0 and "--sequence" in res.stderr, res.stderr
+
+
 def test_synthetic_frames_can_be_scored_as_stills(runner):
     """`hubtrack eval --as-stills` scores the `--synthetic` frames as `hubtrack detect` sees an
     image (no attitude, both pyramid levels): the path outside evaluation takes on renders."""

@@ -75,6 +75,11 @@ pub struct EvalArgs {
     /// Frames per flight for --sequence.
     #[arg(long, default_value_t = 300)]
     pub frames: u64,
+    /// With --sequence: film the flights in the held-out scenes of --cross-domain (a chimney
+    /// beside or behind the turbine in half the flights, motion blur in all), to count the
+    /// locks a chimney's top takes.
+    #[arg(long, requires = "sequence")]
+    pub held_out_scenes: bool,
     /// Write an overlay PNG (truth in red) of every `default`-mode miss and false positive to
     /// this folder, with `misses.jsonl` listing them (each --cross-domain set in a subfolder
     /// `cross-domain-<set>`); with --sequence, of every frame whose detection lies off the truth
@@ -103,7 +108,13 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
             misses: args.misses.as_deref(),
             candidates: args.candidates.as_deref(),
         };
-        return crate::eval_seq::run(&config, args.flights, args.frames, args.seed, out);
+        let flights = crate::eval_seq::Flights {
+            count: args.flights,
+            frames: args.frames,
+            seed: args.seed,
+            held_out_scenes: args.held_out_scenes,
+        };
+        return crate::eval_seq::run(&config, &flights, out);
     }
     let misses = args.misses.as_deref();
     let mut cand_out = match &args.candidates {

@@ -6,8 +6,8 @@ use crate::config::LabConfig;
 use crate::score::point_segment_distance;
 use anyhow::Context;
 use hubtrack_detect::{Detector, Hints, ImageView};
-use hubtrack_render::dataset::{flight, FLIGHT_FPS};
-use hubtrack_render::{Camera, Renderer};
+use hubtrack_render::dataset::{flight, held_out_scene, FLIGHT_FPS};
+use hubtrack_render::{Camera, Distractor, Renderer};
 use hubtrack_track::{BaselineTracker, Tracker};
 use hubtrack_types::{Detection, PixelFormat, TrackMode, TrackState, VehicleState};
 
@@ -236,15 +236,21 @@ pub struct Outputs<'a> {
     pub candidates: Option<&'a std::path::Path>,
 }
 
-/// Runs `flights` flights of `frames` frames and prints the tables, writing the optional
-/// per-frame outputs on the way.
-pub fn run(
-    config: &LabConfig,
-    flights: u64,
-    frames: u64,
-    seed: u64,
-    outputs: Outputs<'_>,
-) -> anyhow::Result<()> {
+/// Which rendered flights to score.
+pub struct Flights {
+    /// How many.
+    pub count: u64,
+    /// Frames per flight.
+    pub frames: u64,
+    /// Flight `f` is `dataset::flight(seed + f)`.
+    pub seed: u64,
+    /// Filmed in the held-out scenes of `eval --cross-domain` (`dataset::held_out_scene`).
+    pub held_out_scenes: bool,
+}
+
+/// Runs the flights and prints the tables, writing the optional per-frame outputs on the way.
+pub fn run(config: &LabConfig, flights: &Flights, outputs: Outputs<'_>) -> anyhow::Result<()> {
+    let (frames, seed) = (flights.frames, flights.seed);
     use std::io::Write as _;
     let mut trace = match outputs.trace {
         Some(p) => Some(std::io::BufWriter::new(
@@ -274,7 +280,13 @@ pub fn run(
     let height = cam.height as f64;
     let (mut total_ours, mut total_thesis) = (Metrics::default(), Metrics::default());
     println!(
-        "\nrendered flights: {flights} x {frames} frames at {FLIGHT_FPS} fps (30 -> 6 m, drift, climb, yaw turn, roll jitter, dropouts), seed {seed}"
+        "\nrendered flights: {} x {frames} frames at {FLIGHT_FPS} fps (30 -> 6 m, drift, climb, yaw turn, roll jitter, dropouts){}, seed {seed}",
+        flights.count,
+        if flights.held_out_scenes {
+            ", held-out scenes (chimneys, motion blur)"
+        } else {
+            ""
+        }
     );
     println!(
         "{:<8}{:>9} |{:>9}{:>8}{:>8}{:>10}{:>10}{:>10}{:>7} |{:>9}{:>8}{:>8}{:>10}{:>10}{:>10}{:>7}",
@@ -285,12 +297,27 @@ pub fn run(
         "{:<17} |{:^62} |{:^62}",
         "", "hubtrack tracker", "thesis filter (no gating, no attitude)"
     );
-    for f in 0..flights {
+    for f in 0..flights.count {
         let mut path = flight(seed.wrapping_add(f), frames);
-        if let Some(t) = turbine {
-            for fr in &mut path {
+        for fr in &mut path {
+            if let Some(t) = turbine {
                 hubtrack_sim::show_turbine(&mut fr.scene, t);
             }
+            if flights.held_out_scenes {
+                let scene_seed = fr.scene.seed;
+                held_out_scene(&mut fr.scene, scene_seed);
+            }
+        }
+        if let Some(fr) = path.first().filter(|_| flights.held_out_scenes) {
+            eprintln!(
+                "[eval] flight {f}: {}, motion blur {:.1} px",
+                if fr.scene.distractor == Distractor::Chimney {
+                    "a chimney"
+                } else {
+                    "no chimney"
+                },
+                fr.scene.motion_blur_frac * cam.width as f32
+            );
         }
         let mut ours = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
         let mut thesis =
