@@ -495,8 +495,9 @@ mod tests {
         // Across the edge the level ramps in eighths: 8 pixels in between, rising.
         let ramp: Vec<u8> = (w / 2 - 4..w / 2 + 4).map(|x| row(1)[x * 3]).collect();
         assert!(ramp.windows(2).all(|p| p[0] < p[1]), "{ramp:?}");
-        assert_eq!(ramp[0], 20 + 25); // one bright pixel of eight: 20 + 200/8
-                                      // Rows stay rows: the blur does not mix them, all three are equal.
+        // One bright pixel of eight: 20 + 200/8.
+        assert_eq!(ramp[0], 20 + 25);
+        // Rows stay rows: the blur does not mix them, all three are equal.
         assert_eq!(row(0), row(2));
         // Length 1 (or less) is no blur.
         let mut same = img.clone();
