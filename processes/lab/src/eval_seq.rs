@@ -50,6 +50,8 @@ struct Metrics {
     off_hub: u64,
     /// Longest run of such frames.
     longest_off_hub: u64,
+    /// Where it begins: flight and frame.
+    longest_off_hub_at: Option<(u64, u64)>,
 }
 
 impl Metrics {
@@ -73,7 +75,10 @@ impl Metrics {
         self.yaw_err_deg.extend(&o.yaw_err_deg);
         self.false_locks += o.false_locks;
         self.off_hub += o.off_hub;
-        self.longest_off_hub = self.longest_off_hub.max(o.longest_off_hub);
+        if o.longest_off_hub > self.longest_off_hub {
+            self.longest_off_hub = o.longest_off_hub;
+            self.longest_off_hub_at = o.longest_off_hub_at;
+        }
     }
 }
 
@@ -98,9 +103,10 @@ fn valid(s: &TrackState) -> bool {
     matches!(s.mode, TrackMode::Tracking | TrackMode::Coasting)
 }
 
-/// Scores one tracker output against the frame truth.
+/// Scores one tracker output over one flight against the frame truth.
 struct Scorer {
     m: Metrics,
+    flight: u64,
     locked: bool,
     gap: u64,
     off_run: u64,
@@ -108,9 +114,10 @@ struct Scorer {
 }
 
 impl Scorer {
-    fn new() -> Scorer {
+    fn new(flight: u64) -> Scorer {
         Scorer {
             m: Metrics::default(),
+            flight,
             locked: false,
             gap: 0,
             off_run: 0,
@@ -143,7 +150,11 @@ impl Scorer {
             if err > OFF_HUB_FRAC {
                 self.m.off_hub += 1;
                 self.off_run += 1;
-                self.m.longest_off_hub = self.m.longest_off_hub.max(self.off_run);
+                if self.off_run > self.m.longest_off_hub {
+                    self.m.longest_off_hub = self.off_run;
+                    // `frames` counts this frame: the run began `off_run − 1` frames earlier.
+                    self.m.longest_off_hub_at = Some((self.flight, self.m.frames - self.off_run));
+                }
             } else {
                 self.off_run = 0;
             }
@@ -322,7 +333,7 @@ pub fn run(config: &LabConfig, flights: &Flights, outputs: Outputs<'_>) -> anyho
         let mut ours = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
         let mut thesis =
             BaselineTracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let (mut so, mut st) = (Scorer::new(), Scorer::new());
+        let (mut so, mut st) = (Scorer::new(f), Scorer::new(f));
         let mut raw_sq = Vec::new();
         let mut prev_heading: Option<(f64, u64)> = None;
         let mut prev_position: Option<([f64; 3], u64)> = None;
@@ -478,13 +489,21 @@ distance error median {:.1} % p90 {:.1} % (8-30 m), yaw error median {:.1} deg p
             pct(&abs(et), 0.5), pct(&abs(et), 0.9)
         );
     }
+    // Where the longest stretch begins, to replay it (`--flights 1 --seed SEED+FLIGHT`).
+    let at = |m: &Metrics| {
+        m.longest_off_hub_at.map_or(String::new(), |(f, frame)| {
+            format!(" (flight {f} from frame {frame})")
+        })
+    };
     println!(
-        "off the hub (> {:.0} % of height): hubtrack {:.1} % of valid frames after first lock, longest {:.1} s | thesis filter {:.1} %, longest {:.1} s",
+        "off the hub (> {:.0} % of height): hubtrack {:.1} % of valid frames after first lock, longest {:.1} s{} | thesis filter {:.1} %, longest {:.1} s{}",
         100.0 * OFF_HUB_FRAC,
         100.0 * o.off_hub as f64 / o.valid_after_lock.max(1) as f64,
         o.longest_off_hub as f64 / FLIGHT_FPS,
+        at(o),
         100.0 * t.off_hub as f64 / t.valid_after_lock.max(1) as f64,
-        t.longest_off_hub as f64 / FLIGHT_FPS
+        t.longest_off_hub as f64 / FLIGHT_FPS,
+        at(t)
     );
     println!("RMS in % of image height over frames with a valid estimate after first lock; gap = frames without one.");
     if let Some(w) = cand_out.as_mut() {
@@ -550,4 +569,64 @@ fn write_sequence_miss(
             .with_context(|| format!("writing {}", hints_path.display()))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A frame's truth with the hub (and its nose) at `hub`.
+    fn truth(hub: [f64; 2]) -> hubtrack_render::Truth {
+        hubtrack_render::Truth {
+            turbine_in_view: true,
+            hub_px: Some(hub),
+            nose_px: Some(hub),
+            tower_top_px: None,
+            tower_width_px: None,
+            tower_width_row: None,
+            tower_width_height_m: None,
+            distance_m: 20.0,
+            relative_yaw_deg: 0.0,
+            hub_cam_m: [0.0, 0.0, 20.0],
+        }
+    }
+
+    /// A tracking state with the hub at `hub`.
+    fn tracking(hub: [f64; 2]) -> TrackState {
+        TrackState {
+            mode: TrackMode::Tracking,
+            hub_px: hub,
+            ..TrackState::default()
+        }
+    }
+
+    /// Scores one flight of 100 px high frames whose track is `off[i]` px below the hub.
+    fn flight(f: u64, off: &[f64]) -> Metrics {
+        let mut s = Scorer::new(f);
+        for &dy in off {
+            s.add(&tracking([50.0, 50.0 + dy]), &truth([50.0, 50.0]), 100.0);
+        }
+        s.m
+    }
+
+    #[test]
+    fn the_longest_stretch_off_the_hub_is_located() {
+        // 8 % of the height is the limit: 9 px is off, 7 px on.
+        let a = flight(0, &[0.0, 9.0, 9.0, 0.0, 9.0, 0.0]);
+        assert_eq!((a.off_hub, a.longest_off_hub), (3, 2));
+        assert_eq!(a.longest_off_hub_at, Some((0, 1)));
+        let b = flight(1, &[0.0, 0.0, 7.0, 9.0, 9.0, 9.0]);
+        assert_eq!(b.longest_off_hub_at, Some((1, 3)));
+        // Merged, the longer stretch and its place win; a shorter one later does not move it.
+        let mut all = Metrics::default();
+        for m in [&a, &b, &flight(2, &[9.0, 9.0])] {
+            all.merge(m);
+        }
+        assert_eq!(
+            (all.off_hub, all.longest_off_hub, all.longest_off_hub_at),
+            (8, 3, Some((1, 3)))
+        );
+        // A flight that never leaves the hub names no place.
+        assert_eq!(flight(3, &[0.0, 7.0]).longest_off_hub_at, None);
+    }
 }
