@@ -601,7 +601,7 @@ mod tests {
     }
 
     /// Scores one flight of 100 px high frames whose track is `off[i]` px below the hub.
-    fn flight(f: u64, off: &[f64]) -> Metrics {
+    fn scored_flight(f: u64, off: &[f64]) -> Metrics {
         let mut s = Scorer::new(f);
         for &dy in off {
             s.add(&tracking([50.0, 50.0 + dy]), &truth([50.0, 50.0]), 100.0);
@@ -612,14 +612,14 @@ mod tests {
     #[test]
     fn the_longest_stretch_off_the_hub_is_located() {
         // 8 % of the height is the limit: 9 px is off, 7 px on.
-        let a = flight(0, &[0.0, 9.0, 9.0, 0.0, 9.0, 0.0]);
+        let a = scored_flight(0, &[0.0, 9.0, 9.0, 0.0, 9.0, 0.0]);
         assert_eq!((a.off_hub, a.longest_off_hub), (3, 2));
         assert_eq!(a.longest_off_hub_at, Some((0, 1)));
-        let b = flight(1, &[0.0, 0.0, 7.0, 9.0, 9.0, 9.0]);
+        let b = scored_flight(1, &[0.0, 0.0, 7.0, 9.0, 9.0, 9.0]);
         assert_eq!(b.longest_off_hub_at, Some((1, 3)));
         // Merged, the longer stretch and its place win; a shorter one later does not move it.
         let mut all = Metrics::default();
-        for m in [&a, &b, &flight(2, &[9.0, 9.0])] {
+        for m in [&a, &b, &scored_flight(2, &[9.0, 9.0])] {
             all.merge(m);
         }
         assert_eq!(
@@ -627,6 +627,6 @@ mod tests {
             (8, 3, Some((1, 3)))
         );
         // A flight that never leaves the hub names no place.
-        assert_eq!(flight(3, &[0.0, 7.0]).longest_off_hub_at, None);
+        assert_eq!(scored_flight(3, &[0.0, 7.0]).longest_off_hub_at, None);
     }
 }
