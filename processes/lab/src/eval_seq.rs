@@ -75,9 +75,15 @@ impl Metrics {
         self.yaw_err_deg.extend(&o.yaw_err_deg);
         self.false_locks += o.false_locks;
         self.off_hub += o.off_hub;
-        if o.longest_off_hub > self.longest_off_hub {
-            self.longest_off_hub = o.longest_off_hub;
-            self.longest_off_hub_at = o.longest_off_hub_at;
+        self.keep_longest_off_hub(o.longest_off_hub, o.longest_off_hub_at);
+    }
+
+    /// Takes a stretch of `frames` off the hub beginning `at` when it is longer than the
+    /// longest so far (an equal one later does not move it).
+    fn keep_longest_off_hub(&mut self, frames: u64, at: Option<(u64, u64)>) {
+        if frames > self.longest_off_hub {
+            self.longest_off_hub = frames;
+            self.longest_off_hub_at = at;
         }
     }
 }
@@ -150,11 +156,10 @@ impl Scorer {
             if err > OFF_HUB_FRAC {
                 self.m.off_hub += 1;
                 self.off_run += 1;
-                if self.off_run > self.m.longest_off_hub {
-                    self.m.longest_off_hub = self.off_run;
-                    // `frames` counts this frame: the run began `off_run − 1` frames earlier.
-                    self.m.longest_off_hub_at = Some((self.flight, self.m.frames - self.off_run));
-                }
+                // `frames` counts this frame: the run began `off_run − 1` frames earlier.
+                let start = self.m.frames - self.off_run;
+                self.m
+                    .keep_longest_off_hub(self.off_run, Some((self.flight, start)));
             } else {
                 self.off_run = 0;
             }
