@@ -30,11 +30,14 @@ struct Anchor {
     distance_m: f64,
     /// When it was taken.
     at_ns: u64,
-    /// Readings have agreed with the odometry over `shrink_check_m` of flight towards the hub
-    /// up to this anchor: only a confirmed anchor latches. A reading in a hover proves nothing
-    /// (the tracker's first distance after an acquisition read 10.4 m at 29.4 m and grew
-    /// over 1.5 s); one that held while the vehicle closed in does.
+    /// Readings have agreed with the odometry over `shrink_check_confirm_windows` windows in
+    /// a row of flight towards the hub up to this anchor: only a confirmed anchor latches. A
+    /// reading in a hover proves nothing (the tracker's first distance after an acquisition
+    /// read 10.4 m at 29.4 m and grew over 1.5 s); one that held while the vehicle closed in
+    /// does.
     confirmed: bool,
+    /// Windows in a row, up to this anchor, over which the readings shrank as flown.
+    agreeing_windows: u32,
 }
 
 /// A reading that did not shrink as the vehicle closed in.
@@ -77,6 +80,7 @@ impl ShrinkCheck {
             distance_m: d,
             at_ns: now,
             confirmed: false,
+            agreeing_windows: 0,
         };
         let Some(a) = self.anchor else {
             if d <= c.shrink_check_range_m {
@@ -145,11 +149,20 @@ impl ShrinkCheck {
         // Confirmed by flight: the reading shrank by the distance flown, within `frac` of it
         // and without the noise allowance.
         let shrank_as_flown = flown >= window_m && excess.abs() <= c.shrink_check_frac * flown;
+        // One window is not enough: a reading off by a factor that itself drifts (0.45 to
+        // 0.38 of the truth over 2.6 m) shrinks by about the distance flown for a window
+        // (`fly --random-setup` seed 82), but not for several in a row.
+        let agreeing_windows = if shrank_as_flown {
+            a.agreeing_windows + 1
+        } else {
+            0
+        };
         self.anchor = if d > c.shrink_check_range_m {
             None
         } else if window_done {
             Some(Anchor {
-                confirmed: a.confirmed || shrank_as_flown,
+                confirmed: a.confirmed || agreeing_windows >= c.shrink_check_confirm_windows,
+                agreeing_windows,
                 ..anchor_here
             })
         } else {

@@ -1930,6 +1930,47 @@ fn a_reading_off_by_a_factor_is_not_confirmed_by_flight() {
     );
 }
 
+/// A reading off by a factor that drifts shrinks by the distance flown over a window now and
+/// then (`fly --random-setup` seed 82: 0.38–0.47× the truth from 35 m to 20 m). One such window
+/// confirms nothing: the right reading that follows is no contradiction. Confirmed by a single
+/// window, the same readings would hold it back.
+#[test]
+fn one_window_shrinking_as_flown_confirms_no_anchor() {
+    // 35 m from the hub at north 0: 0.45× the truth, then 2 m shrinking as flown, 2 m not
+    // shrinking, and 0.44× again.
+    let reading = |north: f64| {
+        let d = 35.0 - north;
+        if north < 7.0 {
+            0.45 * d
+        } else if north < 9.0 {
+            0.45 * 28.0 - (north - 7.0)
+        } else if north < 11.0 {
+            0.45 * 28.0 - 2.0
+        } else {
+            0.44 * d
+        }
+    };
+    let run = |c: ApproachConfig| {
+        let mut rig = Rig::with(c);
+        rig.fly_north(0.0, 15.0, reading);
+        rig.vehicle = Some(vehicle_at(15.0));
+        rig.run(Some(track(0.0, 0.0, Some(20.0), Some(0.0))), 3.0)
+    };
+    let out = run(ApproachConfig::default());
+    assert!(
+        out.vx_m_s > 0.5 && out.reason.starts_with("T3: 20.0 m"),
+        "{out:?}"
+    );
+    let one = run(ApproachConfig {
+        shrink_check_confirm_windows: 1,
+        ..ApproachConfig::default()
+    });
+    assert!(
+        one.vx_m_s <= 0.0 && one.reason.contains("by odometry"),
+        "{one:?}"
+    );
+}
+
 /// Close in, the distance reads more the closer the vehicle comes (a narrow lens filled by the
 /// rotor: a simulated flight read 7.6 m at 7.0 m and 8.1 m at 5.5 m, then flew past the rotor
 /// plane). The autopilot's odometry contradicts it and forward motion stops short of
