@@ -334,10 +334,13 @@ def test_control_killed_the_firmware_stops_the_vehicle_by_its_guided_timeout(fli
         gcs.pump(0.05)
         lp = gcs.last["LOCAL_POSITION_NED"]
         samples.append((lp.time_boot_ms / 1000.0 - t_kill, math.hypot(lp.vx, lp.vy)))
-    # Still flying the last setpoint well within the timeout, stopped after it.
+    # Still flying the last setpoint well within the timeout, stopped after it. The last setpoint
+    # is whatever control sent as it died: moving (over 0.3 m/s) when killed, the vehicle may be
+    # settling to a slower one (T2's sideways step after T3's forward one: 0.28 m/s). A vehicle
+    # that stopped at once is near 0 by 0.5 s.
     early = [v for t, v in samples if 0.5 <= t <= GUID_TIMEOUT_S - 1.0]
     late = [v for t, v in samples if t >= GUID_TIMEOUT_S + 4.0]
-    assert early and min(early) > 0.3, samples[:40]
+    assert early and min(early) > 0.15, samples[:40]
     assert late and max(late) < 0.2, samples[-40:]
     flight.start_control()
     gcs.wait(flight.commanding, 30, "a new control commanding")
