@@ -397,12 +397,14 @@ hubtrack_types::params! {
         /// before the split; higher values slowed the yaw at long range (all hubs from lines).
         pub gap_std_lines_px: f64 = 5.0, open_closed(0.0, MAX_PX);
         /// Also estimate the yaw from the nacelle's far end beside the spinner (the detector's
-        /// `nacelle_end_dx_px`), and drop a hub–tower gap beyond the yaw gate (`gate_chi2`) from
-        /// it: with a blade pointing down the tower hides behind that blade and its gap takes
-        /// either sign, while the nacelle sticks out on the tower's side only. Dropping every gap
-        /// of the other sign was tried and is not done: one persistent false nacelle reading then
-        /// owns the yaw (`fly` seed 37: a distance read 1.8× long shrank the detector's window
-        /// onto the spinner's own edge, and the vehicle came within 2.1 m of the rotor plane).
+        /// `nacelle_end_dx_px`). A hub–tower gap and a nacelle yaw beyond the yaw gate
+        /// (`gate_chi2`) from each other are both dropped: with a blade pointing down the tower
+        /// hides behind that blade and its gap takes either sign, and on turbines of other
+        /// proportions the nacelle's "end" is as often the spinner's rim, a blade root or the
+        /// nacelle's near side. Dropping only the gap let one persistent false nacelle reading
+        /// own the yaw (`fly --random-setup` seed 36; before that, dropping every gap of the
+        /// other sign, `fly` seed 37 came within 2.1 m of the rotor plane on a distance read 1.8×
+        /// long that shrank the detector's window onto the spinner's own edge).
         pub use_nacelle: bool = true;
         /// Distance from the hub back to the nacelle's rear face along the rotor axis, m. From
         /// `[turbine]` (`nacelle_front_behind_hub_m` + `nacelle_length_m`), not a key of its own:

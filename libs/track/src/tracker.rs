@@ -936,15 +936,15 @@ impl Core {
         let yc = &self.cfg.yaw;
         let yaw_prior = self.yaw.estimate();
         let gap = self.gap_yaw(det, sizes, yaw_prior);
-        // A gap contradicting the nacelle is the blade the tower hides behind.
         let nacelle = self.nacelle_yaw(det, sizes.spinner, innovation_px);
-        let gap = match (gap, nacelle) {
+        // A gap and a nacelle that contradict each other: one is wrong, and neither is used.
+        let (gap, nacelle) = match (gap, nacelle) {
             (Some(g), Some(n))
                 if (g.value - n.value).powi(2) / (g.var() + n.var()) > yc.gate_chi2 =>
             {
-                None
+                (None, None)
             }
-            (g, _) => g,
+            pair => pair,
         };
         // With `net_vetoes_gap` a gap or nacelle yaw the network contradicts is dropped.
         let net = self.net_yaw_reading(det);
