@@ -60,9 +60,10 @@ hubtrack_types::params! {
         /// the distance flown within `shrink_check_frac` of it. Range [0, 1]; default 0.15.
         pub shrink_check_window_frac: f64 = 0.15, closed(0.0, 1.0);
         /// Windows in a row over which the readings must shrink by the distance flown before an
-        /// anchor is confirmed. A reading off by a factor that drifts can shrink as flown over
-        /// one window: `fly --random-setup` seed 82 read 0.38–0.47× the truth from 35 m to
-        /// 20 m, one window confirmed it, and the right 18.4 m that followed was held for a
+        /// anchor is confirmed; a window that ends on time before its length was flown (a hover)
+        /// neither counts nor breaks the row. A reading off by a factor that drifts can shrink as
+        /// flown over one window: `fly --random-setup` seed 82 read 0.38–0.47× the truth from 35 m
+        /// to 20 m, one window confirmed it, and the right 18.4 m that followed was held for a
         /// contradiction until the time ran out. Range [1, 100]; default 2.
         pub shrink_check_confirm_windows: u32 = 2, closed(1, 100);
         /// How long an anchor lasts in a hover before the next reading that agrees replaces it,
