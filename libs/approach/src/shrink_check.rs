@@ -30,15 +30,21 @@ struct Anchor {
     distance_m: f64,
     /// When it was taken.
     at_ns: u64,
+    /// Windows in a row, up to this anchor, over which the readings shrank as flown (windows
+    /// ended in a hover between them not counted); kept once it reaches
+    /// `shrink_check_confirm_windows` (see [`Anchor::confirmed`]).
+    agreeing_windows: u32,
+}
+
+impl Anchor {
     /// Readings have agreed with the odometry over `shrink_check_confirm_windows` windows in
     /// a row of flight towards the hub up to this anchor: only a confirmed anchor latches. A
     /// reading in a hover proves nothing (the tracker's first distance after an acquisition
     /// read 10.4 m at 29.4 m and grew over 1.5 s); one that held while the vehicle closed in
     /// does.
-    confirmed: bool,
-    /// Windows in a row, up to this anchor, over which the readings shrank as flown (windows
-    /// ended in a hover between them not counted).
-    agreeing_windows: u32,
+    fn confirmed(&self, c: &ApproachConfig) -> bool {
+        self.agreeing_windows >= c.shrink_check_confirm_windows
+    }
 }
 
 /// A reading that did not shrink as the vehicle closed in.
@@ -80,7 +86,6 @@ impl ShrinkCheck {
             fix,
             distance_m: d,
             at_ns: now,
-            confirmed: false,
             agreeing_windows: 0,
         };
         let Some(a) = self.anchor else {
@@ -102,7 +107,7 @@ impl ShrinkCheck {
             "shrink check: reading {d:.2} m, anchor {:.2} m (confirmed {}; windows agreeing in a \
              row: {}), flown {flown:.2} m, excess {excess:.2} m (allowed {allowed:.2}), latched {}",
             a.distance_m,
-            a.confirmed,
+            a.confirmed(c),
             a.agreeing_windows,
             self.latched.is_some()
         );
@@ -119,7 +124,7 @@ impl ShrinkCheck {
             }
             return self.latched;
         }
-        if excess > allowed && a.confirmed {
+        if excess > allowed && a.confirmed(c) {
             self.latched = Some(Contradiction {
                 flown_m: flown,
                 excess_m: excess,
@@ -132,7 +137,7 @@ impl ShrinkCheck {
             self.anchor = (d <= c.shrink_check_range_m).then_some(anchor_here);
             return None;
         }
-        if excess < -allowed && a.confirmed {
+        if excess < -allowed && a.confirmed(c) {
             // Far less than the odometry leaves: acted on (it is the careful side), but not
             // made the reference. `fly` seed 20 read 1.3–2.6 m at 5 m while backing away;
             // anchored there, the right reading after it looked like a jump.
@@ -159,7 +164,9 @@ impl ShrinkCheck {
         // never, and only a confirmed anchor holds a reading that jumps (a track that jumped
         // from 12 to 32 m at 12 m flew `fly --random-setup` seed 105, with a detector change
         // tried, to 1.1 m from the rotor plane; there no window had been flown through).
-        let agreeing_windows = if shrank_as_flown {
+        let agreeing_windows = if a.confirmed(c) {
+            a.agreeing_windows
+        } else if shrank_as_flown {
             a.agreeing_windows + 1
         } else if flown.abs() < window_m {
             a.agreeing_windows
@@ -170,7 +177,6 @@ impl ShrinkCheck {
             None
         } else if window_done {
             Some(Anchor {
-                confirmed: a.confirmed || agreeing_windows >= c.shrink_check_confirm_windows,
                 agreeing_windows,
                 ..anchor_here
             })
