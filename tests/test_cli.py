@@ -263,6 +263,41 @@ def test_cross_domain_eval_prints_one_table_per_held_out_set(runner, tmp_path):
     assert len(negatives) == 7 and all(row[1] == "3" for row in negatives), negatives
 
 
+def test_each_miss_reruns_through_hubtrack_detect_as_it_was_scored(runner, tmp_path):
+    """`hubtrack eval --misses`: each miss's `rerun` (a `hubtrack detect` command line, with
+    `--as-frame` and the roll for video frames and the held-out camera's calibration written
+    beside the misses) gives back the detection the table scored; detected as a still photo
+    instead, some of the same frames come out otherwise."""
+    import json
+    import shlex
+
+    misses = tmp_path / "misses"
+    res = runner.run(
+        "hubtrack", "eval", "--no-photos", "--synthetic", 8, "--negatives", 6, "--seed", 3,
+        "--cross-domain", "--misses", misses, timeout=300,
+    )
+    assert res.returncode == 0, res.stderr
+    lines = [json.loads(l) for f in sorted(misses.rglob("misses.jsonl")) for l in f.read_text().splitlines()]
+    assert len(lines) >= 5, f"too few misses to check: {len(lines)}"
+    cameras = sorted(misses.glob("cross-domain-*/camera.yaml"))
+    assert len(cameras) == 4, cameras
+    assert all("--as-frame" in l["rerun"] and "--hint-roll" in l["rerun"] for l in lines), lines[0]
+    assert any("--camera" in l["rerun"] for l in lines), [l["rerun"] for l in lines]
+    as_still = 0
+    for line in lines:
+        args = shlex.split(line["rerun"])
+        assert args[:2] == ["hubtrack", "detect"], args
+        again = runner.run("hubtrack", *args[1:])
+        assert again.returncode == 0, again.stderr
+        got, scored = json.loads(again.stdout.splitlines()[-1]), line["result"]
+        assert got["detected"] == scored["detected"], (line["name"], got, scored)
+        if scored["detected"]:
+            assert max(abs(a - b) for a, b in zip(got["hub"], scored["hub"])) < 0.5, (line["name"], got, scored)
+        still = runner.run("hubtrack", *[a for a in args[1:] if a != "--as-frame"])
+        as_still += json.loads(still.stdout.splitlines()[-1])["hub"] != scored["hub"]
+    assert as_still > 0, "the still-photo path gave every miss's detection too: --as-frame checks nothing"
+
+
 def test_sequence_eval_films_flights_in_held_out_scenes(runner):
     """`hubtrack eval --sequence --held-out-scenes`: the rendered flights in the held-out scenes,
     each flight's chimney and blur named on stderr; the option needs --sequence."""

@@ -53,6 +53,12 @@ pub struct DetectArgs {
     /// is a negative roll, not a flag).
     #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub hint_roll: Option<f64>,
+    /// Detect as the detect stage does on a video frame (its working pyramid level and the
+    /// video frames' models), not as on a still photo (two levels, the mirror image, the
+    /// photos' models): to look again at a frame `hubtrack eval --misses` scored as a video
+    /// frame, as its `misses.jsonl` line's `rerun` says.
+    #[arg(long)]
+    pub as_frame: bool,
     /// Image files or folders of images (taken in file-name order).
     #[arg(required = true, value_name = "PATH")]
     pub paths: Vec<PathBuf>,
@@ -137,7 +143,13 @@ pub fn run(args: DetectArgs) -> anyhow::Result<()> {
     let hints = args.hints();
     let (mut done, mut failed) = (0usize, 0usize);
     for path in expand(&args.paths) {
-        let line = match detect_one(&mut det, &path, args.annotate.as_deref(), &hints) {
+        let line = match detect_one(
+            &mut det,
+            &path,
+            args.annotate.as_deref(),
+            &hints,
+            args.as_frame,
+        ) {
             Ok(v) => {
                 done += 1;
                 v
@@ -163,6 +175,7 @@ fn detect_one(
     path: &Path,
     annotate: Option<&Path>,
     hints: &Hints,
+    as_frame: bool,
 ) -> anyhow::Result<serde_json::Value> {
     if !path.exists() {
         anyhow::bail!("no such file");
@@ -170,7 +183,11 @@ fn detect_one(
     let mat = read_image(path)?;
     let view = view_of(&mat)?;
     let t = Instant::now();
-    let out = det.detect_still(&view, hints)?;
+    let out = if as_frame {
+        det.detect(&view, hints)?
+    } else {
+        det.detect_still(&view, hints)?
+    };
     let ms = t.elapsed().as_secs_f64() * 1e3;
     if let Some(dir) = annotate {
         let stem = path

@@ -270,6 +270,7 @@ pub(crate) fn write_miss(
     truth: &Truth,
     outputs: &[Output],
     outcomes: &[Outcome],
+    rerun: Option<&str>,
 ) -> anyhow::Result<bool> {
     let (Some(dir), Some(out), Some(o)) = (dir, outputs.last(), outcomes.last()) else {
         return Ok(false);
@@ -289,13 +290,32 @@ pub(crate) fn write_miss(
     };
     draw_overlay(image, out, truth_segment, &png)?;
     let line = serde_json::json!({"name": name, "truth": truth_segment, "error_pct": o.error_pct,
-        "result": result_json(&png, image.cols() as u32, image.rows() as u32, out, 0.0)});
+        "result": result_json(&png, image.cols() as u32, image.rows() as u32, out, 0.0),
+        "rerun": rerun});
     let mut f = std::fs::OpenOptions::new()
         .append(true)
         .open(dir.join("misses.jsonl"))?;
     writeln!(f, "{line}")?;
     Ok(true)
 }
+
+/// The `hubtrack detect` command line that detects a rendered frame written to `input` as it
+/// was scored: as a video frame (`--as-frame`, the roll known) unless `still`, through the
+/// held-out camera whose calibration the set's misses folder holds (`camera.yaml`), if any.
+fn rerun_command(dir: &Path, input: &str, still: bool, roll_deg: f64) -> String {
+    let mut cmd = String::from("hubtrack detect");
+    if !still {
+        cmd += &format!(" --as-frame --hint-roll {roll_deg:.3}");
+    }
+    let camera = dir.join(MISSES_CAMERA_FILE);
+    if camera.is_file() {
+        cmd += &format!(" --camera '{}'", camera.display());
+    }
+    cmd + &format!(" '{input}'")
+}
+
+/// The calibration of a held-out camera set, in its misses folder (see [`rerun_command`]).
+const MISSES_CAMERA_FILE: &str = "camera.yaml";
 
 /// Creates `dir` with an empty `misses.jsonl` (see `--misses`).
 fn start_misses_dir(dir: &Path) -> anyhow::Result<()> {
@@ -380,7 +400,7 @@ fn eval_truth_file(
         let id = v["id"]
             .as_str()
             .map_or_else(|| format!("line{}", n + 1), |s| s.replace('/', "_"));
-        write_miss(misses, &id, &mat, &truth, &outputs, &outcomes)?;
+        write_miss(misses, &id, &mat, &truth, &outputs, &outcomes, None)?;
         if let Some(out) = outputs.last() {
             write_candidates(cand_out.as_deref_mut(), &id, &truth, out, view.height)?;
         }
@@ -508,6 +528,12 @@ fn eval_cross_domain(
     };
     for (name, camera) in held_out_cameras() {
         let misses = misses_of(name)?;
+        if let Some(dir) = &misses {
+            // What `hubtrack detect --camera` needs to look at a miss as it was scored.
+            let file = dir.join(MISSES_CAMERA_FILE);
+            std::fs::write(&file, camera.to_ros_yaml(name))
+                .with_context(|| format!("writing {}", file.display()))?;
+        }
         let lens = Lens::from_model(camera);
         let detect = config.detect.clone().with_setup(&lens, &config.turbine);
         let mut detectors = MODES
@@ -661,16 +687,16 @@ fn eval_rendered(
         if let Some(out) = outputs.last() {
             write_candidates(cand_out.as_deref_mut(), &name, &t, out, view.height)?;
         }
-        if misses.is_some() {
+        if let Some(dir) = misses {
             let mat = Mat::from_slice(&buffers[k])?
                 .reshape(3, cam.height as i32)?
                 .try_clone()?;
-            if write_miss(misses, &name, &mat, &t, &outputs, &outcomes)? {
-                // The rendered input too, to re-run `hubtrack detect` on (with RUST_LOG=trace).
-                let input = misses
-                    .unwrap_or(Path::new("."))
-                    .join(format!("{name}_input.png"));
-                let path = input.to_str().context("non-UTF-8 path")?;
+            // The rendered input too, to re-run `hubtrack detect` on (with RUST_LOG=trace) as
+            // this frame was scored.
+            let input = dir.join(format!("{name}_input.png"));
+            let path = input.to_str().context("non-UTF-8 path")?;
+            let rerun = rerun_command(dir, path, still, case.pose.roll_deg);
+            if write_miss(misses, &name, &mat, &t, &outputs, &outcomes, Some(&rerun))? {
                 anyhow::ensure!(
                     opencv::imgcodecs::imwrite_def(path, &mat)?,
                     "cannot write {path}"

@@ -546,6 +546,7 @@ fn write_sequence_miss(
         &t,
         std::slice::from_ref(output),
         &[outcome],
+        None,
     )? {
         // The rendered input too, to re-run `hubtrack detect` on (with RUST_LOG=trace).
         let input = dir
@@ -558,8 +559,9 @@ fn write_sequence_miss(
             opencv::imgcodecs::imwrite_def(path, &mat)?,
             "cannot write {path}"
         );
-        // ... with the hints the tracker gave the detector, as `hubtrack detect` arguments.
-        let mut args = Vec::new();
+        // ... with the hints the tracker gave the detector, as `hubtrack detect` arguments
+        // (detecting as the detect stage does on a video frame).
+        let mut args = vec!["--as-frame".to_string()];
         if let Some([x, y]) = hints.predicted_hub_px {
             args.push(format!("--hint-hub={x:.1},{y:.1}"));
         }
