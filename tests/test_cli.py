@@ -271,7 +271,7 @@ def test_each_miss_reruns_through_hubtrack_detect_as_it_was_scored(runner, tmp_p
     import json
     import shlex
 
-    misses = tmp_path / "misses"
+    misses = tmp_path / "the crew's misses"  # a space and a quote: the rerun is one shell line
     res = runner.run(
         "hubtrack", "eval", "--no-photos", "--synthetic", 8, "--negatives", 6, "--seed", 3,
         "--cross-domain", "--misses", misses, timeout=300,

@@ -309,9 +309,14 @@ fn rerun_command(dir: &Path, input: &str, still: bool, roll_deg: f64) -> String 
     }
     let camera = dir.join(MISSES_CAMERA_FILE);
     if camera.is_file() {
-        cmd += &format!(" --camera '{}'", camera.display());
+        cmd += &format!(" --camera {}", shell_quoted(&camera.display().to_string()));
     }
-    cmd + &format!(" '{input}'")
+    cmd + " " + &shell_quoted(input)
+}
+
+/// `s` as one POSIX shell word: in single quotes, each `'` in it closed, escaped and reopened.
+fn shell_quoted(s: &str) -> String {
+    format!("'{}'", s.replace('\'', r"'\''"))
 }
 
 /// The calibration of a held-out camera set, in its misses folder (see [`rerun_command`]).
