@@ -7,6 +7,7 @@ safety margin and the recording, and take a few minutes.
 """
 
 import json
+import math
 import os
 import signal
 
@@ -93,6 +94,45 @@ def test_a_recorded_flight_has_every_channel_and_the_loop_is_closed(runner, tmp_
     assert abs(everything["distance_ratio"][1] - ratios[int((len(ratios) - 1) * 0.5 + 0.5)]) < 1e-9
     assert sum(report["task_frames"].values()) == len(setpoints)
     assert report["last"]["seq"] == max(in_view)
+    # The spinner's looming (no truth needed): the circle's growth over the last 2 m (or 20 %)
+    # flown toward the hub gives the distance; recomputed here from the circles and /vehicle.
+    vehicles = sorted(vehicle, key=lambda v: v["recv_ns"])
+    sights, k = [], 0
+    for h in headers:
+        while k < len(vehicles) and vehicles[k]["recv_ns"] <= h["capture_ns"]:
+            k += 1
+        v = vehicles[k - 1] if k and vehicles[k - 1]["position_valid"] and vehicles[k - 1]["attitude_valid"] else None
+        t, d = tracks.get(h["seq"]), dets.get(h["seq"], {})
+        sights.append(dict(
+            pos=v["position_ned_m"][:2] if v else None,
+            los=(v["yaw_rad"] if v else 0.0) + math.radians(t["hub_bearing_deg"][0] if t else 0.0),
+            r=d["circle"][2] if d.get("detected") and d.get("circle_found") else None,
+            trk=t["distance_m"] if t and t["distance_valid"] and t["mode"] == "tracking" else None,
+        ))
+
+    def radius(i):
+        half = min(3, i, len(sights) - 1 - i)
+        rs = sorted(s["r"] for s in sights[i - half:i + half + 1] if s["r"] is not None)
+        return rs[len(rs) // 2] if rs else None
+
+    def looming(i):
+        s = sights[i]
+        if s["trk"] is None or s["pos"] is None:
+            return None
+        for j in range(i - 1, max(-1, i - 301), -1):
+            if sights[j]["pos"] is None:
+                continue
+            flown = ((s["pos"][0] - sights[j]["pos"][0]) * math.cos(s["los"])
+                     + (s["pos"][1] - sights[j]["pos"][1]) * math.sin(s["los"]))
+            if flown >= max(2.0, 0.2 * s["trk"]):
+                r1, r2 = radius(j), radius(i)
+                return flown * r1 / (r2 - r1) if r1 and r2 and r2 > r1 else None
+        return None
+
+    seq_index = {h["seq"]: i for i, h in enumerate(headers)}
+    with_looming = sum(1 for s in in_view if looming(seq_index[s]) is not None)
+    assert with_looming > 0.2 * len(in_view), (with_looming, len(in_view))
+    assert abs(everything["looming_pct"] - 100.0 * with_looming / len(in_view)) < 1e-6, (everything, with_looming)
     # A recording without truth is refused with the cause named.
     bad = runner.run("hubtrack", "diagnose", str(path.parent / "missing.mcap"), timeout=60)
     assert bad.returncode != 0 and "missing.mcap" in bad.stderr

@@ -4,7 +4,7 @@
 use crate::reader::OpenError;
 use crate::writer::ChannelKind;
 use crate::RecordError;
-use hubtrack_types::{Detection, FrameHeader, Setpoint, Stamps, TrackState};
+use hubtrack_types::{Detection, FrameHeader, Setpoint, Stamps, TrackState, VehicleState};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -19,6 +19,8 @@ pub struct Channels {
     pub tracks: BTreeMap<u64, TrackState>,
     /// `/setpoints`.
     pub setpoints: BTreeMap<u64, Setpoint>,
+    /// `/vehicle`, in the order received (`recv_ns` is on the frames' capture clock).
+    pub vehicles: Vec<VehicleState>,
     /// The last `/recorder` counters.
     pub recorder: Option<crate::writer::RecorderStats>,
     /// Messages without usable stamps (all zero) or that did not decode, per topic.
@@ -89,6 +91,10 @@ pub fn read(path: &Path) -> Result<Channels, ReadError> {
                 Ok(s) if stamped(&s.stamps) => {
                     c.setpoints.insert(s.stamps.seq, s);
                 }
+                _ => unstamped(),
+            },
+            Some(ChannelKind::Vehicle) => match serde_json::from_slice::<VehicleState>(&m.data) {
+                Ok(v) if v.recv_ns > 0 => c.vehicles.push(v),
                 _ => unstamped(),
             },
             Some(ChannelKind::Recorder) => {

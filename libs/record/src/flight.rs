@@ -4,12 +4,13 @@
 //! truth (`hubtrack fly --record`, or a replay of such a recording, which keeps the headers).
 //!
 //! Truth comes from `/frames/header`; the estimates from `/detections` and `/track` of the same
-//! `seq`. A yaw "has the wrong sign" when both the truth and the estimate are valid, the truth is
+//! `seq`; the spinner's looming ([`crate::looming`]) from the circles and `/vehicle`. A yaw "has the wrong sign" when both the truth and the estimate are valid, the truth is
 //! at least [`SIGN_MIN_DEG`] from zero, and the signs differ: the failure that makes T2 fly the
 //! wrong way.
 
 use crate::channels::{self, ReadError};
-use hubtrack_types::{ApproachTask, Detection, FrameHeader, TrackState};
+use crate::looming;
+use hubtrack_types::{ApproachTask, Detection, FrameHeader, TrackMode, TrackState};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -72,6 +73,13 @@ pub struct Band {
     pub net_error_deg: Option<Spread>,
     /// Network yaws of the wrong sign, % of those where the true |yaw| ≥ [`SIGN_MIN_DEG`].
     pub net_wrong_sign_pct: Option<f64>,
+    /// Share of the frames with a distance from the spinner's looming ([`crate::looming`]), %.
+    pub looming_pct: f64,
+    /// |looming distance / true distance − 1|, %.
+    pub looming_error_pct: Option<Spread>,
+    /// Of the frames with both a looming and a valid tracked distance, the share where they
+    /// differ by more than [`crate::looming::DISAGREE_FACTOR`], % (no truth needed).
+    pub looming_disagrees_pct: Option<f64>,
 }
 
 /// The truth and the track at the last frame with truth.
@@ -148,6 +156,8 @@ struct Sample<'a> {
     header: &'a FrameHeader,
     detection: Option<&'a Detection>,
     track: Option<&'a TrackState>,
+    /// The distance from the spinner's looming, m.
+    looming_m: Option<f64>,
 }
 
 fn band(name: String, samples: &[&Sample<'_>]) -> Band {
@@ -205,6 +215,17 @@ fn band(name: String, samples: &[&Sample<'_>]) -> Band {
         .iter()
         .filter(|(truth, _)| truth.abs() >= SIGN_MIN_DEG)
         .collect();
+    let loomings: Vec<(f64, Option<f64>)> = samples
+        .iter()
+        .filter_map(|s| {
+            let tracked = s.track.filter(|t| t.distance_valid).map(|t| t.distance_m);
+            Some((s.looming_m?, tracked))
+        })
+        .collect();
+    let both: Vec<(f64, f64)> = loomings
+        .iter()
+        .filter_map(|(l, t)| Some((*l, (*t)?)))
+        .collect();
     Band {
         name,
         frames: n as u64,
@@ -257,6 +278,24 @@ fn band(name: String, samples: &[&Sample<'_>]) -> Band {
                 nets_signed.len(),
             )
         }),
+        looming_pct: pct(loomings.len(), n),
+        looming_error_pct: spread(
+            samples
+                .iter()
+                .filter_map(|s| {
+                    let truth = s.header.truth.distance_m;
+                    Some(100.0 * (s.looming_m? / truth - 1.0).abs()).filter(|_| truth > 0.0)
+                })
+                .collect(),
+        ),
+        looming_disagrees_pct: (!both.is_empty()).then(|| {
+            pct(
+                both.iter()
+                    .filter(|(l, t)| looming::disagree(*l, *t))
+                    .count(),
+                both.len(),
+            )
+        }),
     }
 }
 
@@ -272,9 +311,47 @@ fn task_name(t: ApproachTask) -> &'static str {
     }
 }
 
+/// The looming distance of every frame (see [`crate::looming`]), by `seq`: each frame's circle,
+/// tracked distance and line of sight, with the newest vehicle state received by its capture.
+fn looming_by_seq(c: &channels::Channels) -> BTreeMap<u64, Option<f64>> {
+    let mut vehicles = c.vehicles.clone();
+    vehicles.sort_by_key(|v| v.recv_ns);
+    let mut next = 0;
+    let (seqs, sights): (Vec<u64>, Vec<looming::Sight>) = c
+        .frames
+        .iter()
+        .map(|(seq, h)| {
+            while next < vehicles.len() && vehicles[next].recv_ns <= h.capture_ns {
+                next += 1;
+            }
+            let vehicle = next
+                .checked_sub(1)
+                .map(|i| &vehicles[i])
+                .filter(|v| v.position_valid && v.attitude_valid);
+            let track = c.tracks.get(seq);
+            let sight = looming::Sight {
+                position_ne_m: vehicle.map(|v| [v.position_ned_m[0], v.position_ned_m[1]]),
+                line_of_sight_rad: vehicle.map_or(0.0, |v| v.yaw_rad)
+                    + track.map_or(0.0, |t| t.hub_bearing_deg[0].to_radians()),
+                radius_px: c
+                    .detections
+                    .get(seq)
+                    .filter(|d| d.detected && d.circle_found)
+                    .map(|d| d.circle[2]),
+                tracked_m: track
+                    .filter(|t| t.distance_valid && t.mode == TrackMode::Tracking)
+                    .map(|t| t.distance_m),
+            };
+            (*seq, sight)
+        })
+        .unzip();
+    seqs.into_iter().zip(looming::distances(&sights)).collect()
+}
+
 /// Reads `path` (a cut file as far as it goes) and compares the estimates with the truth.
 pub fn analyze(path: &Path) -> Result<FlightReport, FlightError> {
     let c = channels::read(path)?;
+    let looming = looming_by_seq(&c);
     let samples: Vec<Sample<'_>> = c
         .frames
         .iter()
@@ -283,6 +360,7 @@ pub fn analyze(path: &Path) -> Result<FlightReport, FlightError> {
             header,
             detection: c.detections.get(seq),
             track: c.tracks.get(seq),
+            looming_m: looming.get(seq).copied().flatten(),
         })
         .collect();
     if samples.is_empty() {
@@ -335,19 +413,19 @@ pub fn print(r: &FlightReport) {
         })
     };
     println!(
-        "{:<9}{:>7}{:>6} {:>11}{:>6}{:>6}{:>6}{:>6} | {:>6} {:>17} | {:>6} {:>11} {:>6} | {:>6} {:>11} {:>6}",
-        "truth", "frames", "det%", "hub err %h", "tow%", "circ%", "nac%", "side%", "dist%", "dist/truth", "yaw%", "|yaw err|°", "wrong%", "net%", "|net err|°", "wrong%"
+        "{:<9}{:>7}{:>6} {:>11}{:>6}{:>6}{:>6}{:>6} | {:>6} {:>17} | {:>6} {:>11} {:>6} | {:>6} {:>11} {:>6} | {:>6} {:>11} {:>6}",
+        "truth", "frames", "det%", "hub err %h", "tow%", "circ%", "nac%", "side%", "dist%", "dist/truth", "yaw%", "|yaw err|°", "wrong%", "net%", "|net err|°", "wrong%", "loom%", "loom err %", "≠trk%"
     );
     println!(
-        "{:<9}{:>7}{:>6} {:>11}{:>6}{:>6}{:>6}{:>6} | {:>6} {:>17} | {:>6} {:>11} {:>6} | {:>6} {:>11} {:>6}",
-        "", "", "", "p50   p90", "", "", "", "", "", "p10   p50   p90", "", "p50   p90", "", "", "p50   p90", ""
+        "{:<9}{:>7}{:>6} {:>11}{:>6}{:>6}{:>6}{:>6} | {:>6} {:>17} | {:>6} {:>11} {:>6} | {:>6} {:>11} {:>6} | {:>6} {:>11} {:>6}",
+        "", "", "", "p50   p90", "", "", "", "", "", "p10   p50   p90", "", "p50   p90", "", "", "p50   p90", "", "", "p50   p90", ""
     );
     for b in &r.bands {
         let ratio = b.distance_ratio.map_or(format!("{:>17}", "-"), |q| {
             format!("{:>5.2} {:>5.2} {:>5.2}", q[0], q[1], q[2])
         });
         println!(
-            "{:<9}{:>7}{:>6.1} {}{:>6.1}{:>6.1}{:>6.1}{} | {:>6.1} {} | {:>6.1} {} {} | {:>6.1} {} {}",
+            "{:<9}{:>7}{:>6.1} {}{:>6.1}{:>6.1}{:>6.1}{} | {:>6.1} {} | {:>6.1} {} {} | {:>6.1} {} {} | {:>6.1} {} {}",
             b.name,
             b.frames,
             b.detected_pct,
@@ -363,11 +441,20 @@ pub fn print(r: &FlightReport) {
             opt(b.yaw_wrong_sign_pct, 6),
             b.net_valid_pct,
             sp(b.net_error_deg),
-            opt(b.net_wrong_sign_pct, 6)
+            opt(b.net_wrong_sign_pct, 6),
+            b.looming_pct,
+            sp(b.looming_error_pct),
+            opt(b.looming_disagrees_pct, 6)
         );
     }
     println!(
         "side% = nacelle ends on the side the true yaw puts the nacelle; wrong% = valid yaws (the track's, the yaw network's) of the wrong sign; both where the true |yaw| >= {SIGN_MIN_DEG:.0}°"
+    );
+    println!(
+        "loom% = frames with a distance from the spinner circle's growth over the last {:.0} m (or {:.0} %) flown toward the hub; ≠trk% = of those with a valid tracked distance, the share more than {:.1}x apart (no truth needed)",
+        looming::MIN_FLOWN_M,
+        100.0 * looming::MIN_FLOWN_FRAC,
+        looming::DISAGREE_FACTOR
     );
     if !r.task_frames.is_empty() {
         let tasks: Vec<String> = r
@@ -409,6 +496,73 @@ mod tests {
             recv_ns: base + 1_000_000,
             publish_ns: base + 2_000_000,
         }
+    }
+
+    /// A straight approach from 20 m to 6 m, 0.1 m a frame, the spinner circle 200 px / d: the
+    /// tracked distance right for the first half, then twice the truth. The looming distance
+    /// (from the circles and `/vehicle`) follows the truth, and disagrees with the track exactly
+    /// where the track is wrong.
+    #[test]
+    fn the_spinner_looming_checks_the_tracked_distance_without_the_truth() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("f.mcap");
+        let mut rec = Recording::create(&path, &RecordingOptions::default()).unwrap();
+        let frames = 141u64;
+        for seq in 0..frames {
+            let north = 0.1 * seq as f64;
+            let d = 20.0 - north;
+            let wrong = seq >= frames / 2;
+            let mut h = FrameHeader {
+                seq,
+                capture_ns: stamps(seq).capture_ns,
+                publish_ns: stamps(seq).publish_ns,
+                height: 1000,
+                ..Default::default()
+            };
+            h.truth.valid = true;
+            h.truth.turbine_in_view = true;
+            h.truth.distance_m = d;
+            rec.write_frame(&h, None, 1).unwrap();
+            let v = hubtrack_types::VehicleState {
+                recv_ns: stamps(seq).capture_ns,
+                attitude_valid: true,
+                position_valid: true,
+                position_ned_m: [north, 0.0, -80.0],
+                ..Default::default()
+            };
+            rec.write_json(ChannelKind::Vehicle, seq, 1, 1, &v).unwrap();
+            let mut det = Detection {
+                stamps: stamps(seq),
+                detected: true,
+                ..Default::default()
+            };
+            det.circle_found = true;
+            det.circle = [500.0, 500.0, 200.0 / d];
+            rec.write_json(ChannelKind::Detection, seq, 1, 1, &det)
+                .unwrap();
+            let t = TrackState {
+                stamps: stamps(seq),
+                mode: TrackMode::Tracking,
+                distance_valid: true,
+                distance_m: if wrong { 2.0 * d } else { d },
+                ..Default::default()
+            };
+            rec.write_json(ChannelKind::Track, seq, 1, 1, &t).unwrap();
+        }
+        rec.finish().unwrap();
+        let r = analyze(&path).unwrap();
+        let band = |name: &str| r.bands.iter().find(|b| b.name == name).unwrap();
+        // 20–10 m: the track right (20–13 m) and wrong (13–10 m); the looming starts once 4 m
+        // (20 % of 20 m) have been flown.
+        let mid = band("10-20 m");
+        assert!(mid.looming_pct > 30.0, "{mid:?}");
+        assert!(mid.looming_error_pct.unwrap().p90 < 3.0, "{mid:?}");
+        let near = band("5-10 m");
+        assert_eq!(near.looming_pct, 100.0, "{near:?}");
+        assert_eq!(near.looming_disagrees_pct, Some(100.0), "{near:?}");
+        let all = band("all");
+        let disagreeing = all.looming_disagrees_pct.unwrap();
+        assert!((20.0..100.0).contains(&disagreeing), "{all:?}");
     }
 
     #[test]

@@ -27,6 +27,7 @@ pub mod flight;
 pub mod frame_payload;
 pub mod jpeg;
 pub mod latency;
+pub mod looming;
 pub mod raw_image;
 pub mod raw_window;
 pub mod reader;
