@@ -488,6 +488,21 @@ mod tests {
     use crate::writer::{ChannelKind, Recording, RecordingOptions};
     use hubtrack_types::{Stamps, TrackMode};
 
+    /// Frame `seq`'s header with the hub in view at `distance_m`.
+    fn header_with_truth(seq: u64, distance_m: f64) -> FrameHeader {
+        let mut h = FrameHeader {
+            seq,
+            capture_ns: stamps(seq).capture_ns,
+            publish_ns: stamps(seq).publish_ns,
+            height: 1000,
+            ..Default::default()
+        };
+        h.truth.valid = true;
+        h.truth.turbine_in_view = true;
+        h.truth.distance_m = distance_m;
+        h
+    }
+
     fn stamps(seq: u64) -> Stamps {
         let base = 1_000_000_000 + seq * 50_000_000;
         Stamps {
@@ -512,17 +527,8 @@ mod tests {
             let north = 0.1 * seq as f64;
             let d = 20.0 - north;
             let wrong = seq >= frames / 2;
-            let mut h = FrameHeader {
-                seq,
-                capture_ns: stamps(seq).capture_ns,
-                publish_ns: stamps(seq).publish_ns,
-                height: 1000,
-                ..Default::default()
-            };
-            h.truth.valid = true;
-            h.truth.turbine_in_view = true;
-            h.truth.distance_m = d;
-            rec.write_frame(&h, None, 1).unwrap();
+            rec.write_frame(&header_with_truth(seq, d), None, 1)
+                .unwrap();
             let v = hubtrack_types::VehicleState {
                 recv_ns: stamps(seq).capture_ns,
                 attitude_valid: true,
@@ -574,17 +580,8 @@ mod tests {
         // wrong sign), 35 m and +9° after; the detector's hub is 10 px off in a 1000 px image,
         // its nacelle end on the left (the wrong side) in every frame.
         for seq in 0..20u64 {
-            let mut h = FrameHeader {
-                seq,
-                capture_ns: stamps(seq).capture_ns,
-                publish_ns: stamps(seq).publish_ns,
-                height: 1000,
-                ..Default::default()
-            };
-            h.truth.valid = true;
-            h.truth.turbine_in_view = true;
+            let mut h = header_with_truth(seq, 35.0);
             h.truth.hub_px = [500.0, 500.0];
-            h.truth.distance_m = 35.0;
             h.truth.relative_yaw_deg = 10.0;
             rec.write_frame(&h, None, 1).unwrap();
             let mut d = Detection {
