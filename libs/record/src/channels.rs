@@ -19,7 +19,7 @@ pub struct Channels {
     pub tracks: BTreeMap<u64, TrackState>,
     /// `/setpoints`.
     pub setpoints: BTreeMap<u64, Setpoint>,
-    /// `/vehicle`, in the order received (`recv_ns` is on the frames' capture clock).
+    /// `/vehicle`, by `recv_ns` (on the frames' capture clock).
     pub vehicles: Vec<VehicleState>,
     /// The last `/recorder` counters.
     pub recorder: Option<crate::writer::RecorderStats>,
@@ -109,6 +109,7 @@ pub fn read(path: &Path) -> Result<Channels, ReadError> {
         }
     }
     c.read_error = messages.stopped;
+    c.vehicles.sort_by_key(|v| v.recv_ns);
     if c.frames.is_empty()
         && c.detections.is_empty()
         && c.tracks.is_empty()

@@ -314,8 +314,7 @@ fn task_name(t: ApproachTask) -> &'static str {
 /// The looming distance of every frame (see [`crate::looming`]), by `seq`: each frame's circle,
 /// tracked distance and line of sight, with the newest vehicle state received by its capture.
 fn looming_by_seq(c: &channels::Channels) -> BTreeMap<u64, Option<f64>> {
-    let mut vehicles = c.vehicles.clone();
-    vehicles.sort_by_key(|v| v.recv_ns);
+    let vehicles = &c.vehicles;
     let mut next = 0;
     let (seqs, sights): (Vec<u64>, Vec<looming::Sight>) = c
         .frames

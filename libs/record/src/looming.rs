@@ -43,10 +43,16 @@ pub struct Sight {
 /// not flown far enough toward the hub within [`MAX_LOOKBACK_FRAMES`], a circle is missing at
 /// either end, or the circle did not grow.
 pub fn distances(sights: &[Sight]) -> Vec<Option<f64>> {
-    (0..sights.len()).map(|i| distance_at(sights, i)).collect()
+    let radii: Vec<Option<f64>> = (0..sights.len())
+        .map(|i| smoothed_radius(sights, i))
+        .collect();
+    (0..sights.len())
+        .map(|i| distance_at(sights, &radii, i))
+        .collect()
 }
 
-fn distance_at(sights: &[Sight], i: usize) -> Option<f64> {
+/// Frame `i`'s looming distance, `radii` each frame's smoothed radius.
+fn distance_at(sights: &[Sight], radii: &[Option<f64>], i: usize) -> Option<f64> {
     let now = &sights[i];
     let tracked = now.tracked_m?;
     let [n2, e2] = now.position_ne_m?;
@@ -58,7 +64,7 @@ fn distance_at(sights: &[Sight], i: usize) -> Option<f64> {
         };
         let flown = (n2 - n1) * cos + (e2 - e1) * sin;
         if flown >= stretch {
-            let (r1, r2) = (smoothed_radius(sights, j)?, smoothed_radius(sights, i)?);
+            let (r1, r2) = (radii[j]?, radii[i]?);
             return (r2 > r1).then(|| flown * r1 / (r2 - r1));
         }
     }

@@ -48,6 +48,13 @@ impl Estimate {
     pub fn var(&self) -> f64 {
         self.std * self.std
     }
+
+    /// The squared difference of two estimates over the sum of their variances (chi-square,
+    /// one degree of freedom): how far apart they are for what each is worth; compared with a
+    /// gate, whether they contradict each other.
+    pub fn chi2_to(&self, other: &Estimate) -> f64 {
+        (self.value - other.value).powi(2) / (self.var() + other.var()).max(1e-12)
+    }
 }
 
 /// Depth of an object of real size `real_size_m` that appears `size_px` large:

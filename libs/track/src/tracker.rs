@@ -724,8 +724,7 @@ impl Core {
             return sizes;
         };
         let view = view.with_yaw(self.yaw_now());
-        let chi2 =
-            (tower_hub.value - sp.value).powi(2) / (tower_hub.var() + sp.std.powi(2)).max(1e-12);
+        let chi2 = tower_hub.chi2_to(&sp);
         if chi2 <= dc.consistency_chi2 {
             return sizes;
         }
@@ -769,10 +768,7 @@ impl Core {
         sizes: &mut SizeDistances,
     ) -> Option<Estimate> {
         let p = self.parallax_distance(det, t)?;
-        let disagrees = |m: Estimate| {
-            (m.value - p.value).powi(2) / (m.var() + p.var()).max(1e-12)
-                > self.cfg.parallax.consistency_chi2
-        };
+        let disagrees = |m: Estimate| m.chi2_to(&p) > self.cfg.parallax.consistency_chi2;
         let tower_hub = sizes.tower_hub(self.yaw_now());
         if tower_hub.is_some_and(disagrees) {
             log::debug!(
@@ -939,20 +935,13 @@ impl Core {
         let nacelle = self.nacelle_yaw(det, sizes.spinner, innovation_px);
         // A gap and a nacelle that contradict each other: one is wrong, and neither is used.
         let (gap, nacelle) = match (gap, nacelle) {
-            (Some(g), Some(n))
-                if (g.value - n.value).powi(2) / (g.var() + n.var()) > yc.gate_chi2 =>
-            {
-                (None, None)
-            }
+            (Some(g), Some(n)) if g.chi2_to(&n) > yc.gate_chi2 => (None, None),
             pair => pair,
         };
         // With `net_vetoes_gap` a gap or nacelle yaw the network contradicts is dropped.
         let net = self.net_yaw_reading(det);
         let contradicts = |m: Option<Estimate>| match (m, net) {
-            (Some(m), Some(n)) => {
-                yc.net_vetoes_gap
-                    && (m.value - n.value).powi(2) / (m.var() + n.var()) > yc.gate_chi2
-            }
+            (Some(m), Some(n)) => yc.net_vetoes_gap && m.chi2_to(&n) > yc.gate_chi2,
             _ => false,
         };
         let gap = if contradicts(gap) { None } else { gap };

@@ -301,14 +301,13 @@ pub(crate) fn write_miss(
 
 /// The `hubtrack detect` command line that detects a rendered frame written to `input` as it
 /// was scored: as a video frame (`--as-frame`, the roll known) unless `still`, through the
-/// held-out camera whose calibration the set's misses folder holds (`camera.yaml`), if any.
-fn rerun_command(dir: &Path, input: &str, still: bool, roll_deg: f64) -> String {
+/// held-out camera whose calibration the set's misses folder holds (`camera`), if any.
+fn rerun_command(camera: Option<&Path>, input: &str, still: bool, roll_deg: f64) -> String {
     let mut cmd = String::from("hubtrack detect");
     if !still {
         cmd += &format!(" --as-frame --hint-roll {roll_deg:.3}");
     }
-    let camera = dir.join(MISSES_CAMERA_FILE);
-    if camera.is_file() {
+    if let Some(camera) = camera {
         cmd += &format!(" --camera {}", shell_quoted(&camera.display().to_string()));
     }
     cmd + " " + &shell_quoted(input)
@@ -660,6 +659,10 @@ fn eval_rendered(
         .iter()
         .map(|r| vec![0u8; r.camera().frame_bytes()])
         .collect();
+    // A held-out camera's calibration beside its misses, for their reruns.
+    let camera_file = misses
+        .map(|dir| dir.join(MISSES_CAMERA_FILE))
+        .filter(|f| f.is_file());
     for (name, case) in cases {
         let negative = case.categories.iter().any(|c| c == "negatives");
         let k = if case.wide { 0 } else { 1 };
@@ -700,7 +703,7 @@ fn eval_rendered(
             // this frame was scored.
             let input = dir.join(format!("{name}_input.png"));
             let path = input.to_str().context("non-UTF-8 path")?;
-            let rerun = rerun_command(dir, path, still, case.pose.roll_deg);
+            let rerun = rerun_command(camera_file.as_deref(), path, still, case.pose.roll_deg);
             if write_miss(misses, &name, &mat, &t, &outputs, &outcomes, Some(&rerun))? {
                 anyhow::ensure!(
                     opencv::imgcodecs::imwrite_def(path, &mat)?,
