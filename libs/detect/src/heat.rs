@@ -165,7 +165,17 @@ impl HubCropNet {
 
     /// The hub near `centre` (working px) of the working level `working` (grey).
     pub fn run(&mut self, working: &Mat, centre: [f64; 2]) -> Result<CropPeak, DetectError> {
-        let side = CROP_FRAC * working.rows() as f64;
+        self.run_scaled(working, centre, 1.0)
+    }
+
+    /// The same with the crop's side `scale` times the trained one.
+    pub fn run_scaled(
+        &mut self,
+        working: &Mat,
+        centre: [f64; 2],
+        scale: f64,
+    ) -> Result<CropPeak, DetectError> {
+        let side = scale * CROP_FRAC * working.rows() as f64;
         let (x0, y0) = (centre[0] - side / 2.0, centre[1] - side / 2.0);
         warp_crop(working, centre, side, CROP_SIDE, &mut self.crop)?;
         let g = (CROP_SIDE / CROP_STRIDE) as usize;

@@ -320,6 +320,18 @@ hubtrack_types::params! {
         /// Tolerance on the blade separation (larger than the thesis's to allow oblique views),
         /// degrees.
         pub blade_sep_tol_deg: f64 = 45.0, closed(0.0, 180.0);
+        /// Without a tracker's prediction (acquisition, still photos), a candidate whose seen
+        /// blades (two or more) all lie within this of the world's vertical or horizontal is no
+        /// hub: three blades 120° apart always have one 30° from both (20° at 45° of yaw or
+        /// pitch), while roofs, chimney rims, a mast with its stays and field borders at the
+        /// horizon meet at right angles. On the cross-domain sets' frames without a turbine it
+        /// takes false positives from 7.5 to 4.0 % in the held-out scenes (chimneys), 3.0 to 1.5 %
+        /// through the 60° lens, 7.0 to 5.0 % through the fisheye, hits unchanged (one of 1 260
+        /// lost, one gained).
+        /// Not while tracking: there it dropped close-in detections of the hub, and two of 240
+        /// `fly --random-setup` flights came within 3 m of the rotor. Degrees, range [0, 20];
+        /// 0 = off.
+        pub square_blades_max_deg: f64 = 10.0, closed(0.0, 20.0);
         /// Tower lines: maximum tilt from vertical after roll, degrees (larger than the thesis's
         /// because the wide lens bends lines and unknown roll is searched).
         pub tower_max_tilt_deg: f64 = 8.0, closed(0.0, 45.0);
@@ -784,6 +796,19 @@ hubtrack_types::params! {
         pub heat_verify_min: f64 = 0.5, closed(0.0, 1.0);
         /// See `heat_verify_min`. Range [0, 1].
         pub heat_verify_crop_min: f64 = 0.5, closed(0.0, 1.0);
+        /// When the crop network is not that sure of its crop (`CROP_FRAC` of the height, the
+        /// size it was trained on), it looks again at the heatmap's peak through crops
+        /// `heat_verify_crop_zoom` times wider in turn, up to this many times, and takes the first
+        /// look it is sure of (its allowed shift, `hub_crop_max_shift_frac`, wider by as much).
+        /// Through a narrow lens or close in, the spinner fills the trained crop and the network
+        /// sees no hub in it: 1, 1.5, 2.25 and 3.4 times the crop take the close hits of the held-out
+        /// 60° camera from 63 to 78 % and of held-out turbines from 73 to 80 % (`eval
+        /// --cross-domain`). Video frames only: on photos the still crop network's wider looks
+        /// lose 5 of 43 hits. Range [0, 8]; 0 = the trained crop only.
+        pub heat_verify_crop_zooms: u32 = 3, closed(0.0, 8.0);
+        /// See `heat_verify_crop_zooms`: each look's crop is this many times wider than the last.
+        /// Range [1, 4].
+        pub heat_verify_crop_zoom: f64 = 1.5, closed(1.0, 4.0);
         /// ... and lines that end within this of that hub, fraction of the image height, must
         /// include one more than `heat_verify_oblique_deg` from both the vertical and the
         /// horizontal: the networks also take a mast's top for a hub; and no long line may pass

@@ -36,6 +36,9 @@ pub(super) struct Candidate {
     pub spinner: Option<[f64; 3]>,
     /// What the learned ranker sees ([`crate::ranker`]).
     pub features: crate::ranker::Features,
+    /// Its blades all run along the world's vertical and horizontal (`square_blades_max_deg`):
+    /// built edges, no rotor.
+    pub square: bool,
 }
 
 impl Candidate {
@@ -215,6 +218,7 @@ pub(super) fn evaluate(sc: &SceneCtx<'_>, c: P2, spinner: Option<[f64; 3]>) -> C
         image_height: h,
     };
     let features = crate::ranker::features(&cues);
+    let square = square_blades(sc, c, &blades);
     Candidate {
         centre: c,
         blades,
@@ -225,7 +229,39 @@ pub(super) fn evaluate(sc: &SceneCtx<'_>, c: P2, spinner: Option<[f64; 3]>) -> C
         support,
         spinner,
         features,
+        square,
     }
+}
+
+/// Whether, without a tracker's prediction, two or more blades are seen at `c` and every one
+/// of them lies within `square_blades_max_deg` of the world's vertical or horizontal (the
+/// blades' image angles taken through the lens's undistortion when it bends straight lines,
+/// and the camera's roll removed). Three blades 120° apart always have one at least 30° from both (still 20° at 45°
+/// of relative yaw or of pitch), while a roof, a chimney's rim, a mast with its stays or field
+/// borders at the horizon meet at right angles.
+pub(super) fn square_blades(sc: &SceneCtx<'_>, c: P2, blades: &[Blade]) -> bool {
+    let p = sc.p;
+    let undistorted_angle = |a: f64| match &sc.camera {
+        None => a,
+        Some(cam) => {
+            let step = 0.1 * sc.h;
+            let (s, co) = a.to_radians().sin_cos();
+            let q0 = cam.undistort_pixel(c);
+            let q1 = cam.undistort_pixel([c[0] + step * s, c[1] - step * co]);
+            (q1[0] - q0[0]).atan2(q0[1] - q1[1]).to_degrees()
+        }
+    };
+    let off_axes = |a: f64| {
+        let r = (undistorted_angle(a) + sc.roll_deg).rem_euclid(90.0);
+        r.min(90.0 - r)
+    };
+    p.square_blades_max_deg > 0.0
+        && sc.hints.predicted_hub_px.is_none()
+        && blades.len() >= 2
+        && blades
+            .iter()
+            .take(ROTOR_BLADES)
+            .all(|b| off_axes(b.angle_deg) <= p.square_blades_max_deg)
 }
 
 /// A long usable line passes through `c` (not ending near it): `c` lies on a tower, mast or wire.

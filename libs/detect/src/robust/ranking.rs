@@ -66,6 +66,9 @@ pub(super) fn pick(
     for mut cand in cands {
         cand.features[crate::ranker::HUB_HEAT] = heat_at(cand.centre);
         considered.push(cand.considered());
+        if cand.square {
+            continue;
+        }
         if best.as_ref().is_none_or(|b| preferred(p, &cand, b)) {
             best = Some(cand);
         }

@@ -1074,3 +1074,60 @@ fn a_horizon_bent_into_pieces_by_a_fisheye_is_still_a_horizon() {
     };
     assert!(usable_lines(&f, &segs, 0.0).iter().all(|u| *u));
 }
+
+#[test]
+fn blades_all_square_to_the_world_are_built_edges_not_a_rotor() {
+    let c = [200.0, 120.0];
+    // A mast standing on a tower-like mast with a stay or a roof's edge going level from its
+    // foot, each seen as a band; the camera rolled 8°.
+    let roll_deg: f64 = 8.0;
+    let scene = |blades: &[f64]| {
+        let mut segs = vec![
+            ray(c, 180.0 - roll_deg - 1.0, 8.0, 140.0),
+            ray(c, 180.0 - roll_deg + 1.0, 8.0, 140.0),
+        ];
+        for a in blades {
+            segs.push(ray(c, a - roll_deg - 3.0, 6.0, 70.0));
+            segs.push(ray(c, a - roll_deg + 3.0, 6.0, 70.0));
+        }
+        segs
+    };
+    let hints = Hints {
+        roll_rad: Some(roll_deg.to_radians()),
+        ..Hints::default()
+    };
+    let off = DefaultParams {
+        square_blades_max_deg: 0.0,
+        ..DefaultParams::default()
+    };
+    let on = DefaultParams::default();
+    let square = scene(&[0.0, 90.0]);
+    let f = recognise_at(&off, &square, &hints, &mut no_circles, Expected::default()).unwrap();
+    assert!(
+        f.detected && geometry::dist(f.hub, c) < 3.0,
+        "without the rule the mast and the level edge pass for a rotor: {f:?}"
+    );
+    let f = recognise_at(&on, &square, &hints, &mut no_circles, Expected::default()).unwrap();
+    assert!(!f.detected, "{f:?}");
+    // Rotors, rolled as the camera is: two blades up with the third hidden down the tower
+    // (30° from the level), one blade level (the others 30° from the vertical), one straight
+    // up (the others 30° from the level).
+    for blades in [
+        &[60.0, 300.0][..],
+        &[90.0, 210.0, 330.0],
+        &[0.0, 120.0, 240.0],
+    ] {
+        let f = recognise_at(
+            &on,
+            &scene(blades),
+            &hints,
+            &mut no_circles,
+            Expected::default(),
+        )
+        .unwrap();
+        assert!(
+            f.detected && geometry::dist(f.hub, c) < 3.0,
+            "{blades:?}: {f:?}"
+        );
+    }
+}
