@@ -1127,32 +1127,35 @@ mod tests {
         );
     }
 
-    /// Close-range frames (seed 2026, not trained on) where the spinner fills the view and the
-    /// lines find nothing to rank: with the networks' verdict (`heat_verify_min`) more of them
-    /// are detected on the hub (139 against 128 of 150 when written), and frames without a
-    /// turbine gain no detection.
-    #[test]
-    fn the_networks_verdict_finds_close_hubs_the_lines_miss_and_no_turbine_where_there_is_none() {
+    /// Hits and false positives of two detectors on the same close-range frames (class 2, seed
+    /// 2026, every fourth without a turbine), each filmed by the renderer `pick` chooses for
+    /// it; a hit as `hubtrack eval` scores it: within 3 % of the height of the visible rotor
+    /// axis, from the hub's centre to the spinner's nose.
+    struct CloseRangeScore {
+        frames: usize,
+        hits: [usize; 2],
+        negatives: usize,
+        false_positives: [usize; 2],
+    }
+
+    fn score_close_range(
+        detectors: [&mut Detector; 2],
+        renderers: &mut [hubtrack_render::Renderer],
+        pick: impl Fn(&hubtrack_render::dataset::SynthCase) -> usize,
+        count: u64,
+    ) -> CloseRangeScore {
         use hubtrack_render::dataset::synth_case;
-        use hubtrack_render::{Camera, Renderer};
-        let on = DetectConfig::default();
-        assert!(
-            on.default.heat_verify_min < 1.0,
-            "the verdict is on by default"
-        );
-        let mut off = on.clone();
-        off.default.heat_verify_min = 1.0;
-        let (mut det_on, mut det_off) = (Detector::new(on).unwrap(), Detector::new(off).unwrap());
-        let mut renderers = [
-            Renderer::new(Camera::gopro_hero3()),
-            Renderer::new(Camera::usb_narrow()),
-        ];
-        let (mut frames, mut hits_on, mut hits_off, mut fp_on, mut fp_off, mut negatives) =
-            (0, 0, 0, 0, 0, 0);
-        for i in 0..200u64 {
+        let [a, b] = detectors;
+        let mut score = CloseRangeScore {
+            frames: 0,
+            hits: [0; 2],
+            negatives: 0,
+            false_positives: [0; 2],
+        };
+        for i in 0..count {
             let negative = i % 4 == 3;
             let case = synth_case(2026, 2, i, negative);
-            let r = &mut renderers[if case.wide { 0 } else { 1 }];
+            let r = &mut renderers[pick(&case)];
             let cam = *r.camera();
             let mut buf = vec![0u8; cam.frame_bytes()];
             let truth = r.render(&case.scene, &case.pose, &mut buf).unwrap();
@@ -1167,39 +1170,72 @@ mod tests {
                 roll_rad: Some(case.pose.roll_deg.to_radians()),
                 ..Hints::default()
             };
-            let (a, b) = (
-                det_on.detect(&view, &hints).unwrap().detection,
-                det_off.detect(&view, &hints).unwrap().detection,
-            );
-            // A hit as `hubtrack eval` scores it: within 3 % of the height of the visible rotor
-            // axis, from the hub's centre to the spinner's nose.
+            let found = [
+                a.detect(&view, &hints).unwrap().detection,
+                b.detect(&view, &hints).unwrap().detection,
+            ];
             let axis = truth
                 .hub_px
                 .zip(truth.nose_px)
                 .filter(|_| truth.turbine_in_view && !negative);
             match axis {
                 Some((hub, nose)) => {
-                    let hit = |d: &Detection| {
-                        d.detected
-                            && geometry::point_segment_distance(d.hub_px, hub, nose)
-                                <= 0.03 * cam.height as f64
-                    };
-                    frames += 1;
-                    hits_on += usize::from(hit(&a));
-                    hits_off += usize::from(hit(&b));
+                    score.frames += 1;
+                    for (k, d) in found.iter().enumerate() {
+                        score.hits[k] += usize::from(
+                            d.detected
+                                && geometry::point_segment_distance(d.hub_px, hub, nose)
+                                    <= 0.03 * cam.height as f64,
+                        );
+                    }
                 }
                 None if negative => {
-                    negatives += 1;
-                    fp_on += usize::from(a.detected);
-                    fp_off += usize::from(b.detected);
+                    score.negatives += 1;
+                    for (k, d) in found.iter().enumerate() {
+                        score.false_positives[k] += usize::from(d.detected);
+                    }
                 }
                 None => {}
             }
         }
-        eprintln!("close range: {hits_on} of {frames} hits with the verdict, {hits_off} without; negatives detected {fp_on} / {fp_off} of {negatives}");
+        score
+    }
+
+    /// Close-range frames (seed 2026, not trained on) where the spinner fills the view and the
+    /// lines find nothing to rank: with the networks' verdict (`heat_verify_min`) more of them
+    /// are detected on the hub (139 against 128 of 150 when written), and frames without a
+    /// turbine gain no detection.
+    #[test]
+    fn the_networks_verdict_finds_close_hubs_the_lines_miss_and_no_turbine_where_there_is_none() {
+        use hubtrack_render::{Camera, Renderer};
+        let on = DetectConfig::default();
         assert!(
-            frames >= 120 && negatives >= 40,
-            "{frames} frames, {negatives} negatives"
+            on.default.heat_verify_min < 1.0,
+            "the verdict is on by default"
+        );
+        let mut off = on.clone();
+        off.default.heat_verify_min = 1.0;
+        let (mut det_on, mut det_off) = (Detector::new(on).unwrap(), Detector::new(off).unwrap());
+        let mut renderers = [
+            Renderer::new(Camera::gopro_hero3()),
+            Renderer::new(Camera::usb_narrow()),
+        ];
+        let s = score_close_range(
+            [&mut det_on, &mut det_off],
+            &mut renderers,
+            |case| if case.wide { 0 } else { 1 },
+            200,
+        );
+        let ([hits_on, hits_off], [fp_on, fp_off]) = (s.hits, s.false_positives);
+        eprintln!(
+            "close range: {hits_on} of {} hits with the verdict, {hits_off} without; negatives detected {fp_on} / {fp_off} of {}",
+            s.frames, s.negatives
+        );
+        assert!(
+            s.frames >= 120 && s.negatives >= 40,
+            "{} frames, {} negatives",
+            s.frames,
+            s.negatives
         );
         assert!(
             hits_on >= hits_off + 7,
@@ -1218,7 +1254,6 @@ mod tests {
     /// without a turbine.
     #[test]
     fn the_crop_networks_wider_looks_find_close_hubs_through_a_narrow_lens() {
-        use hubtrack_render::dataset::synth_case;
         use hubtrack_render::{Camera, Renderer};
         use hubtrack_types::setup::{Lens, TurbineSetup};
         let camera = Camera::pinhole(1280, 720, 60.0);
@@ -1228,56 +1263,22 @@ mod tests {
         let mut off = on.clone();
         off.default.heat_verify_crop_zooms = 0;
         let (mut det_on, mut det_off) = (Detector::new(on).unwrap(), Detector::new(off).unwrap());
-        let mut renderer = Renderer::new(camera);
-        let (mut frames, mut hits_on, mut hits_off, mut fp_on, mut fp_off, mut negatives) =
-            (0, 0, 0, 0, 0, 0);
-        for i in 0..80u64 {
-            let negative = i % 4 == 3;
-            let case = synth_case(2026, 2, i, negative);
-            let mut buf = vec![0u8; camera.frame_bytes()];
-            let truth = renderer.render(&case.scene, &case.pose, &mut buf).unwrap();
-            let view = ImageView {
-                width: camera.width,
-                height: camera.height,
-                stride: camera.width as usize * 3,
-                format: PixelFormat::Bgr8,
-                data: &buf,
-            };
-            let hints = Hints {
-                roll_rad: Some(case.pose.roll_deg.to_radians()),
-                ..Hints::default()
-            };
-            let (a, b) = (
-                det_on.detect(&view, &hints).unwrap().detection,
-                det_off.detect(&view, &hints).unwrap().detection,
-            );
-            let axis = truth
-                .hub_px
-                .zip(truth.nose_px)
-                .filter(|_| truth.turbine_in_view && !negative);
-            match axis {
-                Some((hub, nose)) => {
-                    let hit = |d: &Detection| {
-                        d.detected
-                            && geometry::point_segment_distance(d.hub_px, hub, nose)
-                                <= 0.03 * camera.height as f64
-                    };
-                    frames += 1;
-                    hits_on += usize::from(hit(&a));
-                    hits_off += usize::from(hit(&b));
-                }
-                None if negative => {
-                    negatives += 1;
-                    fp_on += usize::from(a.detected);
-                    fp_off += usize::from(b.detected);
-                }
-                None => {}
-            }
-        }
-        eprintln!("60° lens close in: {hits_on} of {frames} hits with the wider looks, {hits_off} without; negatives detected {fp_on} / {fp_off} of {negatives}");
+        let s = score_close_range(
+            [&mut det_on, &mut det_off],
+            &mut [Renderer::new(camera)],
+            |_| 0,
+            80,
+        );
+        let ([hits_on, hits_off], [fp_on, fp_off]) = (s.hits, s.false_positives);
+        eprintln!(
+            "60° lens close in: {hits_on} of {} hits with the wider looks, {hits_off} without; negatives detected {fp_on} / {fp_off} of {}",
+            s.frames, s.negatives
+        );
         assert!(
-            frames >= 50 && negatives >= 15,
-            "{frames} frames, {negatives} negatives"
+            s.frames >= 50 && s.negatives >= 15,
+            "{} frames, {} negatives",
+            s.frames,
+            s.negatives
         );
         assert!(
             hits_on >= hits_off + 5,
