@@ -325,12 +325,11 @@ hubtrack_types::params! {
         /// hub: three blades 120° apart always have one 30° from both (20° at 45° of yaw or
         /// pitch), while roofs, chimney rims, a mast with its stays and field borders at the
         /// horizon meet at right angles. On the cross-domain sets' frames without a turbine it
-        /// takes false positives from 7.5 to 4.0 % in the held-out scenes (chimneys), 3.0 to 1.5 %
-        /// through the 60° lens, 7.0 to 5.0 % through the fisheye, hits unchanged (one of 1 260
-        /// lost, one gained).
-        /// Not while tracking: there it dropped close-in detections of the hub, and two of 240
-        /// `fly --random-setup` flights came within 3 m of the rotor. Degrees, range [0, 20];
-        /// 0 = off.
+        /// takes false positives from 7.5 to 4.0 % in the held-out scenes (chimneys), 3.0 to
+        /// 1.5 % through the 60° lens, 7.0 to 5.0 % through the fisheye, hits unchanged (one of
+        /// 1 260 lost, one gained). Not while tracking: there it dropped close-in detections of
+        /// the hub, and two of 240 `fly --random-setup` flights came within 3 m of the rotor.
+        /// Degrees, range [0, 20]; 0 = off.
         pub square_blades_max_deg: f64 = 10.0, closed(0.0, 20.0);
         /// Tower lines: maximum tilt from vertical after roll, degrees (larger than the thesis's
         /// because the wide lens bends lines and unknown roll is searched).
@@ -801,8 +800,8 @@ hubtrack_types::params! {
         /// `heat_verify_crop_zoom` times wider in turn, up to this many times, and takes the first
         /// look it is sure of (its allowed shift, `hub_crop_max_shift_frac`, wider by as much).
         /// Through a narrow lens or close in, the spinner fills the trained crop and the network
-        /// sees no hub in it: 1, 1.5, 2.25 and 3.4 times the crop take the close hits of the held-out
-        /// 60° camera from 63 to 78 % and of held-out turbines from 73 to 80 % (`eval
+        /// sees no hub in it: 1, 1.5, 2.25 and 3.4 times the crop take the close hits of the
+        /// held-out 60° camera from 63 to 78 % and of held-out turbines from 73 to 80 % (`eval
         /// --cross-domain`). Video frames only: on photos the still crop network's wider looks
         /// lose 5 of 43 hits. Range [0, 8]; 0 = the trained crop only.
         pub heat_verify_crop_zooms: u32 = 3, closed(0.0, 8.0);

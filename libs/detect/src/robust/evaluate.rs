@@ -233,18 +233,22 @@ pub(super) fn evaluate(sc: &SceneCtx<'_>, c: P2, spinner: Option<[f64; 3]>) -> C
     }
 }
 
+/// How far from the hub a blade's direction is undistorted, fraction of the working height:
+/// near the hub, where the blade's lines met, and far enough for a sub-degree direction.
+const BLADE_DIRECTION_STEP_FRAC: f64 = 0.1;
+
 /// Whether, without a tracker's prediction, two or more blades are seen at `c` and every one
 /// of them lies within `square_blades_max_deg` of the world's vertical or horizontal (the
 /// blades' image angles taken through the lens's undistortion when it bends straight lines,
-/// and the camera's roll removed). Three blades 120° apart always have one at least 30° from both (still 20° at 45°
-/// of relative yaw or of pitch), while a roof, a chimney's rim, a mast with its stays or field
-/// borders at the horizon meet at right angles.
+/// and the camera's roll removed). Three blades 120° apart always have one at least 30° from
+/// both (still 20° at 45° of relative yaw or of pitch), while a roof, a chimney's rim, a mast
+/// with its stays or field borders at the horizon meet at right angles.
 pub(super) fn square_blades(sc: &SceneCtx<'_>, c: P2, blades: &[Blade]) -> bool {
     let p = sc.p;
     let undistorted_angle = |a: f64| match &sc.camera {
         None => a,
         Some(cam) => {
-            let step = 0.1 * sc.h;
+            let step = BLADE_DIRECTION_STEP_FRAC * sc.h;
             let (s, co) = a.to_radians().sin_cos();
             let q0 = cam.undistort_pixel(c);
             let q1 = cam.undistort_pixel([c[0] + step * s, c[1] - step * co]);
