@@ -130,7 +130,12 @@ class GroundStation:
         end = time.monotonic() + seconds
         while True:
             self.stick()
-            msg = self.m.recv_match(blocking=True, timeout=max(0.0, end - time.monotonic()))
+            try:
+                msg = self.m.recv_match(blocking=True, timeout=max(0.0, end - time.monotonic()))
+            except (ConnectionResetError, BrokenPipeError):
+                # The autopilot restarted and reset the link: pymavlink has already reconnected
+                # (autoreconnect) but re-raises the reset, where a closed link (EOF) it does not.
+                msg = None
             # Only the autopilot's own messages: the firmware also routes control's HEARTBEAT here.
             if (msg is not None and msg.get_type() != "BAD_DATA"
                     and (msg.get_srcSystem(), msg.get_srcComponent()) == (1, 1)):
