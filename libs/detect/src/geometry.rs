@@ -179,6 +179,13 @@ pub fn ang_dist(a: f64, b: f64) -> f64 {
     wrap180(a - b).abs()
 }
 
+/// How far a direction (degrees, any convention whose axes are multiples of 90°) lies from the
+/// nearest image axis, vertical or horizontal: degrees in [0, 45].
+pub fn off_axes_deg(a: f64) -> f64 {
+    let r = a.rem_euclid(90.0);
+    r.min(90.0 - r)
+}
+
 /// Tilt of a segment from the *world* vertical, given the camera roll (clockwise positive, which
 /// makes the image content appear rotated counter-clockwise by the same angle). Degrees in
 /// (−90, 90].

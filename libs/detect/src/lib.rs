@@ -405,10 +405,7 @@ fn lines_allow_hub(
     // A mast's top or a field's corner, where the lines end along the vertical and the
     // horizontal only, is no rotor: three blades 120° apart always have one at least 30° from
     // both axes (20° under ±10° of roll).
-    let off_axes = |s: &Segment| {
-        let o = s.orientation_deg();
-        o.min(180.0 - o).min((o - 90.0).abs())
-    };
+    let off_axes = |s: &Segment| geometry::off_axes_deg(s.orientation_deg());
     let mut ending = lines
         .iter()
         .map(|(s, _)| s)
@@ -433,14 +430,15 @@ fn lines_allow_hub(
 /// The networks' verdict on a frame where the lines found no hub (see
 /// `default.heat_verify_min`): the heatmap's peak, placed and confirmed by the crop network;
 /// also over a detection the heatmap rates below `override_max` (`heat_override_max`, or
-/// `still_heat_override_max` for stills).
+/// `still_heat_override_max` for stills); `zooms`: how many wider crops the crop network may
+/// look through (`heat_verify_crop_zooms`, none for stills).
 fn verify_heat_peak(
     p: &params::DefaultParams,
     heat: &heat::Heatmap,
     net: &mut heat::HubCropNet,
     small: &Mat,
     override_max: f64,
-    still: bool,
+    zooms: u32,
     found: &mut Found,
 ) -> Result<(), DetectError> {
     if p.heat_verify_min >= 1.0 {
@@ -461,9 +459,8 @@ fn verify_heat_peak(
     let centre = [f[0] * w, f[1] * h];
     // The crop network was trained on crops of one size, where a spinner fills a few tenths of
     // them; through a narrower lens or close in, it fills the whole crop and the network sees
-    // no hub in it. It looks again through wider crops in turn (video frames only: on photos
-    // the still crop network's wider looks place hubs worse), taking the first it is sure of.
-    let zooms = if still { 0 } else { p.heat_verify_crop_zooms };
+    // no hub in it. It looks again through `zooms` wider crops in turn, taking the first it is
+    // sure of.
     let mut looked = None;
     for zoom in (0..=zooms).map(|i| p.heat_verify_crop_zoom.powi(i as i32)) {
         let peak = net.run_scaled(small, centre, zoom)?;
@@ -860,10 +857,15 @@ impl Detector {
                 place_hub_by_crop(&self.config.default, net, small, &mut found)?;
             }
             if let (None, Some(heat)) = (hints.predicted_hub_px, heatmap.as_ref()) {
-                let override_max = if still {
-                    self.config.default.still_heat_override_max
+                // Stills keep the crop network's trained crop: on the photos the still crop
+                // network's wider looks place hubs worse.
+                let (override_max, zooms) = if still {
+                    (self.config.default.still_heat_override_max, 0)
                 } else {
-                    self.config.default.heat_override_max
+                    (
+                        self.config.default.heat_override_max,
+                        self.config.default.heat_verify_crop_zooms,
+                    )
                 };
                 verify_heat_peak(
                     &self.config.default,
@@ -871,7 +873,7 @@ impl Detector {
                     net,
                     small,
                     override_max,
-                    still,
+                    zooms,
                     &mut found,
                 )?;
             }
@@ -1138,6 +1140,33 @@ mod tests {
         false_positives: [usize; 2],
     }
 
+    impl CloseRangeScore {
+        /// At least `frames` frames with a hub and `negatives` without one were scored, the
+        /// first detector (`what`) hits at least `gain` more hubs than the second and detects
+        /// no more frames without a turbine.
+        fn check(&self, what: &str, frames: usize, negatives: usize, gain: usize) {
+            let ([hits_on, hits_off], [fp_on, fp_off]) = (self.hits, self.false_positives);
+            eprintln!(
+                "{what}: {hits_on} of {} hits, {hits_off} without; negatives detected {fp_on} / {fp_off} of {}",
+                self.frames, self.negatives
+            );
+            assert!(
+                self.frames >= frames && self.negatives >= negatives,
+                "{} frames, {} negatives",
+                self.frames,
+                self.negatives
+            );
+            assert!(
+                hits_on >= hits_off + gain,
+                "{what}: {hits_on} hits against {hits_off}"
+            );
+            assert!(
+                fp_on <= fp_off,
+                "{what}: {fp_on} negatives detected against {fp_off}"
+            );
+        }
+    }
+
     fn score_close_range(
         detectors: [&mut Detector; 2],
         renderers: &mut [hubtrack_render::Renderer],
@@ -1220,31 +1249,13 @@ mod tests {
             Renderer::new(Camera::gopro_hero3()),
             Renderer::new(Camera::usb_narrow()),
         ];
-        let s = score_close_range(
+        score_close_range(
             [&mut det_on, &mut det_off],
             &mut renderers,
             |case| if case.wide { 0 } else { 1 },
             200,
-        );
-        let ([hits_on, hits_off], [fp_on, fp_off]) = (s.hits, s.false_positives);
-        eprintln!(
-            "close range: {hits_on} of {} hits with the verdict, {hits_off} without; negatives detected {fp_on} / {fp_off} of {}",
-            s.frames, s.negatives
-        );
-        assert!(
-            s.frames >= 120 && s.negatives >= 40,
-            "{} frames, {} negatives",
-            s.frames,
-            s.negatives
-        );
-        assert!(
-            hits_on >= hits_off + 7,
-            "verdict: {hits_on} hits against {hits_off}"
-        );
-        assert!(
-            fp_on <= fp_off,
-            "verdict: {fp_on} negatives detected against {fp_off}"
-        );
+        )
+        .check("close range with the verdict", 120, 40, 7);
     }
 
     /// Close-range frames through a narrower lens than any the networks were trained on (the
@@ -1263,31 +1274,13 @@ mod tests {
         let mut off = on.clone();
         off.default.heat_verify_crop_zooms = 0;
         let (mut det_on, mut det_off) = (Detector::new(on).unwrap(), Detector::new(off).unwrap());
-        let s = score_close_range(
+        score_close_range(
             [&mut det_on, &mut det_off],
             &mut [Renderer::new(camera)],
             |_| 0,
             80,
-        );
-        let ([hits_on, hits_off], [fp_on, fp_off]) = (s.hits, s.false_positives);
-        eprintln!(
-            "60° lens close in: {hits_on} of {} hits with the wider looks, {hits_off} without; negatives detected {fp_on} / {fp_off} of {}",
-            s.frames, s.negatives
-        );
-        assert!(
-            s.frames >= 50 && s.negatives >= 15,
-            "{} frames, {} negatives",
-            s.frames,
-            s.negatives
-        );
-        assert!(
-            hits_on >= hits_off + 5,
-            "wider looks: {hits_on} hits against {hits_off}"
-        );
-        assert!(
-            fp_on <= fp_off,
-            "wider looks: {fp_on} negatives detected against {fp_off}"
-        );
+        )
+        .check("60° lens close in with the wider looks", 50, 15, 5);
     }
 
     /// Video frames take the box first pyramid level (`default.box_first_level`), still photos

@@ -245,27 +245,23 @@ const BLADE_DIRECTION_STEP_FRAC: f64 = 0.1;
 /// with its stays or field borders at the horizon meet at right angles.
 pub(super) fn square_blades(sc: &SceneCtx<'_>, c: P2, blades: &[Blade]) -> bool {
     let p = sc.p;
-    let undistorted_angle = |a: f64| match &sc.camera {
-        None => a,
-        Some(cam) => {
+    if p.square_blades_max_deg <= 0.0 || sc.hints.predicted_hub_px.is_some() || blades.len() < 2 {
+        return false;
+    }
+    let undistorted_c = sc.camera.map(|cam| cam.undistort_pixel(c));
+    let undistorted_angle = |a: f64| match (&sc.camera, undistorted_c) {
+        (Some(cam), Some(q0)) => {
+            let d = geometry::dir_from_up_cw(a);
             let step = BLADE_DIRECTION_STEP_FRAC * sc.h;
-            let (s, co) = a.to_radians().sin_cos();
-            let q0 = cam.undistort_pixel(c);
-            let q1 = cam.undistort_pixel([c[0] + step * s, c[1] - step * co]);
-            (q1[0] - q0[0]).atan2(q0[1] - q1[1]).to_degrees()
+            let q1 = cam.undistort_pixel([c[0] + step * d[0], c[1] + step * d[1]]);
+            geometry::up_cw_deg([q1[0] - q0[0], q1[1] - q0[1]])
         }
+        _ => a,
     };
-    let off_axes = |a: f64| {
-        let r = (undistorted_angle(a) + sc.roll_deg).rem_euclid(90.0);
-        r.min(90.0 - r)
-    };
-    p.square_blades_max_deg > 0.0
-        && sc.hints.predicted_hub_px.is_none()
-        && blades.len() >= 2
-        && blades
-            .iter()
-            .take(ROTOR_BLADES)
-            .all(|b| off_axes(b.angle_deg) <= p.square_blades_max_deg)
+    blades.iter().take(ROTOR_BLADES).all(|b| {
+        geometry::off_axes_deg(undistorted_angle(b.angle_deg) + sc.roll_deg)
+            <= p.square_blades_max_deg
+    })
 }
 
 /// A long usable line passes through `c` (not ending near it): `c` lies on a tower, mast or wire.
