@@ -1112,6 +1112,9 @@ impl Approach {
             limit(v.min(cap), -c.max_backward_m_s, c.max_forward_m_s)
         };
         let vx_t = match cues.dist {
+            // Contradicted by the odometry, the reading is judged by backing away (see
+            // `shrink_check_probe_ratio`).
+            Some(_) if cues.not_shrinking.is_some_and(|n| n.back_away) => -c.search_backoff_m_s,
             Some(d) if !self.t1_active && !self.t2_active => t3_law(d),
             // Backing away from a hub that is too close is allowed in every task.
             Some(d) if d < c.target_distance_m - c.distance_tolerance_outer_m => t3_law(d).min(0.0),
@@ -1208,9 +1211,14 @@ impl Approach {
                 let (excess, flown) = cues
                     .not_shrinking
                     .map_or((0.0, 0.0), |n| (n.excess_m, n.flown_m));
-                format!(
-                    "T3: {d:.1} m by odometry; the track reads {excess:.1} m more after {flown:.1} m closer: no forward"
-                )
+                if cues.not_shrinking.is_some_and(|n| n.back_away) {
+                    // Short: the reason travels as 64 bytes.
+                    format!("T3: {d:.1} m by odometry, track +{excess:.1} m: backing away")
+                } else {
+                    format!(
+                        "T3: {d:.1} m by odometry; the track reads {excess:.1} m more after {flown:.1} m closer: no forward"
+                    )
+                }
             }
             (Some(d), true) if backoff_spent => format!(
                 "T3: still {d:.1} m after backing {:.1} m: no further back",

@@ -78,6 +78,26 @@ hubtrack_types::params! {
         /// Readings farther than this start no anchor, m: the check guards the last metres,
         /// where the view is filled by rotor parts. Range [0, 1000]; default 15.
         pub shrink_check_range_m: f64 = 15.0, closed(0.0, 1000.0);
+        /// A latched reading at least this many times what the odometry leaves, and beyond
+        /// `shrink_check_range_m`, is judged by backing away at `search_backoff_m_s` (0 = never:
+        /// the latch holds the vehicle in a hover until the readings agree again). From
+        /// `shrink_check_window_s` after the backing begins (the distance filter settles after
+        /// the jump), over a window of flight
+        /// (`shrink_check_m`, or `shrink_check_window_frac` of the reading), a reading that grows
+        /// by the distance flown (its slope against the odometry's distance within
+        /// `shrink_check_frac` of 1) lifts the latch and starts a new anchor; one that does not
+        /// ends the backing, and the latch holds. A confirmed anchor can itself be the wrong
+        /// one: `fly --random-setup` seeds 219 and 231 read 0.35–0.5× the truth from 34 m in,
+        /// confirmed an anchor ~8 m out, then read right (2.6× the odometry) at 21 m and hovered
+        /// against the latch until the time ran out. A right reading changes by the distance
+        /// flown, one off by a factor by that factor of it, and backing away is safe whichever
+        /// is right. A reading only a little beyond the odometry is not judged: a window's
+        /// change would be lost in its noise, and backing out of the readings' contradiction
+        /// and closing in again would repeat. Nor is one within the range: close in, where a
+        /// blade or the spinner is taken for the tower, backing away lost seed 191 its track
+        /// 5.3 m out (it ended 22° off axis; held there, it ends done). Range [0, 100];
+        /// default 1.5.
+        pub shrink_check_probe_ratio: f64 = 1.5, closed(0.0, 100.0);
         /// Relative yaw counted as "in front of the rotor", degrees: T2 is satisfied and Done may
         /// begin below it. Range (0, 45]; default 3.
         pub yaw_tolerance_deg: f64 = 3.0, open_closed(0.0, 45.0);

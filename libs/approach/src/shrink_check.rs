@@ -9,10 +9,12 @@
 //! read more the closer the vehicle comes: a simulated flight through a 640×480 USB lens read
 //! 7.6 m at 7.0 m, then 8.1 m at 5.5 m, then a re-acquired track 19 m at 5.3 m, and T3 flew
 //! the vehicle 1.2 m past the rotor plane. This check latches "no forward motion" as soon as a
-//! reading exceeds what the odometry allows, and lets go only when the readings agree with the
-//! odometry again, never on a timer (the turbine does not move, and the autopilot's position
-//! drifts far less than the detector errs): stuck in a hover is a failed approach, flying on
-//! is a crash.
+//! reading exceeds what the odometry allows, and lets go only on evidence, never on a timer
+//! (the turbine does not move, and the autopilot's position drifts far less than the detector
+//! errs): when the readings agree with the odometry again, or when, as the vehicle backs away,
+//! the reading grows by the distance flown, as only a right reading does
+//! (`shrink_check_probe_ratio`; the anchor was then the wrong one). Stuck in a hover is a failed
+//! approach, flying on is a crash.
 //!
 //! Pure and sans-IO: the controller feeds each step's reading and vehicle state and asks
 //! whether forward motion is allowed.
@@ -56,13 +58,67 @@ pub(crate) struct Contradiction {
     pub excess_m: f64,
     /// What the odometry says is left to the hub, m (plus the noise allowance).
     pub odometry_m: f64,
+    /// Back away to judge the reading by the flight (`shrink_check_probe_ratio`, not yet judged).
+    pub back_away: bool,
 }
 
-/// The check's state: the anchor and, once a reading contradicted it, the latch.
+/// The flight under the latch that judges the reading (see `shrink_check_probe_ratio`): a
+/// least-squares line through (odometry's distance, reading) pairs, kept as running sums.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Probe {
+    /// When the reading was found of another scale (the backing began).
+    since_ns: u64,
+    /// The odometry's distance at the first pair, m.
+    first_m: f64,
+    /// Pairs taken, and their sums: x, y, x·x, x·y (x the odometry's distance less `first_m`).
+    n: f64,
+    sx: f64,
+    sy: f64,
+    sxx: f64,
+    sxy: f64,
+    /// The judgement is made (and failed): no more backing.
+    spent: bool,
+}
+
+impl Probe {
+    fn new(since_ns: u64) -> Probe {
+        Probe {
+            since_ns,
+            first_m: f64::NAN,
+            n: 0.0,
+            sx: 0.0,
+            sy: 0.0,
+            sxx: 0.0,
+            sxy: 0.0,
+            spent: false,
+        }
+    }
+
+    fn add(&mut self, odometry_m: f64, reading_m: f64) {
+        if self.first_m.is_nan() {
+            self.first_m = odometry_m;
+        }
+        let x = odometry_m - self.first_m;
+        self.n += 1.0;
+        self.sx += x;
+        self.sy += reading_m;
+        self.sxx += x * x;
+        self.sxy += x * reading_m;
+    }
+
+    /// Metres of reading per metre of the odometry's distance.
+    fn slope(&self) -> f64 {
+        (self.n * self.sxy - self.sx * self.sy) / (self.n * self.sxx - self.sx * self.sx)
+    }
+}
+
+/// The check's state: the anchor and, once a reading contradicted it, the latch and the
+/// window the latched readings are being judged over.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct ShrinkCheck {
     anchor: Option<Anchor>,
     latched: Option<Contradiction>,
+    probe: Option<Probe>,
 }
 
 impl ShrinkCheck {
@@ -112,23 +168,59 @@ impl ShrinkCheck {
             self.latched.is_some()
         );
         if let Some(latched) = self.latched {
+            // Only a reading of another scale than the odometry's, and beyond the range the check
+            // guards, is judged by backing away: a window of flight tells the two apart (a small
+            // excess would be lost in the noise), and close in, where a blade or the spinner is
+            // taken for the tower, the vehicle holds where it is instead of backing out of its
+            // view (`fly --random-setup` seed 191 lost its track so, 5.3 m out). The filtered
+            // reading may take a few steps to get there after a jump.
+            if self.probe.is_none()
+                && c.shrink_check_probe_ratio > 0.0
+                && d > c.shrink_check_range_m
+                && d >= c.shrink_check_probe_ratio * (predicted + c.shrink_check_noise_m)
+            {
+                log::info!(
+                    "shrink check: the reading {d:.1} m is {:.1}× what the odometry leaves to the \
+                     anchor's hub ({predicted:.1} m): backing away to judge which is right",
+                    d / predicted.max(f64::EPSILON)
+                );
+                self.probe = Some(Probe::new(now));
+            }
             if excess <= c.shrink_check_noise_m {
                 self.latched = None;
+                self.probe = None;
                 self.anchor = Some(anchor_here);
+            } else if self.reading_follows_flight(c, now, d, predicted) {
+                // Backed away under the latch, the reading grew by the distance flown, as a
+                // right reading does and one off by a factor does not: the anchor was the wrong
+                // one. The reading starts a new, unconfirmed anchor.
+                log::info!(
+                    "shrink check: backed away under the latch, the reading {d:.1} m grew by the \
+                     distance flown, {excess:.1} m beyond the odometry: the anchor's {:.1} m \
+                     reading was the wrong one; going on with the track's distance",
+                    a.distance_m
+                );
+                self.latched = None;
+                self.probe = None;
+                self.anchor = (d <= c.shrink_check_range_m).then_some(anchor_here);
+                return None;
             } else {
                 self.latched = Some(Contradiction {
                     flown_m: flown.max(latched.flown_m),
                     excess_m: excess,
                     odometry_m: predicted + c.shrink_check_noise_m,
+                    back_away: self.probe.is_some_and(|p| !p.spent),
                 });
             }
             return self.latched;
         }
         if excess > allowed && a.confirmed(c) {
+            self.probe = None;
             self.latched = Some(Contradiction {
                 flown_m: flown,
                 excess_m: excess,
                 odometry_m: predicted + c.shrink_check_noise_m,
+                back_away: false,
             });
             return self.latched;
         }
@@ -184,5 +276,45 @@ impl ShrinkCheck {
             Some(a)
         };
         None
+    }
+
+    /// Judges the latched reading by the flight that backs away (see
+    /// `shrink_check_probe_ratio`): from `shrink_check_window_s` after the backing begins (the
+    /// distance filter settles after the jump), the line through (odometry's distance, reading)
+    /// pairs; once the odometry's distance spans a window (`shrink_check_m`, or
+    /// `shrink_check_window_frac` of the reading), true if its slope is within
+    /// `shrink_check_frac` of 1, else the probe is spent.
+    fn reading_follows_flight(
+        &mut self,
+        c: &ApproachConfig,
+        now: u64,
+        reading: f64,
+        odometry: f64,
+    ) -> bool {
+        let Some(p) = self.probe.as_mut().filter(|p| !p.spent) else {
+            return false;
+        };
+        if secs(p.since_ns, now) < c.shrink_check_window_s {
+            return false;
+        }
+        p.add(odometry, reading);
+        let window_m = c.shrink_check_m.max(c.shrink_check_window_frac * reading);
+        if (odometry - p.first_m).abs() < window_m {
+            return false;
+        }
+        let slope = p.slope();
+        let follows = (slope - 1.0).abs() <= c.shrink_check_frac;
+        log::info!(
+            "shrink check: backed away {:.1} m under the latch, the reading changed {slope:.2} m \
+             a metre{}",
+            odometry - p.first_m,
+            if follows {
+                ""
+            } else {
+                ": it is not the hub's distance; holding"
+            }
+        );
+        p.spent = !follows;
+        follows
     }
 }

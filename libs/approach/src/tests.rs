@@ -1051,10 +1051,7 @@ fn a_reacquired_track_that_reads_too_far_is_bounded_by_the_remembered_hub() {
     );
     let bounded = rig.log[mark..]
         .iter()
-        .filter(|o| {
-            o.reason
-                .starts_with("T3: 3.5 m by odometry; the track reads")
-        })
+        .filter(|o| o.reason.starts_with("T3: 3.5 m by odometry"))
         .count();
     assert!(bounded > 10, "{:?}", rig.log.last());
     // Past the check time too: the odometry still contradicts the track.
@@ -1969,6 +1966,84 @@ fn one_window_shrinking_as_flown_confirms_no_anchor() {
         one.vx_m_s <= 0.0 && one.reason.contains("by odometry"),
         "{one:?}"
     );
+}
+
+/// A confirmed anchor can itself be the wrong one: `fly --random-setup` seeds 219 and 231 read
+/// 0.35–0.5× the truth from 34 m in, confirmed an anchor ~8 m out, then read right at 21 m and
+/// hovered against the latch until the time ran out. Under the latch T3 backs away, and a
+/// reading that grows by the distance flown lifts it; with `shrink_check_probe_ratio` 0 the same
+/// flight stays held.
+#[test]
+fn a_right_reading_against_a_wrong_anchor_is_judged_by_backing_away() {
+    // The hub 34 m north of the start; readings 20 m short that shrink as flown confirm an
+    // anchor, then the right readings contradict it.
+    let wrong = |north: f64| 14.0 - north;
+    let right = |north: f64| 34.0 - north;
+    let run = |probe: bool| {
+        let c = ApproachConfig {
+            shrink_check_probe_ratio: if probe { 1.5 } else { 0.0 },
+            ..ApproachConfig::default()
+        };
+        let settle_s = c.shrink_check_window_s + 0.5;
+        let mut rig = Rig::with(c);
+        rig.fly_north(0.0, 6.0, wrong);
+        rig.vehicle = Some(vehicle_at(6.0));
+        let latched = rig.run(Some(track(0.0, 0.0, Some(right(6.0)), Some(0.0))), settle_s);
+        // Back 5 m: more than a window (0.15 of the 28 m reading).
+        rig.fly_north(6.0, 1.0, right);
+        rig.vehicle = Some(vehicle_at(1.0));
+        let after = rig.run(Some(track(0.0, 0.0, Some(right(1.0)), Some(0.0))), 1.0);
+        (latched, after)
+    };
+    let (latched, after) = run(true);
+    assert!(
+        latched.reason.contains("backing away") && latched.vx_m_s < -0.1,
+        "{latched:?}"
+    );
+    assert!(
+        after.vx_m_s > 0.1 && after.reason.contains("m to hub"),
+        "{after:?}"
+    );
+    let (latched, after) = run(false);
+    assert!(
+        latched.vx_m_s.abs() <= EPS && latched.reason.contains("by odometry"),
+        "{latched:?}"
+    );
+    assert!(
+        after.vx_m_s <= EPS && after.reason.contains("by odometry"),
+        "{after:?}"
+    );
+}
+
+/// The anchor right and the reading off by a factor (2.9× the truth once the vehicle came
+/// within 9 m, as a blade root taken for the tower reads): backed away under the latch, the
+/// reading grows by 2.9 m a metre, so the latch holds to the end, the vehicle no nearer the
+/// hub than where it latched.
+#[test]
+fn a_reading_off_by_a_factor_under_the_latch_never_lifts_it() {
+    let c = ApproachConfig::default();
+    let misread = std::cell::Cell::new(false);
+    let reading = |d: f64| {
+        misread.set(misread.get() || d < 9.0);
+        if misread.get() {
+            2.9 * d
+        } else {
+            d
+        }
+    };
+    let f = fly_reading(c.clone(), [25.0, 2.0, 1.0, 5.0], None, reading);
+    let latched = f
+        .reasons
+        .iter()
+        .position(|r| r.contains("backing away"))
+        .unwrap_or_else(|| panic!("never latched: {:?}", f.reasons));
+    assert!(
+        !f.reasons[latched..].iter().any(|r| r.contains("to hub")),
+        "the latch lifted: {:?}",
+        &f.reasons[latched..]
+    );
+    assert!(f.closest >= 8.0, "closest {:.2} m", f.closest);
+    assert_ne!(f.last.task, ApproachTask::Done);
 }
 
 /// A hover between two windows flown in (stopping to centre the hub) neither counts nor breaks
