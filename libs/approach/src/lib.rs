@@ -1208,10 +1208,10 @@ impl Approach {
                 track_reads(cues)
             ),
             (Some(d), true) if cues.not_shrinking.is_some() => {
-                let (excess, flown) = cues
+                let (excess, flown, back_away) = cues
                     .not_shrinking
-                    .map_or((0.0, 0.0), |n| (n.excess_m, n.flown_m));
-                if cues.not_shrinking.is_some_and(|n| n.back_away) {
+                    .map_or((0.0, 0.0, false), |n| (n.excess_m, n.flown_m, n.back_away));
+                if back_away {
                     // Short: the reason travels as 64 bytes.
                     format!("T3: {d:.1} m by odometry, track +{excess:.1} m: backing away")
                 } else {

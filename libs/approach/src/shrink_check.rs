@@ -69,7 +69,7 @@ struct Probe {
     /// When the reading was found of another scale (the backing began).
     since_ns: u64,
     /// The odometry's distance at the first pair, m.
-    first_m: f64,
+    first_m: Option<f64>,
     /// Pairs taken, and their sums: x, y, x·x, x·y (x the odometry's distance less `first_m`).
     n: f64,
     sx: f64,
@@ -84,7 +84,7 @@ impl Probe {
     fn new(since_ns: u64) -> Probe {
         Probe {
             since_ns,
-            first_m: f64::NAN,
+            first_m: None,
             n: 0.0,
             sx: 0.0,
             sy: 0.0,
@@ -94,16 +94,15 @@ impl Probe {
         }
     }
 
-    fn add(&mut self, odometry_m: f64, reading_m: f64) {
-        if self.first_m.is_nan() {
-            self.first_m = odometry_m;
-        }
-        let x = odometry_m - self.first_m;
+    /// Takes one pair; returns how far the odometry's distance has moved since the first, m.
+    fn add(&mut self, odometry_m: f64, reading_m: f64) -> f64 {
+        let x = odometry_m - *self.first_m.get_or_insert(odometry_m);
         self.n += 1.0;
         self.sx += x;
         self.sy += reading_m;
         self.sxx += x * x;
         self.sxy += x * reading_m;
+        x
     }
 
     /// Metres of reading per metre of the odometry's distance.
@@ -187,9 +186,7 @@ impl ShrinkCheck {
                 self.probe = Some(Probe::new(now));
             }
             if excess <= c.shrink_check_noise_m {
-                self.latched = None;
-                self.probe = None;
-                self.anchor = Some(anchor_here);
+                self.lift(Some(anchor_here));
             } else if self.reading_follows_flight(c, now, d, predicted) {
                 // Backed away under the latch, the reading grew by the distance flown, as a
                 // right reading does and one off by a factor does not: the anchor was the wrong
@@ -200,9 +197,7 @@ impl ShrinkCheck {
                      reading was the wrong one; going on with the track's distance",
                     a.distance_m
                 );
-                self.latched = None;
-                self.probe = None;
-                self.anchor = (d <= c.shrink_check_range_m).then_some(anchor_here);
+                self.lift((d <= c.shrink_check_range_m).then_some(anchor_here));
                 return None;
             } else {
                 self.latched = Some(Contradiction {
@@ -278,6 +273,13 @@ impl ShrinkCheck {
         None
     }
 
+    /// Lets go of the latch (and its probe); `anchor` is the reference from here.
+    fn lift(&mut self, anchor: Option<Anchor>) {
+        self.latched = None;
+        self.probe = None;
+        self.anchor = anchor;
+    }
+
     /// Judges the latched reading by the flight that backs away (see
     /// `shrink_check_probe_ratio`): from `shrink_check_window_s` after the backing begins (the
     /// distance filter settles after the jump), the line through (odometry's distance, reading)
@@ -297,9 +299,9 @@ impl ShrinkCheck {
         if secs(p.since_ns, now) < c.shrink_check_window_s {
             return false;
         }
-        p.add(odometry, reading);
+        let span_m = p.add(odometry, reading);
         let window_m = c.shrink_check_m.max(c.shrink_check_window_frac * reading);
-        if (odometry - p.first_m).abs() < window_m {
+        if span_m.abs() < window_m {
             return false;
         }
         let slope = p.slope();
@@ -307,7 +309,7 @@ impl ShrinkCheck {
         log::info!(
             "shrink check: backed away {:.1} m under the latch, the reading changed {slope:.2} m \
              a metre{}",
-            odometry - p.first_m,
+            span_m,
             if follows {
                 ""
             } else {
