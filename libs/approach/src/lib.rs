@@ -74,6 +74,20 @@ pub struct Transition {
     pub to: ApproachTask,
     /// Why (the new task's reason).
     pub reason: String,
+    /// Entering Done with the two turbine-heading estimates further apart than
+    /// `yaw_tolerance_outer_deg`: the station is only as square to the rotor as the estimate
+    /// that is right, and the crew should know.
+    pub heading_doubt: Option<HeadingDoubt>,
+}
+
+/// The relative yaw each turbine-heading estimate gives, degrees (see
+/// [`Transition::heading_doubt`]); the approach flies on their `net_heading_weight` mean.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeadingDoubt {
+    /// From the track's geometric yaw cues (hub–tower gap, nacelle).
+    pub geometric_deg: f64,
+    /// From the learned yaw network's readings.
+    pub network_deg: f64,
 }
 
 /// The setpoint of one controller step (body frame).
@@ -170,6 +184,8 @@ pub struct Approach {
     turbine_heading: Option<TurbineHeading>,
     /// The same from the learned yaw network's readings (see `net_heading_weight`).
     net_heading: Option<TurbineHeading>,
+    /// The relative yaws the two estimates gave at the last step, while both are established.
+    heading_split: Option<HeadingDoubt>,
     /// Filtered distance, m.
     dist_f: Option<f64>,
     /// `capture_ns` of the track last fed to the filters (a repeated track is not re-filtered).
@@ -388,6 +404,7 @@ impl Approach {
             yaw_f: None,
             turbine_heading: None,
             net_heading: None,
+            heading_split: None,
             dist_f: None,
             filter_capture_ns: None,
             t1_active: true,
@@ -507,6 +524,10 @@ impl Approach {
             from: self.task,
             to: task,
             reason: reason.clone(),
+            heading_doubt: self.heading_split.filter(|s| {
+                task == ApproachTask::Done
+                    && (s.geometric_deg - s.network_deg).abs() > self.config.yaw_tolerance_outer_deg
+            }),
         });
         if let Some(t) = &transition {
             log::debug!("approach: {:?} -> {:?}: {}", t.from, t.to, t.reason);
@@ -1454,6 +1475,7 @@ impl Approach {
         vehicle: Option<&VehicleState>,
         new: bool,
     ) -> Option<f64> {
+        self.heading_split = None;
         let c = &self.config;
         if c.turbine_heading_filter_s <= 0.0 {
             return None;
@@ -1544,21 +1566,27 @@ impl Approach {
         }
         let enough = |h: &&TurbineHeading| h.samples >= c.turbine_heading_min_samples;
         let h = self.turbine_heading.as_ref().filter(enough)?;
-        let heading = match self.net_heading.as_ref().filter(enough) {
+        let net = self.net_heading.as_ref().filter(enough);
+        let heading = match net {
             Some(n) => wrap_pi(
                 h.heading_rad + c.net_heading_weight * wrap_pi(n.heading_rad - h.heading_rad),
             ),
             None => h.heading_rad,
         };
-        let yaw = wrap_pi(heading - to_hub).to_degrees();
+        let relative_deg = |heading: f64| wrap_pi(heading - to_hub).to_degrees();
+        self.heading_split = net.map(|n| HeadingDoubt {
+            geometric_deg: relative_deg(h.heading_rad),
+            network_deg: relative_deg(n.heading_rad),
+        });
+        let yaw = relative_deg(heading);
         if new {
             log::debug!(
                 "turbine heading, frame {}: relative yaw {yaw:+.1} deg from {} samples (weight {:.2e}), the geometric one's {:+.1}, the network's {}; track yaw {} at {}",
                 t.stamps.seq,
                 h.samples,
                 h.weight,
-                wrap_pi(h.heading_rad - to_hub).to_degrees(),
-                self.net_heading.as_ref().map_or("-".into(), |n| format!("{:+.1} ({} samples)", wrap_pi(n.heading_rad - to_hub).to_degrees(), n.samples)),
+                relative_deg(h.heading_rad),
+                self.net_heading.as_ref().map_or("-".into(), |n| format!("{:+.1} ({} samples)", relative_deg(n.heading_rad), n.samples)),
                 if yaw_usable(t) { format!("{:+.1}", t.yaw_deg) } else { "-".into() },
                 if t.distance_valid { format!("{:.1} m", t.distance_m) } else { "-".into() },
             );

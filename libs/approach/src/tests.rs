@@ -91,6 +91,24 @@ fn check_output(out: &ApproachOutput, c: &ApproachConfig) {
     }
 }
 
+/// A vehicle with a valid attitude, heading 0.3 rad (the turbine-heading tests).
+fn attitude_vehicle() -> VehicleState {
+    VehicleState {
+        attitude_valid: true,
+        yaw_rad: 0.3,
+        ..vehicle(true)
+    }
+}
+
+/// A centred track at `dist` m with the geometric yaw `yaw` and the yaw network's reading `net`.
+fn track_with_net(dist: f64, yaw: f64, net: Option<f64>) -> TrackState {
+    TrackState {
+        net_yaw_valid: net.is_some(),
+        net_yaw_deg: net.unwrap_or(0.0),
+        ..track(0.0, 0.0, Some(dist), Some(yaw))
+    }
+}
+
 /// Drives the controller at 15 Hz; the track's capture time is the step time.
 struct Rig {
     ap: Approach,
@@ -344,7 +362,8 @@ fn t1_preempts_t2_preempts_t3() {
         Some(Transition {
             from: ApproachTask::CentreHub,
             to: ApproachTask::ReduceYaw,
-            reason: out.reason.clone()
+            reason: out.reason.clone(),
+            heading_doubt: None,
         })
     );
     let out = rig.run(Some(track(0.0, 0.0, Some(30.0), Some(10.0))), 1.0);
@@ -879,11 +898,7 @@ fn close_in_a_run_of_wrong_yaws_leaves_the_turbine_heading() {
             ..ApproachConfig::default()
         };
         let mut rig = Rig::with(c);
-        rig.vehicle = Some(VehicleState {
-            attitude_valid: true,
-            yaw_rad: 0.3,
-            ..vehicle(true)
-        });
+        rig.vehicle = Some(attitude_vehicle());
         rig.run(Some(track(0.0, 0.0, Some(20.0), Some(3.0))), 15.0);
         let far = rig.ap.heading_yaw(
             &track(0.0, 0.0, Some(20.0), Some(3.0)),
@@ -917,11 +932,7 @@ fn closer_than_the_hold_distance_the_turbine_heading_holds() {
             ..ApproachConfig::default()
         };
         let mut rig = Rig::with(c);
-        rig.vehicle = Some(VehicleState {
-            attitude_valid: true,
-            yaw_rad: 0.3,
-            ..vehicle(true)
-        });
+        rig.vehicle = Some(attitude_vehicle());
         rig.run(Some(track(0.0, 0.0, Some(20.0), Some(2.0))), 15.0);
         rig.run(Some(track(0.0, 0.0, Some(7.0), Some(9.0))), 10.0);
         rig.ap
@@ -943,22 +954,14 @@ fn closer_than_the_hold_distance_the_turbine_heading_holds() {
 /// reading leave it alone, and at weight 0 the geometric estimate flies alone.
 #[test]
 fn the_networks_turbine_heading_is_weighed_in() {
-    let with_net = |yaw: f64, net: Option<f64>| TrackState {
-        net_yaw_valid: net.is_some(),
-        net_yaw_deg: net.unwrap_or(0.0),
-        ..track(0.0, 0.0, Some(12.0), Some(yaw))
-    };
+    let with_net = |yaw: f64, net: Option<f64>| track_with_net(12.0, yaw, net);
     let run = |weight: f64| {
         let c = ApproachConfig {
             net_heading_weight: weight,
             ..ApproachConfig::default()
         };
         let mut rig = Rig::with(c);
-        rig.vehicle = Some(VehicleState {
-            attitude_valid: true,
-            yaw_rad: 0.3,
-            ..vehicle(true)
-        });
+        rig.vehicle = Some(attitude_vehicle());
         // The tower says 1°, the network −7°.
         rig.run(Some(with_net(1.0, Some(-7.0))), 5.0);
         let both = rig
@@ -988,11 +991,7 @@ fn the_networks_turbine_heading_is_weighed_in() {
         ..ApproachConfig::default()
     };
     let mut rig = Rig::with(c.clone());
-    rig.vehicle = Some(VehicleState {
-        attitude_valid: true,
-        yaw_rad: 0.3,
-        ..vehicle(true)
-    });
+    rig.vehicle = Some(attitude_vehicle());
     rig.run(Some(with_net(1.0, None)), 5.0);
     for _ in 1..c.turbine_heading_min_samples {
         rig.step(Some(with_net(1.0, Some(-7.0))));
@@ -1002,6 +1001,36 @@ fn the_networks_turbine_heading_is_weighed_in() {
         .heading_yaw(&with_net(1.0, None), rig.vehicle.as_ref(), false)
         .unwrap();
     assert!((few - 1.0).abs() < 0.1, "too few network samples: {few}");
+}
+
+/// Entering Done with the geometric and the network's turbine headings further apart than
+/// `yaw_tolerance_outer_deg`, the transition says so with both relative yaws (the control stage
+/// warns the crew); two estimates that agree, or one alone, raise no doubt.
+#[test]
+fn done_reports_two_turbine_headings_that_disagree() {
+    let at = |yaw: f64, net: Option<f64>| track_with_net(5.1, yaw, net);
+    let entering_done = |t: TrackState| {
+        let c = ApproachConfig::default();
+        let mut rig = Rig::with(c.clone());
+        rig.vehicle = Some(attitude_vehicle());
+        rig.run(Some(t), c.done_hold_s + 3.0);
+        assert_eq!(rig.ap.task(), ApproachTask::Done, "{:?}", rig.log.last());
+        rig.log
+            .iter()
+            .filter_map(|o| o.transition.as_ref())
+            .rfind(|tr| tr.to == ApproachTask::Done)
+            .unwrap()
+            .heading_doubt
+    };
+    // The tower says +5°, the network −3°: flown on 0.3 × 5 + 0.7 × (−3) = −0.6°, inside the
+    // tolerance, but 8° apart.
+    let doubt = entering_done(at(5.0, Some(-3.0))).expect("8° apart is a doubt");
+    assert!(
+        (doubt.geometric_deg - 5.0).abs() < 0.1 && (doubt.network_deg + 3.0).abs() < 0.1,
+        "{doubt:?}"
+    );
+    assert_eq!(entering_done(at(1.0, Some(-1.0))), None, "2° apart");
+    assert_eq!(entering_done(at(1.0, None)), None, "no network heading");
 }
 
 /// A vehicle at `north` m on the local frame's north axis, facing north, with position and

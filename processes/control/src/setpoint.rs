@@ -40,6 +40,13 @@ impl Controller {
         });
         if let Some(t) = &out.transition {
             log::info!("task {:?} → {:?}: {}", t.from, t.to, t.reason);
+            if let Some(d) = t.heading_doubt {
+                log::warn!(
+                    "done with the turbine heading in doubt: the geometric cues read the relative yaw as {:+.1}°, the yaw network as {:+.1}°; the station holds their weighted mean (control.approach.net_heading_weight) and is square to the rotor only if that is right",
+                    d.geometric_deg,
+                    d.network_deg
+                );
+            }
         }
         Setpoint {
             stamps: Stamps {
