@@ -184,7 +184,8 @@ pub struct Approach {
     turbine_heading: Option<TurbineHeading>,
     /// The same from the learned yaw network's readings (see `net_heading_weight`).
     net_heading: Option<TurbineHeading>,
-    /// The relative yaws the two estimates gave at the last step, while both are established.
+    /// The relative yaws the two estimates gave when the relative yaw was last worked out
+    /// (`heading_yaw`), if both were established then; read on entering Done.
     heading_split: Option<HeadingDoubt>,
     /// Filtered distance, m.
     dist_f: Option<f64>,
