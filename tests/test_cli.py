@@ -127,6 +127,23 @@ def test_track_prints_one_json_object_per_frame(runner, tmp_path):
     assert res.returncode != 0 and "--fps" in res.stderr
 
 
+def test_inputs_that_give_nothing_to_detect_or_track_are_errors(runner, tmp_path):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    (tmp_path / "notes").mkdir()
+    (tmp_path / "notes" / "readme.txt").write_text("no images here")
+    for folder in (empty, tmp_path / "notes"):
+        for cmd in (["detect"], ["track", "--fps", 10]):
+            res = runner.run("hubtrack", *cmd, folder)
+            assert res.returncode == 1 and f"{folder} holds no images" in res.stderr, (cmd, res.stderr)
+    missing, bad = tmp_path / "missing.png", tmp_path / "bad.png"
+    bad.write_bytes(b"not a png")
+    res = runner.run("hubtrack", "track", "--fps", 10, missing, bad)
+    lines = [json.loads(l) for l in res.stdout.splitlines()]
+    assert lines[0]["error"] == "no such file" and "cannot be read" in lines[1]["error"], lines
+    assert res.returncode == 1 and "none of the 2 input(s) could be read" in res.stderr, res.stderr
+
+
 def test_detect_hints_find_the_tower_at_close_range(runner, tmp_path):
     """The tower at close range (8 m), where its top and edges lie outside the fixed search window
     and a blade often stands beside it: a regression guard for the gradient scan and the width

@@ -232,3 +232,49 @@ def test_sample_recording_opens_with_independent_reader():
     for _, _, d in frames:
         img = cv2.imdecode(np.frombuffer(d.data, np.uint8), cv2.IMREAD_COLOR)
         assert img is not None and img.shape == (480, 640, 3)
+
+
+def test_what_the_stages_log_is_recorded_as_foxglove_log(runner, tmp_path):
+    """Every stage's log lines reach the recording on /log as `foxglove.Log` (protobuf): levels
+    as the official schema numbers them (an INFO start-up line, the WARNING of a refused raw
+    window), each stage named, stamped within the run."""
+    from foxglove_schemas_protobuf.Log_pb2 import Log
+    from mcap.reader import make_reader
+    from mcap_protobuf.decoder import DecoderFactory
+
+    rec = tmp_path / "log.mcap"
+    t0 = time.time_ns()
+    pipeline = runner.start("hubtrack", "run", "--record", rec, "--duration", "120",
+                            "--set", 'run.stages=["capture","detect","track","recorder"]',
+                            "--set", "recorder.raw_window_max_s=0",
+                            "--set", "capture.fps=10", "--set", "capture.max_frames=30", *USB)
+    time.sleep(1.5)
+    res = runner.run("hubtrack", "raw-window", "--seconds", "1", "--wait", "20")
+    assert res.returncode == 0, res.stderr
+    assert pipeline.wait(timeout=120) == 0, pipeline.stderr()[-3000:]
+    t1 = time.time_ns()
+
+    with open(rec, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        summary = reader.get_summary()
+        channel = next(c for c in summary.channels.values() if c.topic == "/log")
+        assert summary.schemas[channel.schema_id].name == "foxglove.Log"
+        assert channel.message_encoding == "protobuf"
+        decoded = [(m, d) for _, _, m, d in reader.iter_decoded_messages(topics=["/log"])]
+    assert decoded, "no log lines recorded"
+    lines = []
+    for m, d in decoded:
+        official = Log.FromString(m.data)
+        # The file's own schema and the official one read the same level, by the same name.
+        level_names = d.DESCRIPTOR.fields_by_name["level"].enum_type.values_by_number
+        assert level_names[d.level].name == Log.Level.Name(official.level)
+        assert t0 <= official.timestamp.ToNanoseconds() <= t1
+        assert official.file and official.line > 0 or "missing from the recording" in official.message
+        lines.append(official)
+    assert {line.name for line in lines} >= {"supervisor", "capture", "detect", "track", "recorder"}, \
+        sorted({line.name for line in lines})
+    assert any(line.level == Log.INFO and line.name == "recorder" and f"recording to {rec}" in line.message
+               for line in lines), [line.message for line in lines]
+    refused = [line for line in lines if "raw window refused" in line.message]
+    assert refused and all(line.level == Log.WARNING and line.name == "recorder" for line in refused), \
+        [(Log.Level.Name(line.level), line.message) for line in lines]

@@ -115,6 +115,15 @@ def test_replay_rejects_bad_files(runner, tmp_path):
     assert res.returncode != 0 and "holds no track states to replay" in res.stderr and "--into control" in res.stderr
     res = runner.run("hubtrack", "replay", ROOT / "recordings" / "demo.mcap", "--into", "detect,control")
     assert res.returncode != 0 and "must follow each other" in res.stderr
+    # A calibration that cannot describe the recorded frames is said before any stage starts
+    # (detect would refuse every frame, each after the replay's wait for an output).
+    usb = ROOT / "config" / "cameras" / "usb_narrow_640x480.yaml"
+    out = tmp_path / "never.mcap"
+    res = runner.run("hubtrack", "replay", ROOT / "recordings" / "flight.mcap", "--into", "detect,track",
+                     "--camera", usb, "-o", out, timeout=30)
+    assert res.returncode != 0 and "960x540 does not match the camera calibration (640x480)" in res.stderr, \
+        res.stderr
+    assert not out.exists() and not list(tmp_path.glob("never.mcap*"))
 
 
 @pytest.fixture(scope="module")

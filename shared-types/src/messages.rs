@@ -336,64 +336,119 @@ pub struct TrackState {
     pub profile_contradiction: bool,
 }
 
-/// A fixed-capacity ASCII text (NUL padded) for reasons and error messages in shared memory.
-#[repr(C)]
-#[derive(Clone, Copy, PartialEq, Eq, ZeroCopySend)]
-#[type_name("hubtrack::Text64")]
-pub struct Text64(pub [u8; 64]);
+/// Defines a fixed-capacity UTF-8 text type of `$n` bytes (NUL padded) for shared memory.
+macro_rules! fixed_text {
+    ($(#[$doc:meta])* $name:ident, $n:literal, $type_name:literal) => {
+        $(#[$doc])*
+        #[repr(C)]
+        #[derive(Clone, Copy, PartialEq, Eq, ZeroCopySend)]
+        #[type_name($type_name)]
+        pub struct $name(pub [u8; $n]);
 
-impl Default for Text64 {
-    fn default() -> Self {
-        Text64([0; 64])
-    }
-}
-
-impl Text64 {
-    /// Builds from a string, truncated at a char boundary to 64 bytes.
-    pub fn new(s: &str) -> Self {
-        let mut out = [0u8; 64];
-        let mut end = s.len().min(64);
-        while !s.is_char_boundary(end) {
-            end -= 1;
+        impl Default for $name {
+            fn default() -> Self {
+                $name([0; $n])
+            }
         }
-        out[..end].copy_from_slice(&s.as_bytes()[..end]);
-        Text64(out)
-    }
 
-    /// The text up to the first NUL.
-    pub fn as_str(&self) -> &str {
-        let end = self.0.iter().position(|&b| b == 0).unwrap_or(64);
-        // Built only from &str, cut at a char boundary; fall back to "" for foreign bytes.
-        std::str::from_utf8(&self.0[..end]).unwrap_or("")
-    }
+        impl $name {
+            #[doc = concat!("Builds from a string, truncated at a char boundary to ", stringify!($n), " bytes.")]
+            pub fn new(s: &str) -> Self {
+                let mut out = [0u8; $n];
+                let mut end = s.len().min($n);
+                while !s.is_char_boundary(end) {
+                    end -= 1;
+                }
+                out[..end].copy_from_slice(&s.as_bytes()[..end]);
+                $name(out)
+            }
+
+            /// The text up to the first NUL.
+            pub fn as_str(&self) -> &str {
+                let end = self.0.iter().position(|&b| b == 0).unwrap_or($n);
+                // Built only from &str, cut at a char boundary; fall back to "" for foreign bytes.
+                std::str::from_utf8(&self.0[..end]).unwrap_or("")
+            }
+        }
+
+        impl std::fmt::Debug for $name {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "{:?}", self.as_str())
+            }
+        }
+
+        impl Serialize for $name {
+            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                s.serialize_str(self.as_str())
+            }
+        }
+
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let s = String::deserialize(d)?;
+                Ok($name::new(&s))
+            }
+        }
+
+        impl JsonSchema for $name {
+            fn schema_name() -> std::borrow::Cow<'static, str> {
+                stringify!($name).into()
+            }
+            fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+                schemars::json_schema!({ "type": "string", "maxLength": $n })
+            }
+        }
+    };
 }
 
-impl std::fmt::Debug for Text64 {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{:?}", self.as_str())
-    }
+fixed_text!(
+    /// A fixed-capacity text (NUL padded) for names, reasons and error messages in shared memory.
+    Text64,
+    64,
+    "hubtrack::Text64"
+);
+
+fixed_text!(
+    /// A fixed-capacity text (NUL padded) for a log line in shared memory.
+    Text512,
+    512,
+    "hubtrack::Text512"
+);
+
+/// Severity of a [`LogLine`], numbered as `foxglove.Log.Level` numbers its values, so the
+/// recorder writes it unchanged.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[type_name("hubtrack::LogLevel")]
+pub enum LogLevel {
+    /// `debug!` and `trace!`.
+    Debug = 1,
+    /// `info!`.
+    #[default]
+    Info = 2,
+    /// `warn!`.
+    Warning = 3,
+    /// `error!`.
+    Error = 4,
 }
 
-impl Serialize for Text64 {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(self.as_str())
-    }
-}
-
-impl<'de> Deserialize<'de> for Text64 {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let s = String::deserialize(d)?;
-        Ok(Text64::new(&s))
-    }
-}
-
-impl JsonSchema for Text64 {
-    fn schema_name() -> std::borrow::Cow<'static, str> {
-        "Text64".into()
-    }
-    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
-        schemars::json_schema!({ "type": "string", "maxLength": 64 })
-    }
+/// One line a stage logged, as it printed it, for the recorder (`/log` in a recording).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("hubtrack::LogLine")]
+pub struct LogLine {
+    /// When it was logged, wall clock (ns since the Unix epoch).
+    pub realtime_ns: u64,
+    /// Severity.
+    pub level: LogLevel,
+    /// Source line of the log call (0: unknown).
+    pub line: u32,
+    /// The stage that logged it (`detect`, `control`, ...).
+    pub stage: Text64,
+    /// Source file of the log call, cut to 64 bytes.
+    pub file: Text64,
+    /// The message, cut to 512 bytes.
+    pub text: Text512,
 }
 
 /// Which task of the approach produced a setpoint.

@@ -183,6 +183,9 @@ macro_rules! params {
         }
 
         impl $name {
+            /// The section's keys, as they are spelt in a config file.
+            pub const KEYS: &'static [&'static str] = &[$(stringify!($field)),*];
+
             /// Checks every declared range; errors name `section.key` and the allowed range.
             pub fn check_ranges(&self, section: &str) -> Result<(), $crate::params::ParamError> {
                 #[allow(unused_variables)]

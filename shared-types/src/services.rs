@@ -177,5 +177,22 @@ pub const RAW_WINDOW: ServiceSpec = ServiceSpec {
     },
 };
 
+/// [`crate::LogLine`]s of every stage (many publishers), recorded on `/log`. A history of a
+/// few dozen lines: a recorder started after a stage still records how that stage started.
+pub const LOG: ServiceSpec = ServiceSpec {
+    channel: "log",
+    name: "hubtrack/log",
+    event_name: "hubtrack/log/event",
+    qos: Qos {
+        history_size: 32,
+        subscriber_max_buffer_size: 256,
+        subscriber_max_borrowed_samples: 4,
+        max_subscribers: 8,
+        max_publishers: 16,
+        max_nodes: 24,
+        safe_overflow: true,
+    },
+};
+
 /// All fixed-size result services, in pipeline order (frames excluded).
 pub const RESULT_SERVICES: [ServiceSpec; 5] = [DETECTIONS, TRACK, SETPOINTS, VEHICLE, STATUS];

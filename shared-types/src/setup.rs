@@ -82,6 +82,19 @@ params! {
     }
 }
 
+impl TurbineSetup {
+    /// The keys a turbine profile file must state: the dimensions the distance and the yaw are
+    /// computed from. A profile that leaves one out would fly on the thesis turbine's value.
+    pub const PROFILE_REQUIRED: [&'static str; 6] = [
+        "hub_height_m",
+        "rotor_radius_m",
+        "tower_top_diameter_m",
+        "tower_base_diameter_m",
+        "spinner_diameter_m",
+        "hub_overhang_m",
+    ];
+}
+
 impl CameraSetup {
     /// Checks every value and that the calibration file (if any) reads; errors name the key
     /// under `camera`.

@@ -202,8 +202,8 @@ pub struct Output {
 /// Errors of the detector.
 #[derive(Debug, thiserror::Error)]
 pub enum DetectError {
-    /// A configuration value is out of range.
-    #[error("invalid configuration: {0}")]
+    /// A configuration value is out of range (the message names the key).
+    #[error(transparent)]
     Config(#[from] params::ParamError),
     /// The image view does not describe its buffer (size, stride, length).
     #[error("bad image: {0}")]

@@ -76,9 +76,18 @@ impl DetectConfig {
         }
     }
 
-    /// Check every parameter's range; the error names the first offending key.
+    /// Check every parameter's range; the error names the first offending key (the calibration
+    /// file for a focal length read from it).
     pub fn validate(&self) -> Result<(), ParamError> {
-        self.camera.check_ranges("detect.camera")?;
+        self.camera.check_ranges("detect.camera").map_err(|e| {
+            match (self.camera.lens.calibration(), e.key.as_str()) {
+                (Some(_), "detect.camera.focal_length_per_width") => ParamError {
+                    key: "camera.calibration: fx / image_width".into(),
+                    ..e
+                },
+                _ => e,
+            }
+        })?;
         self.thesis.validate()?;
         self.default.validate()
     }

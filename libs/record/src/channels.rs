@@ -103,8 +103,8 @@ pub fn read(path: &Path) -> Result<Channels, ReadError> {
                 }
             }
             Some(_) => {}
-            // The images (`/frames`, `/frames/raw`) and the overlay.
-            None if topic.starts_with("/frames") => {}
+            // The images (`/frames`, `/frames/raw`), the overlay and the stages' log lines.
+            None if topic.starts_with("/frames") || topic == crate::log::LOG_TOPIC => {}
             None => *c.unknown_topics.entry(topic.to_string()).or_insert(0) += 1,
         }
     }

@@ -9,7 +9,8 @@
 //! - `/frames/header`: the [`hubtrack_types::FrameHeader`] of each frame (stamps and truth), JSON;
 //! - `/detections`, `/track`, `/setpoints`, `/vehicle`, `/status`: the stage messages, JSON with
 //!   an embedded JSON schema generated from the Rust types;
-//! - `/recorder`: the recorder's own counters, JSON.
+//! - `/recorder`: the recorder's own counters, JSON;
+//! - `/log`: every line the stages and the supervisor logged (`foxglove.Log`, protobuf: [`log`]).
 //!
 //! Every message's MCAP `sequence` is the frame `seq` it belongs to (truncated to 32 bits), so a
 //! gap is visible to any MCAP tool; `log_time` is the wall-clock receive time (epoch ns) and
@@ -27,6 +28,7 @@ pub mod flight;
 pub mod frame_payload;
 pub mod jpeg;
 pub mod latency;
+pub mod log;
 pub mod looming;
 pub mod raw_image;
 pub mod raw_window;

@@ -175,6 +175,7 @@ pub struct Recording {
     /// Where raw pixels go: `/frames` (raw encoding) or `/frames/raw` (raw copies beside JPEG).
     raw_channel: Option<u16>,
     overlay_channel: u16,
+    log_channel: u16,
     json_channels: BTreeMap<ChannelKind, u16>,
     scratch: Vec<u8>,
     /// Wall-clock minus monotonic ns, to turn monotonic stamps into MCAP publish times.
@@ -204,22 +205,35 @@ pub fn foxglove_encoding(f: PixelFormat) -> &'static str {
     }
 }
 
+/// Registers a protobuf channel on `topic` with the schema `name` (a `FileDescriptorSet`).
+fn add_protobuf_channel(
+    writer: &mut mcap::Writer<BufWriter<File>>,
+    path: &Path,
+    topic: &str,
+    name: &str,
+    descriptor: &[u8],
+) -> Result<u16, RecordError> {
+    let schema = writer
+        .add_schema(name, "protobuf", descriptor)
+        .map_err(|e| mcap_err(path, e))?;
+    writer
+        .add_channel(schema, topic, "protobuf", &BTreeMap::new())
+        .map_err(|e| mcap_err(path, e))
+}
+
 /// Registers a `foxglove.RawImage` channel on `topic`.
 fn add_raw_channel(
     writer: &mut mcap::Writer<BufWriter<File>>,
     path: &Path,
     topic: &str,
 ) -> Result<u16, RecordError> {
-    let schema = writer
-        .add_schema(
-            raw_image::SCHEMA_NAME,
-            "protobuf",
-            &raw_image::descriptor_set(),
-        )
-        .map_err(|e| mcap_err(path, e))?;
-    writer
-        .add_channel(schema, topic, "protobuf", &BTreeMap::new())
-        .map_err(|e| mcap_err(path, e))
+    add_protobuf_channel(
+        writer,
+        path,
+        topic,
+        raw_image::SCHEMA_NAME,
+        &raw_image::descriptor_set(),
+    )
 }
 
 impl Recording {
@@ -260,12 +274,7 @@ impl Recording {
                         compressed_video::descriptor_set(),
                     ),
                 };
-                let schema = writer
-                    .add_schema(name, "protobuf", &descriptor)
-                    .map_err(|e| mcap_err(path, e))?;
-                let id = writer
-                    .add_channel(schema, FRAMES_TOPIC, "protobuf", &no_meta)
-                    .map_err(|e| mcap_err(path, e))?;
+                let id = add_protobuf_channel(&mut writer, path, FRAMES_TOPIC, name, &descriptor)?;
                 Some((id, format))
             }
             None => None,
@@ -284,6 +293,13 @@ impl Recording {
         let overlay_channel = writer
             .add_channel(overlay_schema, OVERLAY_TOPIC, "json", &no_meta)
             .map_err(|e| mcap_err(path, e))?;
+        let log_channel = add_protobuf_channel(
+            &mut writer,
+            path,
+            crate::log::LOG_TOPIC,
+            crate::log::SCHEMA_NAME,
+            &crate::log::descriptor_set(),
+        )?;
         let mut json_channels = BTreeMap::new();
         for kind in ChannelKind::ALL {
             let schema = writer
@@ -302,6 +318,7 @@ impl Recording {
             compressed_channel,
             raw_channel,
             overlay_channel,
+            log_channel,
             json_channels,
             scratch: Vec::new(),
             realtime_offset_ns,
@@ -446,6 +463,32 @@ impl Recording {
             sequence: overlay.stamps.seq as u32,
             log_time,
             publish_time: self.to_realtime(overlay.stamps.publish_ns),
+        };
+        self.writer
+            .write_to_known_channel(&h, &self.scratch)
+            .map_err(|e| mcap_err(&self.path, e))
+    }
+
+    /// Writes a stage's log line to `/log` as `foxglove.Log`; its publish time is when it was
+    /// logged.
+    pub fn write_log(
+        &mut self,
+        line: &hubtrack_types::LogLine,
+        log_time: u64,
+    ) -> Result<(), RecordError> {
+        use prost::Message;
+        self.scratch.clear();
+        crate::log::to_message(line)
+            .encode(&mut self.scratch)
+            .map_err(|e| RecordError::Encode {
+                channel: crate::log::LOG_TOPIC.into(),
+                message: e.to_string(),
+            })?;
+        let h = MessageHeader {
+            channel_id: self.log_channel,
+            sequence: 0,
+            log_time,
+            publish_time: line.realtime_ns,
         };
         self.writer
             .write_to_known_channel(&h, &self.scratch)

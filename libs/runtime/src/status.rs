@@ -1,7 +1,9 @@
 //! The stage heartbeat: a [`StageStatus`] published every `run.status_interval_ms` on the status
 //! service. The supervisor uses it for liveness and `hubtrack status`; the recorder records it.
+//! Each beat of the loop also hands the stage's log lines to the recorder ([`LogForwarder`]).
 
 use crate::ipc::{Ipc, IpcError, MsgPublisher};
+use crate::logging::LogForwarder;
 use hubtrack_types::services::STATUS;
 use hubtrack_types::time::monotonic_ns;
 use hubtrack_types::{StageStatus, Text64};
@@ -12,6 +14,7 @@ pub struct StatusReporter {
     publisher: MsgPublisher<StageStatus>,
     interval_ns: u64,
     last_ns: u64,
+    logs: LogForwarder,
     /// The counters; the stage updates them, [`StatusReporter::tick`] publishes them.
     pub status: StageStatus,
 }
@@ -24,6 +27,7 @@ impl StatusReporter {
             publisher: MsgPublisher::new(node, &STATUS)?,
             interval_ns: interval_ms * 1_000_000,
             last_ns: 0,
+            logs: LogForwarder::new(node, stage)?,
             status: StageStatus {
                 stage: Text64::new(stage),
                 pid: std::process::id(),
@@ -39,8 +43,10 @@ impl StatusReporter {
         self.status.last_error = Text64::new(message);
     }
 
-    /// Publishes the status if the interval has passed.
+    /// Publishes the log lines logged since the last call, and the status if the interval has
+    /// passed. The stage's loop calls it on every turn.
     pub fn tick(&mut self) {
+        self.logs.forward();
         let now = monotonic_ns();
         if now.saturating_sub(self.last_ns) >= self.interval_ns {
             self.publish_now();
@@ -55,5 +61,6 @@ impl StatusReporter {
         if let Err(e) = self.publisher.publish(self.status) {
             log::warn!("status heartbeat not sent: {e}");
         }
+        self.logs.forward();
     }
 }

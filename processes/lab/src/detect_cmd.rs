@@ -2,7 +2,7 @@
 //! evaluation tools rely on: keep the keys).
 
 use anyhow::Context;
-use hubtrack_capture::images::{has_image_extension, read_image};
+use hubtrack_capture::images::{has_image_extension, read_image, IMAGE_EXTENSIONS};
 use hubtrack_detect::params::{DetectConfig, Mode};
 use hubtrack_detect::{Detector, Hints, ImageView, LineKind, Output};
 use hubtrack_runtime::config::ConfigArgs;
@@ -88,25 +88,38 @@ impl DetectArgs {
     }
 }
 
-/// Expands folders into their images (name order); files stay as given.
-pub fn expand(paths: &[PathBuf]) -> Vec<PathBuf> {
+/// Expands folders into their images (name order); files stay as given (a missing or
+/// unreadable one is reported on its own line). A folder that cannot be listed, or holds no
+/// image, is an error naming it: nothing would be detected on it, and silence would say so
+/// no better than an empty result.
+pub fn expand(paths: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     for p in paths {
         if p.is_dir() {
             let mut files: Vec<PathBuf> = std::fs::read_dir(p)
-                .map(|rd| {
-                    rd.filter_map(|e| e.ok().map(|e| e.path()))
-                        .filter(|f| f.is_file() && has_image_extension(f))
-                        .collect()
-                })
-                .unwrap_or_default();
+                .with_context(|| format!("listing {}", p.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| f.is_file() && has_image_extension(f))
+                .collect();
+            anyhow::ensure!(
+                !files.is_empty(),
+                "{} holds no images (files ending in .{})",
+                p.display(),
+                IMAGE_EXTENSIONS.join(", .")
+            );
             files.sort();
             out.extend(files);
         } else {
             out.push(p.clone());
         }
     }
-    out
+    Ok(out)
+}
+
+/// Reads one input image; a missing file says so rather than that it is no image.
+pub fn read_input(path: &Path) -> anyhow::Result<Mat> {
+    anyhow::ensure!(path.exists(), "no such file");
+    Ok(read_image(path)?)
 }
 
 /// A BGR8 OpenCV image as a detector view (no copy).
@@ -142,7 +155,7 @@ pub fn run(args: DetectArgs) -> anyhow::Result<()> {
     }
     let hints = args.hints();
     let (mut done, mut failed) = (0usize, 0usize);
-    for path in expand(&args.paths) {
+    for path in expand(&args.paths)? {
         let line = match detect_one(
             &mut det,
             &path,
@@ -177,10 +190,7 @@ fn detect_one(
     hints: &Hints,
     as_frame: bool,
 ) -> anyhow::Result<serde_json::Value> {
-    if !path.exists() {
-        anyhow::bail!("no such file");
-    }
-    let mat = read_image(path)?;
+    let mat = read_input(path)?;
     let view = view_of(&mat)?;
     let t = Instant::now();
     let out = if as_frame {

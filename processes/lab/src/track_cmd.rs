@@ -1,8 +1,7 @@
 //! `hubtrack track`: detect → track over an image sequence offline, with the same library code the
 //! stages run; one JSON object per frame on stdout (a contract: keep the keys).
 
-use crate::detect_cmd::{detector, expand, view_of, ModeArg};
-use hubtrack_capture::images::read_image;
+use crate::detect_cmd::{detector, expand, read_input, view_of, ModeArg};
 use hubtrack_detect::Hints;
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_track::Tracker;
@@ -48,10 +47,12 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     let mut tracker = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
     // As in the live pipeline, the tracker's newest state focuses the detector on the next frame.
     let mut last: Option<hubtrack_types::TrackState> = None;
-    for (i, path) in expand(&args.paths).into_iter().enumerate() {
+    let mut unreadable = 0usize;
+    let paths = expand(&args.paths)?;
+    for (i, path) in paths.iter().enumerate() {
         let capture_ns = (i as f64 / args.fps * 1e9).round() as u64;
         // An unreadable frame is a frame without detection: the track predicts through it.
-        let (detection, error) = match read_image(&path) {
+        let (detection, error) = match read_input(path) {
             Ok(mat) => {
                 let view = view_of(&mat)?;
                 // No IMU with a folder of images: no roll.
@@ -63,10 +64,11 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
                 (d, None)
             }
             Err(e) => {
+                unreadable += 1;
                 let mut d = Detection::default();
                 d.stamps.seq = i as u64;
                 d.stamps.capture_ns = capture_ns;
-                (d, Some(e.to_string()))
+                (d, Some(format!("{e:#}")))
             }
         };
         let t = tracker.update(&detection, None);
@@ -89,5 +91,10 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         }
         println!("{line}");
     }
+    // Each unreadable frame is on its own line above; a sequence of none is no track.
+    anyhow::ensure!(
+        unreadable < paths.len(),
+        "none of the {unreadable} input(s) could be read (each error is above)"
+    );
     Ok(())
 }

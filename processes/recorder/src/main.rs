@@ -25,12 +25,12 @@ use hubtrack_runtime::ipc::{FrameSubscriber, MsgSubscriber};
 use hubtrack_runtime::stage::{Stage, StageArgs};
 use hubtrack_runtime::status::StatusReporter;
 use hubtrack_types::services::{
-    DETECTIONS, FRAMES, OVERLAY, RAW_WINDOW, SETPOINTS, STATUS, TRACK, VEHICLE,
+    DETECTIONS, FRAMES, LOG, OVERLAY, RAW_WINDOW, SETPOINTS, STATUS, TRACK, VEHICLE,
 };
 use hubtrack_types::time::{monotonic_ns, realtime_ns};
 use hubtrack_types::{
-    DetectOverlay, Detection, FrameHeader, RawWindowRequest, Setpoint, StageStatus, TrackState,
-    VehicleState,
+    DetectOverlay, Detection, FrameHeader, LogLine, RawWindowRequest, Setpoint, StageStatus,
+    TrackState, VehicleState,
 };
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
@@ -76,6 +76,10 @@ enum Item {
     },
     Overlay {
         overlay: Box<DetectOverlay>,
+        log_time: u64,
+    },
+    Log {
+        line: Box<LogLine>,
         log_time: u64,
     },
 }
@@ -133,6 +137,7 @@ fn run() -> anyhow::Result<()> {
         &RAW_WINDOW,
         RAW_WINDOW.qos.subscriber_max_buffer_size,
     )?;
+    let logs = MsgSubscriber::<LogLine>::polling(&node, &LOG, LOG.qos.subscriber_max_buffer_size)?;
     let mut raw_window = RawWindow::new(cfg.raw_window_s, cfg.raw_window_max_s);
     let compressed = cfg.frame_encoding != FrameEncoding::Raw;
     let raw_every = cfg.raw_every;
@@ -148,7 +153,9 @@ fn run() -> anyhow::Result<()> {
         free_tx.send(Vec::new()).expect("pool fits its channel");
     }
     let mut packer = FramePacker::new(&cfg, free_rx)?;
-    let (queue_tx, queue_rx) = mpsc::sync_channel::<Item>(cfg.queue_frames + RESULT_BUFFER * 5);
+    let (queue_tx, queue_rx) = mpsc::sync_channel::<Item>(
+        cfg.queue_frames + RESULT_BUFFER * 5 + LOG.qos.subscriber_max_buffer_size,
+    );
     let (stats_tx, stats_rx) = mpsc::channel::<RecorderStats>();
     // Set once by the writer when the file can no longer be written (e.g. the disk is full).
     let writer_failed = Arc::new(OnceLock::<String>::new());
@@ -283,6 +290,18 @@ fn run() -> anyhow::Result<()> {
                 &queue_tx,
                 Item::Overlay {
                     overlay: Box::new(o),
+                    log_time: now,
+                },
+                &mut stats,
+                &mut status,
+            );
+        }
+
+        while let Some(line) = logs.receive()? {
+            enqueue(
+                &queue_tx,
+                Item::Log {
+                    line: Box::new(line),
                     log_time: now,
                 },
                 &mut stats,
@@ -609,6 +628,11 @@ fn write_items(
                     .map_or_else(|| rec.to_realtime(overlay.stamps.capture_ns), |(_, t)| *t);
                 rec.write_overlay(&overlay, image_time, log_time)
                     .context("writing an overlay")?;
+                stats.messages_recorded += 1;
+            }
+            Some(Item::Log { line, log_time }) => {
+                rec.write_log(&line, log_time)
+                    .context("writing a log line")?;
                 stats.messages_recorded += 1;
             }
             None => {}

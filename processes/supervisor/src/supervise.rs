@@ -11,6 +11,7 @@ use crate::launch::{signal, stage_binary, Stage};
 use anyhow::bail;
 use hubtrack_runtime::config::{ConfigArgs, RestartPolicy, RunConfig};
 use hubtrack_runtime::ipc::{open_node, MsgPublisher, MsgSubscriber};
+use hubtrack_runtime::logging::LogForwarder;
 use hubtrack_runtime::shutdown::Shutdown;
 use hubtrack_types::services::{STATUS, SUPERVISOR};
 use hubtrack_types::time::monotonic_ns;
@@ -312,6 +313,8 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
     let node = open_node("supervisor")?;
     let heartbeats = MsgSubscriber::<StageStatus>::new(&node, &STATUS, 64)?;
     let status_pub = MsgPublisher::<SupervisorStatus>::new(&node, &SUPERVISOR)?;
+    // What the supervisor says of the stages (starts, crashes, restarts) goes into the recording.
+    let mut logs = LogForwarder::new(&node, "supervisor")?;
     let mut last_status: BTreeMap<String, StageStatus> = BTreeMap::new();
 
     let names: Vec<&'static str> = PIPELINE_ORDER
@@ -374,6 +377,7 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
         let t0 = Instant::now();
         loop {
             drain(&heartbeats, &mut sup, &mut last_status)?;
+            logs.forward();
             if sup.stages[i].last_heartbeat.is_some() || shutdown.requested() {
                 break;
             }
@@ -407,6 +411,7 @@ pub fn supervise(opts: RunOptions) -> anyhow::Result<RunReport> {
     {
         std::thread::sleep(TICK);
         drain(&heartbeats, &mut sup, &mut last_status)?;
+        logs.forward();
         let now = Instant::now();
         for i in 0..sup.stages.len() {
             let s = &mut sup.stages[i];

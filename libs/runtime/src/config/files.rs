@@ -60,11 +60,14 @@ impl ConfigDoc {
     }
 }
 
-/// Reads and checks a turbine profile: a TOML file of `[turbine]` keys (without `profile`).
+/// Reads and checks a turbine profile: a TOML file of `[turbine]` keys (without `profile`)
+/// stating at least [`TurbineSetup::PROFILE_REQUIRED`]. Keys that are not `[turbine]` keys (a
+/// datasheet's rated power, a manufacturer) are left out with a warning naming them: a profile
+/// describes a turbine, and may say more of it than hubtrack uses.
 fn read_profile(path: &Path) -> Result<toml::Table, ConfigError> {
     let origin = format!("turbine profile {}", path.display());
     let text = read_bounded(path)?;
-    let table = text
+    let mut table = text
         .parse::<toml::Table>()
         .map_err(|e| ConfigError::Invalid {
             origin: origin.clone(),
@@ -78,7 +81,46 @@ fn read_profile(path: &Path) -> Result<toml::Table, ConfigError> {
             message: "a profile cannot name another profile".into(),
         });
     }
-    // Strict parse: an unknown or misspelt key is an error naming the profile, not the config.
+    let unused: Vec<String> = table
+        .keys()
+        .filter(|k| !TurbineSetup::KEYS.contains(&k.as_str()))
+        .cloned()
+        .collect();
+    let missing: Vec<&str> = TurbineSetup::PROFILE_REQUIRED
+        .into_iter()
+        .filter(|k| !table.contains_key(*k))
+        .collect();
+    if !missing.is_empty() {
+        let instead = if unused.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; it has {}, which no [turbine] key is called",
+                unused.join(", ")
+            )
+        };
+        return Err(ConfigError::Invalid {
+            origin,
+            key: missing.join(", "),
+            message: format!(
+                "missing: a turbine profile states {} (m){instead}",
+                TurbineSetup::PROFILE_REQUIRED.join(", ")
+            ),
+        });
+    }
+    if !unused.is_empty() {
+        log::warn!(
+            "{origin}: not used (no such [turbine] key): {}; the keys are {}",
+            unused.join(", "),
+            TurbineSetup::KEYS
+                .iter()
+                .filter(|k| **k != "profile")
+                .copied()
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        table.retain(|k, _| TurbineSetup::KEYS.contains(&k));
+    }
     let parsed: TurbineSetup = serde_path_to_error::deserialize(toml::Value::Table(table.clone()))
         .map_err(|e| ConfigError::Invalid {
             origin: origin.clone(),

@@ -204,14 +204,18 @@ fn every_shipped_turbine_profile_reads() {
     assert!(n >= 3, "{n} profiles");
 }
 
+/// A profile stating the keys every profile states.
+const PROFILE: &str = "hub_height_m = 80.0\nrotor_radius_m = 40.0\ntower_top_diameter_m = 3.0\n\
+                       tower_base_diameter_m = 4.0\nspinner_diameter_m = 3.0\nhub_overhang_m = 4.0\n";
+
 #[test]
 fn a_profile_replaces_the_config_files_turbine_keys() {
     let dir = temp_dir("replace");
-    std::fs::write(dir.join("p.toml"), "tower_top_diameter_m = 3.0\n").unwrap();
+    std::fs::write(dir.join("p.toml"), PROFILE).unwrap();
     // A relative profile path in a config file is relative to the file.
     std::fs::write(
         dir.join("c.toml"),
-        "[turbine]\nprofile = \"p.toml\"\ntower_top_diameter_m = 2.0\nspinner_diameter_m = 2.5\n",
+        "[turbine]\nprofile = \"p.toml\"\ntower_top_diameter_m = 2.0\nnacelle_width_m = 2.5\n",
     )
     .unwrap();
     let args = ConfigArgs {
@@ -221,7 +225,7 @@ fn a_profile_replaces_the_config_files_turbine_keys() {
     let s: SetupSections = args.load().unwrap();
     assert_eq!(s.turbine.tower_top_diameter_m, 3.0);
     assert_eq!(
-        s.turbine.spinner_diameter_m, 2.5,
+        s.turbine.nacelle_width_m, 2.5,
         "keys the profile lacks stay"
     );
     std::fs::remove_dir_all(&dir).ok();
@@ -231,7 +235,16 @@ fn a_profile_replaces_the_config_files_turbine_keys() {
 fn bad_profiles_and_calibrations_are_named() {
     let dir = temp_dir("bad");
     std::fs::write(dir.join("typo.toml"), "tower_top_diamter_m = 3.0\n").unwrap();
-    std::fs::write(dir.join("range.toml"), "spinner_diameter_m = 99.0\n").unwrap();
+    std::fs::write(
+        dir.join("range.toml"),
+        PROFILE.replace("spinner_diameter_m = 3.0", "spinner_diameter_m = 99.0"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("short.toml"),
+        PROFILE.replace("hub_overhang_m = 4.0\n", ""),
+    )
+    .unwrap();
     std::fs::write(dir.join("cal.yaml"), "image_width: 640\n").unwrap();
     let err = |args: ConfigArgs| args.load::<SetupSections>().unwrap_err().to_string();
     let typo = err(ConfigArgs {
@@ -241,6 +254,14 @@ fn bad_profiles_and_calibrations_are_named() {
     assert!(
         typo.contains("typo.toml") && typo.contains("tower_top_diamter_m"),
         "{typo}"
+    );
+    let short = err(ConfigArgs {
+        turbine: Some(dir.join("short.toml")),
+        ..Default::default()
+    });
+    assert!(
+        short.contains("short.toml") && short.contains("`hub_overhang_m`: missing"),
+        "{short}"
     );
     let range = err(ConfigArgs {
         turbine: Some(dir.join("range.toml")),
@@ -260,6 +281,21 @@ fn bad_profiles_and_calibrations_are_named() {
         cal.contains("camera.calibration") && cal.contains("image_height"),
         "{cal}"
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_profiles_keys_hubtrack_does_not_use_are_left_out() {
+    let dir = temp_dir("datasheet");
+    let text = format!("{PROFILE}manufacturer = \"Acme\"\nrated_power_kw = 2000\n");
+    std::fs::write(dir.join("p.toml"), text).unwrap();
+    let args = ConfigArgs {
+        turbine: Some(dir.join("p.toml")),
+        ..Default::default()
+    };
+    let s: SetupSections = args.load().unwrap();
+    assert_eq!(s.turbine.hub_height_m, 80.0);
+    assert_eq!(s.turbine.tower_top_diameter_m, 3.0);
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -123,6 +123,8 @@ pub struct Survey {
     pub topics: BTreeMap<String, u64>,
     /// Why reading stopped early, if it did.
     pub stopped: Option<String>,
+    /// The size of the first frame, when frames drive the first stage.
+    pub frame_size: Option<(u32, u32)>,
 }
 
 /// Only the stamps of a result message.
@@ -141,6 +143,11 @@ pub fn survey(path: &Path, first: FirstStage) -> anyhow::Result<Survey> {
         let kind = ChannelKind::from_topic(topic);
         if kind == Some(first.driver_channel()) {
             s.drivers += 1;
+            if kind == Some(ChannelKind::FrameHeader) && s.frame_size.is_none() {
+                s.frame_size = serde_json::from_slice::<FrameHeader>(&m.data)
+                    .ok()
+                    .map(|h| (h.width, h.height));
+            }
         }
         if kind == Some(first.output()) {
             if let Ok(o) = serde_json::from_slice::<StampsOnly>(&m.data) {

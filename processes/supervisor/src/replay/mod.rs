@@ -247,6 +247,27 @@ fn start_stages(
     Ok(processes)
 }
 
+hubtrack_runtime::sections! {
+    /// The camera section, to check the recording's frames against its calibration.
+    struct CameraSection { camera: hubtrack_types::setup::CameraSetup }
+}
+
+/// A calibration that cannot describe the recorded frames is said before any stage starts:
+/// detect would refuse every frame, each after the replay's wait for an output.
+fn check_calibration_fits(args: &ReplayArgs, width: u32, height: u32) -> anyhow::Result<()> {
+    let section: CameraSection = args.config.load()?;
+    if let Some(calibration) = section.camera.calibrated()? {
+        calibration.scaled_to(width, height).map_err(|e| {
+            anyhow::anyhow!(
+                "{}: its frames cannot be detected with {}: {e}",
+                args.file.display(),
+                section.camera.calibration
+            )
+        })?;
+    }
+    Ok(())
+}
+
 /// Runs the command.
 pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     let stages = chosen_stages(&args.into)?;
@@ -282,6 +303,9 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
             first.name(),
             survey.topics.keys().collect::<Vec<_>>()
         );
+    }
+    if let Some((width, height)) = survey.frame_size {
+        check_calibration_fits(&args, width, height)?;
     }
     let mut reader = Reader::open(&args.file, first)?;
 
