@@ -116,6 +116,11 @@ def test_replay_never_writes_over_its_input_or_an_existing_file(recording, tmp_p
     res = r.run("hubtrack", "replay", rec, "--into", "detect", "-o", link, timeout=60)
     assert res.returncode == 1 and "is the recording being replayed" in res.stderr, res.stderr
     assert rec.read_bytes() == before
+    folder = tmp_path / "out"
+    folder.mkdir()
+    res = r.run("hubtrack", "replay", rec, "--into", "detect", "-o", folder, "--force", timeout=60)
+    assert res.returncode == 1 and f"-o {folder} is a folder" in res.stderr, res.stderr
+    assert not list(tmp_path.glob("out.partial*")) and not list(folder.iterdir())
     existing = tmp_path / "existing.mcap"
     existing.write_bytes(b"keep me")
     res = r.run("hubtrack", "replay", rec, "--into", "detect", "-o", existing, timeout=60)

@@ -6,8 +6,13 @@ use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 hubtrack_runtime::sections! {
-    /// What the capture stage reads.
-    pub struct CaptureSections { capture: CaptureConfig }
+    /// What the capture stage reads: its own section, and the camera and turbine the synthetic
+    /// camera films when files name them.
+    pub struct CaptureSections {
+        capture: CaptureConfig,
+        camera: hubtrack_types::setup::CameraSetup,
+        turbine: hubtrack_types::setup::TurbineSetup,
+    }
 }
 
 /// Which frame source the capture stage uses.
@@ -136,7 +141,7 @@ pub enum SyntheticCamera {
 params! {
     /// `[capture.synthetic]`: a scripted camera path in front of a rendered turbine.
     pub struct SyntheticConfig {
-        /// Lens.
+        /// Lens, unless `[camera] calibration` names one (see `synthetic::Filming`).
         pub camera: SyntheticCamera = SyntheticCamera::Gopro;
         /// Seed of the scene (sky, ground, sun, effects); the same seed gives the same frames.
         pub seed: u64 = 1;

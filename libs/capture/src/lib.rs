@@ -224,7 +224,10 @@ pub trait FrameSource {
 }
 
 /// Opens the source selected by `config.source`, with a clear error when it cannot be used.
-pub fn open_source(config: &CaptureConfig) -> Result<Box<dyn FrameSource>, CaptureError> {
+pub fn open_source(
+    config: &CaptureConfig,
+    filming: &synthetic::Filming,
+) -> Result<Box<dyn FrameSource>, CaptureError> {
     Ok(match config.source {
         SourceKind::V4l => Box::new(v4l_source::V4lSource::open(&config.v4l)?),
         SourceKind::Video => Box::new(video::VideoSource::open(
@@ -235,10 +238,9 @@ pub fn open_source(config: &CaptureConfig) -> Result<Box<dyn FrameSource>, Captu
             &config.images.path,
             config.looping,
         )?),
-        SourceKind::Synthetic => Box::new(synthetic::SyntheticSource::new(
-            &config.synthetic,
-            config.fps,
-        )?),
+        SourceKind::Synthetic => Box::new(
+            synthetic::SyntheticSource::new(&config.synthetic, config.fps)?.filming(filming),
+        ),
     })
 }
 

@@ -6,6 +6,7 @@
 use crate::config::{SyntheticCamera, SyntheticConfig};
 use crate::{CaptureError, FrameInfo, FrameSink, FrameSource, Step};
 use hubtrack_render::{Camera, CameraPose, Renderer, Scene, Truth};
+use hubtrack_types::setup::{CameraSetup, TurbineSetup};
 use hubtrack_types::{FrameSourceKind, FrameTruth, PixelFormat};
 use std::f64::consts::TAU;
 
@@ -61,7 +62,42 @@ pub struct SyntheticSource {
     cache: Vec<(Vec<u8>, FrameTruth)>,
 }
 
+/// What the synthetic camera films beyond its own settings: the lens of a calibration file
+/// (`--camera`) instead of `capture.synthetic.camera`'s, and the turbine of a profile
+/// (`--turbine`) instead of the renderer's own, so that detect and track, given the same files,
+/// see what they are told they see.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Filming {
+    /// The calibrated lens, when `[camera] calibration` names one.
+    pub lens: Option<Camera>,
+    /// The turbine, when `[turbine] profile` names one.
+    pub turbine: Option<TurbineSetup>,
+}
+
+impl Filming {
+    /// The calibration and the profile of `[camera]` and `[turbine]`, where files are named.
+    pub fn of(camera: &CameraSetup, turbine: &TurbineSetup) -> Result<Filming, CaptureError> {
+        Ok(Filming {
+            lens: camera
+                .calibrated()
+                .map_err(|e| CaptureError::Render(format!("camera calibration: {e}")))?,
+            turbine: (!turbine.profile.is_empty()).then(|| turbine.clone()),
+        })
+    }
+}
+
 impl SyntheticSource {
+    /// The same source filming through `filming`'s lens and turbine, where it names them.
+    pub fn filming(mut self, filming: &Filming) -> SyntheticSource {
+        if let Some(lens) = filming.lens {
+            self.renderer = Renderer::new(lens);
+        }
+        if let Some(t) = &filming.turbine {
+            hubtrack_sim::show_turbine(&mut self.scene, t);
+        }
+        self
+    }
+
     /// A source for `cfg` at `fps` frames per simulated second.
     pub fn new(cfg: &SyntheticConfig, fps: f64) -> Result<SyntheticSource, CaptureError> {
         let camera = match cfg.camera {

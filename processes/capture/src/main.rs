@@ -6,6 +6,7 @@ use clap::Parser;
 use hubtrack_capture::config::{CaptureSections, Pace};
 use hubtrack_capture::pacing::Pacer;
 use hubtrack_capture::sink::ShmSink;
+use hubtrack_capture::synthetic::Filming;
 use hubtrack_capture::{open_source, Step};
 use hubtrack_runtime::ipc::{cleanup_dead_nodes, FramePublisher};
 use hubtrack_runtime::stage::{Stage, StageArgs};
@@ -40,7 +41,8 @@ fn run() -> anyhow::Result<()> {
         return Ok(());
     };
     let cfg = &config.capture;
-    let mut source = open_source(cfg)?;
+    let filming = Filming::of(&config.camera, &config.turbine)?;
+    let mut source = open_source(cfg, &filming)?;
     log::info!("source: {}", source.describe());
     let publisher = FramePublisher::new(&node, source.max_frame_len())?;
     let mut sink = ShmSink::new(publisher, source.kind());

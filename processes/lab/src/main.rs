@@ -20,7 +20,7 @@ mod turbine_family;
 
 use anyhow::{bail, Context};
 use clap::{Parser, Subcommand};
-use hubtrack_capture::synthetic::SyntheticSource;
+use hubtrack_capture::synthetic::{Filming, SyntheticSource};
 use hubtrack_runtime::config::ConfigArgs;
 use hubtrack_supervisor::tools::show;
 use std::path::{Path, PathBuf};
@@ -133,7 +133,9 @@ fn diagnose(file: &Path, json: bool) -> anyhow::Result<()> {
 fn render(args: RenderArgs) -> anyhow::Result<()> {
     use opencv::prelude::*;
     let config = config::load(&args.config)?;
-    let mut source = SyntheticSource::new(&config.capture.synthetic, config.capture.fps)?;
+    let filming = Filming::of(&config.camera, &config.turbine)?;
+    let mut source =
+        SyntheticSource::new(&config.capture.synthetic, config.capture.fps)?.filming(&filming);
     let (w, h) = source.size();
     let mut pixels = vec![0u8; w as usize * h as usize * 3];
     let ext = args

@@ -21,6 +21,13 @@ pub fn check(input: &Path, output: &Path, force: bool) -> anyhow::Result<()> {
             input.display()
         );
     }
+    if output.is_dir() {
+        bail!(
+            "-o {} is a folder: name the output file (e.g. {})",
+            output.display(),
+            output.join("replay.mcap").display()
+        );
+    }
     if !force && std::fs::symlink_metadata(output).is_ok() {
         bail!(
             "-o {} already exists: choose another output file, or pass --force to replace it",
