@@ -127,6 +127,21 @@ def test_track_prints_one_json_object_per_frame(runner, tmp_path):
     assert res.returncode != 0 and "--fps" in res.stderr
 
 
+def test_detect_reports_the_hubs_distance(runner, tmp_path):
+    # 12 frames 20 m from the hub: the hub's distance, not the tower axis's (4.2 m behind it).
+    folder = tmp_path / "at20"
+    folder.mkdir()
+    res = runner.run("hubtrack", "render", "--frames", 12, "-o", folder,
+                     "--set", "capture.synthetic.start_distance_m=20", "--set", "capture.synthetic.end_distance_m=20")
+    assert res.returncode == 0, res.stderr
+    truth = [json.loads(l)["truth"]["distance_m"] for l in res.stdout.splitlines()]
+    res = runner.run("hubtrack", "detect", folder)
+    assert res.returncode == 0, res.stderr
+    ratios = sorted(json.loads(l)["distance_m"] / t for l, t in zip(res.stdout.splitlines(), truth)
+                    if json.loads(l)["distance_m"] is not None)
+    assert len(ratios) >= 8 and abs(ratios[len(ratios) // 2] - 1) < 0.12, ratios
+
+
 def test_inputs_that_give_nothing_to_detect_or_track_are_errors(runner, tmp_path):
     empty = tmp_path / "empty"
     empty.mkdir()

@@ -676,6 +676,20 @@ impl Core {
         self.update_distance(t, &sizes, parallax);
     }
 
+    /// The hub's distance from one detection alone (see [`Tracker::still_distance`]).
+    fn still_distance(&self, det: &Detection) -> Option<f64> {
+        let (tower, yaw) = self.raw_estimates(det);
+        let from_tower = tower.and_then(|depth| {
+            let yaw = Estimate::exact(yaw.map_or(0.0, |y| y.value));
+            self.tower_view(det, depth.value)
+                .with_yaw(yaw)
+                .hub_distance(depth)
+        });
+        from_tower
+            .or_else(|| self.spinner_distance(det))
+            .map(|d| d.value)
+    }
+
     /// Distance of the hub from the spinner circle's size, when it is large enough.
     fn spinner_distance(&self, det: &Detection) -> Option<Estimate> {
         let dc = &self.cfg.distance;
@@ -1256,6 +1270,17 @@ impl Tracker {
     /// The configuration in use.
     pub fn config(&self) -> &TrackConfig {
         &self.core.cfg
+    }
+
+    /// The hub's distance from one detection alone, as of a still photo: the depth of the tower
+    /// point its width was measured at, taken to the hub by the turbine profile's overhang at
+    /// the relative yaw its hub–tower gap gives (0 without one) with the camera level, as the
+    /// tracker takes each frame's tower; else the spinner circle's distance; `None` without
+    /// either. Forgets the track: a still photo has none.
+    pub fn still_distance(&mut self, detection: &Detection) -> Option<f64> {
+        self.core.reset();
+        self.core.image = Some((detection.image_width, detection.image_height));
+        self.core.still_distance(detection)
     }
 }
 

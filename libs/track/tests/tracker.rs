@@ -1949,3 +1949,21 @@ fn a_distance_read_too_short_does_not_throw_the_coasting_hub_out_of_the_image() 
         "without the guard it leaves the image: {unguarded:.0} vs {guarded:.0}"
     );
 }
+
+#[test]
+fn a_still_photos_distance_is_the_hubs_from_its_tower_else_its_spinner() {
+    let cfg = pinhole_config();
+    let mut tracker = Tracker::new(cfg.clone()).unwrap();
+    let mut rng = Rng::new(5);
+    // Level and head-on at the centre: the tower axis lies the overhang · cos ψ behind the hub.
+    let mut d = full_det(0, 1.0, 20.0, 10.0, &cfg, &mut rng, 0.0);
+    d.tower_width_row = d.tower_top_px[1];
+    let from_tower = tracker.still_distance(&d).unwrap();
+    assert!((from_tower - 20.0).abs() < 0.05, "{from_tower}");
+    // Without a tower: the spinner's (a dome, not a disc: within a few per cent).
+    d.tower_found = false;
+    let from_spinner = tracker.still_distance(&d).unwrap();
+    assert!((from_spinner / 20.0 - 1.0).abs() < 0.05, "{from_spinner}");
+    d.circle_found = false;
+    assert_eq!(tracker.still_distance(&d), None);
+}

@@ -6,6 +6,7 @@ use hubtrack_capture::images::{has_image_extension, read_image, IMAGE_EXTENSIONS
 use hubtrack_detect::params::{DetectConfig, Mode};
 use hubtrack_detect::{Detector, Hints, ImageView, LineKind, Output};
 use hubtrack_runtime::config::ConfigArgs;
+use hubtrack_track::Tracker;
 use hubtrack_types::PixelFormat;
 use opencv::core::{Mat, MatTraitConst, MatTraitConstManual, Point, Scalar};
 use opencv::imgproc;
@@ -150,6 +151,8 @@ pub fn detector(config: &DetectConfig, mode: Option<Mode>) -> anyhow::Result<Det
 pub fn run(args: DetectArgs) -> anyhow::Result<()> {
     let config = crate::config::load(&args.config)?;
     let mut det = detector(&config.detect, args.mode.map(Into::into))?;
+    // The hub's distance of each photo, as the tracker takes a frame's tower and spinner.
+    let mut tracker = Tracker::new(config.track.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
     if let Some(dir) = &args.annotate {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
@@ -158,6 +161,7 @@ pub fn run(args: DetectArgs) -> anyhow::Result<()> {
     for path in expand(&args.paths)? {
         let line = match detect_one(
             &mut det,
+            &mut tracker,
             &path,
             args.annotate.as_deref(),
             &hints,
@@ -185,6 +189,7 @@ pub fn run(args: DetectArgs) -> anyhow::Result<()> {
 
 fn detect_one(
     det: &mut Detector,
+    tracker: &mut Tracker,
     path: &Path,
     annotate: Option<&Path>,
     hints: &Hints,
@@ -205,23 +210,33 @@ fn detect_one(
             .map_or("image".into(), |s| s.to_string_lossy().into_owned());
         draw_overlay(&mat, &out, None, &dir.join(format!("{stem}.png")))?;
     }
-    Ok(result_json(path, view.width, view.height, &out, ms))
+    let distance_m = tracker.still_distance(&out.detection);
+    Ok(result_json(
+        path,
+        view.width,
+        view.height,
+        &out,
+        distance_m,
+        ms,
+    ))
 }
 
 /// The JSON object of one image (keys are a contract: path, width, height, detected, hub,
-/// confidence, distance_m, yaw_deg, ms; the rest are extras).
+/// confidence, distance_m, yaw_deg, ms; the rest are extras). `distance_m` is the hub's
+/// distance ([`Tracker::still_distance`]).
 pub fn result_json(
     path: &Path,
     width: u32,
     height: u32,
     out: &Output,
+    distance_m: Option<f64>,
     ms: f64,
 ) -> serde_json::Value {
     let d = &out.detection;
     json!({
         "path": path, "width": width, "height": height, "detected": d.detected,
         "hub": d.detected.then_some(d.hub_px), "confidence": d.confidence,
-        "distance_m": out.distance_m, "yaw_deg": out.yaw_deg, "ms": ms,
+        "distance_m": distance_m, "yaw_deg": out.yaw_deg, "ms": ms,
         "tower_top": d.tower_found.then_some(d.tower_top_px),
         "tower_width_px": d.tower_found.then_some(d.tower_width_px),
         "circle": d.circle_found.then_some(d.circle),

@@ -290,7 +290,8 @@ pub(crate) fn write_miss(
     };
     draw_overlay(image, out, truth_segment, &png)?;
     let line = serde_json::json!({"name": name, "truth": truth_segment, "error_pct": o.error_pct,
-        "result": result_json(&png, image.cols() as u32, image.rows() as u32, out, 0.0),
+        // The hub's distance is left to the rerun (`hubtrack detect`), which has the tracker's.
+        "result": result_json(&png, image.cols() as u32, image.rows() as u32, out, None, 0.0),
         "rerun": rerun});
     let mut f = std::fs::OpenOptions::new()
         .append(true)
