@@ -108,12 +108,19 @@ def test_detect_hit_rate_on_all_real_photos(runner):
     assert hits >= ALL_MIN_HITS and false <= ALL_MAX_FALSE, f"{hits} hits of {visible}, {false} false detections"
 
 
+def render_at(runner, folder, frames, distance_m):
+    """`frames` rendered frames `distance_m` from the hub into `folder`; their truth."""
+    folder.mkdir()
+    res = runner.run("hubtrack", "render", "--frames", frames, "-o", folder,
+                     "--set", f"capture.synthetic.start_distance_m={distance_m}",
+                     "--set", f"capture.synthetic.end_distance_m={distance_m}")
+    assert res.returncode == 0, res.stderr
+    return [json.loads(l)["truth"] for l in res.stdout.splitlines()]
+
+
 def test_track_prints_one_json_object_per_frame(runner, tmp_path):
     folder = tmp_path / "seq"
-    folder.mkdir()
-    res = runner.run("hubtrack", "render", "--frames", 30, "-o", folder,
-                     "--set", "capture.synthetic.start_distance_m=30", "--set", "capture.synthetic.end_distance_m=30")
-    assert res.returncode == 0, res.stderr
+    render_at(runner, folder, 30, 30)
     res = runner.run("hubtrack", "track", "--fps", 10, folder)
     assert res.returncode == 0, res.stderr
     lines = [json.loads(l) for l in res.stdout.splitlines()]
@@ -130,11 +137,7 @@ def test_track_prints_one_json_object_per_frame(runner, tmp_path):
 def test_detect_reports_the_hubs_distance(runner, tmp_path):
     # 12 frames 20 m from the hub: the hub's distance, not the tower axis's (4.2 m behind it).
     folder = tmp_path / "at20"
-    folder.mkdir()
-    res = runner.run("hubtrack", "render", "--frames", 12, "-o", folder,
-                     "--set", "capture.synthetic.start_distance_m=20", "--set", "capture.synthetic.end_distance_m=20")
-    assert res.returncode == 0, res.stderr
-    truth = [json.loads(l)["truth"]["distance_m"] for l in res.stdout.splitlines()]
+    truth = [t["distance_m"] for t in render_at(runner, folder, 12, 20)]
     res = runner.run("hubtrack", "detect", folder)
     assert res.returncode == 0, res.stderr
     ratios = sorted(json.loads(l)["distance_m"] / t for l, t in zip(res.stdout.splitlines(), truth)
