@@ -6,7 +6,7 @@
 //! the stage processes the supervisor starts read the same files. A profile's keys replace the
 //! config file's `[turbine]` keys, except keys given with `--set`, which win.
 
-use super::{quoted, read_bounded, ConfigDoc, ConfigError};
+use super::{parse_table, quoted, read_bounded, ConfigDoc, ConfigError};
 use hubtrack_types::setup::TurbineSetup;
 use std::path::{Path, PathBuf};
 
@@ -67,13 +67,7 @@ impl ConfigDoc {
 fn read_profile(path: &Path) -> Result<toml::Table, ConfigError> {
     let origin = format!("turbine profile {}", path.display());
     let text = read_bounded(path)?;
-    let mut table = text
-        .parse::<toml::Table>()
-        .map_err(|e| ConfigError::Invalid {
-            origin: origin.clone(),
-            key: "(syntax)".into(),
-            message: quoted(e.to_string().trim()),
-        })?;
+    let mut table = parse_table(&text, &origin)?;
     if table.contains_key("profile") {
         return Err(ConfigError::Invalid {
             origin,

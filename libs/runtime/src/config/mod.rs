@@ -113,13 +113,7 @@ impl ConfigDoc {
 
     /// Parses TOML text; `origin` names it in errors.
     pub fn parse(text: &str, origin: &str) -> Result<ConfigDoc, ConfigError> {
-        let table = text
-            .parse::<toml::Table>()
-            .map_err(|e| ConfigError::Invalid {
-                origin: origin.to_string(),
-                key: "(syntax)".into(),
-                message: quoted(e.to_string().trim()),
-            })?;
+        let table = parse_table(text, origin)?;
         Ok(ConfigDoc {
             table,
             origin: origin.to_string(),
@@ -228,6 +222,24 @@ fn read_bounded(path: &Path) -> Result<String, ConfigError> {
         });
     }
     Ok(text)
+}
+
+/// Parses a TOML document; a syntax error names `origin` and keeps its reason: each line of
+/// the parser's message is cut by [`quoted`] on its own, so that a long line quoted from the
+/// file does not cut off the reason printed under it.
+fn parse_table(text: &str, origin: &str) -> Result<toml::Table, ConfigError> {
+    text.parse::<toml::Table>()
+        .map_err(|e| ConfigError::Invalid {
+            origin: origin.to_string(),
+            key: "(syntax)".into(),
+            message: e
+                .to_string()
+                .trim()
+                .lines()
+                .map(quoted)
+                .collect::<Vec<_>>()
+                .join("\n"),
+        })
 }
 
 /// Cuts a user-given text to [`MAX_QUOTED_CHARS`] for an error message.
