@@ -160,6 +160,12 @@ def test_inputs_that_give_nothing_to_detect_or_track_are_errors(runner, tmp_path
     lines = [json.loads(l) for l in res.stdout.splitlines()]
     assert lines[0]["error"] == "no such file" and "cannot be read" in lines[1]["error"], lines
     assert res.returncode == 1 and "none of the 2 input(s) could be read" in res.stderr, res.stderr
+    for hint, value, reason in (("--hint-distance", "nan", "positive number of metres"),
+                                ("--hint-distance", "0", "positive number of metres"),
+                                ("--hint-roll", "1e300", "within ±180"),
+                                ("--hint-hub", "nan,1", "expected X,Y")):
+        res = runner.run("hubtrack", "detect", hint, value, bad)
+        assert res.returncode == 2 and reason in res.stderr, (hint, value, res.stderr)
 
 
 def test_detect_hints_find_the_tower_at_close_range(runner, tmp_path):

@@ -317,8 +317,13 @@ fn a_calibration_given_on_the_command_line_reaches_the_section() {
 #[test]
 fn a_syntax_error_on_a_long_line_keeps_its_reason() {
     let text = format!("fps = {}\nfoo = [1, 2\n", "3".repeat(400));
-    let err = ConfigDoc::parse(&text, "long.toml").unwrap_err().to_string();
-    assert!(err.contains("long.toml") && err.contains("(syntax)"), "{err}");
+    let err = ConfigDoc::parse(&text, "long.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("long.toml") && err.contains("(syntax)"),
+        "{err}"
+    );
     assert!(
         err.lines().last().is_some_and(|l| !l.contains('…')),
         "the reason is cut off: {err}"
