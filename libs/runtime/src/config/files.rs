@@ -66,7 +66,7 @@ impl ConfigDoc {
 /// describes a turbine, and may say more of it than hubtrack uses.
 fn read_profile(path: &Path) -> Result<toml::Table, ConfigError> {
     let origin = format!("turbine profile {}", path.display());
-    let text = read_bounded(path)?;
+    let text = read_bounded(path, "turbine profile")?;
     let mut table = parse_table(&text, &origin)?;
     if table.contains_key("profile") {
         return Err(ConfigError::Invalid {

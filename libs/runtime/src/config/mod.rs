@@ -36,8 +36,10 @@ pub const KNOWN_SECTIONS: &[&str] = &[
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
     /// The file could not be read.
-    #[error("cannot read config file {path}: {cause}")]
+    #[error("cannot read {what} {path}: {cause}")]
     Io {
+        /// What the file is: `config file`, `turbine profile`.
+        what: &'static str,
         /// The file.
         path: PathBuf,
         /// The OS error (not a `source`: the message already says it, and error chains would
@@ -45,8 +47,10 @@ pub enum ConfigError {
         cause: std::io::Error,
     },
     /// The file is larger than any config.
-    #[error("config file {path} is larger than {MAX_CONFIG_BYTES} bytes: not a hubtrack config")]
+    #[error("{what} {path} is larger than {MAX_CONFIG_BYTES} bytes: not one of hubtrack's")]
     TooLarge {
+        /// What the file is: `config file`, `turbine profile`.
+        what: &'static str,
         /// The file.
         path: PathBuf,
     },
@@ -102,7 +106,7 @@ impl ConfigDoc {
 
     /// Reads a config file (at most [`MAX_CONFIG_BYTES`]).
     pub fn load(path: &Path) -> Result<ConfigDoc, ConfigError> {
-        let text = read_bounded(path)?;
+        let text = read_bounded(path, "config file")?;
         let mut doc = ConfigDoc::parse(&text, &path.display().to_string())?;
         // Paths in a file are relative to the file.
         if let Some(dir) = path.parent() {
@@ -205,9 +209,11 @@ impl ConfigDoc {
     }
 }
 
-/// Reads a TOML file of at most [`MAX_CONFIG_BYTES`] (a config or a turbine profile).
-fn read_bounded(path: &Path) -> Result<String, ConfigError> {
+/// Reads a TOML file of at most [`MAX_CONFIG_BYTES`]; `what` it is (a `config file`, a
+/// `turbine profile`) names it in errors.
+fn read_bounded(path: &Path, what: &'static str) -> Result<String, ConfigError> {
     let io = |cause| ConfigError::Io {
+        what,
         path: path.to_path_buf(),
         cause,
     };
@@ -218,6 +224,7 @@ fn read_bounded(path: &Path) -> Result<String, ConfigError> {
         .map_err(io)?;
     if text.len() as u64 > MAX_CONFIG_BYTES {
         return Err(ConfigError::TooLarge {
+            what,
             path: path.to_path_buf(),
         });
     }
