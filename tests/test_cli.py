@@ -145,6 +145,16 @@ def test_detect_reports_the_hubs_distance(runner, tmp_path):
     assert len(ratios) >= 8 and abs(ratios[len(ratios) // 2] - 1) < 0.12, ratios
 
 
+def test_render_says_what_it_cannot_write(runner, tmp_path):
+    res = runner.run("hubtrack", "render", "-o", tmp_path / "nodir" / "x.png")
+    assert res.returncode == 1 and f"no folder {tmp_path / 'nodir'}" in res.stderr, res.stderr
+    res = runner.run("hubtrack", "render", "-o", tmp_path / "one.png", "--frames", 3)
+    assert res.returncode == 1 and "holds one frame" in res.stderr and not (tmp_path / "one.png").exists()
+    res = runner.run("hubtrack", "render", "-o", f"{tmp_path / 'new'}/", "--frames", 2)
+    assert res.returncode == 0, res.stderr
+    assert sorted(p.name for p in (tmp_path / "new").iterdir()) == ["frame_000000.png", "frame_000001.png"]
+
+
 def test_inputs_that_give_nothing_to_detect_or_track_are_errors(runner, tmp_path):
     empty = tmp_path / "empty"
     empty.mkdir()

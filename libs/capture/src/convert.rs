@@ -111,15 +111,22 @@ pub fn write_bgr_image(
     check_len(bgr, width as usize * height as usize * 3)?;
     let flat = Mat::new_rows_cols_with_data(height as i32, (width * 3) as i32, bgr)?;
     let mat = flat.reshape(3, height as i32)?;
-    let name = path.to_str().ok_or_else(|| CaptureError::BadFrame {
-        seq: 0,
-        reason: "non-UTF-8 path".into(),
-    })?;
+    let refused = |reason: &str| CaptureError::ImageWrite {
+        path: path.to_path_buf(),
+        reason: reason.into(),
+    };
+    let name = path
+        .to_str()
+        .ok_or_else(|| refused("the path is not UTF-8"))?;
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            return Err(refused(&format!("no folder {}", dir.display())));
+        }
+    }
     if !opencv::imgcodecs::imwrite_def(name, &mat)? {
-        return Err(CaptureError::BadFrame {
-            seq: 0,
-            reason: format!("cannot write {name}"),
-        });
+        return Err(refused(
+            "the image writer refused it (an extension it cannot write, or no permission)",
+        ));
     }
     Ok(())
 }

@@ -122,6 +122,14 @@ pub enum CaptureError {
     /// The renderer failed.
     #[error("synthetic renderer: {0}")]
     Render(String),
+    /// An image file could not be written.
+    #[error("cannot write {path}: {reason}")]
+    ImageWrite {
+        /// The file.
+        path: PathBuf,
+        /// Why, as far as it is known.
+        reason: String,
+    },
     /// OpenCV failed.
     #[error("OpenCV: {0}")]
     OpenCv(#[from] opencv::Error),

@@ -90,7 +90,8 @@ struct RenderArgs {
     /// Number of frames: with an `.avi` output, a Motion-JPEG clip; with a folder, one PNG each.
     #[arg(long, default_value_t = 1)]
     frames: u64,
-    /// Output: `.png`/`.jpg` an image, `.avi` a video, an existing folder PNGs, anything else raw BGR8 bytes.
+    /// Output: `.png`/`.jpg` an image, `.avi` a video, a folder (existing, or named with a
+    /// trailing `/`) PNGs, anything else raw BGR8 bytes.
     #[arg(long, short = 'o')]
     out: PathBuf,
 }
@@ -132,6 +133,17 @@ fn diagnose(file: &Path, json: bool) -> anyhow::Result<()> {
 /// `render`: synthetic frames to images, a video or raw bytes, with their truth as JSON lines.
 fn render(args: RenderArgs) -> anyhow::Result<()> {
     use opencv::prelude::*;
+    anyhow::ensure!(args.frames > 0, "--frames 0 renders nothing");
+    anyhow::ensure!(
+        args.seq.checked_add(args.frames).is_some(),
+        "--seq {} with --frames {} runs past the last sequence number",
+        args.seq,
+        args.frames
+    );
+    if args.out.as_os_str().to_string_lossy().ends_with('/') {
+        std::fs::create_dir_all(&args.out)
+            .with_context(|| format!("creating {}", args.out.display()))?;
+    }
     let config = config::load(&args.config)?;
     let filming = Filming::of(&config.camera, &config.turbine)?;
     let mut source =
@@ -144,6 +156,13 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
+    anyhow::ensure!(
+        args.frames == 1 || ext == "avi" || args.out.is_dir(),
+        "-o {} holds one frame: give a folder (e.g. {}/) or an .avi for --frames {}",
+        args.out.display(),
+        args.out.with_extension("").display(),
+        args.frames
+    );
     let mut video = if ext == "avi" {
         let fourcc = opencv::videoio::VideoWriter::fourcc('M', 'J', 'P', 'G')?;
         let name = args.out.to_str().context("output path is not UTF-8")?;
