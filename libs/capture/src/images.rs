@@ -72,7 +72,41 @@ fn check_declared(path: &Path, declared: Option<(u32, u32)>) -> Result<(), Captu
     Ok(())
 }
 
-/// Reads one image as BGR8; an unreadable file is [`CaptureError::ImageUnreadable`].
+/// How far from its end a JPEG's end-of-image marker is looked for: some cameras write a few
+/// bytes of padding or trailer after it.
+const JPEG_END_SEARCH: usize = 1024;
+
+/// Whether `head` (the first bytes) and `tail` (the last [`JPEG_END_SEARCH`] bytes) are those of
+/// a JPEG cut before its end-of-image marker (FF D9). Inside a JPEG's entropy-coded data an FF
+/// byte is always followed by 00 or a restart marker, so FF D9 near the end is the marker.
+/// A tail of zeros only (padding longer than the search) says nothing: not taken for a cut.
+fn jpeg_cut_short(head: &[u8], tail: &[u8]) -> bool {
+    let end = tail.iter().rposition(|&b| b != 0).map_or(0, |i| i + 1);
+    head.starts_with(&[0xFF, 0xD8]) && end > 0 && !tail[..end].windows(2).any(|w| w == [0xFF, 0xD9])
+}
+
+/// Refuses a JPEG file cut before its end (see [`jpeg_cut_short`]); other files pass.
+fn check_jpeg_end(path: &Path) -> Result<(), CaptureError> {
+    use std::io::{Read, Seek, SeekFrom};
+    let read = || -> std::io::Result<bool> {
+        let mut f = std::fs::File::open(path)?;
+        let mut head = [0u8; 2];
+        let n = f.read(&mut head)?;
+        let len = f.seek(SeekFrom::End(0))?;
+        f.seek(SeekFrom::Start(len.saturating_sub(JPEG_END_SEARCH as u64)))?;
+        let mut tail = Vec::with_capacity(JPEG_END_SEARCH);
+        f.read_to_end(&mut tail)?;
+        Ok(jpeg_cut_short(&head[..n], &tail))
+    };
+    match read() {
+        Ok(true) => Err(CaptureError::ImageTruncated { path: path.into() }),
+        Ok(false) => Ok(()),
+        Err(_) => Err(CaptureError::ImageUnreadable { path: path.into() }),
+    }
+}
+
+/// Reads one image as BGR8; an unreadable file is [`CaptureError::ImageUnreadable`], a JPEG
+/// cut short [`CaptureError::ImageTruncated`].
 pub fn read_image(path: &Path) -> Result<opencv::core::Mat, CaptureError> {
     let unreadable = || CaptureError::ImageUnreadable { path: path.into() };
     let name = path.to_str().ok_or_else(unreadable)?;
@@ -80,6 +114,7 @@ pub fn read_image(path: &Path) -> Result<opencv::core::Mat, CaptureError> {
         path,
         crate::image_header::declared_size(path).map_err(|_| unreadable())?,
     )?;
+    check_jpeg_end(path)?;
     let m = imgcodecs::imread(name, imgcodecs::IMREAD_COLOR).map_err(|_| unreadable())?;
     if m.empty() {
         return Err(unreadable());
@@ -92,6 +127,9 @@ pub fn read_image(path: &Path) -> Result<opencv::core::Mat, CaptureError> {
 pub fn decode_image(bytes: &[u8], name: &Path) -> Result<opencv::core::Mat, CaptureError> {
     let unreadable = || CaptureError::ImageUnreadable { path: name.into() };
     check_declared(name, crate::image_header::size_from_bytes(bytes))?;
+    if jpeg_cut_short(bytes, &bytes[bytes.len().saturating_sub(JPEG_END_SEARCH)..]) {
+        return Err(CaptureError::ImageTruncated { path: name.into() });
+    }
     let buf = opencv::core::Vector::<u8>::from_slice(bytes);
     let m = imgcodecs::imdecode(&buf, imgcodecs::IMREAD_COLOR).map_err(|_| unreadable())?;
     if m.empty() {
@@ -242,5 +280,27 @@ mod tests {
         assert_eq!(src.next_frame(&mut sink).unwrap(), Step::Frame);
         assert!(sink.camera_jpeg.is_empty());
         assert_eq!(sink.header.camera_jpeg_len, 0);
+    }
+
+    #[test]
+    fn a_jpeg_cut_before_its_end_is_refused_and_a_whole_one_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let (whole, cut) = (dir.path().join("whole.jpg"), dir.path().join("cut.jpg"));
+        write_image(&whole);
+        let bytes = std::fs::read(&whole).unwrap();
+        std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
+        assert!(read_image(&whole).is_ok());
+        assert!(matches!(
+            read_image(&cut),
+            Err(CaptureError::ImageTruncated { .. })
+        ));
+        assert!(matches!(
+            decode_image(&bytes[..bytes.len() - 2], &cut),
+            Err(CaptureError::ImageTruncated { .. })
+        ));
+        // A few bytes after the marker (a camera's padding) are no cut.
+        let mut padded = bytes.clone();
+        padded.extend_from_slice(&[0; 16]);
+        assert!(decode_image(&padded, &whole).is_ok());
     }
 }

@@ -90,6 +90,13 @@ pub enum CaptureError {
         /// File path.
         path: PathBuf,
     },
+    /// A JPEG ends before its end-of-image marker (a cut transfer, a full card): the decoder
+    /// would fill the missing rows with grey.
+    #[error("image {path} is cut short: the JPEG ends before its end-of-image marker")]
+    ImageTruncated {
+        /// File path.
+        path: PathBuf,
+    },
     /// An image declares more pixels than [`image_header::MAX_IMAGE_PIXELS`] (refused before
     /// decoding: a small file can declare gigabytes of pixels).
     #[error("image {path} declares {width}x{height} pixels, more than the {limit} allowed: refused before decoding")]
@@ -144,6 +151,7 @@ impl CaptureError {
         matches!(
             self,
             CaptureError::ImageUnreadable { .. }
+                | CaptureError::ImageTruncated { .. }
                 | CaptureError::ImageTooLarge { .. }
                 | CaptureError::BadFrame { .. }
         )
