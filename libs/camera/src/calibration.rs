@@ -15,6 +15,15 @@ const MAX_SIDE_PX: u32 = 16_384;
 /// file written with limited precision.
 const ZERO_TOLERANCE: f64 = 1e-9;
 
+/// Largest ratio of fx to fy (either way) a calibration may state: camera pixels are square to
+/// within a few per cent; a factor of two is a typing error.
+const MAX_PIXEL_ASPECT: f64 = 2.0;
+
+/// Narrowest horizontal field of view a calibration may describe, degrees: a lens narrower than
+/// this (a 500 mm telephoto on a full-frame sensor sees 4°) does not fly an approach, and
+/// absurd coefficients (k1 = 1e20) shrink the undistorted view to nothing.
+const MIN_HFOV_DEG: f64 = 1.0;
+
 /// Why a calibration file was refused.
 #[derive(Debug, thiserror::Error)]
 #[error("camera calibration {path}: {reason}")]
@@ -123,6 +132,12 @@ impl CameraModel {
                 "focal lengths fx = {fx}, fy = {fy} must be positive"
             ));
         }
+        if !(1.0 / MAX_PIXEL_ASPECT..=MAX_PIXEL_ASPECT).contains(&(fx / fy)) {
+            return Err(format!(
+                "focal lengths fx = {fx}, fy = {fy} differ more than {MAX_PIXEL_ASPECT} times: \
+                 pixels are near square, a mistyped camera_matrix is not"
+            ));
+        }
         let inside = |c: f64, side: u32| c >= -0.5 && c <= f64::from(side) - 0.5;
         if !inside(cx, w) || !inside(cy, h) {
             return Err(format!(
@@ -178,6 +193,15 @@ impl CameraModel {
                  a real lens over this frame)"
                     .to_string(),
             );
+        }
+        let hfov = model.hfov_deg();
+        // NaN (coefficients that overflow) fails too.
+        if hfov.is_nan() || hfov < MIN_HFOV_DEG {
+            return Err(format!(
+                "the lens sees {hfov:.2}° across the image (fx and the distortion together), \
+                 less than {MIN_HFOV_DEG}°: the coefficients cannot describe a camera that \
+                 films a turbine"
+            ));
         }
         Ok(model)
     }
@@ -325,6 +349,18 @@ projection_matrix:
             refused(&negative).contains("positive"),
             "{}",
             refused(&negative)
+        );
+        let anisotropic = ROS_EXAMPLE.replace("430.531693", "0.4305");
+        assert!(
+            refused(&anisotropic).contains("differ more than"),
+            "{}",
+            refused(&anisotropic)
+        );
+        let absurd = ROS_EXAMPLE.replace("0.116546", "1e20");
+        assert!(
+            refused(&absurd).contains("less than 1°"),
+            "{}",
+            refused(&absurd)
         );
         let folding = ROS_EXAMPLE.replace("0.116546", "-2.0");
         assert!(
