@@ -278,3 +278,17 @@ def test_what_the_stages_log_is_recorded_as_foxglove_log(runner, tmp_path):
     refused = [line for line in lines if "raw window refused" in line.message]
     assert refused and all(line.level == Log.WARNING and line.name == "recorder" for line in refused), \
         [(Log.Level.Name(line.level), line.message) for line in lines]
+    # `hubtrack log` prints them as the journal did, filtered by level and stage.
+    res = runner.run("hubtrack", "log", rec, "--level", "warning", "--json")
+    assert res.returncode == 0, res.stderr
+    shown = [json.loads(l) for l in res.stdout.splitlines()]
+    assert shown and all(s["level"] in ("WARNING", "ERROR") for s in shown), shown
+    assert any("raw window refused" in s["message"] and s["stage"] == "recorder" for s in shown), shown
+    res = runner.run("hubtrack", "log", rec, "--stage", "capture")
+    assert res.returncode == 0 and res.stdout.splitlines(), res.stderr
+    assert all(" capture: " in l for l in res.stdout.splitlines()), res.stdout
+    times = [json.loads(l)["time_ns"] for l in runner.run("hubtrack", "log", rec, "--json").stdout.splitlines()]
+    assert times == sorted(times) and len(times) == len(lines)
+    from conftest import ROOT
+    res = runner.run("hubtrack", "log", ROOT / "recordings" / "demo.mcap")
+    assert res.returncode == 1 and "holds no log lines" in res.stderr, res.stderr

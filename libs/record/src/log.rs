@@ -108,6 +108,43 @@ pub fn descriptor_set() -> Vec<u8> {
     .encode_to_vec()
 }
 
+/// The log lines of a recording, in file order, and why reading stopped early if it did (a cut
+/// or damaged file is read as far as it goes). Lines that do not decode are counted.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Lines {
+    /// The lines.
+    pub lines: Vec<Log>,
+    /// `/log` messages that did not decode as `foxglove.Log`.
+    pub undecodable: u64,
+    /// Why reading stopped before the end of the file.
+    pub stopped: Option<String>,
+}
+
+/// Reads the `/log` lines of the recording `path`.
+pub fn read(path: &std::path::Path) -> Result<Lines, crate::reader::OpenError> {
+    let mut messages = crate::reader::messages(path)?;
+    let mut out = Lines::default();
+    for m in messages.by_ref() {
+        if m.channel.topic != LOG_TOPIC {
+            continue;
+        }
+        match Log::decode(&m.data[..]) {
+            Ok(line) => out.lines.push(line),
+            Err(_) => out.undecodable += 1,
+        }
+    }
+    out.stopped = messages.stopped;
+    Ok(out)
+}
+
+/// The name of a `foxglove.Log.Level` value (`LEVELS`), `UNKNOWN` for one it does not define.
+pub fn level_name(level: i32) -> &'static str {
+    LEVELS
+        .iter()
+        .find(|(_, n)| *n == level)
+        .map_or("UNKNOWN", |(name, _)| name)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -140,5 +177,6 @@ mod tests {
         let level = log.field.iter().find(|f| f.name() == "level").unwrap();
         assert_eq!(level.type_name(), ".foxglove.Log.Level");
         assert_eq!(log.enum_type[0].value.len(), 6);
+        assert_eq!((level_name(3), level_name(9)), ("WARNING", "UNKNOWN"));
     }
 }

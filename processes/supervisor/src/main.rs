@@ -78,6 +78,20 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Print what the stages logged during a recording (`/log`), as the journal showed it.
+    Log {
+        /// The recording (a cut file is read as far as it goes).
+        file: PathBuf,
+        /// Only lines of this level and above.
+        #[arg(long, value_enum, default_value = "debug")]
+        level: tools::LogLevelArg,
+        /// Only the lines of these stages (repeatable), e.g. `--stage control`.
+        #[arg(long)]
+        stage: Vec<String>,
+        /// One JSON object per line (`time_ns`, `level`, `stage`, `file`, `line`, `message`).
+        #[arg(long)]
+        json: bool,
+    },
     /// Replay a recording's inputs through chosen stages and record their new outputs.
     Replay(hubtrack_supervisor::replay::ReplayArgs),
     /// Ask the running recorder to record every frame raw as well (`/frames/raw`, bit-exact,
@@ -114,6 +128,12 @@ fn main() {
         Command::Config { config, print } => tools::check_config(&config, print),
         Command::Recover { input, output } => tools::recover(&input, output),
         Command::Latency { file, json } => tools::latency(&file, json),
+        Command::Log {
+            file,
+            level,
+            stage,
+            json,
+        } => tools::log(&file, level, &stage, json),
         Command::Replay(a) => hubtrack_supervisor::replay::run(a),
         Command::RawWindow { seconds, wait } => tools::raw_window(seconds, wait),
         Command::SigningKey { file } => tools::signing_key(&file),

@@ -8,7 +8,7 @@ use hubtrack_runtime::ipc::{open_node, FrameSubscriber, MsgPublisher, MsgSubscri
 use hubtrack_runtime::shutdown::Shutdown;
 use hubtrack_types::services::{RAW_WINDOW, STATUS, SUPERVISOR};
 use hubtrack_types::time::monotonic_ns;
-use hubtrack_types::{RawWindowRequest, StageStatus, SupervisorStatus};
+use hubtrack_types::{LogLevel, RawWindowRequest, StageStatus, SupervisorStatus};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -227,6 +227,91 @@ pub fn latency(file: &Path, json: bool) -> anyhow::Result<()> {
         format!("latency from the stamps in {}", file.display()),
         hubtrack_record::latency::print,
     )
+}
+
+/// `hubtrack log --level`: the least level printed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LogLevelArg {
+    /// Everything.
+    Debug,
+    /// Info and up.
+    Info,
+    /// Warnings and errors.
+    Warning,
+    /// Errors only.
+    Error,
+}
+
+impl LogLevelArg {
+    /// The `foxglove.Log.Level` number of this level.
+    fn number(self) -> i32 {
+        match self {
+            LogLevelArg::Debug => LogLevel::Debug as i32,
+            LogLevelArg::Info => LogLevel::Info as i32,
+            LogLevelArg::Warning => LogLevel::Warning as i32,
+            LogLevelArg::Error => LogLevel::Error as i32,
+        }
+    }
+}
+
+/// `hubtrack log`: the recording's log lines, one per line as the journal shows them (the wall
+/// time they were logged, UTC), or as JSON.
+pub fn log(file: &Path, least: LogLevelArg, stages: &[String], json: bool) -> anyhow::Result<()> {
+    use hubtrack_record::log::{level_name, read};
+    let mut read = read(file)?;
+    if read.lines.is_empty() && read.undecodable == 0 {
+        anyhow::bail!(
+            "{} holds no log lines (`/log`: recordings made before it, or by a recorder that \
+             ran alone, have none){}",
+            file.display(),
+            read.stopped
+                .as_ref()
+                .map_or(String::new(), |s| format!("; reading stopped: {s}"))
+        );
+    }
+    // In the order they were logged: a recorder started after a stage records that stage's
+    // first lines when it subscribes (the service's history), after its own.
+    let time_ns = |l: &hubtrack_record::log::Log| {
+        l.timestamp
+            .map_or(0, |t| t.seconds as i128 * 1_000_000_000 + t.nanos as i128)
+    };
+    read.lines.sort_by_key(time_ns);
+    for line in read
+        .lines
+        .iter()
+        .filter(|l| l.level >= least.number() && (stages.is_empty() || stages.contains(&l.name)))
+    {
+        let ns = time_ns(line);
+        if json {
+            println!(
+                "{}",
+                serde_json::json!({"time_ns": ns, "level": level_name(line.level),
+                    "stage": line.name, "file": line.file, "line": line.line,
+                    "message": line.message})
+            );
+        } else {
+            let time = jiff::Timestamp::from_nanosecond(ns)
+                .map_or_else(|_| format!("{ns} ns"), |t| format!("{t:.3}"));
+            let level = match level_name(line.level) {
+                "WARNING" => "WARN",
+                other => other,
+            };
+            println!("{time} {level:5} {}: {}", line.name, line.message);
+        }
+    }
+    if read.undecodable > 0 {
+        eprintln!(
+            "note: {} log lines did not decode and were skipped",
+            read.undecodable
+        );
+    }
+    if let Some(why) = &read.stopped {
+        eprintln!(
+            "note: {} is cut or damaged; its lines up to there are shown (reading stopped: {why})",
+            file.display()
+        );
+    }
+    Ok(())
 }
 
 /// `hubtrack tap`: one JSON line per frame received on the frames service.
