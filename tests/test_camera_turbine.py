@@ -87,6 +87,9 @@ def test_bad_calibration_and_profile_files_are_named(runner, tmp_path):
         "short.yaml": ("image_width: 640\nimage_height: 480\n", "camera_matrix"),
         "nan.yaml": (USB.read_text().replace("692.820323027551, 0.0, 319.5", ".nan, 0.0, 319.5"), "NaN"),
         "model.yaml": (USB.read_text().replace("plumb_bob", "rational_polynomial"), "not supported"),
+        # A 1.8° telephoto: valid as a lens, outside what the estimators are built for.
+        "tele.yaml": (USB.read_text().replace("692.820323027551, 0.0, 319.5", "20000.0, 0.0, 319.5")
+                      .replace("692.820323027551, 239.5", "20000.0, 239.5"), "fx / image_width"),
     }
     for name, (text, reason) in cases.items():
         path = tmp_path / name

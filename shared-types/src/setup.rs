@@ -16,6 +16,10 @@ pub use hubtrack_camera::{CalibrationError, CameraModel, Distortion, SizeMismatc
 #[allow(clippy::approx_constant)] // 0.4343 is the lens, not log10(e)
 pub const GOPRO_FOCAL_LENGTH_PER_WIDTH: f64 = 0.4343;
 
+/// The centre focal lengths per image width the estimators are built for, `[min, max]`: from a
+/// 180°-class fisheye to a 5.7° telephoto. A calibration outside it is refused where it is read.
+pub const FOCAL_LENGTH_PER_WIDTH_RANGE: [f64; 2] = [0.05, 10.0];
+
 params! {
     /// `[camera]`: the camera that takes the frames.
     pub struct CameraSetup {
@@ -32,7 +36,8 @@ params! {
         /// focal length than the pinhole value from its edge field of view: the GoPro HERO3+
         /// wide has 833.9 px at 1920 wide (0.4343) against 577 px (0.3004) from 118°. 0 = use
         /// `hfov_deg`.
-        pub focal_length_per_width: f64 = GOPRO_FOCAL_LENGTH_PER_WIDTH, zero_or_closed(0.05, 10.0);
+        pub focal_length_per_width: f64 = GOPRO_FOCAL_LENGTH_PER_WIDTH,
+            zero_or_closed(FOCAL_LENGTH_PER_WIDTH_RANGE[0], FOCAL_LENGTH_PER_WIDTH_RANGE[1]);
     }
 }
 
@@ -100,11 +105,24 @@ impl CameraSetup {
     /// under `camera`.
     pub fn validate(&self) -> Result<(), ParamError> {
         self.check_ranges("camera")?;
-        self.calibrated().map_err(|e| ParamError {
+        let calibrated = self.calibrated().map_err(|e| ParamError {
             key: "camera.calibration".into(),
             value: format!("{:?}", self.calibration),
             allowed: format!("a ROS camera_info YAML file ({})", e.reason),
         })?;
+        if let Some(model) = calibrated {
+            let [lo, hi] = FOCAL_LENGTH_PER_WIDTH_RANGE;
+            let f = model.focal_length_per_width();
+            if !(lo..=hi).contains(&f) {
+                return Err(ParamError {
+                    key: "camera.calibration".into(),
+                    value: format!("{:?}", self.calibration),
+                    allowed: format!(
+                        "a lens whose fx / image_width lies in [{lo}, {hi}] (this one: {f:.4})"
+                    ),
+                });
+            }
+        }
         Ok(())
     }
 

@@ -76,24 +76,17 @@ impl DetectConfig {
         }
     }
 
-    /// Check every parameter's range; the error names the first offending key (the calibration
-    /// file for a focal length read from it).
+    /// Check every parameter's range; the error names the first offending key.
     pub fn validate(&self) -> Result<(), ParamError> {
-        self.camera.check_ranges("detect.camera").map_err(|e| {
-            match (self.camera.lens.calibration(), e.key.as_str()) {
-                (Some(_), "detect.camera.focal_length_per_width") => ParamError {
-                    key: "camera.calibration: fx / image_width".into(),
-                    ..e
-                },
-                _ => e,
-            }
-        })?;
+        self.camera.check_ranges("detect.camera")?;
         self.thesis.validate()?;
         self.default.validate()
     }
 }
 
-use hubtrack_types::setup::{Lens, TurbineSetup, GOPRO_FOCAL_LENGTH_PER_WIDTH};
+use hubtrack_types::setup::{
+    Lens, TurbineSetup, FOCAL_LENGTH_PER_WIDTH_RANGE, GOPRO_FOCAL_LENGTH_PER_WIDTH,
+};
 
 hubtrack_types::params! {
     /// Camera optics and known turbine dimensions used for distance and yaw estimates.
@@ -107,7 +100,8 @@ hubtrack_types::params! {
         /// value from its edge FOV: the GoPro HERO3+ wide (the thesis camera, as the renderer
         /// models it) has 833.9 px at 1920 wide (0.4343) vs 577 px (0.3004) from 118°, which would
         /// make every distance ~31 % short. Default 0.4343; 0 = use `hfov_deg`.
-        pub focal_length_per_width: f64 = GOPRO_FOCAL_LENGTH_PER_WIDTH, zero_or_closed(0.05, 10.0);
+        pub focal_length_per_width: f64 = GOPRO_FOCAL_LENGTH_PER_WIDTH,
+            zero_or_closed(FOCAL_LENGTH_PER_WIDTH_RANGE[0], FOCAL_LENGTH_PER_WIDTH_RANGE[1]);
         /// Tower diameter at the top, metres (2.2 m on the thesis's ~1.5 MW turbines); the distance
         /// estimate divides it by the measured tower width.
         pub tower_top_diameter_m: f64 = 2.2, closed(0.1, 30.0);
