@@ -18,9 +18,47 @@ pub fn seconds(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A finite number that `accept` takes; else an error quoting `text` with `what` it must be.
+fn number(text: &str, accept: impl Fn(f64) -> bool, what: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && accept(v) => Ok(v),
+        Ok(_) => Err(format!("{text:?}: {what}")),
+        Err(e) => Err(format!("{text:?}: {e}")),
+    }
+}
+
+/// A distance in metres: finite and positive.
+pub fn metres(text: &str) -> Result<f64, String> {
+    number(
+        text,
+        |v| v > 0.0,
+        "a distance is a positive number of metres",
+    )
+}
+
+/// A roll in degrees: finite, within ±180.
+pub fn roll_deg(text: &str) -> Result<f64, String> {
+    number(
+        text,
+        |v| v.abs() <= 180.0,
+        "a roll is a number of degrees within ±180",
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_distances_and_rolls_pass() {
+        assert_eq!((metres("12.5"), roll_deg("-1.6")), (Ok(12.5), Ok(-1.6)));
+        for bad in ["nan", "inf", "0", "-5", "ten"] {
+            assert!(metres(bad).is_err(), "{bad}");
+        }
+        for bad in ["nan", "1e300", "181", "ten"] {
+            assert!(roll_deg(bad).is_err(), "{bad}");
+        }
+    }
 
     #[test]
     fn only_sane_spans_pass() {

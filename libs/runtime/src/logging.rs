@@ -39,14 +39,15 @@ pub fn init(stage: &'static str) {
     let env = env_logger::Env::default().default_filter_or("info");
     let _ = env_logger::Builder::from_env(env)
         .format(move |buf, record| {
-            keep(record);
+            // Formatted once, for stderr and for the recording.
+            let text = record.args().to_string();
+            keep(record, &text);
             writeln!(
                 buf,
-                "{} {:5} {}: {}",
+                "{} {:5} {}: {text}",
                 buf.timestamp_millis(),
                 record.level(),
                 stage,
-                record.args()
             )
         })
         // iceoryx2's own logger is separate; keep third-party crates quiet unless asked.
@@ -64,8 +65,9 @@ pub fn level(level: log::Level) -> LogLevel {
     }
 }
 
-/// Queues `record` for the forwarder, if there is one (which names the stage).
-fn keep(record: &log::Record<'_>) {
+/// Queues `record`, formatted as `text`, for the forwarder, if there is one (which names the
+/// stage).
+fn keep(record: &log::Record<'_>, text: &str) {
     let Ok(mut waiting) = WAITING.lock() else {
         return;
     };
@@ -82,7 +84,7 @@ fn keep(record: &log::Record<'_>) {
         line: record.line().unwrap_or(0),
         stage: Text64::default(),
         file: Text64::new(record.file().unwrap_or("")),
-        text: Text512::new(&record.args().to_string()),
+        text: Text512::new(text),
     });
 }
 

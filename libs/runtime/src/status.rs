@@ -46,14 +46,16 @@ impl StatusReporter {
     /// Publishes the log lines logged since the last call, and the status if the interval has
     /// passed. The stage's loop calls it on every turn.
     pub fn tick(&mut self) {
-        self.logs.forward();
         let now = monotonic_ns();
         if now.saturating_sub(self.last_ns) >= self.interval_ns {
             self.publish_now();
+        } else {
+            self.logs.forward();
         }
     }
 
-    /// Publishes the status now (e.g. just before exiting, so final counts are seen).
+    /// Publishes the status now (e.g. just before exiting, so final counts are seen), and the
+    /// log lines logged since the last call.
     pub fn publish_now(&mut self) {
         let now = monotonic_ns();
         self.last_ns = now;

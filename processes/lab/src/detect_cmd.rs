@@ -48,11 +48,11 @@ pub struct DetectArgs {
     #[arg(long, value_name = "X,Y", value_parser = parse_point, allow_negative_numbers = true)]
     pub hint_hub: Option<[f64; 2]>,
     /// ... and the tracker's distance to the hub, metres (positive).
-    #[arg(long, value_name = "M", value_parser = parse_distance)]
+    #[arg(long, value_name = "M", value_parser = hubtrack_runtime::cli::metres)]
     pub hint_distance: Option<f64>,
     /// ... and the camera roll from the IMU, degrees (clockwise positive, within ±180;
     /// `--hint-roll -1.6` is a negative roll, not a flag).
-    #[arg(long, value_name = "DEG", value_parser = parse_roll, allow_negative_numbers = true)]
+    #[arg(long, value_name = "DEG", value_parser = hubtrack_runtime::cli::roll_deg, allow_negative_numbers = true)]
     pub hint_roll: Option<f64>,
     /// Detect as the detect stage does on a video frame (its working pyramid level and the
     /// video frames' models), not as on a still photo (two levels, the mirror image, the
@@ -75,24 +75,6 @@ fn parse_point(s: &str) -> Result<[f64; 2], String> {
     match v[..] {
         [x, y] if x.is_finite() && y.is_finite() => Ok([x, y]),
         _ => Err(format!("{s:?}: expected X,Y")),
-    }
-}
-
-/// Parses a distance: a positive finite number of metres.
-fn parse_distance(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(d) if d.is_finite() && d > 0.0 => Ok(d),
-        Ok(_) => Err(format!("{s:?}: a distance is a positive number of metres")),
-        Err(e) => Err(format!("{s:?}: {e}")),
-    }
-}
-
-/// Parses a roll: a finite number of degrees within ±180.
-fn parse_roll(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(r) if r.is_finite() && r.abs() <= 180.0 => Ok(r),
-        Ok(_) => Err(format!("{s:?}: a roll is a number of degrees within ±180")),
-        Err(e) => Err(format!("{s:?}: {e}")),
     }
 }
 
