@@ -401,6 +401,8 @@ fn lines_allow_hub(
     lines: &[(Segment, LineKind)],
     hub: P2,
     h: f64,
+    roll_deg: f64,
+    zoom: f64,
 ) -> bool {
     // A mast's top or a field's corner, where the lines end along the vertical and the
     // horizontal only, is no rotor: three blades 120° apart always have one at least 30° from
@@ -422,25 +424,61 @@ fn lines_allow_hub(
     }) {
         return false;
     }
+    // Some line in reach rising above it: of three blades 120° apart one always points within
+    // 60° of straight up, while a mast's top has only its own shaft, its stays and its
+    // crossbars, which hang from it or run level. The wider the crop network had to look, the
+    // larger the hub, and the farther out its blades' edges may run (`zoom`).
+    let max_from_up = 90.0 - p.heat_verify_rise_deg;
+    if p.heat_verify_rise_deg > 0.0
+        && !lines.iter().any(|(s, _)| {
+            let far = if geometry::dist(s.a, hub) >= geometry::dist(s.b, hub) {
+                s.a
+            } else {
+                s.b
+            };
+            let from_world_up = geometry::wrap180(
+                geometry::up_cw_deg([far[0] - hub[0], far[1] - hub[1]]) + roll_deg,
+            );
+            s.segment_distance(hub) <= p.heat_verify_blade_frac * h * zoom
+                && from_world_up.abs() <= max_from_up
+        })
+    {
+        return false;
+    }
     // A long line running on through it: a mast or a wire.
     let segs: Vec<Segment> = lines.iter().map(|(s, _)| *s).collect();
     !robust::passes_through(p, &segs, &vec![true; segs.len()], hub, h)
 }
 
+/// How the networks' verdict looks at a frame (see [`verify_heat_peak`]).
+#[derive(Debug, Clone, Copy)]
+struct VerdictLook {
+    /// It also replaces a detection the heatmap rates below this.
+    override_max: f64,
+    /// How many wider crops the crop network may look through.
+    zooms: u32,
+    /// The camera's roll, degrees (0 when unknown).
+    roll_deg: f64,
+}
+
 /// The networks' verdict on a frame where the lines found no hub (see
 /// `default.heat_verify_min`): the heatmap's peak, placed and confirmed by the crop network;
-/// also over a detection the heatmap rates below `override_max` (`heat_override_max`, or
-/// `still_heat_override_max` for stills); `zooms`: how many wider crops the crop network may
+/// also over a detection the heatmap rates below `how.override_max` (`heat_override_max`, or
+/// `still_heat_override_max` for stills); `how.zooms`: how many wider crops the crop network may
 /// look through (`heat_verify_crop_zooms`, none for stills).
 fn verify_heat_peak(
     p: &params::DefaultParams,
     heat: &heat::Heatmap,
     net: &mut heat::HubCropNet,
     small: &Mat,
-    override_max: f64,
-    zooms: u32,
+    how: VerdictLook,
     found: &mut Found,
 ) -> Result<(), DetectError> {
+    let VerdictLook {
+        override_max,
+        zooms,
+        roll_deg,
+    } = how;
     if p.heat_verify_min >= 1.0 {
         return Ok(());
     }
@@ -474,7 +512,7 @@ fn verify_heat_peak(
     let Some((peak, zoom)) = looked else {
         return Ok(());
     };
-    if !lines_allow_hub(p, &found.lines, peak.hub, h) {
+    if !lines_allow_hub(p, &found.lines, peak.hub, h, roll_deg, zoom) {
         return Ok(());
     }
     log::trace!(
@@ -867,15 +905,12 @@ impl Detector {
                         self.config.default.heat_verify_crop_zooms,
                     )
                 };
-                verify_heat_peak(
-                    &self.config.default,
-                    heat,
-                    net,
-                    small,
+                let how = VerdictLook {
                     override_max,
                     zooms,
-                    &mut found,
-                )?;
+                    roll_deg: hints.roll_rad.unwrap_or(0.0).to_degrees(),
+                };
+                verify_heat_peak(&self.config.default, heat, net, small, how, &mut found)?;
             }
             found.geometry_us += us_since(t);
         }
@@ -1066,8 +1101,9 @@ mod tests {
 
     /// The networks' verdict is refused where the lines say mast: lines ending at the point
     /// only along the image axes (a mast's top, a field's corner), a long line running on
-    /// through it, or no line oblique to both axes (a blade) within reach; it stands with a
-    /// blade-like line near and among those ending.
+    /// through it, no line oblique to both axes (a blade) within reach, or none rising above
+    /// it in the world (a mast's stays); it stands with a blade-like line near and among those
+    /// ending, and one rising.
     #[test]
     fn the_networks_verdict_stands_only_where_the_lines_allow_a_rotor() {
         let p = params::DefaultParams::default();
@@ -1078,33 +1114,33 @@ mod tests {
         let blade = line([202.0, 98.0], [260.0, 40.0]);
         let far_away = line([20.0, 250.0], [120.0, 200.0]);
         assert!(
-            !lines_allow_hub(&p, &[], hub, h),
+            !lines_allow_hub(&p, &[], hub, h, 0.0, 1.0),
             "no lines at all: no blade"
         );
         assert!(
-            !lines_allow_hub(&p, &[far_away], hub, h),
+            !lines_allow_hub(&p, &[far_away], hub, h, 0.0, 1.0),
             "no line within reach"
         );
         assert!(
-            lines_allow_hub(&p, &[blade, far_away], hub, h),
+            lines_allow_hub(&p, &[blade, far_away], hub, h, 0.0, 1.0),
             "a blade alone"
         );
         assert!(
-            !lines_allow_hub(&p, &[mast, far_away], hub, h),
+            !lines_allow_hub(&p, &[mast, far_away], hub, h, 0.0, 1.0),
             "a mast's top"
         );
         assert!(
-            !lines_allow_hub(&p, &[mast, horizon_end], hub, h),
+            !lines_allow_hub(&p, &[mast, horizon_end], hub, h, 0.0, 1.0),
             "a corner of vertical and horizontal lines"
         );
         assert!(
-            lines_allow_hub(&p, &[mast, blade], hub, h),
+            lines_allow_hub(&p, &[mast, blade], hub, h, 0.0, 1.0),
             "a tower and a blade"
         );
         // A mast (or wire) passing through: its ends are far from the point.
         let through = line([199.0, 20.0], [201.0, 260.0]);
         assert!(
-            !lines_allow_hub(&p, &[through, blade], hub, h),
+            !lines_allow_hub(&p, &[through, blade], hub, h, 0.0, 1.0),
             "a line through the point"
         );
         // Rolled 10°, the blade-like line stays oblique enough, the mast stays a mast.
@@ -1113,19 +1149,52 @@ mod tests {
             [200.0 + 159.0 * 10f64.to_radians().tan(), 260.0],
         );
         assert!(
-            !lines_allow_hub(&p, &[tilted_mast], hub, h),
+            !lines_allow_hub(&p, &[tilted_mast], hub, h, 0.0, 1.0),
             "a mast rolled 10°"
         );
         // A mast whose top the lines lost: its vertical below, level lines about, no blade.
         let mast_below = line([200.0, 160.0], [200.0, 260.0]);
         let level = line([120.0, 110.0], [180.0, 112.0]);
         assert!(
-            !lines_allow_hub(&p, &[mast_below, level], hub, h),
+            !lines_allow_hub(&p, &[mast_below, level], hub, h, 0.0, 1.0),
             "a mast's top lost against the horizon"
         );
         assert!(
-            lines_allow_hub(&p, &[mast_below, level, blade], hub, h),
+            lines_allow_hub(&p, &[mast_below, level, blade], hub, h, 0.0, 1.0),
             "and with a blade"
+        );
+        // A mast's stays hang from its top: oblique, ending at the point, nothing above it.
+        let stay = |dx: f64| line([200.0 + dx.signum(), 102.0], [200.0 + dx, 250.0]);
+        assert!(
+            !lines_allow_hub(&p, &[mast, stay(-80.0), stay(90.0)], hub, h, 0.0, 1.0),
+            "a mast with stays"
+        );
+        // An inverted Y: one blade straight up, two 30° below the level, oblique like stays.
+        let up = line([200.0, 99.0], [200.0, 10.0]);
+        let low = |dx: f64| {
+            line(
+                [200.0 + dx.signum(), 101.0],
+                [200.0 + dx, 101.0 + dx.abs() * 0.58],
+            )
+        };
+        assert!(
+            lines_allow_hub(&p, &[up, low(-90.0), low(90.0)], hub, h, 0.0, 1.0),
+            "a rotor with one blade up"
+        );
+        // Rising in the image only by the camera's roll: the horizon of a camera rolled 25°
+        // counter-clockwise (roll −25°) runs up to the left in the image, level in the world.
+        let rolled = 25f64.to_radians();
+        let horizon = line(
+            [202.0, 101.0],
+            [202.0 - 100.0 * rolled.cos(), 101.0 - 100.0 * rolled.sin()],
+        );
+        assert!(
+            lines_allow_hub(&p, &[mast, horizon], hub, h, 0.0, 1.0),
+            "unrolled, it rises 25°"
+        );
+        assert!(
+            !lines_allow_hub(&p, &[mast, horizon], hub, h, -25.0, 1.0),
+            "rolled, it is level"
         );
     }
 

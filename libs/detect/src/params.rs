@@ -822,6 +822,12 @@ hubtrack_types::params! {
         /// image height (a blade's edge; from 5 m the spinner's rim is within ~0.3 of the height).
         /// Range [0, 2].
         pub heat_verify_blade_frac: f64 = 0.3, closed(0.0, 2.0);
+        /// ... and some line within that reach must rise above it, its far end at least this
+        /// far above the horizontal through the hub, degrees: one of three blades 120° apart
+        /// always points within 60° of straight up, while a mast's top (its stays, crossbars and
+        /// shaft all hang from it or run level) has nothing above it. 20° leaves 10° to the camera's
+        /// roll. Range [0, 90]; 0 = off.
+        pub heat_verify_rise_deg: f64 = 20.0, closed(0.0, 90.0);
         /// The verdict also replaces a detection whose hub the heatmap rates below this (within
         /// `hub_heat_radius_cells`): the ranking's choice where both networks and the lines around
         /// agree on a hub elsewhere, or the crop network's place for it where they agree on the
