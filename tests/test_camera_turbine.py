@@ -98,6 +98,8 @@ def test_bad_calibration_and_profile_files_are_named(runner, tmp_path):
         res = runner.run("hubtrack", "config", "--camera", path, timeout=60)
         assert res.returncode == 1, (name, res.stdout, res.stderr)
         assert "camera.calibration" in res.stderr and reason in res.stderr, (name, res.stderr)
+        # A file that cannot be used is said so, not called a value out of range.
+        assert ("out of range" in res.stderr) == (name == "tele.yaml"), (name, res.stderr)
     typo = tmp_path / "typo.toml"
     typo.write_text("tower_top_diamter_m = 3.0\n")
     res = runner.run("hubtrack", "config", "--turbine", typo, timeout=60)

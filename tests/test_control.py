@@ -340,6 +340,9 @@ def test_bad_link_string_names_the_key(runner):
     r = runner.run("hubtrack-control", "--set", "control.link=\"tcp:nowhere\"", timeout=30)
     assert r.returncode != 0
     assert "control.link" in r.stderr, r.stderr
+    # What is wrong and the forms it takes, once each; not a value out of range.
+    assert 'unknown transport "tcp"' in r.stderr and "out of range" not in r.stderr, r.stderr
+    assert r.stderr.count("udpin:ADDR:PORT") == 1, r.stderr
 
 
 def test_a_second_system_cannot_redirect_or_receive_setpoints(runner, udp_autopilot):

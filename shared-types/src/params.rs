@@ -10,15 +10,25 @@ pub struct ParamError {
     pub value: String,
     /// The allowed range or set.
     pub allowed: String,
+    /// What is wrong with a value that names something to use (a file, an address) and cannot
+    /// be used, instead of lying outside a range: `cannot open: …`. `None` for a range.
+    pub problem: Option<String>,
 }
 
 impl std::fmt::Display for ParamError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "config key `{}` = {} is out of range: allowed {}",
-            self.key, self.value, self.allowed
-        )
+        match &self.problem {
+            Some(problem) => write!(
+                f,
+                "config key `{}` = {}: {problem} (expected {})",
+                self.key, self.value, self.allowed
+            ),
+            None => write!(
+                f,
+                "config key `{}` = {} is out of range: allowed {}",
+                self.key, self.value, self.allowed
+            ),
+        }
     }
 }
 
@@ -40,6 +50,7 @@ impl<'a> Check<'a> {
             key: format!("{}.{}", self.prefix, key),
             value,
             allowed,
+            problem: None,
         }
     }
 

@@ -108,7 +108,8 @@ impl CameraSetup {
         let calibrated = self.calibrated().map_err(|e| ParamError {
             key: "camera.calibration".into(),
             value: format!("{:?}", self.calibration),
-            allowed: format!("a ROS camera_info YAML file ({})", e.reason),
+            allowed: "a ROS camera_info YAML file".into(),
+            problem: Some(e.reason),
         })?;
         if let Some(model) = calibrated {
             let [lo, hi] = FOCAL_LENGTH_PER_WIDTH_RANGE;
@@ -120,6 +121,7 @@ impl CameraSetup {
                     allowed: format!(
                         "a lens whose fx / image_width lies in [{lo}, {hi}] (this one: {f:.4})"
                     ),
+                    problem: None,
                 });
             }
         }

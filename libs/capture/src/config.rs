@@ -73,6 +73,7 @@ impl CaptureConfig {
                 key: "capture.fps".into(),
                 value: self.fps.to_string(),
                 allowed: "(0, 1000] for this source".into(),
+                problem: None,
             });
         }
         self.v4l.check_ranges("capture.v4l")?;

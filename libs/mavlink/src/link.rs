@@ -117,6 +117,21 @@ impl<'de> serde::Deserialize<'de> for Endpoint {
     }
 }
 
+impl Endpoint {
+    /// The forms an endpoint string takes, for error messages.
+    pub const FORMS: &'static str = ENDPOINT_FORMS;
+}
+
+impl LinkError {
+    /// What is wrong, without the endpoint string, for a message that names it already.
+    pub fn reason(&self) -> String {
+        match self {
+            LinkError::BadEndpoint { reason, .. } => reason.clone(),
+            other => other.to_string(),
+        }
+    }
+}
+
 /// Why a link could not be set up or used.
 #[derive(Debug, thiserror::Error)]
 pub enum LinkError {

@@ -259,6 +259,7 @@ fn range(
             key: format!("{prefix}.{key}"),
             value: format!("[{}, {}]", r[0], r[1]),
             allowed: format!("[lo, hi] with lo <= hi within [{min}, {max}]"),
+            problem: None,
         });
     }
     Ok(())
@@ -332,6 +333,7 @@ impl ScenarioConfig {
                     key: format!("{section}.rotor_axis_heading_deg"),
                     value: h.to_string(),
                     allowed: "[0, 360) or unset (random)".into(),
+                    problem: None,
                 });
             }
         }

@@ -79,7 +79,8 @@ impl ControlConfig {
             .map_err(|e| ParamError {
                 key: "control.link".into(),
                 value: format!("{:?}", self.link),
-                allowed: e.to_string(),
+                allowed: hubtrack_mavlink::Endpoint::FORMS.into(),
+                problem: Some(e.reason()),
             })?;
         self.approach.validate()
     }

@@ -71,7 +71,8 @@ impl hubtrack_runtime::Sections for SimSections {
             .map_err(|e| hubtrack_runtime::config::ParamError {
                 key: "sim.link".into(),
                 value: format!("{:?}", self.sim.link),
-                allowed: e.to_string(),
+                allowed: hubtrack_mavlink::Endpoint::FORMS.into(),
+                problem: Some(e.reason()),
             })
     }
 }

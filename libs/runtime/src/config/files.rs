@@ -121,11 +121,8 @@ fn read_profile(path: &Path) -> Result<toml::Table, ConfigError> {
             key: quoted(&e.path().to_string()),
             message: quoted(e.into_inner().to_string().trim()),
         })?;
-    parsed.validate().map_err(|e| ConfigError::OutOfRange {
-        origin,
-        key: e.key,
-        value: quoted(&e.value),
-        allowed: e.allowed,
-    })?;
+    parsed
+        .validate()
+        .map_err(|e| ConfigError::of_param(origin, e))?;
     Ok(table)
 }

@@ -39,6 +39,7 @@ impl LiveConfig {
             key: "live.address".into(),
             value: format!("{:?}", self.address),
             allowed: "IP:PORT, e.g. \"127.0.0.1:8765\" or \"[::1]:8765\"".into(),
+            problem: None,
         })
     }
 

@@ -78,6 +78,26 @@ pub enum ConfigError {
     },
 }
 
+impl ConfigError {
+    /// A value the checks refused: out of its range, or naming something that cannot be used
+    /// (then `Invalid`, saying what is wrong with it, not that it is out of range).
+    pub(crate) fn of_param(origin: String, e: ParamError) -> ConfigError {
+        match e.problem {
+            Some(problem) => ConfigError::Invalid {
+                origin,
+                key: e.key,
+                message: format!("{}: {problem} (expected {})", quoted(&e.value), e.allowed),
+            },
+            None => ConfigError::OutOfRange {
+                origin,
+                key: e.key,
+                value: quoted(&e.value),
+                allowed: e.allowed,
+            },
+        }
+    }
+}
+
 /// The sections one process reads, composed from the section types of the crates it uses.
 ///
 /// Implementors are plain structs with one field per section, named as the section, with
@@ -194,12 +214,9 @@ impl ConfigDoc {
                 message: quoted(e.into_inner().to_string().trim()),
             }
         })?;
-        sections.validate().map_err(|e| ConfigError::OutOfRange {
-            origin: origin.clone(),
-            key: e.key,
-            value: quoted(&e.value),
-            allowed: e.allowed,
-        })?;
+        sections
+            .validate()
+            .map_err(|e| ConfigError::of_param(origin.clone(), e))?;
         Ok(sections)
     }
 

@@ -116,6 +116,7 @@ impl RunConfig {
                     key,
                     value: format!("{stage:?}"),
                     allowed: format!("a stage of {KNOWN_STAGES:?}"),
+                    problem: None,
                 })
             }
         };
@@ -127,6 +128,7 @@ impl RunConfig {
                 key: "run.stages".into(),
                 value: format!("{:?}", self.stages),
                 allowed: "either \"capture\" or \"sim\" (both publish frames)".into(),
+                problem: None,
             });
         }
         for (stage, nice) in &self.nice {
