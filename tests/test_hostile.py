@@ -159,6 +159,15 @@ def alive(pid):
     return state not in ("Z", "X")
 
 
+def test_an_ipc_domain_that_cannot_prefix_a_service_is_named(runner):
+    runner.env["HUBTRACK_DOMAIN"] = "d" * 300
+    for cmd in (["status"], ["echo", "detections"]):
+        res = runner.run("hubtrack", *cmd, timeout=30)
+        assert res.returncode == 1, (cmd, res.stderr[-2000:])
+        assert 'HUBTRACK_DOMAIN="ddd' in res.stderr and "ExceedsMaximumLength" in res.stderr, (cmd, res.stderr)
+        assert "panicked" not in res.stderr
+
+
 def test_one_run_per_domain_and_orphans_of_a_killed_supervisor_are_stopped(runner, tmp_path):
     import signal
     from conftest import read_mcap_messages, wait_until

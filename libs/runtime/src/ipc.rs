@@ -34,6 +34,18 @@ pub enum IpcError {
         /// iceoryx2's reason.
         reason: String,
     },
+    /// The IPC domain cannot prefix a service's name.
+    #[error(
+        "{DOMAIN_ENV}={domain:?} cannot prefix the iceoryx2 service name `{service}`: {reason} (a domain is a short name such as `bench1`)"
+    )]
+    Domain {
+        /// The domain as set.
+        domain: String,
+        /// The service name it prefixes.
+        service: String,
+        /// iceoryx2's reason.
+        reason: String,
+    },
     /// Opening a service or creating a port failed.
     #[error("cannot open iceoryx2 service `{service}`: {reason}")]
     Service {
@@ -64,6 +76,20 @@ pub fn scoped_name(name: &str) -> String {
         Ok(d) if !d.is_empty() => format!("{d}/{name}"),
         _ => name.to_string(),
     }
+}
+
+/// The iceoryx2 name of `name` (one of `spec`'s) in the current domain; a domain that makes
+/// it no valid service name (too long, a character iceoryx2 refuses) is named as the cause.
+fn service_name(spec: &ServiceSpec, name: &str) -> Result<ServiceName, IpcError> {
+    let scoped = scoped_name(name);
+    ServiceName::new(scoped.as_str()).map_err(|e| match std::env::var(DOMAIN_ENV) {
+        Ok(domain) if !domain.is_empty() => IpcError::Domain {
+            domain,
+            service: name.into(),
+            reason: format!("{e:?}"),
+        },
+        _ => svc_err(spec, e),
+    })
 }
 
 fn svc_err(spec: &ServiceSpec, e: impl Debug) -> IpcError {
@@ -112,10 +138,7 @@ pub fn cleanup_dead_nodes(node: &Node<Ipc>) -> u64 {
 }
 
 fn open_event(node: &Node<Ipc>, spec: &ServiceSpec) -> Result<PortFactoryEvent, IpcError> {
-    let name: ServiceName = scoped_name(spec.event_name)
-        .as_str()
-        .try_into()
-        .map_err(|e| svc_err(spec, e))?;
+    let name: ServiceName = service_name(spec, spec.event_name)?;
     open_or_create_recovering(node, &name, MessagingPattern::Event, || {
         node.service_builder(&name)
             .event()
@@ -136,10 +159,7 @@ macro_rules! open_pubsub {
     ($node:expr, $spec:expr, $payload:ty, |$b:ident| $more:expr) => {{
         let spec: &ServiceSpec = $spec;
         let node: &Node<Ipc> = $node;
-        let name: ServiceName = scoped_name(spec.name)
-            .as_str()
-            .try_into()
-            .map_err(|e| svc_err(spec, e))?;
+        let name: ServiceName = service_name(spec, spec.name)?;
         open_or_create_recovering(node, &name, MessagingPattern::PublishSubscribe, || {
             let $b = node
                 .service_builder(&name)
