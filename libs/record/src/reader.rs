@@ -124,6 +124,9 @@ pub struct RecoverReport {
     pub input_complete: bool,
     /// Why reading stopped before the end of the input (damage, a cut), if it did.
     pub stopped_by: Option<String>,
+    /// What is wrong with the summary section of an input read to its end, if anything: every
+    /// message of its data section was copied, but the input was not complete.
+    pub summary_damage: Option<String>,
 }
 
 /// The MCAP magic that starts and ends a complete file.
@@ -187,10 +190,16 @@ pub fn recover(input: &Path, output: &Path) -> Result<RecoverReport, OpenError> 
         path: input.into(),
         cause,
     })?;
+    // A finished file whose summary is damaged (zeroed, overwritten) was not complete, though
+    // every message of its data section was read.
+    let summary_damage = (finished && messages.stopped.is_none())
+        .then(|| summary_damage(input, messages.count))
+        .flatten();
     Ok(RecoverReport {
         messages: messages.count,
-        input_complete: finished && messages.stopped.is_none(),
+        input_complete: finished && messages.stopped.is_none() && summary_damage.is_none(),
         stopped_by: messages.stopped,
+        summary_damage,
     })
 }
 
@@ -272,6 +281,29 @@ mod tests {
         assert_eq!(
             (report.messages, report.input_complete, report.stopped_by),
             (30, true, None)
+        );
+        // A finished file whose summary section was zeroed: every message is copied, and the
+        // input is not called complete.
+        let mut bytes = std::fs::read(&full).unwrap();
+        let footer = bytes.len() - 8 - 29;
+        let summary_start =
+            u64::from_le_bytes(bytes[footer + 9..footer + 17].try_into().unwrap()) as usize;
+        assert!(
+            summary_start > 0 && summary_start < footer,
+            "{summary_start}"
+        );
+        bytes[summary_start..footer].fill(0);
+        let zeroed = dir.path().join("zeroed.mcap");
+        std::fs::write(&zeroed, &bytes).unwrap();
+        let report = recover(&zeroed, &dir.path().join("from-zeroed.mcap")).unwrap();
+        assert_eq!(report.messages, 30, "{report:?}");
+        assert!(!report.input_complete, "{report:?}");
+        assert!(
+            report
+                .summary_damage
+                .as_deref()
+                .is_some_and(|d| d.contains("summary section")),
+            "{report:?}"
         );
     }
 
@@ -423,6 +455,34 @@ pub struct FileInfo {
     pub topic_counts: std::collections::BTreeMap<String, u64>,
 }
 
+/// The summary section of a finished file (`None` when the file has none), or why it cannot be
+/// read. Maps the file instead of reading it: only the summary's pages at its end are touched (a
+/// flight's recording is many GB).
+fn read_summary(path: &Path) -> Result<Option<mcap::Summary>, String> {
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    // SAFETY: the file is opened read-only; a concurrent writer would only make the summary
+    // unreadable, which the callers treat as a damaged summary.
+    let data = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| e.to_string())?;
+    mcap::Summary::read(&data).map_err(|e| e.to_string())
+}
+
+/// Whether a finished file's summary section is intact: it reads, and its statistics count
+/// `messages` (those a linear read found).
+fn summary_damage(path: &Path, messages: u64) -> Option<String> {
+    match read_summary(path) {
+        Err(e) => Some(format!("its summary section cannot be read: {e}")),
+        Ok(None) => Some("it has no summary section".into()),
+        Ok(Some(summary)) => match summary.stats {
+            None => Some("its summary section holds no statistics (empty or overwritten)".into()),
+            Some(stats) if stats.message_count != messages => Some(format!(
+                "its summary section counts {} messages, its data section holds {messages}",
+                stats.message_count
+            )),
+            Some(_) => None,
+        },
+    }
+}
+
 /// Counts the messages of every topic. A finished file is read through its summary; a cut one
 /// linearly, as far as it is readable.
 pub fn inspect(path: &Path) -> Result<FileInfo, RecordError> {
@@ -434,13 +494,7 @@ pub fn inspect(path: &Path) -> Result<FileInfo, RecordError> {
     let finished = is_finished(path).map_err(io)?;
     let mut topic_counts = std::collections::BTreeMap::new();
     if finished {
-        // Map, don't read: only the summary pages at the end of the file are touched (a flight's
-        // recording is many GB).
-        let file = std::fs::File::open(path).map_err(io)?;
-        // SAFETY: the file is opened read-only; a concurrent writer would only make the summary
-        // unreadable, which falls back to the linear count below.
-        let data = unsafe { memmap2::Mmap::map(&file) }.map_err(io)?;
-        if let Ok(Some(summary)) = mcap::Summary::read(&data) {
+        if let Ok(Some(summary)) = read_summary(path) {
             if let Some(stats) = &summary.stats {
                 for (id, n) in &stats.channel_message_counts {
                     if let Some(ch) = summary.channels.get(id) {

@@ -67,10 +67,17 @@ pub fn recover(input: &Path, output: Option<PathBuf>) -> anyhow::Result<()> {
         report.messages,
         input.display(),
         output.display(),
-        match (&report.stopped_by, report.input_complete) {
-            (_, true) => " (the input was complete)",
-            (Some(_), _) => " (the input is damaged or cut short: the rest is lost)",
-            (None, false) => " (the input was cut short)",
+        match (
+            &report.stopped_by,
+            report.input_complete,
+            &report.summary_damage
+        ) {
+            (_, true, _) => " (the input was complete)".to_string(),
+            (Some(_), _, _) => " (the input is damaged or cut short: the rest is lost)".to_string(),
+            (None, false, Some(damage)) => format!(
+                " (every message of the input's data section; the input was damaged: {damage})"
+            ),
+            (None, false, None) => " (the input was cut short)".to_string(),
         }
     );
     if let Some(why) = report.stopped_by {
