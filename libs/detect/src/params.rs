@@ -327,20 +327,13 @@ hubtrack_types::params! {
         /// blades (two or more) all lie within this of the world's vertical or horizontal is no
         /// hub: three blades 120° apart always have one 30° from both (20° at 45° of yaw or
         /// pitch), while roofs, chimney rims, a mast with its stays and field borders at the
-        /// horizon meet at right angles. This bound holds where the camera's roll is known (video
-        /// frames, the roll from the autopilot); see `square_blades_unknown_roll_max_deg` for the
-        /// rest. At 10° it took the cross-domain sets' false positives from 7.5 to 4.0 % in the
-        /// held-out scenes (chimneys), 3.0 to 1.5 % through the 60° lens, 7.0 to 5.0 % through
-        /// the fisheye, hits unchanged (one of 1 260 lost, one gained); 20° took in-domain false
-        /// positives (seeds 11–13) from 2.3 / 2.7 / 3.3 to 2.3 / 2.0 / 2.7 %, hits +1 in all.
-        /// Not while tracking: there it dropped close-in detections of the hub, and two of 240
-        /// `fly --random-setup` flights came within 3 m of the rotor. Degrees, range [0, 20];
-        /// 0 = off.
-        pub square_blades_max_deg: f64 = 20.0, closed(0.0, 20.0);
-        /// See `square_blades_max_deg`: the bound where the camera's roll is unknown (still photos,
-        /// whose roll the detector searches): 10° leaves the other 10° to a roll it may misjudge.
-        /// At 20° the real development photos lost 4 of 43 hits. Degrees, range [0, 20]; 0 = off.
-        pub square_blades_unknown_roll_max_deg: f64 = 10.0, closed(0.0, 20.0);
+        /// horizon meet at right angles. On the cross-domain sets' frames without a turbine it
+        /// takes false positives from 7.5 to 4.0 % in the held-out scenes (chimneys), 3.0 to
+        /// 1.5 % through the 60° lens, 7.0 to 5.0 % through the fisheye, hits unchanged (one of
+        /// 1 260 lost, one gained). Not while tracking: there it dropped close-in detections of
+        /// the hub, and two of 240 `fly --random-setup` flights came within 3 m of the rotor.
+        /// Degrees, range [0, 20]; 0 = off.
+        pub square_blades_max_deg: f64 = 10.0, closed(0.0, 20.0);
         /// Tower lines: maximum tilt from vertical after roll, degrees (larger than the thesis's
         /// because the wide lens bends lines and unknown roll is searched).
         pub tower_max_tilt_deg: f64 = 8.0, closed(0.0, 45.0);

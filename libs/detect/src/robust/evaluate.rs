@@ -238,20 +238,14 @@ pub(super) fn evaluate(sc: &SceneCtx<'_>, c: P2, spinner: Option<[f64; 3]>) -> C
 const BLADE_DIRECTION_STEP_FRAC: f64 = 0.1;
 
 /// Whether, without a tracker's prediction, two or more blades are seen at `c` and every one
-/// of them lies within `square_blades_max_deg` (`square_blades_unknown_roll_max_deg` without
-/// the roll's hint) of the world's vertical or horizontal (the
+/// of them lies within `square_blades_max_deg` of the world's vertical or horizontal (the
 /// blades' image angles taken through the lens's undistortion when it bends straight lines,
 /// and the camera's roll removed). Three blades 120° apart always have one at least 30° from
 /// both (still 20° at 45° of relative yaw or of pitch), while a roof, a chimney's rim, a mast
 /// with its stays or field borders at the horizon meet at right angles.
 pub(super) fn square_blades(sc: &SceneCtx<'_>, c: P2, blades: &[Blade]) -> bool {
     let p = sc.p;
-    let max_deg = if sc.hints.roll_rad.is_some() {
-        p.square_blades_max_deg
-    } else {
-        p.square_blades_unknown_roll_max_deg
-    };
-    if max_deg <= 0.0 || sc.hints.predicted_hub_px.is_some() || blades.len() < 2 {
+    if p.square_blades_max_deg <= 0.0 || sc.hints.predicted_hub_px.is_some() || blades.len() < 2 {
         return false;
     }
     let undistorted_c = sc.camera.map(|cam| cam.undistort_pixel(c));
@@ -264,10 +258,10 @@ pub(super) fn square_blades(sc: &SceneCtx<'_>, c: P2, blades: &[Blade]) -> bool 
         }
         _ => a,
     };
-    blades
-        .iter()
-        .take(ROTOR_BLADES)
-        .all(|b| geometry::off_axes_deg(undistorted_angle(b.angle_deg) + sc.roll_deg) <= max_deg)
+    blades.iter().take(ROTOR_BLADES).all(|b| {
+        geometry::off_axes_deg(undistorted_angle(b.angle_deg) + sc.roll_deg)
+            <= p.square_blades_max_deg
+    })
 }
 
 /// A long usable line passes through `c` (not ending near it): `c` lies on a tower, mast or wire.
