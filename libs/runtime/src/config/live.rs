@@ -35,11 +35,11 @@ params! {
 impl LiveConfig {
     /// The socket address to listen on.
     pub fn socket_addr(&self) -> Result<SocketAddr, ParamError> {
-        self.address.trim().parse().map_err(|_| ParamError {
+        self.address.trim().parse().map_err(|e| ParamError {
             key: "live.address".into(),
             value: format!("{:?}", self.address),
             allowed: "IP:PORT, e.g. \"127.0.0.1:8765\" or \"[::1]:8765\"".into(),
-            problem: None,
+            problem: Some(format!("not a socket address ({e})")),
         })
     }
 
