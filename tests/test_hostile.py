@@ -168,6 +168,13 @@ def test_an_ipc_domain_that_cannot_prefix_a_service_is_named(runner):
         assert "panicked" not in res.stderr
 
 
+def test_an_empty_config_variable_says_what_to_do(runner):
+    runner.env["HUBTRACK_CONFIG"] = ""
+    res = runner.run("hubtrack", "config", timeout=30)
+    assert res.returncode == 2, res.stderr
+    assert "unset HUBTRACK_CONFIG for the built-in defaults" in res.stderr, res.stderr
+
+
 def test_one_run_per_domain_and_orphans_of_a_killed_supervisor_are_stopped(runner, tmp_path):
     import signal
     from conftest import read_mcap_messages, wait_until

@@ -274,12 +274,22 @@ fn quoted(text: &str) -> String {
     }
 }
 
+/// A config file's path; an empty one (most often `HUBTRACK_CONFIG=` left set) is refused
+/// saying what to do, where clap would only say that a value is missing.
+fn config_path(text: &str) -> Result<PathBuf, String> {
+    if text.is_empty() {
+        Err("empty: name a config file, or unset HUBTRACK_CONFIG for the built-in defaults".into())
+    } else {
+        Ok(PathBuf::from(text))
+    }
+}
+
 /// Command-line options of every process that reads the config: `--config FILE`, `--set K=V`,
 /// and the camera calibration and turbine profile files.
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct ConfigArgs {
     /// Config file (TOML); default: built-in defaults, as documented in config/hubtrack.toml.
-    #[arg(long, short = 'c', value_name = "FILE", env = "HUBTRACK_CONFIG")]
+    #[arg(long, short = 'c', value_name = "FILE", env = "HUBTRACK_CONFIG", value_parser = config_path)]
     pub config: Option<PathBuf>,
     /// Override one key, e.g. `--set capture.fps=60` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
