@@ -394,8 +394,10 @@ fn place_hub_by_crop(
 
 /// Whether the lines around `hub` (working px, `h` the working height) leave it a hub for the
 /// networks' verdict (see `default.heat_verify_end_frac`): the lines that end near it, if any,
-/// include one oblique to both image axes, some such line lies within reach of it, and no long
-/// line passes through it.
+/// include one oblique to both image axes, some such line lies within reach of it, some line
+/// within reach (wider by the crop network's `zoom`) rises above it in the world (the camera's
+/// `roll_deg` taken out, see `default.heat_verify_rise_deg`), and no long line passes through
+/// it.
 fn lines_allow_hub(
     p: &params::DefaultParams,
     lines: &[(Segment, LineKind)],
