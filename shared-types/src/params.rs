@@ -15,13 +15,22 @@ pub struct ParamError {
     pub problem: Option<String>,
 }
 
+impl ParamError {
+    /// `value: problem (expected allowed)`, for a value that cannot be used (`problem` set); the
+    /// caller chooses how `value` is shown.
+    pub fn unusable(value: &str, problem: &str, allowed: &str) -> String {
+        format!("{value}: {problem} (expected {allowed})")
+    }
+}
+
 impl std::fmt::Display for ParamError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match &self.problem {
             Some(problem) => write!(
                 f,
-                "config key `{}` = {}: {problem} (expected {})",
-                self.key, self.value, self.allowed
+                "config key `{}` = {}",
+                self.key,
+                ParamError::unusable(&self.value, problem, &self.allowed)
             ),
             None => write!(
                 f,

@@ -118,17 +118,22 @@ impl<'de> serde::Deserialize<'de> for Endpoint {
 }
 
 impl Endpoint {
-    /// The forms an endpoint string takes, for error messages.
-    pub const FORMS: &'static str = ENDPOINT_FORMS;
-}
-
-impl LinkError {
-    /// What is wrong, without the endpoint string, for a message that names it already.
-    pub fn reason(&self) -> String {
-        match self {
-            LinkError::BadEndpoint { reason, .. } => reason.clone(),
-            other => other.to_string(),
-        }
+    /// Checks the config key `key` (`control.link`, `sim.link`) holding `text`: the endpoint, or
+    /// an error naming the key, what is wrong and the forms an endpoint takes.
+    pub fn of_config(
+        key: &str,
+        text: &str,
+    ) -> Result<Endpoint, hubtrack_types::params::ParamError> {
+        text.parse()
+            .map_err(|e| hubtrack_types::params::ParamError {
+                key: key.into(),
+                value: format!("{text:?}"),
+                allowed: ENDPOINT_FORMS.into(),
+                problem: Some(match e {
+                    LinkError::BadEndpoint { reason, .. } => reason,
+                    other => other.to_string(),
+                }),
+            })
     }
 }
 

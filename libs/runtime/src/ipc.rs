@@ -138,7 +138,7 @@ pub fn cleanup_dead_nodes(node: &Node<Ipc>) -> u64 {
 }
 
 fn open_event(node: &Node<Ipc>, spec: &ServiceSpec) -> Result<PortFactoryEvent, IpcError> {
-    let name: ServiceName = service_name(spec, spec.event_name)?;
+    let name = service_name(spec, spec.event_name)?;
     open_or_create_recovering(node, &name, MessagingPattern::Event, || {
         node.service_builder(&name)
             .event()
@@ -159,7 +159,7 @@ macro_rules! open_pubsub {
     ($node:expr, $spec:expr, $payload:ty, |$b:ident| $more:expr) => {{
         let spec: &ServiceSpec = $spec;
         let node: &Node<Ipc> = $node;
-        let name: ServiceName = service_name(spec, spec.name)?;
+        let name = service_name(spec, spec.name)?;
         open_or_create_recovering(node, &name, MessagingPattern::PublishSubscribe, || {
             let $b = node
                 .service_builder(&name)

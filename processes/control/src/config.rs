@@ -74,14 +74,7 @@ impl ControlConfig {
     /// Checks every value; errors name the key under `control`.
     pub fn validate(&self) -> Result<(), ParamError> {
         self.check_ranges("control")?;
-        self.link
-            .parse::<hubtrack_mavlink::Endpoint>()
-            .map_err(|e| ParamError {
-                key: "control.link".into(),
-                value: format!("{:?}", self.link),
-                allowed: hubtrack_mavlink::Endpoint::FORMS.into(),
-                problem: Some(e.reason()),
-            })?;
+        hubtrack_mavlink::Endpoint::of_config("control.link", &self.link)?;
         self.approach.validate()
     }
 }

@@ -64,16 +64,7 @@ impl hubtrack_runtime::Sections for SimSections {
         self.sim.validate()?;
         self.camera.validate()?;
         self.turbine.validate()?;
-        self.sim
-            .link
-            .parse::<hubtrack_mavlink::Endpoint>()
-            .map(|_| ())
-            .map_err(|e| hubtrack_runtime::config::ParamError {
-                key: "sim.link".into(),
-                value: format!("{:?}", self.sim.link),
-                allowed: hubtrack_mavlink::Endpoint::FORMS.into(),
-                problem: Some(e.reason()),
-            })
+        hubtrack_mavlink::Endpoint::of_config("sim.link", &self.sim.link).map(|_| ())
     }
 }
 

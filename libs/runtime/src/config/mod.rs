@@ -86,7 +86,7 @@ impl ConfigError {
             Some(problem) => ConfigError::Invalid {
                 origin,
                 key: e.key,
-                message: format!("{}: {problem} (expected {})", quoted(&e.value), e.allowed),
+                message: ParamError::unusable(&quoted(&e.value), &problem, &e.allowed),
             },
             None => ConfigError::OutOfRange {
                 origin,
