@@ -51,6 +51,9 @@ use shrink_check::{Contradiction, ShrinkCheck};
 
 /// Longest reason text, bytes (it travels as a [`hubtrack_types::Text64`]).
 pub const MAX_REASON_BYTES: usize = 64;
+/// Largest elevation, seen or level, the pitch correction of T1's vertical error takes, radians
+/// (the tangents stay finite).
+const MAX_LEVEL_RAD: f64 = 1.4;
 
 /// The inputs of one controller step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -843,7 +846,7 @@ impl Approach {
             f64::from(t.image_height) / 2.0,
         );
         let ex = (t.hub_px[0] - hw) / hw;
-        let ey = (t.hub_px[1] - hh) / hh;
+        let ey = self.level_ey((t.hub_px[1] - hh) / hh, t, vehicle);
         self.last_seen_right = Some(ex >= 0.0);
 
         let new_track_state = self.filter_capture_ns != Some(t.stamps.capture_ns);
@@ -890,6 +893,25 @@ impl Approach {
             forward_ok: t.distance_valid && dist.is_some() && not_shrinking.is_none(),
             not_shrinking,
             at_target,
+        }
+    }
+
+    /// The vertical image error `ey` of the hub as the camera would see it with the body level
+    /// in pitch (see `focal_half_heights`): the hub's elevation on the track's calibrated
+    /// bearing plus the body's pitch, back through the focal length near the image centre.
+    /// `ey` itself without the focal length, the attitude or the bearing.
+    fn level_ey(&self, ey: f64, t: &TrackState, vehicle: Option<&VehicleState>) -> f64 {
+        let k = self.config.focal_half_heights;
+        let elevation = t.hub_bearing_deg[1]
+            .to_radians()
+            .clamp(-MAX_LEVEL_RAD, MAX_LEVEL_RAD);
+        match vehicle.filter(|v| v.attitude_valid && v.pitch_rad.is_finite()) {
+            Some(v) if k > 0.0 && elevation.is_finite() => {
+                // Image y grows downward: a hub `e` above the axis sits at −k·tan e.
+                let level = (elevation + v.pitch_rad).clamp(-MAX_LEVEL_RAD, MAX_LEVEL_RAD);
+                ey - k * (level.tan() - elevation.tan())
+            }
+            _ => ey,
         }
     }
 

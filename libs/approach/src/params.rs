@@ -21,6 +21,8 @@ pub use hubtrack_types::params::ParamError;
 const MAX_TIME_S: f64 = 3600.0;
 /// Upper bound for the spinner's closest fit, m.
 const MAX_FIT_M: f64 = 1e4;
+/// Upper bound for the vertical focal length in half image heights (a 0.01° telephoto).
+const MAX_FOCAL_HALF_HEIGHTS: f64 = 1e4;
 
 hubtrack_types::params! {
     /// `[control.approach]`: the T1/T2/T3 approach controller (thesis section 7.1, algorithm 2).
@@ -191,6 +193,16 @@ hubtrack_types::params! {
         /// the camera calibration and the turbine profile ([`ApproachConfig::with_spinner_fit`]).
         #[serde(skip)]
         pub spinner_fits_from_m: f64 = 0.0, closed(0.0, MAX_FIT_M);
+        /// The camera's vertical focal length in half image heights (`fy / (height / 2)`; 0: not
+        /// known). With it T1 takes the hub's vertical error as a level body would see it: the
+        /// camera is fixed to the body (see `track.camera.mount_pitch_deg`), so a vehicle
+        /// pitching 4° nose-down to fly forward sees the hub 4° higher, which through a 60°
+        /// 640×480 lens is 0.2 of the half-height, past `box_y`: T1 interrupted the approach
+        /// to climb toward a hub that was level, and `fly` seeds 43 and 77 ran out of time
+        /// hunting between T1 and T3. Not a key: the control stage sets it from the camera
+        /// calibration ([`ApproachConfig::with_camera_focal`]).
+        #[serde(skip)]
+        pub focal_half_heights: f64 = 0.0, closed(0.0, MAX_FOCAL_HALF_HEIGHTS);
 
         // ---- gains ----
         /// T1 yaw-rate gain, deg/s per normalised unit of horizontal error (beyond the deadband).
@@ -382,6 +394,18 @@ impl ApproachConfig {
     pub fn with_spinner_fit(mut self, closest_fit_m: f64) -> ApproachConfig {
         self.spinner_fits_from_m = if closest_fit_m > 0.0 {
             closest_fit_m.min(MAX_FIT_M)
+        } else {
+            0.0
+        };
+        self
+    }
+
+    /// This config for a camera whose vertical focal length is `focal_half_heights` half image
+    /// heights (see `focal_half_heights`). A value that is no number or not positive means not
+    /// known: T1 then takes the vertical error as the image shows it.
+    pub fn with_camera_focal(mut self, focal_half_heights: f64) -> ApproachConfig {
+        self.focal_half_heights = if focal_half_heights > 0.0 {
+            focal_half_heights.min(MAX_FOCAL_HALF_HEIGHTS)
         } else {
             0.0
         };

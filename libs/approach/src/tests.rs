@@ -325,6 +325,85 @@ fn t1_signs() {
     assert_eq!(out.reason, "T1: hub 0.31 right of centre (box 0.15)");
 }
 
+/// A 60° 640×480 camera's vertical focal length in half image heights (`fy / (h / 2)`).
+const NARROW_FOCAL_HALF_HEIGHTS: f64 = 692.820_323 / 240.0;
+
+/// A track with the hub seen `elevation_deg` above the optical axis through a camera of
+/// `focal_half_heights` (the image row and the calibrated bearing agree), 30 m out.
+fn track_seen_at(elevation_deg: f64, focal_half_heights: f64) -> TrackState {
+    let ey = -focal_half_heights * elevation_deg.to_radians().tan();
+    TrackState {
+        hub_bearing_deg: [0.0, elevation_deg],
+        ..track(0.0, ey, Some(30.0), Some(0.0))
+    }
+}
+
+/// A vehicle pitched `pitch_deg` (nose up positive) with a valid attitude.
+fn pitched_vehicle(pitch_deg: f64) -> VehicleState {
+    VehicleState {
+        attitude_valid: true,
+        pitch_rad: pitch_deg.to_radians(),
+        ..vehicle(true)
+    }
+}
+
+/// Flying forward nose-down, the body-fixed camera sees a level hub above the image centre;
+/// through a narrow lens that is past `box_y` (4° of pitch: 0.20 of the half-height against
+/// 0.18), and T1 would stop the approach to climb. With the camera's focal length the vertical
+/// error is taken as a level body sees it: the approach goes on, and nothing climbs. A hub that
+/// is really above stays T1's, pitched or not, and without the focal length the image decides.
+#[test]
+fn t1_takes_the_vertical_error_as_a_level_body_sees_it() {
+    let k = NARROW_FOCAL_HALF_HEIGHTS;
+    let levelled = ApproachConfig::default().with_camera_focal(k);
+    // Nose down 4°: the level hub appears 4° up.
+    let mut rig = Rig::with(levelled.clone());
+    rig.vehicle = Some(pitched_vehicle(-4.0));
+    let out = rig.run(Some(track_seen_at(4.0, k)), 1.0);
+    assert_eq!(out.task, ApproachTask::Approach, "{out:?}");
+    assert_eq!(out.vz_m_s, 0.0, "{out:?}");
+    assert!(out.vx_m_s > 0.0, "{out:?}");
+
+    // Without the focal length the same views trip T1, which climbs.
+    let mut rig = Rig::new();
+    rig.vehicle = Some(pitched_vehicle(-4.0));
+    let out = rig.run(Some(track_seen_at(4.0, k)), 1.0);
+    assert_eq!(out.task, ApproachTask::CentreHub, "{out:?}");
+    assert!(out.vz_m_s < 0.0, "{out:?}");
+
+    // A hub 6° above a level body is above whatever the pitch: seen at 10° nose-down, at 2°
+    // nose-up (its row alone would be inside the box).
+    for (pitch, seen) in [(-4.0, 10.0), (4.0, 2.0)] {
+        let mut rig = Rig::with(levelled.clone());
+        rig.vehicle = Some(pitched_vehicle(pitch));
+        let out = rig.run(Some(track_seen_at(seen, k)), 1.0);
+        assert_eq!(out.task, ApproachTask::CentreHub, "{pitch} {seen}: {out:?}");
+        assert!(out.vz_m_s < 0.0, "{pitch} {seen}: {out:?}");
+    }
+
+    // No attitude: the image decides.
+    let mut rig = Rig::with(levelled);
+    rig.vehicle = Some(vehicle(true));
+    let out = rig.run(Some(track_seen_at(4.0, k)), 1.0);
+    assert_eq!(out.task, ApproachTask::CentreHub, "{out:?}");
+}
+
+/// A focal length that is no number or not positive is "not known"; the config stays valid.
+#[test]
+fn any_camera_focal_leaves_a_valid_config() {
+    for (k, kept) in [
+        (f64::NAN, 0.0),
+        (-1.0, 0.0),
+        (0.0, 0.0),
+        (NARROW_FOCAL_HALF_HEIGHTS, NARROW_FOCAL_HALF_HEIGHTS),
+        (f64::INFINITY, 1e4),
+    ] {
+        let c = ApproachConfig::default().with_camera_focal(k);
+        assert!(c.validate().is_ok(), "{k}: {:?}", c.validate());
+        assert_eq!(c.focal_half_heights, kept, "{k}");
+    }
+}
+
 #[test]
 fn t2_positive_yaw_moves_left_and_turns_right() {
     let mut rig = Rig::new();

@@ -60,7 +60,8 @@ fn run() -> anyhow::Result<()> {
 /// approach's target (see [`SpinnerFit`]); a warning when it does not, and then the approach
 /// flies its last metres on the odometry (`control.approach.odometry_leg_fit_margin`). Without
 /// a calibration the frame's aspect is unknown and nothing is said (detect and track refuse a
-/// bad one). Gives the approach the spinner's closest fit.
+/// bad one). Gives the approach the spinner's closest fit and the camera's vertical focal length
+/// (for T1's pitch-levelled vertical error).
 fn check_envelope(sections: &mut ControlSections) {
     let Ok(Some(camera)) = sections.camera.calibrated() else {
         log::debug!("no camera calibration: the spinner's fit at the target is not checked");
@@ -72,7 +73,9 @@ fn check_envelope(sections: &mut ControlSections) {
         sections.control.approach.target_distance_m,
     );
     let approach = std::mem::take(&mut sections.control.approach);
-    sections.control.approach = approach.with_spinner_fit(fit.closest_fit_m);
+    sections.control.approach = approach
+        .with_spinner_fit(fit.closest_fit_m)
+        .with_camera_focal(camera.fy / (f64::from(camera.height) / 2.0));
     // With the margin the detector needs, the leg may start even where the spinner just fits.
     let leg = sections
         .control
