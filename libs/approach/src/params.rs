@@ -386,17 +386,23 @@ hubtrack_types::params! {
     }
 }
 
+/// A measured quantity set from outside the config: itself up to `max`, or 0 ("not known")
+/// when it is no number or not positive.
+fn known(value: f64, max: f64) -> f64 {
+    if value > 0.0 {
+        value.min(max)
+    } else {
+        0.0
+    }
+}
+
 impl ApproachConfig {
     /// This config for a camera and turbine whose spinner fits the camera's narrower field of
     /// view from `closest_fit_m` out (see `odometry_leg_fit_margin`). A distance that is no
     /// number or not positive means not known (no leg); a telephoto's kilometres are cut to the
     /// field's range (the leg is at most `odometry_leg_max_m` anyway).
     pub fn with_spinner_fit(mut self, closest_fit_m: f64) -> ApproachConfig {
-        self.spinner_fits_from_m = if closest_fit_m > 0.0 {
-            closest_fit_m.min(MAX_FIT_M)
-        } else {
-            0.0
-        };
+        self.spinner_fits_from_m = known(closest_fit_m, MAX_FIT_M);
         self
     }
 
@@ -404,11 +410,7 @@ impl ApproachConfig {
     /// heights (see `focal_half_heights`). A value that is no number or not positive means not
     /// known: T1 then takes the vertical error as the image shows it.
     pub fn with_camera_focal(mut self, focal_half_heights: f64) -> ApproachConfig {
-        self.focal_half_heights = if focal_half_heights > 0.0 {
-            focal_half_heights.min(MAX_FOCAL_HALF_HEIGHTS)
-        } else {
-            0.0
-        };
+        self.focal_half_heights = known(focal_half_heights, MAX_FOCAL_HALF_HEIGHTS);
         self
     }
 
