@@ -83,6 +83,12 @@ impl CameraModel {
         self.fx / f64::from(self.width)
     }
 
+    /// Vertical focal length in half image heights (`fy / (height / 2)`): the normalised image
+    /// offset, per unit of tangent, of a ray near the centre (half the height = 1).
+    pub fn focal_half_heights(&self) -> f64 {
+        self.fy / (f64::from(self.height) / 2.0)
+    }
+
     /// Largest undistorted normalised radius the lens model is valid for (see
     /// [`Distortion::max_radius`]).
     pub fn max_undistorted_radius(&self) -> f64 {
@@ -318,6 +324,23 @@ mod tests {
             },
         );
         assert!((fish.narrow_fov_rad() - 2.0 * 540.0 / 700.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_focal_length_in_half_heights_is_the_offset_of_a_ray_and_survives_scaling() {
+        // A pinhole: a ray at tan = 0.1 below the axis lands 0.1·k half-heights below the centre.
+        let pin = CameraModel::pinhole(640, 480, 90.0);
+        let k = pin.focal_half_heights();
+        let p = pin.project([0.0, 0.1, 1.0]).unwrap();
+        assert!(
+            ((p[1] - pin.cy) / 240.0 - 0.1 * k).abs() < 1e-9,
+            "{k} {p:?}"
+        );
+        assert!((k - 320.0 / 240.0).abs() < 1e-9);
+        // Scaled to another size of the same aspect, the same number.
+        let gopro = CameraModel::gopro_hero3();
+        let half = gopro.scaled_to(960, 540).unwrap();
+        assert!((gopro.focal_half_heights() - half.focal_half_heights()).abs() < 1e-9);
     }
 
     #[test]

@@ -75,7 +75,7 @@ fn check_envelope(sections: &mut ControlSections) {
     let approach = std::mem::take(&mut sections.control.approach);
     sections.control.approach = approach
         .with_spinner_fit(fit.closest_fit_m)
-        .with_camera_focal(camera.fy / (f64::from(camera.height) / 2.0));
+        .with_camera_focal(camera.focal_half_heights());
     // With the margin the detector needs, the leg may start even where the spinner just fits.
     let leg = sections
         .control
