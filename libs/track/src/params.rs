@@ -313,10 +313,14 @@ hubtrack_types::params! {
         /// below this, gated-out measurements never restart the filter, however many agree. Close
         /// in, a tower band merged with the blade pointing down reads the distance 1.5× short for
         /// seconds (`fly` seeds 285 and 518: 150–165 px for 100 px at 5 m, no spinner circle in
-        /// those frames), and a restart there made the vehicle back away to 8 m. At 10 m `fly`
-        /// seeds 161–560 gave 383 of 400 against 381 without the rule (285 and 518 in, none out;
-        /// 387 flights bit for bit the same). Range [0, 100].
-        pub jump_min_distance_m: f64 = 10.0, closed(0.0, MAX_SIZE_M);
+        /// those frames), and a restart there made the vehicle back away to 8 m. Up to 15 m a
+        /// restart can also be the dangerous way: `fly --random-setup` seed 206 (60° 1280×720)
+        /// took a circle half the spinner's size for it at 10.7 m, three readings of ~16 m
+        /// restarted the filter at 16.4 m while the truth was 8.3 m, and T3 flew on to 1.62 m
+        /// from the rotor plane. At 15 m it ends done at 5.14 m (`fly --random-setup` 1–120 110
+        /// of 120 as at 10 m, 121–240 106 against 107, closest to the rotor plane 4.00 m against
+        /// 1.62 m). Range [0, 100]; default 15.
+        pub jump_min_distance_m: f64 = 15.0, closed(0.0, MAX_SIZE_M);
         /// How long the close-in rule (`jump_min_distance_m`) outlives the filter's last accepted
         /// measurement, s (0 = forever). After that long without one, the old distance is no
         /// evidence against new readings, and a consistent run of them restarts the filter as
